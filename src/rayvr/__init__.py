@@ -1,0 +1,48 @@
+"""rayvr: hybrid raster/ray-traced rendering for VR headsets, composed as render graphs.
+
+    import rayvr as rv
+    scene = rv.scenes.cornell_box()
+    g = rv.graphs.hybrid()
+    with rv.Renderer(scene, g, sink=rv.xr.SimulatedHeadset(preset="index")) as r: ...
+
+Submodules load on first use, so `import rayvr` stays cheap and never needs pyopenxr.
+"""
+from __future__ import annotations
+
+import importlib
+
+from .errors import (GpuError, GraphError, OptionError, RayvrError, SceneError, ShaderError,
+                     XrError)
+from .materials.effect import Effect
+
+__version__ = "0.1.0"
+
+_LAZY = {
+    # name: (module, attribute or None for the module itself)
+    "gpu": ("rayvr.gpu", None),
+    "rendergraph": ("rayvr.rendergraph", None),
+    "passes": ("rayvr.passes", None),
+    "scene": ("rayvr.scene", None),
+    "scenes": ("rayvr.scene.builtin", None),
+    "materials": ("rayvr.materials", None),
+    "graphs": ("rayvr.graphs", None),
+    "xr": ("rayvr.xr", None),
+    "tune": ("rayvr.tune", None),
+    "RenderGraph": ("rayvr.rendergraph.graph", "RenderGraph"),
+    "RenderPass": ("rayvr.rendergraph.render_pass", "RenderPass"),
+    "Renderer": ("rayvr.renderer", "Renderer"),
+    "load_scene": ("rayvr.scene", "load_scene"),
+}
+
+__all__ = ["Effect", "RayvrError", "GpuError", "GraphError", "OptionError", "SceneError",
+           "ShaderError", "XrError", *_LAZY]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        module, attr = _LAZY[name]
+        mod = importlib.import_module(module)
+        value = mod if attr is None else getattr(mod, attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'rayvr' has no attribute '{name}'")

@@ -1,0 +1,44 @@
+"""The `rayvr` command: subcommands live in modules of this package, each with
+`register(subparsers)` adding its parser and setting `func(args) -> int`."""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from ..errors import RayvrError
+
+# Subcommand modules, in the order `rayvr --help` lists them.
+COMMAND_MODULES = ["info", "render", "graph", "bench"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="rayvr", description="Hybrid raster/ray-traced rendering for VR headsets.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        try:
+            mod = importlib.import_module(f"rayvr.cli.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"rayvr.cli.{name}":
+                continue
+            raise
+        mod.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except RayvrError as exc:
+        msg = " ".join(str(exc).split()) if "\n" not in str(exc).strip() else str(exc).strip()
+        print(f"rayvr: error: {msg}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,38 @@
+// Per-view camera data for all views of a frame: one SSBO, filled by rayvr.xr.views.ViewSet.pack().
+// All positions are in *render space*: world space minus the frame's origin (a float64 point on
+// the CPU, usually the head position), so scenes far from the world origin stay precise.
+#pragma once
+
+struct ViewData {
+    mat4 view;            // render space -> eye space
+    mat4 proj;            // eye -> clip (OpenGL clip, z in [-1,1]; reversed-Z when flagged)
+    mat4 view_proj;       // render space -> clip
+    mat4 inv_view;        // eye -> render space
+    mat4 prev_view_proj;  // last frame's view_proj, in this frame's render space (motion vectors)
+    vec4 eye;             // xyz eye position in render space
+    vec4 fov_tan;         // tan(angleLeft), tan(angleRight), tan(angleDown), tan(angleUp): left/down < 0
+    vec4 clip;            // near, far, width px, height px
+    vec4 jitter;          // xy sub-pixel jitter in pixels (TAA), zw unused
+};
+
+layout(std430, binding = RAYVR_VIEWS_SSBO) readonly buffer ViewsBlock {
+    uvec4 frame_info;     // x: view count, y: frame index, z: accumulated sample index, w: flags
+    ViewData views[];
+};
+
+uint view_count() { return frame_info.x; }
+uint frame_index() { return frame_info.y; }
+
+// Eye-space direction through `uv` in [0,1]^2 of view v (uv.y = 0 at the bottom row).
+// Built from the same tangents as the projection, so rays register with the raster exactly.
+vec3 view_ray_dir_eye(uint v, vec2 uv) {
+    vec4 t = views[v].fov_tan;
+    return normalize(vec3(mix(t.x, t.y, uv.x), mix(t.z, t.w, uv.y), -1.0));
+}
+
+// Render-space primary ray through pixel centre `pixel` (+ `offset` in [0,1)^2) of view v.
+void view_primary_ray(uint v, vec2 pixel, out vec3 origin, out vec3 dir) {
+    vec2 uv = pixel / views[v].clip.zw;
+    origin = views[v].eye.xyz;
+    dir = normalize(mat3(views[v].inv_view) * view_ray_dir_eye(v, uv));
+}

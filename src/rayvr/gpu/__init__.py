@@ -1,0 +1,7 @@
+"""OpenGL context, capability probe, shader loading and GPU timing."""
+from .context import Capabilities, GpuContext, create_context, get_context, probe
+from .shaders import ShaderSource, compute_program, preprocess, raster_program
+from .timer import GpuTimer
+
+__all__ = ["Capabilities", "GpuContext", "create_context", "get_context", "probe",
+           "ShaderSource", "compute_program", "preprocess", "raster_program", "GpuTimer"]

@@ -1,0 +1,98 @@
+"""The moderngl context rayvr renders with, and what the driver can do.
+
+Headless EGL is the default: Mesa llvmpipe without a GPU, the vendor driver with one.
+One context is shared per process (`get_context()`), as every GPU resource belongs to it.
+"""
+from __future__ import annotations
+
+import dataclasses
+import os
+
+import moderngl
+
+from ..errors import GpuError
+
+_INSTALL_HINT = (
+    "install the EGL loader and Mesa's drivers (Debian/Ubuntu: "
+    "'apt-get install libegl1 libgl1-mesa-dri libgles2'), or on a GPU machine the vendor's EGL driver"
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class Capabilities:
+    """What the OpenGL driver offers that rayvr's passes can choose between."""
+
+    renderer: str
+    vendor: str
+    version: str
+    gl_version: int
+    multiview: bool          # GL_OVR_multiview2: one draw to all views
+    vertex_layer: bool       # gl_Layer from the vertex shader (layered instanced fallback)
+    bindless_textures: bool  # GL_ARB_bindless_texture
+    subgroups: bool          # GL_KHR_shader_subgroup or GL_ARB_shader_ballot
+    int64: bool              # GL_ARB_gpu_shader_int64
+    timer_queries: bool      # GL_ARB_timer_query whose results can be trusted
+    max_texture_layers: int
+    max_compute_work_group_invocations: int
+    is_software: bool        # llvmpipe / softpipe: ~1e4 times slower than a GPU
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def probe(ctx: moderngl.Context) -> Capabilities:
+    """Read the driver's capabilities from a live context."""
+    ext = ctx.extensions
+    renderer = ctx.info.get("GL_RENDERER", "?")
+    software = any(s in renderer.lower() for s in ("llvmpipe", "softpipe", "swrast"))
+    return Capabilities(
+        renderer=renderer,
+        vendor=ctx.info.get("GL_VENDOR", "?"),
+        version=ctx.info.get("GL_VERSION", "?"),
+        gl_version=ctx.version_code,
+        multiview="GL_OVR_multiview2" in ext,
+        vertex_layer="GL_ARB_shader_viewport_layer_array" in ext or "GL_AMD_vertex_shader_layer" in ext,
+        bindless_textures="GL_ARB_bindless_texture" in ext,
+        subgroups="GL_KHR_shader_subgroup" in ext or "GL_ARB_shader_ballot" in ext,
+        int64="GL_ARB_gpu_shader_int64" in ext,
+        # llvmpipe answers timer queries with placeholder values: time it with finish + wall clock.
+        timer_queries="GL_ARB_timer_query" in ext and not software,
+        max_texture_layers=int(ctx.info.get("GL_MAX_ARRAY_TEXTURE_LAYERS", 256)),
+        max_compute_work_group_invocations=int(ctx.info.get("GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS", 1024)),
+        is_software=software,
+    )
+
+
+class GpuContext:
+    """A moderngl context with its probed capabilities."""
+
+    def __init__(self, gl: moderngl.Context):
+        self.gl = gl
+        self.caps = probe(gl)
+
+    def __repr__(self) -> str:
+        return f"GpuContext({self.caps.renderer!r}, GL {self.caps.gl_version})"
+
+
+_default: GpuContext | None = None
+
+
+def create_context(backend: str | None = None) -> GpuContext:
+    """Create a new headless context (EGL unless RAYVR_GL_BACKEND or `backend` says otherwise)."""
+    backend = backend or os.environ.get("RAYVR_GL_BACKEND", "egl")
+    try:
+        kwargs = {"standalone": True, "require": 450}
+        if backend != "default":
+            kwargs["backend"] = backend
+        gl = moderngl.create_context(**kwargs)
+    except Exception as exc:  # glcontext raises plain Exceptions with the loader's words
+        raise GpuError(f"no OpenGL 4.5 context through {backend}: {exc}; {_INSTALL_HINT}") from exc
+    return GpuContext(gl)
+
+
+def get_context() -> GpuContext:
+    """The process-wide shared context, created on first use."""
+    global _default
+    if _default is None:
+        _default = create_context()
+    return _default
