@@ -1,0 +1,59 @@
+// The hybrid G-buffer as compute passes read it: texture arrays (one layer per view) on fixed
+// sampler units, decoded into one GSurface. A pass sets the units it needs with #defines
+// GBUF_POS_UNIT etc. (see rayvr/passes/gbuffer.py for the formats) before including this file.
+#pragma once
+
+// effect texture (r32ui): low byte effect id (rayvr.Effect), upper 24 bits material index;
+// GBUF_NO_GEOMETRY where no surface was drawn (sky).
+const uint GBUF_NO_GEOMETRY = 0xFFu;
+
+uint gbuf_effect_of(uint packed) { return packed & 0xFFu; }
+uint gbuf_material_of(uint packed) { return packed >> 8u; }
+uint gbuf_pack_effect(uint effect, uint material) { return (material << 8u) | (effect & 0xFFu); }
+
+struct GSurface {
+    vec3 pos;          // render space
+    vec3 n;            // shading normal, facing the viewer
+    vec3 ng;           // geometric normal, facing the viewer
+    vec3 base_color;
+    float alpha;
+    float metallic;
+    float roughness;
+    vec3 emissive;
+    uint effect;
+    uint material;
+};
+
+#ifdef GBUF_POS_UNIT
+layout(binding = GBUF_POS_UNIT) uniform sampler2DArray gbuf_pos;
+layout(binding = GBUF_NORMAL_UNIT) uniform sampler2DArray gbuf_normal;
+layout(binding = GBUF_FACE_NORMAL_UNIT) uniform sampler2DArray gbuf_face_normal;
+layout(binding = GBUF_BASE_COLOR_UNIT) uniform sampler2DArray gbuf_base_color;
+layout(binding = GBUF_METAL_ROUGH_UNIT) uniform sampler2DArray gbuf_metal_rough;
+layout(binding = GBUF_EFFECT_UNIT) uniform usampler2DArray gbuf_effect;
+#ifdef GBUF_EMISSIVE_UNIT
+layout(binding = GBUF_EMISSIVE_UNIT) uniform sampler2DArray gbuf_emissive;
+#endif
+
+GSurface gbuf_load(ivec3 p) {
+    GSurface s;
+    s.pos = texelFetch(gbuf_pos, p, 0).xyz;
+    s.n = normalize(texelFetch(gbuf_normal, p, 0).xyz);
+    s.ng = normalize(texelFetch(gbuf_face_normal, p, 0).xyz);
+    vec4 bc = texelFetch(gbuf_base_color, p, 0);
+    s.base_color = bc.rgb;
+    s.alpha = bc.a;
+    vec2 mr = texelFetch(gbuf_metal_rough, p, 0).xy;
+    s.metallic = mr.x;
+    s.roughness = mr.y;
+#ifdef GBUF_EMISSIVE_UNIT
+    s.emissive = texelFetch(gbuf_emissive, p, 0).rgb;
+#else
+    s.emissive = vec3(0.0);
+#endif
+    uint e = texelFetch(gbuf_effect, p, 0).x;
+    s.effect = gbuf_effect_of(e);
+    s.material = gbuf_material_of(e);
+    return s;
+}
+#endif

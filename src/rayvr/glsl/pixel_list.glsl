@@ -1,0 +1,19 @@
+// Per-effect pixel lists built by the compaction pass (rayvr/passes/compaction.py) and consumed
+// by the ray passes through ComputeShader.run_indirect. Buffer layout (std430, uint words):
+//   [0] pixel count, [1..3] indirect dispatch args (groups x, 1, 1), [4..] packed pixels.
+// A pixel packs x (13 bits) | y (13 bits) << 13 | view (6 bits) << 26: up to 8192 px and 64 views.
+#pragma once
+
+#define PIXEL_LIST_GROUP 64
+#define PIXEL_LIST_HEADER_WORDS 4
+
+uint pixel_list_pack(ivec3 p) { return uint(p.x) | (uint(p.y) << 13u) | (uint(p.z) << 26u); }
+ivec3 pixel_list_unpack(uint w) { return ivec3(w & 0x1FFFu, (w >> 13u) & 0x1FFFu, w >> 26u); }
+
+#ifdef PIXEL_LIST_SSBO
+layout(std430, binding = PIXEL_LIST_SSBO) readonly buffer PixelList {
+    uint pixel_count;
+    uint pixel_dispatch[3];
+    uint pixel_items[];
+};
+#endif

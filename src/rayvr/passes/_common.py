@@ -1,0 +1,84 @@
+"""Helpers the hybrid passes share: shader paths, scene defines, texture binding."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import moderngl
+
+from ..gpu.shaders import compute_program
+
+SHADER_DIR = Path(__file__).resolve().parent / "shaders"
+
+# Sampler units of the G-buffer inputs (glsl/gbuffer.glsl reads them from these #defines).
+GBUFFER_UNITS = {"GBUF_POS_UNIT": 0, "GBUF_NORMAL_UNIT": 1, "GBUF_FACE_NORMAL_UNIT": 2,
+                 "GBUF_BASE_COLOR_UNIT": 3, "GBUF_METAL_ROUGH_UNIT": 4, "GBUF_EFFECT_UNIT": 5,
+                 "GBUF_EMISSIVE_UNIT": 6}
+# The G-buffer pins in the order of their units above.
+GBUFFER_PINS = ("posW", "normW", "faceNormalW", "baseColor", "metalRough", "effect", "emissive")
+
+COMPUTE_GROUP = (8, 8, 1)
+
+
+def scene_defines(ctx) -> dict:
+    """The GpuScene's feature #defines (all 0 without a scene)."""
+    scene = getattr(ctx, "scene", None)
+    if scene is not None and hasattr(scene, "defines"):
+        return dict(scene.defines())
+    return {}
+
+
+def build_compute(gl, name: str, defines: dict | None = None) -> moderngl.ComputeShader:
+    return compute_program(gl, SHADER_DIR / name, defines)
+
+
+def groups_2d(size: tuple[int, int], views: int) -> tuple[int, int, int]:
+    gx, gy, _ = COMPUTE_GROUP
+    return (size[0] + gx - 1) // gx, (size[1] + gy - 1) // gy, views
+
+
+def use_textures(data, pins_units) -> None:
+    """Bind the textures of `pins_units` [(pin, unit)] as samplers; missing optional pins are skipped."""
+    for pin, unit in pins_units:
+        tex = data.get(pin)
+        if tex is not None:
+            tex.use(location=unit)
+
+
+def nearest(tex) -> None:
+    """Integer textures are incomplete with linear filtering: sample them nearest."""
+    if tex is not None and tex.filter != (moderngl.NEAREST, moderngl.NEAREST):
+        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+
+
+def bind_scene(ctx) -> None:
+    """Bind the views SSBO and the GpuScene's buffers and textures."""
+    from ..gpu.bindings import BINDINGS
+
+    if ctx.views_buffer is not None:
+        ctx.views_buffer.bind_to_storage_buffer(BINDINGS["RAYVR_VIEWS_SSBO"])
+    if ctx.scene is not None:
+        ctx.scene.bind()
+
+
+def register(cls):
+    """Register a pass class for JSON graph loading (no-op until the registry exists)."""
+    try:
+        from ..rendergraph.registry import register_pass
+    except ImportError:  # the registry lands with the graph compiler
+        return cls
+    return register_pass(cls)
+
+
+def effect_defines() -> dict:
+    """EFFECT_RASTER .. EFFECT_PATH_TRACED as #defines, so GLSL and rayvr.Effect agree."""
+    from ..materials.effect import Effect
+
+    return {f"EFFECT_{e.name}": int(e) for e in Effect}
+
+
+def effects_used(cd) -> set | None:
+    """The effects the scene's materials use, or None without a scene (then nothing is skipped)."""
+    scene = getattr(cd, "scene", None)
+    if scene is None or not hasattr(scene, "effects_used"):
+        return None
+    return set(scene.effects_used())

@@ -1,0 +1,55 @@
+// Per-effect pixel lists: every pixel whose effect needs shadow rays goes to the shadow list,
+// every pixel that needs reflection rays to the reflection list (glsl/pixel_list.glsl layout).
+// One global atomic per workgroup and list; the indirect group count grows as the list fills.
+#include "gbuffer.glsl"
+#include "pixel_list.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+layout(binding = 0) uniform usampler2DArray effect_tex;
+
+layout(std430, binding = RAYVR_PASS_SSBO_0) buffer ShadowList {
+    uint shadow_count; uint shadow_dispatch[3]; uint shadow_items[];
+};
+layout(std430, binding = RAYVR_PASS_SSBO_1) buffer ReflectionList {
+    uint reflection_count; uint reflection_dispatch[3]; uint reflection_items[];
+};
+
+shared uint s_count[2];
+shared uint s_base[2];
+
+// Groups of PIXEL_LIST_GROUP needed for [base, base + n) beyond those [0, base) needed.
+uint new_groups(uint base, uint n) {
+    const uint g = PIXEL_LIST_GROUP;
+    return (base + n + g - 1u) / g - (base + g - 1u) / g;
+}
+
+void main() {
+    if (gl_LocalInvocationIndex == 0u) { s_count[0] = 0u; s_count[1] = 0u; }
+    barrier();
+
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    ivec3 size = textureSize(effect_tex, 0);
+    uint effect = GBUF_NO_GEOMETRY;
+    if (all(lessThan(p, size))) effect = gbuf_effect_of(texelFetch(effect_tex, p, 0).x);
+    bool geo = effect != GBUF_NO_GEOMETRY;
+    bool wants_shadow = geo && effect >= EFFECT_SHADOWS;
+    bool wants_reflection = COMPACT_REFLECTIONS != 0 && geo && effect >= EFFECT_REFLECTIONS;
+
+    uint local_shadow = wants_shadow ? atomicAdd(s_count[0], 1u) : 0u;
+    uint local_reflection = wants_reflection ? atomicAdd(s_count[1], 1u) : 0u;
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        if (s_count[0] > 0u) {
+            s_base[0] = atomicAdd(shadow_count, s_count[0]);
+            atomicAdd(shadow_dispatch[0], new_groups(s_base[0], s_count[0]));
+        }
+        if (s_count[1] > 0u) {
+            s_base[1] = atomicAdd(reflection_count, s_count[1]);
+            atomicAdd(reflection_dispatch[0], new_groups(s_base[1], s_count[1]));
+        }
+    }
+    barrier();
+    if (wants_shadow) shadow_items[s_base[0] + local_shadow] = pixel_list_pack(p);
+    if (wants_reflection) reflection_items[s_base[1] + local_reflection] = pixel_list_pack(p);
+}

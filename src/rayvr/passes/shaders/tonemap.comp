@@ -1,0 +1,50 @@
+// HDR radiance -> display: exposure (fixed stops, or auto from the frame's mean log luminance),
+// an operator (ACES fit, Reinhard, linear clamp) and sRGB encoding into rgba8.
+#include "sampling.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+layout(binding = 0) uniform sampler2DArray src;
+layout(rgba8, binding = 0) writeonly uniform image2DArray dst;
+
+#if AUTO_EXPOSURE
+layout(std430, binding = RAYVR_PASS_SSBO_0) readonly buffer Exposure { float exposure_scale; };
+#endif
+
+uniform float exposure_stops;
+
+vec3 aces_fit(vec3 x) {   // Narkowicz 2015, fit of the ACES RRT+ODT
+    x *= 0.6;
+    return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+}
+
+vec3 tonemap(vec3 c) {
+#if TONEMAP_OPERATOR == 0
+    return aces_fit(c);
+#elif TONEMAP_OPERATOR == 1
+    return c / (1.0 + c);
+#else
+    return clamp(c, 0.0, 1.0);
+#endif
+}
+
+vec3 srgb_encode(vec3 c) {
+    return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
+}
+
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;
+    vec4 c = texelFetch(src, p, 0);
+    float scale = exp2(exposure_stops);
+#if AUTO_EXPOSURE
+    scale *= exposure_scale;
+#endif
+    vec3 hdr = max(c.rgb * scale, vec3(0.0));
+    hdr = mix(hdr, vec3(0.0), bvec3(any(isnan(hdr)) || any(isinf(hdr))));
+    vec3 ldr = tonemap(hdr);
+#if OUTPUT_SRGB
+    ldr = srgb_encode(ldr);
+#endif
+    imageStore(dst, p, vec4(ldr, 1.0));
+}
