@@ -7,8 +7,8 @@
 // GBUF_NO_GEOMETRY where no surface was drawn (sky).
 const uint GBUF_NO_GEOMETRY = 0xFFu;
 
-uint gbuf_effect_of(uint packed) { return packed & 0xFFu; }
-uint gbuf_material_of(uint packed) { return packed >> 8u; }
+uint gbuf_effect_of(uint word) { return word & 0xFFu; }
+uint gbuf_material_of(uint word) { return word >> 8u; }
 uint gbuf_pack_effect(uint effect, uint material) { return (material << 8u) | (effect & 0xFFu); }
 
 struct GSurface {
