@@ -1,0 +1,39 @@
+"""Checkerboard: a test pattern of two colours, shifted by one cell per view layer."""
+from __future__ import annotations
+
+from ...errors import OptionError
+from ...rendergraph.registry import register_pass
+from ...rendergraph.render_pass import RenderPass, Reflection
+from .compute import program, rgba, run_over, storable_format
+
+
+@register_pass
+class Checkerboard(RenderPass):
+    """Texel (x, y) of layer z is `color_a` when (x // cell + y // cell + z) is even, else `color_b`."""
+
+    DST = "dst"
+    PROPERTIES = {"cell": 8, "color_a": [1.0, 1.0, 1.0, 1.0], "color_b": [0.0, 0.0, 0.0, 1.0],
+                  "format": "rgba8"}
+
+    def validate_property(self, key, value):
+        if key in ("color_a", "color_b"):
+            return list(rgba(value, self.name, key))
+        if key == "format":
+            return storable_format(self.name, key, value)
+        if key == "cell" and (not isinstance(value, int) or isinstance(value, bool) or value < 1):
+            raise OptionError(f"pass {self.name}: property 'cell' must be a whole number >= 1, got {value!r}")
+        return super().validate_property(key, value)
+
+    def reflect(self, cd):
+        r = Reflection()
+        r.add_output(self.DST, "the pattern").format(self.format)
+        return r
+
+    def compile(self, ctx, cd):
+        self._prog = program(ctx.gl, "checkerboard.comp", self.format)
+
+    def execute(self, ctx, data):
+        self._prog["color_a"].value = tuple(self.color_a)
+        self._prog["color_b"].value = tuple(self.color_b)
+        self._prog["cell"].value = self.cell
+        run_over(ctx.gl, self._prog, data[self.DST])

@@ -1,0 +1,296 @@
+"""From a `RenderGraph` to a `Plan`: validate, prune, order, resolve and alias resources.
+
+No GPU work happens here, so a plan is cheap to rebuild (the Renderer recompiles when the set of
+effects in use changes) and `CompiledGraph` only allocates what the plan says.
+
+Aliasing: a transient resource lives over [first write, last read] in execution order; two
+transients with the same kind, format, size and layers whose intervals do not overlap share one
+physical texture or buffer. Marked outputs (read after execute) and internal pins (history kept
+across frames) never alias.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import networkx as nx
+
+from ..errors import GraphError, did_you_mean
+from .formats import get_format
+from .graph import Edge, split_pin
+from .render_pass import CompileData, Pin, PinDirection, PinKind, Reflection
+
+DEFAULT_FORMAT = "rgba32f"   # an output pin that declares no format
+
+
+@dataclasses.dataclass
+class Resource:
+    """One logical resource: a pass's output or internal pin, with the pins that read it."""
+
+    name: str                   # 'Pass.pin' of the writer
+    kind: PinKind
+    fmt: str | None             # None for buffers
+    size: tuple[int, int]
+    layers: int
+    byte_size: int              # buffers only
+    first: int                  # index in the execution order of the writer
+    last: int                   # index of the last reader (== first when nobody reads it)
+    readers: list[str] = dataclasses.field(default_factory=list)
+    marked: bool = False
+    internal: bool = False
+    slot: int = -1              # index into Plan.slots
+
+    @property
+    def bytes(self) -> int:
+        if self.kind is PinKind.BUFFER:
+            return self.byte_size
+        return self.size[0] * self.size[1] * self.layers * get_format(self.fmt).bytes_per_texel
+
+    @property
+    def alias_key(self) -> tuple:
+        return (self.kind, self.fmt, self.size, self.layers, self.byte_size)
+
+    @property
+    def transient(self) -> bool:
+        return not (self.marked or self.internal)
+
+
+@dataclasses.dataclass
+class Slot:
+    """One physical GPU object and the resources that share it over the frame."""
+
+    key: tuple
+    bytes: int
+    resources: list[str]
+    last: int
+
+
+@dataclasses.dataclass
+class Plan:
+    """Everything compile decided, before any GPU allocation."""
+
+    graph_name: str
+    size: tuple[int, int]
+    views: int
+    order: list[str]                                  # kept passes, execution order
+    pruned: dict[str, str]                            # pass -> why it does not run
+    reflections: dict[str, Reflection]
+    compile_data: dict[str, CompileData]              # per kept pass (input_formats filled)
+    resources: dict[str, Resource]                    # by 'Pass.pin' of the writer
+    bindings: dict[str, dict[str, str | None]]        # pass -> pin -> resource name (None: absent)
+    slots: list[Slot]
+    outputs: list[str]                                # marked outputs that are produced
+    unavailable: dict[str, str]                       # marked outputs of pruned passes -> why
+
+    @property
+    def total_bytes(self) -> int:
+        return sum(s.bytes for s in self.slots)
+
+    @property
+    def unaliased_bytes(self) -> int:
+        return sum(r.bytes for r in self.resources.values())
+
+
+def _pin_list(refl: Reflection, direction: PinDirection) -> list[str]:
+    return [p.name for p in refl.pins.values() if p.direction is direction]
+
+
+def _check_pin(refl: Reflection, pass_name: str, type_name: str, pin: str, want: PinDirection,
+               where: str) -> Pin:
+    """The pin `pin` of a pass, which must have direction `want`; GraphError naming it otherwise."""
+    wanted = _pin_list(refl, want)
+    p = refl.pins.get(pin)
+    if p is None:
+        raise GraphError(f"{where}: pass '{pass_name}' ({type_name}) has no {want.value} '{pin}'"
+                         f"{did_you_mean(pin, wanted)}; its {want.value}s: {', '.join(wanted) or '(none)'}")
+    if p.direction is not want:
+        raise GraphError(f"{where}: '{pass_name}.{pin}' is an {p.direction.value} pin, not an "
+                         f"{want.value}; use one of {pass_name}'s {want.value}s: {', '.join(wanted) or '(none)'}")
+    return p
+
+
+def _output_shape(pin: Pin, size, views) -> tuple:
+    fmt = None if pin.kind is PinKind.BUFFER else (pin.fmt or DEFAULT_FORMAT)
+    return fmt, pin.resolved_size(size), (pin.layers or views)
+
+
+def plan_graph(graph, scene=None, size=(64, 64), views: int = 1, caps=None) -> Plan:
+    """Validate `graph` and plan its execution; raises GraphError naming the pass/pin and the fix."""
+    name = graph.name
+    passes = graph.passes
+    edges: list[Edge] = graph.edges
+    size = (int(size[0]), int(size[1]))
+    if size[0] < 1 or size[1] < 1 or int(views) < 1:
+        raise GraphError(f"graph '{name}': compile size {size} x {views} views must be positive")
+    if not passes:
+        raise GraphError(f"graph '{name}' is empty: add passes with add_pass(pass, 'Name')")
+    if not graph.outputs:
+        raise GraphError(f"graph '{name}' has no marked output: mark one with mark_output('Pass.pin')")
+
+    index = {p: i for i, p in enumerate(passes)}
+    g = nx.DiGraph()
+    g.add_nodes_from(passes)
+    g.add_edges_from((e.src_pass, e.dst_pass) for e in edges)
+    try:
+        cycle = nx.find_cycle(g)
+    except nx.NetworkXNoCycle:
+        cycle = None
+    if cycle:
+        chain = " -> ".join([u for u, _ in cycle] + [cycle[0][0]])
+        raise GraphError(f"graph '{name}' has a cycle {chain}: remove one of these edges with remove_edge() "
+                         f"(history belongs in an internal pin)")
+    full_order = list(nx.lexicographical_topological_sort(g, key=index.__getitem__))
+
+    # Two sources into one input.
+    into: dict[tuple[str, str], Edge] = {}
+    for e in edges:
+        if not e.is_data:
+            continue
+        other = into.get((e.dst_pass, e.dst_pin))
+        if other is not None:
+            raise GraphError(f"input '{e.dst}' has two sources '{other.src}' and '{e.src}': "
+                             f"remove one with remove_edge('{e.src}', '{e.dst}')")
+        into[(e.dst_pass, e.dst_pin)] = e
+
+    # Reflect in topological order so each pass sees its sources' formats.
+    reflections: dict[str, Reflection] = {}
+    cds: dict[str, CompileData] = {}
+    shapes: dict[tuple[str, str], tuple] = {}   # (pass, output pin) -> (fmt, size, layers)
+    for p in full_order:
+        rp = passes[p]
+        type_name = type(rp).__name__
+        input_formats = {}
+        for (dp, dpin), e in into.items():
+            if dp != p:
+                continue
+            src_refl = reflections[e.src_pass]
+            _check_pin(src_refl, e.src_pass, type(passes[e.src_pass]).__name__, e.src_pin,
+                       PinDirection.OUTPUT, f"edge {e}")
+            input_formats[dpin] = shapes[(e.src_pass, e.src_pin)][0]
+        cd = CompileData(size=size, views=int(views), scene=scene, caps=caps, input_formats=input_formats)
+        refl = rp.reflect(cd)
+        if not isinstance(refl, Reflection):
+            raise GraphError(f"pass '{p}' ({type_name}): reflect() returned {type(refl).__name__}, "
+                             f"not a Reflection; return the Reflection it built")
+        reflections[p], cds[p] = refl, cd
+        for pin in refl.pins.values():
+            if pin.direction is not PinDirection.INPUT:
+                shapes[(p, pin.name)] = _output_shape(pin, size, int(views))
+        for (dp, dpin), e in into.items():
+            if dp == p:
+                inp = _check_pin(refl, p, type_name, dpin, PinDirection.INPUT, f"edge {e}")
+                _check_compatible(e, reflections[e.src_pass].pins[e.src_pin], inp,
+                                  shapes[(e.src_pass, e.src_pin)], size)
+
+    outputs = graph.outputs
+    for ref in outputs:
+        p, pin = split_pin(ref)
+        _check_pin(reflections[p], p, type(passes[p]).__name__, pin, PinDirection.OUTPUT,
+                   f"mark_output('{ref}')")
+
+    # Prune: feeds no marked output; skip_reason; required input from a pruned pass.
+    out_passes = {split_pin(r)[0] for r in outputs}
+    reach = set(out_passes)
+    for p in out_passes:
+        reach |= nx.ancestors(g, p)
+    pruned: dict[str, str] = {p: "feeds no marked output" for p in full_order if p not in reach}
+    for p in full_order:
+        if p in pruned:
+            continue
+        reason = passes[p].skip_reason(cds[p])
+        if reason:
+            pruned[p] = str(reason)
+            continue
+        for pin in reflections[p].inputs():
+            e = into.get((p, pin.name))
+            if e is not None and e.src_pass in pruned and not pin.is_optional:
+                pruned[p] = (f"required input '{pin.name}' comes from '{e.src_pass}', which was pruned "
+                             f"({e.src_pass}: {pruned[e.src_pass]})")
+                break
+    kept_outputs = [r for r in outputs if split_pin(r)[0] not in pruned]
+    kept = g.subgraph([p for p in full_order if p not in pruned])
+    reach = {split_pin(r)[0] for r in kept_outputs}
+    for p in list(reach):
+        reach |= nx.ancestors(kept, p)
+    for p in full_order:
+        if p not in pruned and p not in reach:
+            pruned[p] = "feeds only pruned passes"
+    order = [p for p in full_order if p not in pruned]
+    unavailable = {r: pruned[split_pin(r)[0]] for r in outputs if r not in kept_outputs}
+
+    for p in order:
+        for pin in reflections[p].inputs():
+            if not pin.is_optional and (p, pin.name) not in into:
+                srcs = [f"{q}.{o.name}" for q in order if q != p for o in reflections[q].outputs()]
+                raise GraphError(f"pass '{p}' ({type(passes[p]).__name__}): required input '{pin.name}' is not "
+                                 f"connected; add_edge('<Pass>.<output>', '{p}.{pin.name}')"
+                                 f"{' (outputs: ' + ', '.join(srcs[:8]) + ')' if srcs else ''}")
+
+    # Resources and bindings.
+    resources: dict[str, Resource] = {}
+    bindings: dict[str, dict[str, str | None]] = {}
+    marked = set(kept_outputs)
+    for i, p in enumerate(order):
+        bind: dict[str, str | None] = {}
+        for pin in reflections[p].pins.values():
+            ref = f"{p}.{pin.name}"
+            if pin.direction is PinDirection.INPUT:
+                e = into.get((p, pin.name))
+                if e is None or e.src_pass in pruned:
+                    bind[pin.name] = None
+                    continue
+                res = resources[e.src]
+                res.last = max(res.last, i)
+                res.readers.append(ref)
+                bind[pin.name] = res.name
+            else:
+                fmt, rsize, layers = shapes[(p, pin.name)]
+                resources[ref] = Resource(ref, pin.kind, fmt, rsize, layers, pin.byte_size, i, i,
+                                          marked=ref in marked,
+                                          internal=pin.direction is PinDirection.INTERNAL)
+                bind[pin.name] = ref
+        bindings[p] = bind
+
+    slots = _assign_slots(list(resources.values()))
+    return Plan(name, size, int(views), order, pruned, reflections, {p: cds[p] for p in order},
+                resources, bindings, slots, kept_outputs, unavailable)
+
+
+def _check_compatible(e: Edge, out: Pin, inp: Pin, shape: tuple, size) -> None:
+    fmt, rsize, layers = shape
+    if out.kind is not inp.kind:
+        raise GraphError(f"edge {e}: '{e.src}' is a {out.kind.value} but '{e.dst}' takes a {inp.kind.value}; "
+                         f"connect a {inp.kind.value} output")
+    if inp.kind is PinKind.BUFFER:
+        if inp.byte_size and out.byte_size < inp.byte_size:
+            raise GraphError(f"edge {e}: '{e.src}' has {out.byte_size} bytes but '{e.dst}' needs "
+                             f"{inp.byte_size}; enlarge the source buffer")
+        return
+    if inp.fmt and inp.fmt != fmt:
+        raise GraphError(f"edge {e}: format conflict, '{e.src}' is {fmt} but '{e.dst}' needs {inp.fmt}; "
+                         f"set the source's format to {inp.fmt} or insert a Blit({{'format': '{inp.fmt}'}})")
+    if inp.size_rule != "output":   # an input that states a size (fixed or scaled) must get it
+        want = inp.resolved_size(size)
+        if want != rsize:
+            raise GraphError(f"edge {e}: size conflict, '{e.src}' is {rsize[0]}x{rsize[1]} but '{e.dst}' "
+                             f"needs {want[0]}x{want[1]}; insert a Blit to rescale")
+    if inp.layers is not None and inp.layers != layers:
+        raise GraphError(f"edge {e}: view-count conflict, '{e.src}' has {layers} layers but '{e.dst}' "
+                         f"needs {inp.layers}; make the source declare views({inp.layers})")
+
+
+def _assign_slots(resources: list[Resource]) -> list[Slot]:
+    """Greedy interval sharing: each transient takes the free matching slot released earliest."""
+    slots: list[Slot] = []
+    for r in sorted(resources, key=lambda r: (r.first, r.name)):
+        choice = None
+        if r.transient:
+            free = [s for s in slots if s.key == r.alias_key and s.last < r.first]
+            if free:
+                choice = min(free, key=lambda s: s.last)
+        if choice is None:
+            choice = Slot(r.alias_key, r.bytes, [], r.last if r.transient else 1 << 62)
+            slots.append(choice)
+        choice.resources.append(r.name)
+        choice.last = r.last if r.transient else choice.last
+        r.slot = slots.index(choice)
+    return slots

@@ -1,0 +1,63 @@
+"""Per-pass GPU time with rolling statistics over the last N frames."""
+from __future__ import annotations
+
+import collections
+import dataclasses
+
+import numpy as np
+
+
+@dataclasses.dataclass
+class PassStats:
+    last_ms: float
+    mean_ms: float
+    min_ms: float
+    max_ms: float
+    p95_ms: float
+    samples: int
+
+
+@dataclasses.dataclass
+class Profile:
+    """`profile.passes[name].mean_ms`; `str()` is a table; `method` says how time was measured."""
+
+    method: str                     # 'timer-query' | 'finish+wall' | 'off'
+    frames: int
+    window: int
+    passes: dict[str, PassStats]
+    cpu_ms: PassStats | None        # CPU time inside execute() (includes waits with finish+wall)
+
+    @property
+    def total_ms(self) -> float:
+        return sum(s.mean_ms for s in self.passes.values())
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self) | {"total_ms": self.total_ms}
+
+    def __str__(self) -> str:
+        head = f"GPU time per pass ({self.method}, mean/min/max/p95 over the last {self.window} frames; {self.frames} frames)"
+        width = max([len(p) for p in self.passes] + [5])
+        lines = [head, f"  {'pass':<{width}}  {'mean ms':>9} {'min':>9} {'max':>9} {'p95':>9}"]
+        for name, s in self.passes.items():
+            lines.append(f"  {name:<{width}}  {s.mean_ms:9.3f} {s.min_ms:9.3f} {s.max_ms:9.3f} {s.p95_ms:9.3f}")
+        lines.append(f"  {'total':<{width}}  {self.total_ms:9.3f}")
+        if self.cpu_ms:
+            lines.append(f"  CPU in execute(): mean {self.cpu_ms.mean_ms:.3f} ms")
+        return "\n".join(lines)
+
+
+class RollingTimes:
+    """The last `window` samples of one quantity."""
+
+    def __init__(self, window: int):
+        self.values: collections.deque = collections.deque(maxlen=window)
+
+    def add(self, ms: float) -> None:
+        self.values.append(ms)
+
+    def stats(self) -> PassStats | None:
+        if not self.values:
+            return None
+        a = np.fromiter(self.values, dtype=np.float64)
+        return PassStats(float(a[-1]), float(a.mean()), float(a.min()), float(a.max()),
+                         float(np.percentile(a, 95)), len(a))

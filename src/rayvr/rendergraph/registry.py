@@ -1,0 +1,54 @@
+"""Pass classes by name, so a JSON graph can be loaded without executing code.
+
+    @register_pass
+    class Blit(RenderPass): ...
+
+    get_pass_class("Blit")  -> Blit
+"""
+from __future__ import annotations
+
+import importlib
+
+from ..errors import GraphError, did_you_mean
+
+_REGISTRY: dict[str, type] = {}
+
+# Packages whose import registers passes; imported on the first look-up that misses.
+PASS_PACKAGES = ["rayvr.passes.basic", "rayvr.passes"]
+
+
+def register_pass(cls: type) -> type:
+    """Class decorator: make `cls` loadable by its class name. Re-registering the same name replaces it."""
+    from .render_pass import RenderPass
+
+    if not (isinstance(cls, type) and issubclass(cls, RenderPass)):
+        raise GraphError(f"register_pass: {cls!r} is not a RenderPass subclass; decorate a pass class")
+    _REGISTRY[cls.__name__] = cls
+    return cls
+
+
+def _import_pass_packages() -> None:
+    for name in PASS_PACKAGES:
+        try:
+            importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name != name:
+                raise
+
+
+def get_pass_class(name: str, where: str = "pass type") -> type:
+    """The registered pass class called `name`; GraphError with a did-you-mean when unknown."""
+    if name not in _REGISTRY:
+        _import_pass_packages()
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise GraphError(f"{where}: unknown pass type {name!r}{did_you_mean(name, _REGISTRY)}; "
+                         f"registered: {', '.join(sorted(_REGISTRY)) or '(none)'}; "
+                         f"decorate the class with @register_pass and import its module") from None
+
+
+def registered_passes() -> dict[str, type]:
+    """All registered pass classes by name (after importing the pass packages)."""
+    _import_pass_packages()
+    return dict(_REGISTRY)
