@@ -1,4 +1,28 @@
-"""Views and stereo math, the simulated headset, the OpenXR sink, light-field output."""
-from .views import Fov, Pose, View, ViewSet
+"""Views and stereo math, the simulated headset, the OpenXR sink, light-field output.
 
-__all__ = ["Fov", "Pose", "View", "ViewSet"]
+`OpenXRSink` loads on first use, so rayvr imports and renders without pyopenxr installed.
+"""
+from .cameras import camera_grid, eye_poses, lightfield_row, look_at, mono_view, stereo_views
+from .compositor import Compositor
+from .presets import PRESETS, HeadsetPreset, get_preset
+from .quilt import LOOKING_GLASS, QuiltLayout, compose_quilt, read_quilt, write_quilt_png
+from .readback import read_layers
+from .simulated import SimulatedHeadset
+from .sink import FrameRequest, OffscreenViews, Sink
+from .trajectory import PoseLog, Trajectory, make_trajectory
+from .views import Fov, Pose, View, ViewSet, projection
+
+__all__ = ["Fov", "Pose", "View", "ViewSet", "projection",
+           "look_at", "eye_poses", "mono_view", "stereo_views", "camera_grid", "lightfield_row",
+           "Sink", "FrameRequest", "OffscreenViews", "SimulatedHeadset", "Compositor",
+           "PRESETS", "HeadsetPreset", "get_preset", "Trajectory", "PoseLog", "make_trajectory",
+           "compose_quilt", "read_quilt", "write_quilt_png", "QuiltLayout", "LOOKING_GLASS",
+           "read_layers", "OpenXRSink"]
+
+
+def __getattr__(name: str):
+    if name == "OpenXRSink":
+        from .openxr_sink import OpenXRSink
+
+        return OpenXRSink
+    raise AttributeError(f"module 'rayvr.xr' has no attribute '{name}'")

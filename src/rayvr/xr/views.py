@@ -1,7 +1,8 @@
 """Views in OpenXR's terms: a pose and an asymmetric field of view per view, packed for the GPU.
 
 Math is float64 on the CPU; `ViewSet.pack()` writes float32 matrices in render space (world minus
-the frame origin), laid out as `glsl/views.glsl` declares.
+the frame origin), laid out as `glsl/views.glsl` declares. Pixel coordinates are GL's: x to the
+right, y up, (0, 0) the bottom-left corner of the image, pixel (i, j) centred at (i + 0.5, j + 0.5).
 """
 from __future__ import annotations
 
@@ -10,8 +11,12 @@ import math
 
 import numpy as np
 
+from ..errors import XrError
+from . import quaternion
+
 VIEW_STRUCT_FLOATS = 5 * 16 + 4 * 4   # five mat4 + four vec4 (std430)
 HEADER_BYTES = 16                     # uvec4 frame_info
+FLAG_REVERSED_Z = 1                   # frame_info.w bit: projections are reversed-Z (infinite far)
 
 
 @dataclasses.dataclass
@@ -25,14 +30,39 @@ class Fov:
 
     @classmethod
     def symmetric(cls, vertical_deg: float, aspect: float) -> "Fov":
+        """A centred frustum from the vertical angle and the width/height aspect."""
         ty = math.tan(math.radians(vertical_deg) / 2)
         tx = ty * aspect
         return cls(-math.atan(tx), math.atan(tx), math.atan(ty), -math.atan(ty))
+
+    @classmethod
+    def from_degrees(cls, left: float, right: float, up: float, down: float) -> "Fov":
+        """XrFovf from signed degrees (left/down negative), e.g. Fov.from_degrees(-52, 45, 48, -50)."""
+        return cls(*(math.radians(a) for a in (left, right, up, down)))
+
+    @classmethod
+    def from_tangents(cls, left: float, right: float, down: float, up: float) -> "Fov":
+        """XrFovf from the frustum's tangents (OpenVR's raw projection, in views.glsl's order)."""
+        return cls(math.atan(left), math.atan(right), math.atan(up), math.atan(down))
 
     def tangents(self) -> tuple[float, float, float, float]:
         """tan of (left, right, down, up), the order views.glsl uses."""
         return (math.tan(self.angle_left), math.tan(self.angle_right),
                 math.tan(self.angle_down), math.tan(self.angle_up))
+
+    def degrees(self) -> tuple[float, float, float, float]:
+        """(left, right, up, down) in degrees, XrFovf's order."""
+        return tuple(math.degrees(a) for a in (self.angle_left, self.angle_right, self.angle_up, self.angle_down))
+
+    def focal_px(self, width: int, height: int) -> tuple[float, float]:
+        """Focal lengths in pixels (fx, fy): pixels per unit of tangent across the image."""
+        l, r, d, u = self.tangents()
+        return width / (r - l), height / (u - d)
+
+    def sheared(self, dx: float, dy: float) -> "Fov":
+        """This frustum with its tangents shifted by (dx, dy): an off-axis (lens-shifted) copy."""
+        l, r, d, u = self.tangents()
+        return Fov.from_tangents(l + dx, r + dx, d + dy, u + dy)
 
 
 @dataclasses.dataclass
@@ -40,15 +70,20 @@ class Pose:
     """XrPosef: position (metres) and orientation as a unit quaternion (x, y, z, w)."""
 
     position: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
-    orientation: np.ndarray = dataclasses.field(default_factory=lambda: np.array([0.0, 0.0, 0.0, 1.0]))
+    orientation: np.ndarray = dataclasses.field(default_factory=lambda: quaternion.IDENTITY.copy())
+
+    def __post_init__(self):
+        self.position = np.asarray(self.position, dtype=np.float64).reshape(3)
+        self.orientation = np.asarray(self.orientation, dtype=np.float64).reshape(4)
+
+    @classmethod
+    def from_matrix(cls, m) -> "Pose":
+        """The pose of a rigid 4x4 local-to-world matrix."""
+        m = np.asarray(m, dtype=np.float64)
+        return cls(m[:3, 3].copy(), quaternion.from_matrix(m[:3, :3]))
 
     def rotation_matrix(self) -> np.ndarray:
-        x, y, z, w = np.asarray(self.orientation, dtype=np.float64) / np.linalg.norm(self.orientation)
-        return np.array([
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ])
+        return quaternion.to_matrix(self.orientation)
 
     def matrix(self) -> np.ndarray:
         """Eye-to-world 4x4 (float64)."""
@@ -57,9 +92,21 @@ class Pose:
         m[:3, 3] = self.position
         return m
 
+    def compose(self, local: "Pose") -> "Pose":
+        """`local` (given in this pose's frame) expressed in this pose's parent frame."""
+        return Pose(self.position + self.rotation_matrix() @ local.position,
+                    quaternion.normalize(quaternion.multiply(self.orientation, local.orientation)))
+
+    def transform_point(self, p) -> np.ndarray:
+        return self.rotation_matrix() @ np.asarray(p, dtype=np.float64) + self.position
+
 
 def projection(fov: Fov, near: float, far: float, reversed_z: bool = False) -> np.ndarray:
-    """OpenGL projection for an asymmetric frustum (as the OpenXR GL samples build it)."""
+    """OpenGL projection for an asymmetric frustum (as the OpenXR GL samples build it).
+
+    Reversed-Z is the infinite-far form: depth 1 at `near`, 0 at infinity, for glClipControl
+    (GL_LOWER_LEFT, GL_ZERO_TO_ONE) and a GL_GREATER depth test.
+    """
     l, r, d, u = fov.tangents()
     m = np.zeros((4, 4))
     m[0, 0] = 2 / (r - l)
@@ -67,7 +114,7 @@ def projection(fov: Fov, near: float, far: float, reversed_z: bool = False) -> n
     m[1, 1] = 2 / (u - d)
     m[1, 2] = (u + d) / (u - d)
     m[3, 2] = -1
-    if reversed_z:  # infinite far plane, depth 1 at near, 0 at infinity (with glClipControl semantics)
+    if reversed_z:
         m[2, 2] = 0.0
         m[2, 3] = near
     else:
@@ -94,24 +141,65 @@ class View:
         m[:3, 3] -= np.asarray(origin, dtype=np.float64)
         return np.linalg.inv(m)
 
+    def inverse_view_matrix(self, origin=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Eye-space to render-space, float64."""
+        m = self.pose.matrix()
+        m[:3, 3] -= np.asarray(origin, dtype=np.float64)
+        return m
+
     def projection_matrix(self) -> np.ndarray:
         return projection(self.fov, self.near, self.far, self.reversed_z)
 
+    def inverse_projection_matrix(self) -> np.ndarray:
+        return np.linalg.inv(self.projection_matrix())
+
+    def project(self, points, origin=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Pixel coordinates (x, y) and NDC depth of world (or render-space, with `origin`) points.
+
+        Returns an array (..., 3): x and y in pixels from the bottom-left corner, z in NDC.
+        """
+        p = np.asarray(points, dtype=np.float64)
+        ph = np.concatenate([p, np.ones(p.shape[:-1] + (1,))], axis=-1)
+        clip = ph @ (self.projection_matrix() @ self.view_matrix(origin)).T
+        ndc = clip[..., :3] / clip[..., 3:4]
+        return np.stack([(ndc[..., 0] + 1) * 0.5 * self.width,
+                         (ndc[..., 1] + 1) * 0.5 * self.height, ndc[..., 2]], axis=-1)
+
+    def primary_ray(self, pixel, origin=(0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+        """(origin, unit direction) through `pixel` (x, y): the CPU twin of view_primary_ray()."""
+        l, r, d, u = self.fov.tangents()
+        uvx, uvy = pixel[0] / self.width, pixel[1] / self.height
+        dir_eye = np.array([l + (r - l) * uvx, d + (u - d) * uvy, -1.0])
+        dir_eye /= np.linalg.norm(dir_eye)
+        return (self.pose.position - np.asarray(origin, dtype=np.float64),
+                self.pose.rotation_matrix() @ dir_eye)
+
 
 class ViewSet:
-    """All views of one frame (1 mono, 2 stereo, N light field) and their GPU packing."""
+    """All views of one frame (1 mono, 2 stereo, N light field) and their GPU packing.
 
-    def __init__(self, views: list[View]):
+    `previous`: last frame's ViewSet, whose packed view-projections become this frame's
+    `prev_view_proj` (motion vectors) when the view count matches.
+    """
+
+    def __init__(self, views: list[View], previous: "ViewSet | None" = None):
         if not views:
-            raise ValueError("a ViewSet needs at least one view")
+            raise XrError("a ViewSet needs at least one view; pass a list of rayvr.xr.View")
+        sizes = {(v.width, v.height) for v in views}
+        if len(sizes) != 1:
+            raise XrError(f"all views of a ViewSet render into one texture array, but their sizes differ: "
+                          f"{sorted(sizes)}; give every View the same width and height")
         self.views = list(views)
-        self._prev_view_proj: list[np.ndarray] | None = None
+        self._prev_view_proj = previous._prev_view_proj if previous is not None else None
 
     def __len__(self) -> int:
         return len(self.views)
 
     def __getitem__(self, i: int) -> View:
         return self.views[i]
+
+    def __iter__(self):
+        return iter(self.views)
 
     @property
     def size(self) -> tuple[int, int]:
@@ -121,30 +209,37 @@ class ViewSet:
         """The render-space origin: the mean eye position (float64)."""
         return np.mean([v.pose.position for v in self.views], axis=0)
 
+    def matrices(self, origin=None) -> dict[str, np.ndarray]:
+        """float64 (n, 4, 4) stacks: view, proj, view_proj, inv_view, in render space."""
+        origin = self.origin() if origin is None else np.asarray(origin, dtype=np.float64)
+        inv_view = np.stack([v.inverse_view_matrix(origin) for v in self.views])
+        view = np.linalg.inv(inv_view)
+        proj = np.stack([v.projection_matrix() for v in self.views])
+        return {"view": view, "proj": proj, "view_proj": proj @ view, "inv_view": inv_view}
+
     def pack(self, origin=None, frame_index: int = 0, sample_index: int = 0, flags: int = 0,
              jitter=(0.0, 0.0)) -> bytes:
         """The bytes of the views SSBO for this frame (see glsl/views.glsl)."""
         origin = self.origin() if origin is None else np.asarray(origin, dtype=np.float64)
         n = len(self.views)
+        if self.views[0].reversed_z:
+            flags |= FLAG_REVERSED_Z
         header = np.array([n, frame_index, sample_index, flags], dtype=np.uint32)
+        m = self.matrices(origin)
+        prev = m["view_proj"]
+        if self._prev_view_proj is not None and len(self._prev_view_proj[0]) == n:
+            pvp, porigin = self._prev_view_proj
+            shift = np.eye(4)
+            shift[:3, 3] = origin - porigin   # this frame's render space -> last frame's
+            prev = pvp @ shift
+        self._prev_view_proj = (m["view_proj"], origin)
         body = np.zeros((n, VIEW_STRUCT_FLOATS), dtype=np.float32)
-        current = []
-        for i, v in enumerate(self.views):
-            view = v.view_matrix(origin)
-            proj = v.projection_matrix()
-            vp = proj @ view
-            current.append((vp, origin))
-            prev = vp
-            if self._prev_view_proj is not None and i < len(self._prev_view_proj):
-                pvp, porigin = self._prev_view_proj[i]
-                shift = np.eye(4)
-                shift[:3, 3] = origin - porigin   # this frame's render space -> last frame's
-                prev = pvp @ shift
-            mats = [view, proj, vp, np.linalg.inv(view), prev]
-            # GLSL is column-major: write each matrix transposed.
-            body[i, :80] = np.concatenate([m.T.reshape(-1) for m in mats])
-            eye = v.pose.position - origin
-            body[i, 80:96] = [*eye, 1.0, *v.fov.tangents(), v.near, v.far, v.width, v.height,
-                              jitter[0], jitter[1], 0.0, 0.0]
-        self._prev_view_proj = current
+        mats = [m["view"], m["proj"], m["view_proj"], m["inv_view"], prev]
+        # GLSL is column-major: write each matrix transposed.
+        body[:, :80] = np.concatenate([x.transpose(0, 2, 1).reshape(n, 16) for x in mats], axis=1)
+        body[:, 80:83] = m["inv_view"][:, :3, 3]
+        body[:, 83] = 1.0
+        body[:, 84:88] = [v.fov.tangents() for v in self.views]
+        body[:, 88:92] = [(v.near, v.far, v.width, v.height) for v in self.views]
+        body[:, 92:94] = jitter
         return header.tobytes() + body.tobytes()
