@@ -8,8 +8,9 @@ from pathlib import Path
 from ..errors import GraphError
 
 
-def _q(s: str) -> str:
-    return '"' + str(s).replace("\\", "\\\\").replace('"', '\\"') + '"'
+def _q(*lines: str) -> str:
+    """A quoted DOT string; several arguments become lines."""
+    return '"' + "\\n".join(str(s).replace("\\", "\\\\").replace('"', '\\"') for s in lines) + '"'
 
 
 def graph_to_dot(graph) -> str:
@@ -19,7 +20,7 @@ def graph_to_dot(graph) -> str:
              '  node [shape=box, style="rounded,filled", fillcolor="#eef3fb", fontname="Helvetica"];',
              '  edge [fontname="Helvetica", fontsize=10];']
     for name, p in graph.passes.items():
-        lines.append(f"  {_q(name)} [label={_q(name + chr(10) + type(p).__name__)}];")
+        lines.append(f"  {_q(name)} [label={_q(name, type(p).__name__)}];")
     for e in graph.edges:
         attrs = f"label={_q(e.src_pin + ' -> ' + e.dst_pin)}" if e.is_data else 'style=dashed, label="order"'
         lines.append(f"  {_q(e.src_pass)} -> {_q(e.dst_pass)} [{attrs}];")

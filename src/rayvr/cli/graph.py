@@ -1,0 +1,55 @@
+"""`rayvr graph show FILE`: compile a saved graph (.py or .json) and print its report, DOT or picture."""
+from __future__ import annotations
+
+import json
+
+from ..errors import OptionError
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+        if w > 0 and h > 0:
+            return w, h
+    except ValueError:
+        pass
+    raise OptionError(f"--size: expected WIDTHxHEIGHT such as 640x480, got {text!r}")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("graph", help="inspect saved render graphs")
+    gsub = p.add_subparsers(dest="graph_command", metavar="ACTION")
+    show = gsub.add_parser("show", help="compile a saved graph and print its report")
+    show.add_argument("file", help="graph file: .py script (runs it) or .json (runs no code)")
+    show.add_argument("--size", default="128x128", help="per-view size WxH to compile at (default 128x128)")
+    show.add_argument("--views", type=int, default=2, help="view count (default 2: stereo)")
+    show.add_argument("--scene", help="scene file the passes reflect on (glTF); default none")
+    show.add_argument("--dot", action="store_true", help="print the graph as Graphviz DOT instead")
+    show.add_argument("--png", metavar="OUT", help="also draw the graph to OUT (.png/.svg/.pdf)")
+    show.add_argument("--json", action="store_true", help="print the report as JSON")
+    show.set_defaults(func=run_show)
+    p.set_defaults(func=lambda args: (p.print_help(), 2)[1])
+
+
+def run_show(args) -> int:
+    from ..rendergraph.graph import RenderGraph
+
+    size = _size(args.size)
+    if args.views < 1:
+        raise OptionError(f"--views: must be >= 1, got {args.views}")
+    graph = RenderGraph.load(args.file)
+    if args.png:
+        graph.save_picture(args.png)
+    if args.dot:
+        print(graph.to_dot(), end="")
+        return 0
+    scene = None
+    if args.scene:
+        from ..scene import load_scene
+
+        scene = load_scene(args.scene)
+    report = graph.compile(scene=scene, size=size, views=args.views).report()
+    print(json.dumps(report.as_dict(), indent=2, default=str) if args.json else report)
+    if args.png:
+        print(f"picture: {args.png}")
+    return 0
