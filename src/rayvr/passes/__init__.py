@@ -1,0 +1,19 @@
+"""Render passes. The hybrid pipeline's passes are here; the simple ones (Clear, Blit,
+ImageLoader, ...) in `rayvr.passes.basic`, re-exported below."""
+from .compaction import EffectCompaction
+from .composite import HybridComposite
+from .gbuffer import GBufferRaster
+from .lighting import DirectLighting, RTReflections, RTShadows
+from .tonemap import ToneMapper
+
+__all__ = ["GBufferRaster", "DirectLighting", "EffectCompaction", "RTShadows", "RTReflections",
+           "HybridComposite", "ToneMapper"]
+
+try:
+    from . import basic as _basic
+except ImportError:  # the basic passes land separately
+    _basic = None
+else:
+    for _name in getattr(_basic, "__all__", []):
+        globals()[_name] = getattr(_basic, _name)
+        __all__.append(_name)

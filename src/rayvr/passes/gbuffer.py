@@ -1,0 +1,126 @@
+"""GBufferRaster: every view in one draw into 2D texture arrays.
+
+OVR multiview (gl_ViewID_OVR) where the driver has GL_OVR_multiview2; elsewhere layered instanced
+rendering, each instance drawn once per view with gl_Layer set in the vertex shader.
+"""
+from __future__ import annotations
+
+from ..errors import GpuError, OptionError
+from ..rendergraph.render_pass import Reflection, RenderPass
+from ._common import SHADER_DIR, bind_scene, effect_defines, register, scene_defines
+from ._rawgl import LayeredTarget
+
+# pin -> (format, clear value); the attachment order is this order. posW.w is the linear
+# (eye-space) depth, 0 where nothing was drawn.
+OUTPUTS = {
+    "posW": ("rgba32f", (0.0, 0.0, 0.0, 0.0)),
+    "normW": ("rgba16f", (0.0, 0.0, 0.0, 0.0)),
+    "faceNormalW": ("rgba16f", (0.0, 0.0, 0.0, 0.0)),
+    "baseColor": ("rgba8", (0.0, 0.0, 0.0, 0.0)),
+    "metalRough": ("rg16f", (0.0, 0.0, 0.0, 0.0)),
+    "emissive": ("rgba16f", (0.0, 0.0, 0.0, 0.0)),
+    "effect": ("r32ui", ("uint", 0xFF)),          # glsl/gbuffer.glsl: GBUF_NO_GEOMETRY
+    "motion": ("rg16f", (0.0, 0.0, 0.0, 0.0)),
+}
+DESCRIPTIONS = {
+    "posW": "render-space position; w = linear eye depth (0: no geometry)",
+    "normW": "shading normal (render space, facing the viewer)",
+    "faceNormalW": "geometric normal (render space, facing the viewer)",
+    "baseColor": "base colour and alpha",
+    "metalRough": "metallic, roughness",
+    "emissive": "emitted radiance",
+    "effect": "effect id (low byte) | material index << 8; 0xFF: no geometry",
+    "motion": "motion vector in pixels (this frame - last frame)",
+}
+MULTIVIEW_MODES = ("auto", "on", "off")
+
+
+@register
+class GBufferRaster(RenderPass):
+    """Rasterises the scene for all views in one draw call (see the module docstring)."""
+
+    PROPERTIES = {"multiview": "auto", "cull_back_faces": False}
+
+    def validate_property(self, key, value):
+        value = super().validate_property(key, value)
+        if key == "multiview" and value not in MULTIVIEW_MODES:
+            raise OptionError(f"pass {self.name}: property 'multiview' is {value!r}; use auto, on or off")
+        return value
+
+    def reflect(self, cd):
+        r = Reflection()
+        for pin, (fmt, _) in OUTPUTS.items():
+            r.add_output(pin, DESCRIPTIONS[pin]).format(fmt)
+        return r
+
+    def uses_multiview(self, caps) -> bool:
+        if self.multiview == "off":
+            return False
+        has = bool(caps is not None and caps.multiview)
+        if self.multiview == "on" and not has:
+            raise GpuError(f"pass {self.name}: multiview='on' but the driver has no GL_OVR_multiview2; "
+                           f"use multiview='auto' (layered rendering)")
+        return has
+
+    def compile(self, ctx, cd):
+        if ctx.scene is None:
+            from ..errors import GraphError
+            raise GraphError(f"pass {self.name} (GBufferRaster) needs a scene: compile the graph with "
+                             f"a scene (rv.Renderer(scene, graph) does)")
+        self._multiview = self.uses_multiview(ctx.caps)
+        if not self._multiview and not ctx.caps.vertex_layer:
+            raise GpuError(f"pass {self.name}: the driver has neither GL_OVR_multiview2 nor "
+                           f"GL_ARB_shader_viewport_layer_array; one draw cannot reach every view")
+        self._views = cd.views
+        self._defines = {**scene_defines(ctx), **effect_defines(), "VIEW_COUNT": cd.views,
+                         "RAYVR_MULTIVIEW": int(self._multiview)}
+        header = ("#extension GL_OVR_multiview2 : require" if self._multiview
+                  else "#extension GL_ARB_shader_viewport_layer_array : require")
+        frag_header = "#extension GL_OVR_multiview2 : require" if self._multiview else ""
+        from ..gpu.shaders import preprocess, _compile
+        vs = preprocess(SHADER_DIR / "gbuffer.vert", self._defines, header=header + "\n" + _draw_header())
+        fs = preprocess(SHADER_DIR / "gbuffer.frag", self._defines, header=frag_header)
+        gl = ctx.gl
+        self._prog = _compile(gl, "raster", {"vertex_shader": vs, "fragment_shader": fs},
+                              lambda: gl.program(vertex_shader=vs.text, fragment_shader=fs.text))
+        self._target = None
+        self._target_key = None
+
+    def defines(self) -> dict:
+        return dict(getattr(self, "_defines", {}))
+
+    def _ensure_target(self, ctx, data):
+        colors = [data[p] for p in OUTPUTS]
+        key = tuple(c.glo for c in colors)
+        if key != self._target_key:   # first frame, or the graph re-allocated its textures
+            if self._target is not None:
+                self._target.release()
+            self._target = LayeredTarget(ctx.gl, colors, data.size, data.views, self._multiview)
+            self._target.set_clear_values([clear for _, clear in OUTPUTS.values()])
+            self._target_key = key
+        return self._target
+
+    def execute(self, ctx, data):
+        import moderngl
+
+        target = self._ensure_target(ctx, data)
+        gl = ctx.gl
+        target.use_and_clear()
+        gl.enable(moderngl.DEPTH_TEST)
+        if self.cull_back_faces:
+            gl.enable(moderngl.CULL_FACE)
+        bind_scene(ctx)
+        ctx.scene.draw(self._prog, 1 if self._multiview else data.views)
+        gl.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
+
+    def __del__(self):
+        target = self.__dict__.get("_target")
+        if target is not None:
+            try:
+                target.release()
+            except Exception:
+                pass
+
+
+def _draw_header() -> str:
+    return "#extension GL_ARB_shader_draw_parameters : enable"

@@ -1,0 +1,133 @@
+"""The lighting passes that read the G-buffer: DirectLighting (every pixel, no rays), RTShadows
+and RTReflections (only the pixels on their effect's list, dispatched indirectly)."""
+from __future__ import annotations
+
+from ..gpu.bindings import BINDINGS
+from ..materials.effect import Effect
+from ..rendergraph.render_pass import Reflection, RenderPass
+from ._common import (GBUFFER_PINS, GBUFFER_UNITS, bind_scene, build_compute, effect_defines,
+                      effects_used, groups_2d, register, scene_defines)
+from .compaction import DISPATCH_OFFSET, pixel_list_bytes
+
+GBUFFER_FORMATS = {"posW": "rgba32f", "normW": "rgba16f", "faceNormalW": "rgba16f", "baseColor": "rgba8",
+                   "metalRough": "rg16f", "effect": "r32ui", "emissive": "rgba16f"}
+PASS_SSBO_0 = BINDINGS["RAYVR_PASS_SSBO_0"]
+
+
+class _GBufferLightingPass(RenderPass):
+    """Shared anatomy: G-buffer inputs on fixed sampler units, one rgba16f radiance output."""
+
+    SHADER = ""
+    OUTPUT = "color"
+    OUTPUT_DESC = ""
+    PIXEL_LIST: str | None = None   # input pin of the pixel list, for indirect dispatch
+    SALT = 0
+
+    def reflect(self, cd):
+        r = Reflection()
+        for pin in GBUFFER_PINS:
+            r.add_input(pin, f"G-buffer {pin}").format(GBUFFER_FORMATS[pin])
+        if self.PIXEL_LIST:
+            r.add_input(self.PIXEL_LIST, "pixels to work on (EffectCompaction)").buffer(
+                pixel_list_bytes(cd.size, cd.views))
+        r.add_output(self.OUTPUT, self.OUTPUT_DESC).format("rgba16f")
+        return r
+
+    def shader_defines(self) -> dict:
+        return {}
+
+    def compile(self, ctx, cd):
+        self._defines = {**scene_defines(ctx), **effect_defines(), **GBUFFER_UNITS,
+                         "PIXEL_LIST_SSBO": PASS_SSBO_0, "RNG_SALT": self.SALT, **self.shader_defines()}
+        self._prog = build_compute(ctx.gl, self.SHADER, self._defines)
+        self.set_uniforms(self._prog)
+
+    def set_uniforms(self, prog) -> None:
+        """Properties that are uniforms (set once per compile, not per frame)."""
+
+    def defines(self) -> dict:
+        return dict(getattr(self, "_defines", {}) or self.shader_defines())
+
+    def execute(self, ctx, data):
+        bind_scene(ctx)
+        for pin, unit in zip(GBUFFER_PINS, GBUFFER_UNITS.values()):
+            data[pin].use(location=unit)
+        data[self.OUTPUT].bind_to_image(0, read=False, write=True)
+        if self.PIXEL_LIST:
+            pixels = data[self.PIXEL_LIST]
+            pixels.bind_to_storage_buffer(PASS_SSBO_0)
+            self._prog.run_indirect(pixels, DISPATCH_OFFSET)
+        else:
+            self._prog.run(*groups_2d(data.size, data.views))
+        ctx.gl.memory_barrier()
+
+
+def _background(value):
+    return [float(v) for v in value][:3]
+
+
+@register
+class DirectLighting(_GBufferLightingPass):
+    """Emission + unshadowed direct light (punctual and emissive-triangle lights) for every pixel;
+    the sky gets `background`. RASTER materials use it as is."""
+
+    SHADER = "direct_lighting.comp"
+    OUTPUT = "direct"
+    OUTPUT_DESC = "emission + unshadowed direct light; background where nothing was drawn"
+    SALT = 1
+    PROPERTIES = {"light_samples": 1, "background": [0.0, 0.0, 0.0]}
+
+    def shader_defines(self):
+        return {"LIGHT_SAMPLES": max(1, int(self.light_samples)), "SHADE_SHADOWS": 0}
+
+    def set_uniforms(self, prog):
+        prog["background"] = tuple(_background(self.background))
+
+
+@register
+class RTShadows(_GBufferLightingPass):
+    """Emission + ray-traced shadowed direct light for the pixels whose effect is SHADOWS or above.
+    Area lights get soft shadows from `light_samples` samples per pixel."""
+
+    SHADER = "rt_shadows.comp"
+    OUTPUT = "shadowed"
+    OUTPUT_DESC = "emission + shadowed direct light (listed pixels only)"
+    PIXEL_LIST = "pixels"
+    SALT = 2
+    PROPERTIES = {"light_samples": 1}
+
+    def skip_reason(self, cd):
+        used = effects_used(cd)
+        if used is not None and not any(e >= Effect.SHADOWS for e in used):
+            return "no material uses SHADOWS or above"
+        return None
+
+    def shader_defines(self):
+        return {"LIGHT_SAMPLES": max(1, int(self.light_samples)), "SHADE_SHADOWS": 1}
+
+
+@register
+class RTReflections(_GBufferLightingPass):
+    """Mirror and glossy (GGX VNDF) reflections for the pixels whose effect is REFLECTIONS or above,
+    `max_bounces` deep; reflected hits are shaded with ray-traced shadows. The output is the
+    reflected radiance already weighted by the specular BSDF (the composite adds it)."""
+
+    SHADER = "rt_reflections.comp"
+    OUTPUT = "reflection"
+    OUTPUT_DESC = "specular-weighted reflected radiance (listed pixels only)"
+    PIXEL_LIST = "pixels"
+    SALT = 3
+    PROPERTIES = {"max_bounces": 1, "light_samples": 1, "background": [0.0, 0.0, 0.0]}
+
+    def skip_reason(self, cd):
+        used = effects_used(cd)
+        if used is not None and not any(e >= Effect.REFLECTIONS for e in used):
+            return "no material uses REFLECTIONS"
+        return None
+
+    def shader_defines(self):
+        return {"MAX_BOUNCES": max(1, int(self.max_bounces)), "LIGHT_SAMPLES": max(1, int(self.light_samples)),
+                "SHADE_SHADOWS": 1}
+
+    def set_uniforms(self, prog):
+        prog["background"] = tuple(_background(self.background))
