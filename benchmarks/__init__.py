@@ -1,0 +1,1 @@
+"""rayvr benchmarks: `python -m benchmarks NAME [--quick] [options]` (see harness.py)."""
