@@ -1,0 +1,191 @@
+"""`rayvr render [SCENE] --views 2 --size 1440x1600 --out F`: the hybrid graph on a scene.
+
+No SCENE renders the built-in Cornell box; a name of a built-in scene (cornell_box, spheres, ...)
+renders that; anything else is a glTF file. PNGs per view (out_L/out_R for stereo, out_v{i} for
+more views) or side by side; `.exr` writes linear HDR. Files are written under a temporary name
+in the same folder and renamed, so a failure never leaves a half-written output.
+"""
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import OptionError, did_you_mean
+
+LAYOUTS = ("per-view", "side-by-side")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("render", help="render a scene with the hybrid graph and write images")
+    p.add_argument("scene", nargs="?", help="glTF file or built-in scene name (default: the Cornell box)")
+    p.add_argument("--views", type=int, default=2, help="view count: 1 mono, 2 stereo, N a camera grid (default 2)")
+    p.add_argument("--size", default="256x256", help="per-view size WIDTHxHEIGHT (default 256x256)")
+    p.add_argument("--out", default="out/render.png", help="output image: .png (tone mapped) or .exr (HDR)")
+    p.add_argument("--layout", default="per-view", choices=LAYOUTS, help="one file per view, or side by side")
+    p.add_argument("--effect", action="append", default=[], metavar="MATERIAL=EFFECT",
+                   help="set a material's effect (raster, shadows, reflections, path_traced); '*' for all; repeatable")
+    p.add_argument("--tonemap", default="aces", help="aces, reinhard or linear (default aces)")
+    p.add_argument("--exposure", type=float, default=0.0, help="exposure in stops (default 0)")
+    p.add_argument("--auto-exposure", action="store_true", help="expose for the frame's mean luminance")
+    p.add_argument("--max-bounces", type=int, default=1, help="reflection bounces (default 1)")
+    p.add_argument("--light-samples", type=int, default=1, help="light samples per pixel (default 1)")
+    p.add_argument("--frames", type=int, default=1, help="frames to render (timings average over them)")
+    p.add_argument("--ipd", type=float, default=0.063, help="eye distance in metres for stereo (default 0.063)")
+    p.add_argument("--grid", help="light-field camera grid COLSxROWS (its product must equal --views)")
+    p.add_argument("--quilt", help="also write a Looking Glass quilt PNG of the views (with --grid)")
+    p.add_argument("--multiview", default="auto", choices=("auto", "on", "off"), help="G-buffer multiview")
+    p.add_argument("--report", action="store_true", help="print the graph's compile report")
+    p.set_defaults(func=run)
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", str(text))
+    if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
+        raise OptionError(f"--size {text}: expected WIDTHxHEIGHT in pixels, e.g. --size 1440x1600")
+    w, h = int(m.group(1)), int(m.group(2))
+    if w > 8192 or h > 8192:
+        raise OptionError(f"--size {text}: at most 8192 pixels a side; use a smaller size")
+    return w, h
+
+
+def apply_effects(scene, specs) -> None:
+    """Apply '--effect MATERIAL=EFFECT' options; '*' sets every material."""
+    from ..materials.effect import Effect
+
+    names = [m.name for m in scene.materials]
+    for spec in specs:
+        if "=" not in spec:
+            raise OptionError(f"--effect {spec}: expected MATERIAL=EFFECT, e.g. --effect Floor=reflections")
+        name, value = (s.strip() for s in spec.split("=", 1))
+        effect = Effect.parse(value, where=f"--effect {spec}")
+        if name == "*":
+            for m in scene.materials:
+                m.effect = effect
+            continue
+        if name not in names:
+            raise OptionError(f"--effect {spec}: no material '{name}' in the scene{did_you_mean(name, names)}; "
+                              f"materials: {', '.join(names)}")
+        scene.materials[name].effect = effect
+
+
+def load(scene_arg):
+    from ..scene import builtin
+
+    if not scene_arg:
+        return builtin.cornell_box()
+    path = Path(scene_arg)
+    if not path.exists() and not path.suffix:
+        fn = getattr(builtin, scene_arg, None)
+        if callable(fn) and scene_arg in BUILTIN_SCENES:
+            return fn()
+        raise OptionError(f"scene '{scene_arg}': no such file and no built-in scene of that name"
+                          f"{did_you_mean(scene_arg, BUILTIN_SCENES)}; built-ins: {', '.join(BUILTIN_SCENES)}")
+    from ..scene import load_scene
+
+    return load_scene(path)
+
+
+BUILTIN_SCENES = ("cornell_box", "spheres", "box_on_plane", "mirror_and_checker", "plane_with_point_light",
+                  "instanced_boxes", "quad")
+
+
+def output_paths(out: Path, views: int, layout: str) -> list[Path]:
+    """Where each view goes: out itself (mono or side by side), out_L/out_R, or out_v{i}."""
+    if views == 1 or layout == "side-by-side":
+        return [out]
+    if views == 2:
+        return [out.with_name(f"{out.stem}_L{out.suffix}"), out.with_name(f"{out.stem}_R{out.suffix}")]
+    return [out.with_name(f"{out.stem}_v{i}{out.suffix}") for i in range(views)]
+
+
+def write_atomic(path: Path, write) -> None:
+    """`write(tmp_path)` then rename over `path`: never a half-written file at `path`."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_png(path: Path, pixels: np.ndarray) -> None:
+    from PIL import Image
+
+    write_atomic(path, lambda tmp: Image.fromarray(np.ascontiguousarray(pixels[..., :3])).save(tmp, format="PNG"))
+
+
+def write_exr(path: Path, pixels: np.ndarray) -> None:
+    try:
+        import OpenEXR
+    except ImportError:
+        raise OptionError(f"--out {path}: EXR output needs the 'openexr' package: pip install openexr") from None
+    rgb = np.ascontiguousarray(pixels[..., :3].astype(np.float32))
+
+    def write(tmp: Path):
+        header = {"type": OpenEXR.scanlineimage, "compression": OpenEXR.ZIP_COMPRESSION}
+        with OpenEXR.File(header, {"RGB": rgb}) as f:
+            f.write(str(tmp))
+
+    write_atomic(path, write)
+
+
+def run(args) -> int:
+    from ..graphs import HDR_OUTPUT, OUTPUT, hybrid
+    from ..renderer import Renderer, default_views
+    from ..rendergraph.render_pass import RenderPass  # noqa: F401  (import errors surface early)
+    from ..passes.tonemap import OPERATORS
+
+    size = parse_size(args.size)
+    if args.views < 1:
+        raise OptionError(f"--views {args.views}: need at least 1 view")
+    if args.frames < 1:
+        raise OptionError(f"--frames {args.frames}: need at least 1 frame")
+    if args.tonemap.lower() not in OPERATORS:
+        raise OptionError(f"--tonemap {args.tonemap}: use one of {', '.join(OPERATORS)}")
+    out = Path(args.out)
+    if out.suffix.lower() not in (".png", ".exr"):
+        raise OptionError(f"--out {args.out}: write .png (tone mapped) or .exr (HDR)")
+    grid = None
+    if args.grid:
+        from ..xr.quilt import parse_grid
+
+        grid = parse_grid(args.grid)
+    if args.quilt and grid is None:
+        raise OptionError("--quilt needs --grid COLSxROWS (e.g. --views 48 --grid 8x6 --quilt q.png)")
+    scene = load(args.scene)
+    apply_effects(scene, args.effect)
+
+    views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
+    graph = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=args.exposure,
+                   auto_exposure=args.auto_exposure, light_samples=args.light_samples,
+                   multiview=args.multiview)
+    hdr = out.suffix.lower() == ".exr"
+    written = []
+    with Renderer(scene, graph, views=views) as r:
+        for _ in range(args.frames):
+            r.render()
+        pixels = r.read_output(HDR_OUTPUT if hdr else OUTPUT, flip_y=True)
+        if args.report:
+            print(r.report())
+        print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {args.frames} frame(s)")
+        print(r.profile())
+        if args.quilt:
+            from ..xr.quilt import compose_quilt, quilt_filename, write_quilt_png
+
+            q = compose_quilt(r.gl, r.output_texture(OUTPUT), *grid)
+            qpath = quilt_filename(args.quilt, grid[0], grid[1], size[0] / size[1])
+            written.append(write_quilt_png(q, qpath))
+    images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
+    for path, img in zip(output_paths(out, len(views), args.layout), images):
+        (write_exr if hdr else write_png)(path, img)
+        written.append(path)
+    for path in written:
+        print(f"wrote {path}")
+    return 0

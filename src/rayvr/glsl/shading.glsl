@@ -1,0 +1,45 @@
+// Direct lighting of a surface point with the one BSDF, optionally with ray-traced visibility,
+// shared by DirectLighting (no rays), RTShadows and the hits of RTReflections.
+// Needs views.glsl-free inputs only; define SHADE_SHADOWS 1 to trace shadow rays.
+#pragma once
+#include "scene.glsl"
+#include "lights.glsl"
+#include "bsdf.glsl"
+#if SHADE_SHADOWS
+#include "ray_query.glsl"
+#endif
+
+#ifndef LIGHT_SAMPLES
+#define LIGHT_SAMPLES 1
+#endif
+
+BsdfParams bsdf_params(vec3 base_color, float metallic, float roughness) {
+    BsdfParams b;
+    b.base_color = base_color;
+    b.metallic = clamp(metallic, 0.0, 1.0);
+    b.roughness = clamp(roughness, 0.0, 1.0);
+    return b;
+}
+
+// Sum over LIGHT_SAMPLES light samples of f(v, l) cos / pdf * Le, with visibility when SHADE_SHADOWS.
+// p: render-space point; n: shading normal; ng: geometric normal; both facing v.
+vec3 shade_direct(vec3 p, vec3 n, vec3 ng, vec3 v, BsdfParams m, inout Rng rng) {
+    vec3 sum = vec3(0.0);
+#if SCENE_HAS_PUNCTUAL_LIGHTS || SCENE_HAS_EMISSIVE_TRIANGLES
+#if SHADE_SHADOWS
+    vec3 origin = offset_ray_origin(p, ng);
+#endif
+    for (int k = 0; k < LIGHT_SAMPLES; ++k) {
+        LightSample ls = sample_light(p, rng_next3(rng));
+        if (!(ls.pdf > 0.0) || dot(ls.dir, ng) <= 0.0) continue;
+        vec3 f = bsdf_eval(m, n, v, ls.dir);
+        if (f.x + f.y + f.z <= 0.0) continue;
+#if SHADE_SHADOWS
+        if (trace_occluded(origin, ls.dir, ls.distance * (1.0 - 1e-4))) continue;
+#endif
+        sum += f * ls.radiance / ls.pdf;
+    }
+    sum *= 1.0 / float(LIGHT_SAMPLES);
+#endif
+    return sum;
+}

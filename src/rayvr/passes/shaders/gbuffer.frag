@@ -1,0 +1,58 @@
+// G-buffer fragment stage: material parameters, normals facing the viewer, effect id, motion.
+#define SCENE_MATERIAL_IMPLICIT_LOD 1
+#include "views.glsl"
+#include "scene.glsl"
+#include "gbuffer.glsl"
+
+in vec3 v_pos;
+in vec3 v_normal;
+in vec2 v_uv;
+in vec4 v_tangent;
+in vec4 v_prev_clip;
+in vec4 v_clip;
+flat in uint v_material;
+flat in uint v_view;
+
+layout(location = 0) out vec4 o_pos;
+layout(location = 1) out vec4 o_normal;
+layout(location = 2) out vec4 o_face_normal;
+layout(location = 3) out vec4 o_base_color;
+layout(location = 4) out vec2 o_metal_rough;
+layout(location = 5) out vec4 o_emissive;
+layout(location = 6) out uint o_effect;
+layout(location = 7) out vec2 o_motion;
+
+void main() {
+    MaterialParams m = material_params(v_material, v_uv);
+#if SCENE_HAS_ALPHA_MASK
+    if (m.alpha_mode == ALPHA_MODE_MASK && m.alpha < scene_materials[v_material].emission_cutoff.a) discard;
+#endif
+    vec3 eye = views[v_view].eye.xyz;
+    vec3 to_eye = eye - v_pos;
+    // Geometric normal from screen-space derivatives of the render-space position.
+    vec3 ng = safe_normalize(cross(dFdx(v_pos), dFdy(v_pos)), v_normal);
+    if (dot(ng, to_eye) < 0.0) ng = -ng;
+    vec3 n = safe_normalize(v_normal, ng);
+    if (dot(n, ng) < 0.0) n = -n;   // back face seen: shade the side facing the viewer
+#if SCENE_HAS_NORMAL_MAPS
+    if (scene_materials[v_material].tex[2 * TEX_NORMAL].w >= 0.0 && dot(v_tangent.xyz, v_tangent.xyz) > 0.0) {
+        vec3 t = safe_normalize(v_tangent.xyz - n * dot(n, v_tangent.xyz), vec3(1, 0, 0));
+        vec3 b = cross(n, t) * (v_tangent.w < 0.0 ? -1.0 : 1.0);
+        vec3 tn = texture(scene_textures, vec3(v_uv, scene_materials[v_material].tex[2 * TEX_NORMAL].w)).xyz * 2.0 - 1.0;
+        tn.xy *= scene_materials[v_material].tex[2 * TEX_NORMAL + 1].w;
+        n = safe_normalize(tn.x * t + tn.y * b + tn.z * n, n);
+    }
+#endif
+    float depth = -(views[v_view].view * vec4(v_pos, 1.0)).z;
+    o_pos = vec4(v_pos, depth);
+    o_normal = vec4(n, 0.0);
+    o_face_normal = vec4(ng, 0.0);
+    o_base_color = vec4(m.base_color, m.alpha);
+    o_metal_rough = vec2(m.metallic, m.roughness);
+    o_emissive = vec4(m.emissive, 0.0);
+    o_effect = gbuf_pack_effect(m.effect, v_material);
+    vec2 size = views[v_view].clip.zw;
+    vec2 now = (v_clip.xy / v_clip.w * 0.5 + 0.5) * size;
+    vec2 before = (v_prev_clip.xy / v_prev_clip.w * 0.5 + 0.5) * size;
+    o_motion = now - before;
+}

@@ -1,0 +1,40 @@
+// G-buffer vertex stage: vertex pulling from the GPU scene (scene.glsl), one draw for every view.
+// Layered: GpuScene.draw(program, views) draws each instance `views` times; gl_InstanceID is the
+// view and gl_Layer its layer. Multiview: gl_ViewID_OVR is the view.
+#include "views.glsl"
+#include "scene.glsl"
+
+#if RAYVR_MULTIVIEW
+layout(num_views = VIEW_COUNT) in;
+#define CURRENT_VIEW gl_ViewID_OVR
+#else
+#define CURRENT_VIEW uint(gl_InstanceID)
+#endif
+
+in uint rayvr_instance;
+
+out vec3 v_pos;
+out vec3 v_normal;
+out vec2 v_uv;
+out vec4 v_tangent;
+out vec4 v_prev_clip;
+out vec4 v_clip;
+flat out uint v_material;
+flat out uint v_view;
+
+void main() {
+    uint view = CURRENT_VIEW;
+    RasterVertex r = scene_raster_vertex(rayvr_instance, gl_VertexID);
+    v_pos = r.position;
+    v_normal = r.normal;
+    v_uv = r.uv;
+    v_tangent = r.tangent;
+    v_material = r.material;
+    v_view = view;
+    v_clip = views[view].view_proj * vec4(r.position, 1.0);
+    v_prev_clip = views[view].prev_view_proj * vec4(r.position, 1.0);
+    gl_Position = v_clip;
+#if !RAYVR_MULTIVIEW
+    gl_Layer = int(view);
+#endif
+}

@@ -1,0 +1,49 @@
+// Mirror / glossy reflections for the pixels on the reflection list (indirect dispatch): sample the
+// specular lobe (GGX VNDF; exact mirror at roughness 0), trace, shade the hit with emission and
+// shadowed direct light, continue up to MAX_BOUNCES. Output: reflected radiance weighted by the
+// specular BSDF, so the composite adds it to the direct light.
+#include "views.glsl"
+#include "gbuffer.glsl"
+#include "pixel_list.glsl"
+#include "shading.glsl"
+
+layout(local_size_x = PIXEL_LIST_GROUP) in;
+layout(rgba16f, binding = 0) writeonly uniform image2DArray dst;
+uniform vec3 background;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pixel_count) return;
+    ivec3 p = pixel_list_unpack(pixel_items[i]);
+    GSurface s = gbuf_load(p);
+    Rng rng = rng_init(uvec2(p.xy), uint(p.z), frame_index(), RNG_SALT);
+
+    vec3 pos = s.pos, n = s.n, ng = s.ng;
+    vec3 v = normalize(views[p.z].eye.xyz - s.pos);
+    BsdfParams m = bsdf_params(s.base_color, s.metallic, s.roughness);
+    vec3 throughput = vec3(1.0);
+    vec3 radiance = vec3(0.0);
+    for (int bounce = 0; bounce < MAX_BOUNCES; ++bounce) {
+        vec3 l;
+        bool valid;
+        // A rough lobe already gets emitters through light sampling (specular term of shade_direct);
+        // only a mirror, whose direct specular is zero, sees them through the reflection ray.
+        bool mirror = bsdf_is_mirror(m);
+        throughput *= bsdf_sample_specular(m, n, v, rng_next2(rng), l, valid);
+        if (!valid || dot(l, ng) <= 0.0 || max(throughput.x, max(throughput.y, throughput.z)) <= 0.0) break;
+        Hit hit;
+        if (!trace_closest(offset_ray_origin(pos, ng), l, 1e30, hit)) {
+            radiance += throughput * background;
+            break;
+        }
+        SurfacePoint sp = surface_at(hit, l);
+        MaterialParams mp = material_params(sp.material, sp.uv);
+        BsdfParams hm = bsdf_params(mp.base_color, mp.metallic, mp.roughness);
+        radiance += throughput * ((mirror ? mp.emissive : vec3(0.0)) + shade_direct(sp.position, sp.normal, sp.geometric_normal, -l, hm, rng));
+        // Only surfaces that are themselves reflective carry the path further.
+        if (mp.effect < EFFECT_REFLECTIONS) break;
+        pos = sp.position; n = sp.normal; ng = sp.geometric_normal; v = -l; m = hm;
+    }
+    radiance = mix(radiance, vec3(0.0), bvec3(any(isnan(radiance)) || any(isinf(radiance))));
+    imageStore(dst, p, vec4(radiance, 1.0));
+}

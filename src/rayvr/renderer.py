@@ -1,0 +1,238 @@
+"""`rv.Renderer`: a scene, a render graph and (optionally) a sink, driven frame by frame.
+
+    with rv.Renderer(scene, rv.graphs.hybrid(), sink=rv.xr.SimulatedHeadset()) as r:
+        for frame in r.frames(300):
+            frame.materials["Floor"].effect = rv.Effect.REFLECTIONS
+        print(r.profile())
+
+The Renderer owns the GpuScene and the compiled graph. Per frame Python does a fixed amount of
+work: one views-SSBO upload for all views, the scene's per-frame update, the graph's fixed list of
+dispatches. It recompiles the graph only when the set of effects the materials use changes.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from .errors import OptionError, RayvrError
+from .xr.views import HEADER_BYTES, VIEW_STRUCT_FLOATS, Fov, Pose, View, ViewSet
+
+DEFAULT_IPD = 0.063   # metres; the adult mean (Dodgson 2004)
+
+
+@dataclasses.dataclass
+class Frame:
+    """What `Renderer.frames()` yields: change materials here and the frame renders with them."""
+
+    index: int
+    views: ViewSet
+    materials: object
+    request: object = None
+
+
+def camera_pose(scene) -> tuple[Pose, float]:
+    """The scene's first camera (pose, vertical fov in radians), or one framing its bounds."""
+    from .xr import quaternion
+
+    cams = getattr(scene, "cameras", None) or []
+    if cams:
+        cam = cams[0]
+        m = np.asarray(cam.transform, dtype=np.float64)
+        rot = m[:3, :3] / np.linalg.norm(m[:3, :3], axis=0)
+        return Pose(m[:3, 3].copy(), quaternion.from_matrix(rot)), float(cam.yfov)
+    from .xr.cameras import look_at
+
+    lo, hi = np.asarray(scene.bounds(), dtype=np.float64)
+    centre = 0.5 * (lo + hi)
+    radius = max(float(np.linalg.norm(hi - lo)) * 0.5, 1e-3)
+    yfov = math.radians(45.0)
+    eye = centre + np.array([0.0, 0.0, radius / math.tan(yfov / 2) * 1.1])
+    return look_at(eye, centre), yfov
+
+
+def default_views(scene, views: int = 1, size=(256, 256), ipd: float = DEFAULT_IPD,
+                  grid: tuple[int, int] | None = None) -> ViewSet:
+    """Views from the scene's camera: 1 = mono, 2 = stereo (IPD apart), N = a camera grid
+    (`grid` cols x rows, spacing ipd)."""
+    from .xr.cameras import camera_grid, stereo_views
+
+    w, h = int(size[0]), int(size[1])
+    if w <= 0 or h <= 0:
+        raise OptionError(f"size: {w}x{h} is not a positive pixel size; use e.g. 256x256")
+    pose, yfov = camera_pose(scene)
+    cam = (getattr(scene, "cameras", None) or [None])[0]
+    near = getattr(cam, "znear", 0.05) or 0.05
+    far = getattr(cam, "zfar", 1000.0) or 1000.0
+    fov = Fov.symmetric(math.degrees(yfov), w / h)
+    if views == 1 and grid is None:
+        return ViewSet([View(pose, fov, w, h, near, far)])
+    if views == 2 and grid is None:
+        return stereo_views(pose, ipd, fov, fov, (w, h), near, far)
+    if grid is None:
+        cols = math.ceil(math.sqrt(views))
+        grid = (cols, math.ceil(views / cols))
+    if grid[0] * grid[1] != views:
+        raise OptionError(f"--grid {grid[0]}x{grid[1]} has {grid[0] * grid[1]} views but --views is {views}; "
+                          f"make cols x rows equal the view count")
+    return camera_grid(grid[0], grid[1], ipd, fov, (w, h), center_pose=pose, near=near, far=far)
+
+
+class Renderer:
+    """Renders `graph` over `scene` for a sink's views (or fixed `views`), see the module docstring.
+
+    `views`: a ViewSet, or an int view count (from the scene's camera); `size`: per-view pixels.
+    Without a sink the Renderer renders `render(view_set)` calls for its fixed views.
+    """
+
+    def __init__(self, scene, graph, sink=None, views=None, size=None, gpu=None, profiling: bool = True):
+        from .gpu import get_context
+
+        self.scene = scene
+        self.graph = graph
+        self.sink = sink
+        self.gpu = gpu or get_context()
+        self.gl = self.gpu.gl
+        if sink is not None:
+            self.view_count, self.size = int(sink.view_count), tuple(sink.size)
+            self.view_set = None
+        elif isinstance(views, ViewSet):
+            self.view_set = views
+            self.view_count, self.size = len(views), tuple(views.size)
+        else:
+            self.view_set = default_views(scene, int(views or 1), size or (256, 256))
+            self.view_count, self.size = len(self.view_set), tuple(self.view_set.size)
+        if size is not None and tuple(size) != self.size:
+            raise OptionError(f"Renderer: size {tuple(size)} differs from the views' {self.size}; "
+                              f"pass one or the other")
+        from .scene.gpu_scene import GpuScene
+
+        self.gpu_scene = GpuScene(self.gpu, scene)
+        self.views_buffer = self.gl.buffer(reserve=HEADER_BYTES + 4 * VIEW_STRUCT_FLOATS * self.view_count)
+        self.profiling = profiling
+        self.frame_index = 0
+        self.compiles = 0
+        self.compiled = None
+        self._materials_version = None
+        self._effects = None
+        self._opened = False
+        self._compile()
+
+    # -- compile -----------------------------------------------------------------------------
+    def _compile(self) -> None:
+        if self.compiled is not None:
+            self.compiled.release()
+        self._effects = frozenset(self.scene.effects_used())
+        self._materials_version = self.scene.materials.version
+        self.compiled = self.graph.compile(scene=self.scene, size=self.size, views=self.view_count,
+                                           gpu=self.gpu, gpu_scene=self.gpu_scene,
+                                           extra_report=[self.gpu_scene.report()], profiling=self.profiling)
+        self.compiles += 1
+
+    def _maybe_recompile(self) -> None:
+        version = self.scene.materials.version
+        if version == self._materials_version:
+            return
+        self._materials_version = version
+        if frozenset(self.scene.effects_used()) != self._effects:
+            self._compile()
+
+    # -- frames ------------------------------------------------------------------------------
+    def render(self, view_set: ViewSet | None = None) -> None:
+        """Render one frame of `view_set` (default: the Renderer's fixed views)."""
+        from .rendergraph.render_pass import RenderContext
+
+        view_set = view_set or self.view_set
+        if view_set is None:
+            raise RayvrError("Renderer.render(): no views; pass a ViewSet or use frames() with a sink")
+        if len(view_set) != self.view_count or tuple(view_set.size) != self.size:
+            raise OptionError(f"Renderer.render(): got {len(view_set)} views of {view_set.size}, compiled for "
+                              f"{self.view_count} of {self.size}; make a new Renderer for another size")
+        self._maybe_recompile()
+        origin = view_set.origin()
+        self.gpu_scene.update(origin)
+        self.views_buffer.write(view_set.pack(origin, self.frame_index, 0))
+        ctx = RenderContext(self.gl, self.gpu.caps, scene=self.gpu_scene, views_buffer=self.views_buffer,
+                            view_set=view_set, frame_index=self.frame_index, sample_index=0)
+        self.compiled.execute(ctx)
+        self.frame_index += 1
+
+    def frames(self, n: int | None = None):
+        """Yield up to `n` frames (None: until the sink ends). Each frame renders after the loop
+        body ran, so material changes made on the yielded frame apply to it; then it is submitted."""
+        from .xr.sink import OffscreenViews
+
+        if self.sink is None:
+            self.sink = OffscreenViews(self.view_set, frames=None)
+        self._open()
+        count = 0
+        while n is None or count < n:
+            request = self.sink.wait_frame()
+            if request is None:
+                break
+            frame = Frame(request.index, request.views, self.scene.materials, request)
+            yield frame
+            if request.should_render:
+                self.render(request.views)
+                request.render_time_s = self._last_frame_ms() / 1e3
+                self.sink.submit(self.output_texture(), request)
+            else:
+                self.sink.submit(None, request)
+            count += 1
+
+    def _open(self) -> None:
+        if not self._opened and self.sink is not None:
+            self.sink.open(self.gpu)
+            self._opened = True
+
+    def _last_frame_ms(self) -> float:
+        prof = self.compiled.profile()
+        passes = getattr(prof, "passes", {}) or {}
+        total = 0.0
+        for stats in passes.values():
+            last = getattr(stats, "last", None)
+            total += float(last if last is not None else getattr(stats, "mean", 0.0) or 0.0)
+        return total
+
+    # -- outputs -----------------------------------------------------------------------------
+    @property
+    def output_name(self) -> str:
+        """The primary output: the graph's first marked output that is still produced."""
+        outs = [o for o in self.compiled.plan.outputs]
+        if not outs:
+            raise RayvrError(f"graph '{self.graph.name}' produces no output for this scene; "
+                             f"compile report:\n{self.compiled.report()}")
+        return outs[0]
+
+    def output_texture(self, name: str | None = None):
+        return self.compiled.get_output(name or self.output_name)
+
+    def read_output(self, name: str | None = None, flip_y: bool = False) -> np.ndarray:
+        """Output `name` ('Pass.pin', default the primary) as numpy (views, h, w, c); row 0 is the
+        bottom row (GL) unless `flip_y`. A readback: for tests and files, not per frame."""
+        return self.compiled.read_output(name or self.output_name, flip_y=flip_y)
+
+    def profile(self):
+        """Per-pass GPU ms per frame (see rayvr.rendergraph.profile)."""
+        return self.compiled.profile()
+
+    def report(self):
+        """The graph's compile report (order, pruned passes and why, resources) with the scene's."""
+        return self.compiled.report()
+
+    # -- life --------------------------------------------------------------------------------
+    def close(self) -> None:
+        if self.sink is not None and self._opened:
+            self.sink.close()
+            self._opened = False
+        if self.compiled is not None:
+            self.compiled.release()
+            self.compiled = None
+
+    def __enter__(self):
+        self._open()
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
