@@ -1,4 +1,4 @@
-"""ImageLoader: an image file (PNG/JPEG via Pillow, EXR/HDR via imageio) into an output array.
+"""ImageLoader: an image file (PNG/JPEG via Pillow, EXR via OpenEXR, HDR/PFM via imageio) into an output array.
 
 One `path` fills every view; `paths` gives one file per view (layer i reads paths[min(i, n - 1)]).
 The file is decoded once at compile and uploaded once into an internal array; each frame copies
@@ -6,6 +6,7 @@ it to `dst` on the GPU (so `dst` may alias with other transients).
 """
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import moderngl
@@ -20,11 +21,20 @@ FLOAT_SUFFIXES = {".exr", ".hdr", ".pfm"}
 
 
 def _read_image(path: Path, where: str) -> np.ndarray:
-    """(h, w, 4) uint8 for 8-bit files, float32 for HDR files; rows top-down as in the file."""
+    """(h, w, 4) uint8 for 8-bit files, float32 for HDR files; rows top-down as in the file.
+    Decoded once per file version (reflect and compile both ask); do not modify the result."""
     if not path.is_file():
         raise OptionError(f"{where}: file '{path}' not found; give an existing PNG, JPEG or EXR path")
+    st = path.stat()
+    return _decode(path.resolve(), st.st_mtime_ns, st.st_size, where)
+
+
+@functools.lru_cache(maxsize=8)
+def _decode(path: Path, mtime_ns: int, size: int, where: str) -> np.ndarray:
     try:
-        if path.suffix.lower() in FLOAT_SUFFIXES:
+        if path.suffix.lower() == ".exr":
+            a = _read_exr(path, where)
+        elif path.suffix.lower() in FLOAT_SUFFIXES:
             import imageio.v3 as iio
 
             a = np.asarray(iio.imread(path), dtype=np.float32)
@@ -37,6 +47,8 @@ def _read_image(path: Path, where: str) -> np.ndarray:
         raise
     except Exception as exc:
         raise OptionError(f"{where}: cannot read '{path}': {exc}") from exc
+    if a.dtype not in (np.uint8, np.float32):
+        a = a.astype(np.float32)
     if a.ndim == 2:
         a = a[:, :, None]
     if a.shape[2] < 4:   # grey -> rgb, rgb -> rgba with alpha 1
@@ -44,6 +56,22 @@ def _read_image(path: Path, where: str) -> np.ndarray:
         one = np.full(a.shape[:2] + (1,), 1.0 if a.dtype == np.float32 else 255, a.dtype)
         a = np.concatenate([rgb, one], axis=2)
     return np.ascontiguousarray(a[:, :, :4])
+
+
+def _read_exr(path: Path, where: str) -> np.ndarray:
+    try:
+        import OpenEXR
+    except ImportError:
+        raise OptionError(f"{where}: reading '{path}' needs the OpenEXR bindings: pip install openexr") from None
+    with OpenEXR.File(str(path)) as f:   # pixels must be read while the file is open
+        channels = {k: np.array(c.pixels, dtype=np.float32) for k, c in f.channels().items()}
+    for group in ("RGBA", "RGB"):
+        if group in channels:
+            return channels[group]
+    names = [c for c in ("R", "G", "B", "A", "Y") if c in channels]
+    if not names:
+        raise OptionError(f"{where}: '{path}' has no R/G/B/A/Y channels (it has {', '.join(channels)})")
+    return np.stack([channels[c] for c in names], axis=2)
 
 
 def _image_size(path: Path, where: str) -> tuple[int, int]:
