@@ -1,0 +1,212 @@
+"""OpenGL side of the OpenXR sink: the current context's EGL or GLX handles for the graphics
+binding, swapchain format choice, and the GPU copy of rendered views into swapchain images.
+
+GL entry points moderngl does not wrap (glCopyImageSubData) are looked up with ctypes through
+eglGetProcAddress or glXGetProcAddressARB, whichever API owns the current context.
+"""
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+from pathlib import Path
+
+from ..errors import XrError
+from ..gpu.shaders import compute_program
+
+GL_TEXTURE_2D = 0x0DE1
+GL_TEXTURE_2D_ARRAY = 0x8C1A
+GL_SRGB8_ALPHA8 = 0x8C43
+GL_RGBA8 = 0x8058
+GL_RGBA16F = 0x881A
+GL_RGBA32F = 0x8814
+GL_DEPTH_COMPONENT16 = 0x81A5
+GL_DEPTH_COMPONENT24 = 0x81A6
+GL_DEPTH_COMPONENT32F = 0x8CAC
+GL_DEPTH24_STENCIL8 = 0x88F0
+
+FORMAT_NAMES = {GL_SRGB8_ALPHA8: "GL_SRGB8_ALPHA8", GL_RGBA8: "GL_RGBA8", GL_RGBA16F: "GL_RGBA16F",
+                GL_RGBA32F: "GL_RGBA32F", GL_DEPTH_COMPONENT16: "GL_DEPTH_COMPONENT16",
+                GL_DEPTH_COMPONENT24: "GL_DEPTH_COMPONENT24", GL_DEPTH_COMPONENT32F: "GL_DEPTH_COMPONENT32F",
+                GL_DEPTH24_STENCIL8: "GL_DEPTH24_STENCIL8"}
+# Colour formats in order of preference: sRGB first, so the compositor linearises what we encode
+# (the OpenXR spec: an sRGB swapchain's values are sRGB-encoded, any other is linear).
+COLOR_PREFERENCE = (GL_SRGB8_ALPHA8, GL_RGBA16F, GL_RGBA8)
+DEPTH_PREFERENCE = (GL_DEPTH_COMPONENT32F, GL_DEPTH_COMPONENT24, GL_DEPTH24_STENCIL8, GL_DEPTH_COMPONENT16)
+_DEPTH_OF_DTYPE = {"f4": GL_DEPTH_COMPONENT32F, "f3": GL_DEPTH_COMPONENT24, "f2": GL_DEPTH_COMPONENT16}
+
+EGL_CONFIG_ID = 0x3028
+EGL_NONE = 0x3038
+GLX_FBCONFIG_ID = 0x8013
+GLX_SCREEN = 0x800C
+GLX_NONE = 0x8000
+_P, _I, _U = ctypes.c_void_p, ctypes.c_int, ctypes.c_uint
+
+
+def choose_format(runtime_formats, preference) -> int:
+    """The first of `preference` the runtime offers (its list is in its own order of preference)."""
+    offered = [int(f) for f in runtime_formats]
+    for f in preference:
+        if f in offered:
+            return f
+    names = ", ".join(FORMAT_NAMES.get(f, hex(f)) for f in offered)
+    wanted = ", ".join(FORMAT_NAMES[f] for f in preference)
+    raise XrError(f"OpenXR runtime offers swapchain formats [{names}], none of {wanted}; "
+                  f"rayvr cannot present to it")
+
+
+def _load(names):
+    for n in names:
+        path = ctypes.util.find_library(n) or n
+        try:
+            return ctypes.CDLL(path)
+        except OSError:
+            continue
+    return None
+
+
+class GLPlatform:
+    """The window-system API owning the current GL context: 'egl' or 'glx', its handles and GL procs."""
+
+    def __init__(self):
+        self.kind = None
+        self._egl = _load(["EGL", "libEGL.so.1"])
+        if self._egl is not None:
+            self._egl.eglGetCurrentContext.restype = _P
+            self._egl.eglGetCurrentDisplay.restype = _P
+            self._egl.eglGetProcAddress.restype = _P
+            self._egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
+            if self._egl.eglGetCurrentContext():
+                self.kind = "egl"
+        if self.kind is None:
+            self._glx = _load(["GL", "libGL.so.1"])
+            if self._glx is not None:
+                self._glx.glXGetCurrentContext.restype = _P
+                if self._glx.glXGetCurrentContext():
+                    self.kind = "glx"
+        if self.kind is None:
+            raise XrError("OpenXRSink: no current EGL or GLX OpenGL context; open the sink with rayvr's GPU "
+                          "context (rayvr.gpu.get_context()) on this thread")
+        self._procs = {}
+
+    def proc(self, name: str, restype, argtypes):
+        fn = self._procs.get(name)
+        if fn is None:
+            if self.kind == "egl":
+                addr = self._egl.eglGetProcAddress(name.encode())
+            else:
+                self._glx.glXGetProcAddressARB.restype = _P
+                self._glx.glXGetProcAddressARB.argtypes = [ctypes.c_char_p]
+                addr = self._glx.glXGetProcAddressARB(name.encode())
+            if not addr:
+                raise XrError(f"OpenGL entry point {name} is missing; OpenXRSink needs OpenGL 4.3+")
+            fn = ctypes.CFUNCTYPE(restype, *argtypes)(addr)
+            self._procs[name] = fn
+        return fn
+
+    def egl_binding(self, xr):
+        """XrGraphicsBindingEGLMNDX for the current EGL context (fields cast to the struct's types)."""
+        egl = self._egl
+        display, context = egl.eglGetCurrentDisplay(), egl.eglGetCurrentContext()
+        egl.eglQueryContext.argtypes = [_P, _P, _I, ctypes.POINTER(_I)]
+        config_id = _I(0)
+        egl.eglQueryContext(display, context, EGL_CONFIG_ID, ctypes.byref(config_id))
+        attribs = (_I * 3)(EGL_CONFIG_ID, config_id.value, EGL_NONE)
+        config, count = _P(), _I(0)
+        egl.eglChooseConfig.argtypes = [_P, ctypes.POINTER(_I), ctypes.POINTER(_P), _I, ctypes.POINTER(_I)]
+        if not egl.eglChooseConfig(display, attribs, ctypes.byref(config), 1, ctypes.byref(count)) or count.value < 1:
+            raise XrError("OpenXRSink: eglChooseConfig found no EGLConfig for rayvr's context; "
+                          "create the context through EGL (RAYVR_GL_BACKEND=egl)")
+        fields = dict(xr.GraphicsBindingEGLMNDX._fields_)
+        get_proc = xr.PFN_xrEglGetProcAddressMNDX(ctypes.cast(egl.eglGetProcAddress, _P).value)
+        return xr.GraphicsBindingEGLMNDX(
+            get_proc_address=get_proc,
+            display=ctypes.cast(_P(display), fields["display"]),
+            config=ctypes.cast(config, fields["config"]),
+            context=ctypes.cast(_P(context), fields["context"]))
+
+    def xlib_binding(self, xr):
+        """XrGraphicsBindingOpenGLXlibKHR for the current GLX context."""
+        glx = self._glx
+        for name in ("glXGetCurrentDisplay", "glXGetCurrentDrawable"):
+            getattr(glx, name).restype = _P if name == "glXGetCurrentDisplay" else ctypes.c_ulong
+        display, context, drawable = glx.glXGetCurrentDisplay(), glx.glXGetCurrentContext(), glx.glXGetCurrentDrawable()
+        glx.glXQueryContext.argtypes = [_P, _P, _I, ctypes.POINTER(_I)]
+        fb_id, screen = _I(0), _I(0)
+        glx.glXQueryContext(display, context, GLX_FBCONFIG_ID, ctypes.byref(fb_id))
+        glx.glXQueryContext(display, context, GLX_SCREEN, ctypes.byref(screen))
+        glx.glXChooseFBConfig.restype = ctypes.POINTER(_P)
+        glx.glXChooseFBConfig.argtypes = [_P, _I, ctypes.POINTER(_I), ctypes.POINTER(_I)]
+        attribs = (_I * 3)(GLX_FBCONFIG_ID, fb_id.value, 0)
+        n = _I(0)
+        configs = glx.glXChooseFBConfig(display, screen.value, attribs, ctypes.byref(n))
+        if not configs or n.value < 1:
+            raise XrError("OpenXRSink: glXChooseFBConfig found no GLXFBConfig for rayvr's context")
+        fbconfig = configs[0]
+        glx.glXGetVisualFromFBConfig.restype = ctypes.POINTER(ctypes.c_ulong * 2)  # XVisualInfo: visual*, visualid
+        glx.glXGetVisualFromFBConfig.argtypes = [_P, _P]
+        visual = glx.glXGetVisualFromFBConfig(display, fbconfig)
+        visualid = visual.contents[1] if visual else 0
+        fields = dict(xr.GraphicsBindingOpenGLXlibKHR._fields_)
+        return xr.GraphicsBindingOpenGLXlibKHR(
+            x_display=ctypes.cast(_P(display), fields["x_display"]), visualid=visualid,
+            glx_fbconfig=ctypes.cast(_P(fbconfig), fields["glx_fbconfig"]), glx_drawable=drawable,
+            glx_context=ctypes.cast(_P(context), fields["glx_context"]))
+
+
+class SwapchainCopier:
+    """Copies a rendered TEXTURE_2D_ARRAY into swapchain images, GPU-side.
+
+    A raw glCopyImageSubData when the bytes already mean what the swapchain format says (rgba8
+    sRGB-encoded -> GL_SRGB8_ALPHA8, rgba8 linear -> GL_RGBA8, rgba16f -> GL_RGBA16F); otherwise
+    one compute pass re-encodes into a staging array first.
+    """
+
+    _SHADER = Path(__file__).with_name("openxr_copy.comp")
+
+    def __init__(self, gl, platform: GLPlatform, swapchain_format: int):
+        self.gl = gl
+        self.platform = platform
+        self.format = swapchain_format
+        self._staging = None
+        self._copy = platform.proc("glCopyImageSubData", None, [_U, _U, _I, _I, _I, _I, _U, _U, _I, _I, _I, _I, _I, _I, _I])
+        self._flush = platform.proc("glFlush", None, [])
+
+    def plan(self, texture_array, source_srgb: bool) -> tuple[bool, bool, bool]:
+        """(raw copy?, decode sRGB?, encode sRGB?) for this source and the swapchain format."""
+        dest_srgb = self.format == GL_SRGB8_ALPHA8
+        raw = texture_array.components == 4 and (
+            (texture_array.dtype == "f1" and self.format in (GL_SRGB8_ALPHA8, GL_RGBA8) and source_srgb == dest_srgb)
+            or (texture_array.dtype == "f2" and self.format == GL_RGBA16F and not source_srgb)
+            or (texture_array.dtype == "f4" and self.format == GL_RGBA32F and not source_srgb))
+        return raw, source_srgb and not dest_srgb, dest_srgb and not source_srgb
+
+    def _restage(self, texture_array, decode: bool, encode: bool):
+        w, h, n = texture_array.width, texture_array.height, texture_array.layers
+        dtype = "f2" if self.format == GL_RGBA16F else "f4" if self.format == GL_RGBA32F else "f1"
+        if self._staging is None or self._staging.size != (w, h, n) or self._staging.dtype != dtype:
+            self._staging = self.gl.texture_array((w, h, n), 4, dtype=dtype)
+        fmt = {"f1": "rgba8", "f2": "rgba16f", "f4": "rgba32f"}[dtype]
+        prog = compute_program(self.gl, self._SHADER, {"STAGING_FORMAT": fmt})
+        prog["decode_srgb"] = int(decode)
+        prog["encode_srgb"] = int(encode)
+        texture_array.use(0)
+        self._staging.bind_to_image(0, read=False, write=True)
+        prog.run((w + 7) // 8, (h + 7) // 8, n)
+        self.gl.memory_barrier()
+        return self._staging
+
+    def copy(self, texture_array, source_srgb: bool, targets) -> None:
+        """`targets`: [(gl image name, GL target, first layer in the image, view index, count)]."""
+        raw, decode, encode = self.plan(texture_array, source_srgb)
+        src = texture_array if raw else self._restage(texture_array, decode, encode)
+        w, h = texture_array.width, texture_array.height
+        for image, target, dst_layer, view, count in targets:
+            self._copy(src.glo, GL_TEXTURE_2D_ARRAY, 0, 0, 0, view, image, target, 0, 0, 0, dst_layer, w, h, count)
+        self._flush()
+
+    def copy_depth(self, depth_array, targets) -> None:
+        """Raw copy of a depth texture array whose internal format equals the swapchain's."""
+        w, h = depth_array.width, depth_array.height
+        for image, target, dst_layer, view, count in targets:
+            self._copy(depth_array.glo, GL_TEXTURE_2D_ARRAY, 0, 0, 0, view, image, target, 0, 0, 0, dst_layer, w, h, count)
+        self._flush()
