@@ -1,0 +1,44 @@
+"""`python -m benchmarks NAME --quick` writes JSON and appends markdown rows with the environment."""
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))   # the repository root holds benchmarks/
+
+from benchmarks import harness  # noqa: E402
+
+
+def test_aliasing_quick_run_records_json_and_markdown(tmp_path, gpu, capsys):
+    assert harness.main(["aliasing", "--quick", "--out", str(tmp_path)]) == 0
+    assert harness.main(["aliasing", "--quick", "--out", str(tmp_path), "--passes", "4"]) == 0
+    doc = json.loads((tmp_path / "aliasing.json").read_text())
+    assert doc["device"] == gpu.caps.renderer and doc["driver"] == gpu.caps.version
+    assert doc["commit"] and doc["date"].endswith("UTC") and doc["software"] == gpu.caps.is_software
+    row = dict(zip(doc["columns"], doc["rows"][0]))
+    assert row["passes"] == 4 and row["gpu_objects"] == 3 and row["fraction"] == 0.75
+    md = (tmp_path / "aliasing.md").read_text().splitlines()
+    assert md[0] == "# benchmark: aliasing" and sum(line.startswith("| date |") for line in md) == 1
+    rows = [line for line in md if line.startswith("| 20")]
+    assert len(rows) == 2 and all("(quick)" in r for r in rows)
+    assert ("(software)" in rows[0]) == gpu.caps.is_software
+    first = dict(zip(doc["columns"], rows[0].strip("| ").split(" | ")[4:]))
+    assert first["fraction"] == "0.3" and first["meets"] == "yes"
+
+
+def test_graph_overhead_quick_has_all_settings(tmp_path, gpu):
+    assert harness.main(["graph_overhead", "--quick", "--no-save", "--passes", "3"]) == 0
+    assert not list(tmp_path.iterdir())
+    harness.main(["graph_overhead", "--quick", "--out", str(tmp_path), "--passes", "3"])
+    doc = json.loads((tmp_path / "graph_overhead.json").read_text())
+    kinds = [(r[0], r[1]) for r in doc["rows"]]
+    assert kinds == [("empty passes", "off"), ("Clear+Blits", "off"), ("Clear+Blits", "on")]
+    empty = dict(zip(doc["columns"], doc["rows"][0]))
+    assert empty["meets"] == "yes" and empty["mean_ms"] < 0.3
+
+
+def test_unknown_benchmark_suggests(capsys):
+    assert harness.main(["alising"]) == 2
+    assert "unknown benchmark 'alising' (did you mean 'aliasing'?)" in capsys.readouterr().err
+    assert {"aliasing", "graph_overhead"} <= set(harness.available())
