@@ -2,8 +2,9 @@
 
     python examples/first_graph.py [--out first_graph.png] [--size 256x256] [--views 2]
 
-A checkerboard per view (shifted per eye), halved with a linear Blit, converted to rgba8 and
-written with the views side by side. A pass that feeds no output is pruned, and the report says so.
+A checkerboard per view (shifted per eye), halved and scaled back up with linear Blits (the
+upscaled copy reuses the checkerboard's texture: lifetime aliasing), converted to rgba8 and
+written with the views side by side. A pass that feeds no output is pruned; the report says so.
 """
 from __future__ import annotations
 
@@ -21,10 +22,12 @@ def build() -> rv.RenderGraph:
     g.add_pass(Checkerboard(cell=16, color_a=[0.9, 0.6, 0.2, 1], color_b=[0.1, 0.2, 0.4, 1],
                             format="rgba16f"), "Pattern")
     g.add_pass(Blit(scale=0.5, filter="linear"), "Half")
+    g.add_pass(Blit(scale=1.0, filter="linear"), "Full")          # reuses Pattern's texture
     g.add_pass(Blit(format="rgba8"), "ToLdr")
     g.add_pass(Clear(color=[1, 0, 1, 1]), "Unused")           # feeds nothing: pruned
     g.add_edge("Pattern.dst", "Half.src")
-    g.add_edge("Half.dst", "ToLdr.src")
+    g.add_edge("Half.dst", "Full.src")
+    g.add_edge("Full.dst", "ToLdr.src")
     g.mark_output("ToLdr.dst")
     return g
 
