@@ -200,10 +200,11 @@ def test_report_text_fields_left_out_and_extra(gpu):
     assert rep is cg.report()
     rep.left_out.append("no transmission: code and buffers left out")
     cg.add_report("bvh: 12 nodes")
+    cg.add_report({"scene": "box", "left_out": {"SCENE_HAS_TEXTURES": "texture array"}})
     text = str(rep)
     for piece in ["render graph 'Chain': 8x8 x 2 view(s)", "order: P0 -> P1 -> P2 -> D", "Unused: feeds no marked output",
                   "D: USE_THING=1", "no transmission: code and buffers left out", "scene: 3 meshes",
-                  "bvh: 12 nodes", "saved"]:
+                  "bvh: 12 nodes", "saved", "scene: box\nleft_out:\n  SCENE_HAS_TEXTURES: texture array"]:
         assert piece in text, piece
     assert rep.defines["D"] == {"USE_THING": 1}
     d = rep.as_dict()

@@ -16,6 +16,13 @@ class PassStats:
     p95_ms: float
     samples: int
 
+    # Short spellings: stats.mean == stats.mean_ms, ...
+    last = property(lambda self: self.last_ms)
+    mean = property(lambda self: self.mean_ms)
+    min = property(lambda self: self.min_ms)
+    max = property(lambda self: self.max_ms)
+    p95 = property(lambda self: self.p95_ms)
+
 
 @dataclasses.dataclass
 class Profile:

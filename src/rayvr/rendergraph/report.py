@@ -95,5 +95,21 @@ class CompileReport:
         if self.timing:
             lines.append(f"timing: {self.timing}")
         for e in self.extra:
-            lines.append(str(e).rstrip())
+            lines += _format_entry(e) if isinstance(e, dict) else [str(e).rstrip()]
         return "\n".join(lines)
+
+
+def _format_entry(d: dict, indent: str = "") -> list[str]:
+    """A dict entry (e.g. GpuScene.report()) as indented 'key: value' lines."""
+    out = []
+    for k, v in d.items():
+        if isinstance(v, dict) and v:
+            out.append(f"{indent}{k}:")
+            out += _format_entry(v, indent + "  ")
+        elif isinstance(v, float):
+            out.append(f"{indent}{k}: {v:.4g}")
+        elif isinstance(v, (list, tuple)):
+            out.append(f"{indent}{k}: {', '.join(map(str, v)) or '(none)'}")
+        else:
+            out.append(f"{indent}{k}: {v}")
+    return out
