@@ -3,7 +3,7 @@ import re
 
 import pytest
 
-from rayvr.errors import GraphError
+from rayvr.errors import GraphError, OptionError
 from rayvr.rendergraph import Reflection, RenderGraph, RenderPass
 
 
@@ -152,6 +152,8 @@ def test_editing_errors():
     assert "not a marked output" in error_of(lambda: g.unmark_output("A.out"))
     assert "is not a RenderPass" in error_of(lambda: g.add_pass(object(), "Z"))
     assert "write 'Pass.pin'" in error_of(lambda: g.add_edge("A..out", "B.extra"))
+    with pytest.raises(OptionError, match=r"update_pass\('A'\): pass Src: unknown property 'fromat' \(did you mean 'format'\?\)"):
+        g.update_pass("A", {"fromat": "rgba16f"})
 
 
 def test_remove_pass_drops_its_edges_and_outputs_and_update_pass_keeps_them():

@@ -9,7 +9,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from ..errors import GraphError, did_you_mean
+from ..errors import GraphError, OptionError, did_you_mean
 from .render_pass import RenderPass
 
 
@@ -84,7 +84,10 @@ class RenderGraph:
         """Replace pass `name` by a new instance of its class with `props` over its current
         properties; edges and marked outputs stay. Returns the new pass."""
         old = self._require_pass(name, "update_pass")
-        new = type(old)({**old.get_properties(), **(props or {})})
+        try:
+            new = type(old)({**old.get_properties(), **(props or {})})
+        except OptionError as exc:
+            raise OptionError(f"update_pass('{name}'): {exc}") from exc
         new.name = name
         self._passes[name] = new
         return new
