@@ -21,7 +21,7 @@ BsdfParams bsdf_params(vec3 base_color, float metallic, float roughness) {
     return b;
 }
 
-// Sum over LIGHT_SAMPLES light samples of f(v, l) cos / pdf * Le, with visibility when SHADE_SHADOWS.
+// Mean over LIGHT_SAMPLES light samples of f(v, l) cos * Le / pdf, with visibility when SHADE_SHADOWS.
 // p: render-space point; n: shading normal; ng: geometric normal; both facing v.
 vec3 shade_direct(vec3 p, vec3 n, vec3 ng, vec3 v, BsdfParams m, inout Rng rng) {
     vec3 sum = vec3(0.0);
@@ -31,13 +31,13 @@ vec3 shade_direct(vec3 p, vec3 n, vec3 ng, vec3 v, BsdfParams m, inout Rng rng) 
 #endif
     for (int k = 0; k < LIGHT_SAMPLES; ++k) {
         LightSample ls = sample_light(p, rng_next3(rng));
-        if (!(ls.pdf > 0.0) || dot(ls.dir, ng) <= 0.0) continue;
-        vec3 f = bsdf_eval(m, n, v, ls.dir);
+        if (!ls.valid || dot(ls.direction, ng) <= 0.0) continue;
+        vec3 f = bsdf_eval(m, n, v, ls.direction);
         if (f.x + f.y + f.z <= 0.0) continue;
 #if SHADE_SHADOWS
-        if (trace_occluded(origin, ls.dir, ls.distance * (1.0 - 1e-4))) continue;
+        if (trace_occluded(origin, ls.direction, ls.distance * (1.0 - 1e-4))) continue;
 #endif
-        sum += f * ls.radiance / ls.pdf;
+        sum += f * ls.weight;   // weight = radiance / pdf (lights.glsl)
     }
     sum *= 1.0 / float(LIGHT_SAMPLES);
 #endif
