@@ -16,6 +16,26 @@ def _size(text: str) -> tuple[int, int]:
     raise OptionError(f"--size: expected WIDTHxHEIGHT such as 640x480, got {text!r}")
 
 
+def _load_scene(arg: str):
+    """A glTF file, or a function of rayvr.scene.builtin called by name."""
+    from pathlib import Path
+
+    if Path(arg).suffix.lower() in (".gltf", ".glb") or Path(arg).exists():
+        from ..scene import load_scene
+
+        return load_scene(arg)
+    from ..scene import builtin
+
+    maker = getattr(builtin, arg, None)
+    names = [n for n in ("cornell_box", "spheres", "quad", "plane_with_point_light") if hasattr(builtin, n)]
+    if not callable(maker) or arg.startswith("_"):
+        from ..errors import did_you_mean
+
+        raise OptionError(f"--scene: {arg!r} is neither a glTF file nor a built-in scene"
+                          f"{did_you_mean(arg, names)}; built-in: {', '.join(names)}")
+    return maker()
+
+
 def register(sub) -> None:
     p = sub.add_parser("graph", help="inspect saved render graphs")
     gsub = p.add_subparsers(dest="graph_command", metavar="ACTION")
@@ -23,7 +43,8 @@ def register(sub) -> None:
     show.add_argument("file", help="graph file: .py script (runs it) or .json (runs no code)")
     show.add_argument("--size", default="128x128", help="per-view size WxH to compile at (default 128x128)")
     show.add_argument("--views", type=int, default=2, help="view count (default 2: stereo)")
-    show.add_argument("--scene", help="scene file the passes reflect on (glTF); default none")
+    show.add_argument("--scene", help="glTF file or built-in scene name (e.g. cornell_box) the passes "
+                      "compile against; default none")
     show.add_argument("--dot", action="store_true", help="print the graph as Graphviz DOT instead")
     show.add_argument("--png", metavar="OUT", help="also draw the graph to OUT (.png/.svg/.pdf)")
     show.add_argument("--json", action="store_true", help="print the report as JSON")
@@ -43,12 +64,17 @@ def run_show(args) -> int:
     if args.dot:
         print(graph.to_dot(), end="")
         return 0
-    scene = None
+    scene = gpu_scene = None
+    extra = []
     if args.scene:
-        from ..scene import load_scene
+        from ..gpu import get_context
+        from ..scene import GpuScene
 
-        scene = load_scene(args.scene)
-    report = graph.compile(scene=scene, size=size, views=args.views).report()
+        scene = _load_scene(args.scene)
+        gpu_scene = GpuScene(get_context(), scene)
+        extra.append(gpu_scene.report())
+    report = graph.compile(scene=scene, size=size, views=args.views, gpu_scene=gpu_scene,
+                           extra_report=extra).report()
     print(json.dumps(report.as_dict(), indent=2, default=str) if args.json else report)
     if args.png:
         print(f"picture: {args.png}")
