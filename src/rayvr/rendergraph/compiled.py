@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import time
 
+import moderngl
 import numpy as np
 
 from ..errors import GraphError, did_you_mean
@@ -62,7 +63,10 @@ class CompiledGraph:
         if layers > self.caps.max_texture_layers:
             raise GraphError(f"resource '{first}': {layers} layers exceeds the driver's "
                              f"{self.caps.max_texture_layers}; compile with fewer views")
-        return self.gl.texture_array((size[0], size[1], layers), f.components, dtype=f.dtype)
+        tex = self.gl.texture_array((size[0], size[1], layers), f.components, dtype=f.dtype)
+        if f.dtype == "u4":   # integer textures are incomplete (read as 0) with linear filtering
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        return tex
 
     def release(self) -> None:
         """Free the GPU objects now (otherwise they live as long as this object's GL context)."""
