@@ -1,0 +1,252 @@
+// Ray queries against the two-level BVH of rayvr.scene.GpuScene (see rayvr/scene/bvh.py).
+//
+//   bool trace_closest(vec3 o, vec3 d, float tmax, out Hit hit)   closest hit in (0, tmax)
+//   bool trace_occluded(vec3 o, vec3 d, float tmax)               any hit in (0, tmax), exits early
+//   vec3 offset_ray_origin(vec3 p, vec3 ng)                       self-intersection-free origin
+//
+// Render space; d need not be normalised (t is in units of d) but |d| should be ~1 and
+// tmax <= 1e29. Nodes are BVH2 with both children's boxes in the parent (64 B); children are
+// visited near first; the far one goes on a short stack. Triangles are intersected watertight
+// (Woop, Benthin & Wald 2013) in object space; alpha-masked materials are tested in the any-hit
+// step (SCENE_HAS_ALPHA_MASK). Both faces are hit. `Hit` is declared in scene.glsl.
+#pragma once
+#include "scene.glsl"
+
+#ifndef RQ_STACK_SIZE
+#define RQ_STACK_SIZE 40
+#endif
+#ifndef RQ_TLAS_STACK_SIZE
+#define RQ_TLAS_STACK_SIZE 24
+#endif
+
+layout(std430, binding = RAYVR_BLAS_NODE_SSBO) readonly buffer RqBlasNodes { vec4 rq_blas_nodes[]; };
+layout(std430, binding = RAYVR_TLAS_NODE_SSBO) readonly buffer RqTlasNodes { vec4 rq_tlas_nodes[]; };
+// three vec4 per BVH slot: vertices in object space; w of the first: mesh-local triangle index
+layout(std430, binding = RAYVR_TRIANGLE_SSBO) readonly buffer RqTriangles { vec4 rq_triangles[]; };
+
+// Wächter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection" (Ray Tracing Gems
+// ch. 6): move p along the geometric normal by a few ULPs of its own magnitude (an integer step
+// on the float bits), or by a fixed tiny distance near the origin where ULPs vanish.
+vec3 offset_ray_origin(vec3 p, vec3 ng) {
+    const float near_origin = 1.0 / 32.0;
+    const float float_step = 1.0 / 65536.0;
+    const float int_step = 256.0;
+    ivec3 di = ivec3(int_step * ng);
+    vec3 pi = intBitsToFloat(floatBitsToInt(p) + ivec3(p.x < 0.0 ? -di.x : di.x,
+                                                        p.y < 0.0 ? -di.y : di.y,
+                                                        p.z < 0.0 ? -di.z : di.z));
+    return vec3(abs(p.x) < near_origin ? p.x + float_step * ng.x : pi.x,
+                abs(p.y) < near_origin ? p.y + float_step * ng.y : pi.y,
+                abs(p.z) < near_origin ? p.z + float_step * ng.z : pi.z);
+}
+
+vec3 rq_safe_inverse(vec3 d) {
+    const float big = 1e20;
+    return vec3(abs(d.x) > 1e-20 ? 1.0 / d.x : (d.x < 0.0 ? -big : big),
+                abs(d.y) > 1e-20 ? 1.0 / d.y : (d.y < 0.0 ? -big : big),
+                abs(d.z) > 1e-20 ? 1.0 / d.z : (d.z < 0.0 ? -big : big));
+}
+
+// Slab test of box [lo, hi] (origin * inv = oi): entry distance, or a negative value on a miss.
+// The exit is widened by 2 ulp so that rounding never loses a box a watertight ray touches.
+float rq_box(vec3 lo, vec3 hi, vec3 inv, vec3 oi, float tmax) {
+    vec3 t0 = lo * inv - oi, t1 = hi * inv - oi;
+    vec3 tn = min(t0, t1), tf = max(t0, t1);
+    float enter = max(max(tn.x, tn.y), max(tn.z, 0.0));
+    float leave = min(min(tf.x, tf.y), min(tf.z, tmax)) * 1.00000024;
+    return enter <= leave ? enter : -1.0;
+}
+
+// The per-ray constants of the watertight test in one instance's object space. Coordinates are
+// permuted so that z is the dominant axis of d (swizzles, no dynamic indexing).
+struct RqRay {
+    vec3 o;
+    vec3 inv;
+    vec3 oi;
+    int perm;    // which of the six axis permutations (kx, ky, kz)
+    vec3 shear;  // Sx, Sy, Sz
+};
+
+vec3 rq_permute(vec3 v, int perm) {
+    switch (perm) {
+        case 0: return v.yzx;   // kz = x
+        case 1: return v.zyx;
+        case 2: return v.zxy;   // kz = y
+        case 3: return v.xzy;
+        case 4: return v.xyz;   // kz = z
+        default: return v.yxz;
+    }
+}
+
+RqRay rq_make_ray(vec3 o, vec3 d) {
+    RqRay r;
+    r.o = o;
+    r.inv = rq_safe_inverse(d);
+    r.oi = o * r.inv;
+    vec3 ad = abs(d);
+    int kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+    float dz = kz == 0 ? d.x : (kz == 1 ? d.y : d.z);
+    r.perm = 2 * kz + (dz < 0.0 ? 1 : 0);   // swapping kx, ky keeps the projected winding
+    vec3 dp = rq_permute(d, r.perm);
+    r.shear = vec3(dp.x / dp.z, dp.y / dp.z, 1.0 / dp.z);
+    return r;
+}
+
+// Watertight ray/triangle test: on a hit nearer than tmax, returns true with t and barycentrics.
+bool rq_triangle(RqRay r, vec3 v0, vec3 v1, vec3 v2, float tmax, out float t, out vec2 bary) {
+    vec3 a = rq_permute(v0 - r.o, r.perm), b = rq_permute(v1 - r.o, r.perm), c = rq_permute(v2 - r.o, r.perm);
+    float ax = a.x - r.shear.x * a.z, ay = a.y - r.shear.y * a.z;
+    float bx = b.x - r.shear.x * b.z, by = b.y - r.shear.y * b.z;
+    float cx = c.x - r.shear.x * c.z, cy = c.y - r.shear.y * c.z;
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    if (u == 0.0 || v == 0.0 || w == 0.0) {   // on an edge in float: decide in double
+        u = float(double(cx) * double(by) - double(cy) * double(bx));
+        v = float(double(ax) * double(cy) - double(ay) * double(cx));
+        w = float(double(bx) * double(ay) - double(by) * double(ax));
+    }
+    t = 0.0;
+    bary = vec2(0.0);
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
+    float det = u + v + w;
+    if (det == 0.0) return false;
+    float tt = r.shear.z * (u * a.z + v * b.z + w * c.z);
+    float sgn = det < 0.0 ? -1.0 : 1.0;
+    if (tt * sgn <= 0.0 || tt * sgn > tmax * abs(det)) return false;
+    float rcp = 1.0 / det;
+    t = tt * rcp;
+    bary = vec2(v, w) * rcp;
+    return true;
+}
+
+// Intersect the triangles of one leaf (BVH slots [first, first + count)); updates hit/tmax.
+bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, inout Hit hit, bool any_hit) {
+    bool found = false;
+    for (uint s = first; s < first + count; ++s) {
+        vec4 v0 = rq_triangles[3u * s], v1 = rq_triangles[3u * s + 1u], v2 = rq_triangles[3u * s + 2u];
+        float t;
+        vec2 b;
+        if (!rq_triangle(r, v0.xyz, v1.xyz, v2.xyz, tmax, t, b)) continue;
+        uint prim = floatBitsToUint(v0.w);
+#if SCENE_HAS_ALPHA_MASK
+        uint tri = scene_triangle(instance, prim);
+        if (!material_alpha_passes(scene_triangle_materials[tri], triangle_uv(tri, b))) continue;
+#endif
+        tmax = t;
+        hit.t = t;
+        hit.barycentrics = b;
+        hit.instance = instance;
+        hit.primitive = prim;
+        found = true;
+        if (any_hit) break;
+    }
+    return found;
+}
+
+// Traverse one instance's BLAS in its object space; updates hit/tmax.
+bool rq_trace_blas(vec3 o_render, vec3 d_render, uint instance, bool any_hit, inout float tmax, inout Hit hit) {
+    vec3 o = vec3(dot(scene_instances[instance].to_object[0], vec4(o_render, 1.0)),
+                  dot(scene_instances[instance].to_object[1], vec4(o_render, 1.0)),
+                  dot(scene_instances[instance].to_object[2], vec4(o_render, 1.0)));
+    vec3 d = vec3(dot(scene_instances[instance].to_object[0].xyz, d_render),
+                  dot(scene_instances[instance].to_object[1].xyz, d_render),
+                  dot(scene_instances[instance].to_object[2].xyz, d_render));
+    RqRay r = rq_make_ray(o, d);
+    uint node = scene_meshes[scene_instances[instance].info.x].info.x;
+    uint stack[RQ_STACK_SIZE];
+    int sp = 0;
+    bool found = false;
+    while (true) {
+        uint base = node * 4u;
+        vec4 n0 = rq_blas_nodes[base], n1 = rq_blas_nodes[base + 1u];
+        vec4 n2 = rq_blas_nodes[base + 2u], n3 = rq_blas_nodes[base + 3u];
+        float t0 = rq_box(n0.xyz, n1.xyz, r.inv, r.oi, tmax);
+        float t1 = rq_box(n2.xyz, n3.xyz, r.inv, r.oi, tmax);
+        uint link0 = floatBitsToUint(n0.w), link1 = floatBitsToUint(n2.w);
+        uint count0 = floatBitsToUint(n1.w), count1 = floatBitsToUint(n3.w);
+        bool go0 = t0 >= 0.0, go1 = t1 >= 0.0;
+        if (go0 && count0 > 0u) {
+            go0 = false;
+            found = rq_leaf(r, instance, link0, count0, tmax, hit, any_hit) || found;
+        }
+        if (go1 && count1 > 0u && !(any_hit && found)) {
+            go1 = false;
+            found = rq_leaf(r, instance, link1, count1, tmax, hit, any_hit) || found;
+        }
+        if (any_hit && found) break;
+        if (go0 && go1) {
+            bool near0 = t0 <= t1;
+            if (sp < RQ_STACK_SIZE) stack[sp++] = near0 ? link1 : link0;
+            node = near0 ? link0 : link1;
+        } else if (go0) {
+            node = link0;
+        } else if (go1) {
+            node = link1;
+        } else {
+            if (sp == 0) break;
+            node = stack[--sp];
+        }
+    }
+    return found;
+}
+
+// Traverse the TLAS (leaves: one instance each, link = instance index).
+bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
+    hit.t = tmax_in;
+    hit.barycentrics = vec2(0.0);
+    hit.instance = 0xFFFFFFFFu;
+    hit.primitive = 0xFFFFFFFFu;
+    bool found = false;
+    if (instance_count() == 0u) return false;
+    float tmax = min(tmax_in, 1e29);
+    vec3 inv = rq_safe_inverse(d), oi = o * inv;
+    uint stack[RQ_TLAS_STACK_SIZE];
+    int sp = 0;
+    uint node = 0u;
+    while (true) {
+        uint base = node * 4u;
+        vec4 n0 = rq_tlas_nodes[base], n1 = rq_tlas_nodes[base + 1u];
+        vec4 n2 = rq_tlas_nodes[base + 2u], n3 = rq_tlas_nodes[base + 3u];
+        float t0 = rq_box(n0.xyz, n1.xyz, inv, oi, tmax);
+        float t1 = rq_box(n2.xyz, n3.xyz, inv, oi, tmax);
+        uint link0 = floatBitsToUint(n0.w), link1 = floatBitsToUint(n2.w);
+        uint count0 = floatBitsToUint(n1.w), count1 = floatBitsToUint(n3.w);
+        bool go0 = t0 >= 0.0, go1 = t1 >= 0.0;
+        bool leaf0 = go0 && count0 > 0u, leaf1 = go1 && count1 > 0u;
+        if (leaf0 && leaf1 && t1 < t0) {   // the nearer instance first
+            found = rq_trace_blas(o, d, link1, any_hit, tmax, hit) || found;
+            leaf1 = false;
+            go1 = false;
+        }
+        if (leaf0 && !(any_hit && found)) {
+            found = rq_trace_blas(o, d, link0, any_hit, tmax, hit) || found;
+            go0 = false;
+        }
+        if (leaf1 && !(any_hit && found)) {
+            found = rq_trace_blas(o, d, link1, any_hit, tmax, hit) || found;
+            go1 = false;
+        }
+        if (any_hit && found) break;
+        if (go0 && go1) {
+            bool near0 = t0 <= t1;
+            if (sp < RQ_TLAS_STACK_SIZE) stack[sp++] = near0 ? link1 : link0;
+            node = near0 ? link0 : link1;
+        } else if (go0) {
+            node = link0;
+        } else if (go1) {
+            node = link1;
+        } else {
+            if (sp == 0) break;
+            node = stack[--sp];
+        }
+    }
+    return found;
+}
+
+bool trace_closest(vec3 o, vec3 d, float tmax, out Hit hit) { return rq_trace(o, d, tmax, false, hit); }
+
+bool trace_occluded(vec3 o, vec3 d, float tmax) {
+    Hit h;
+    return rq_trace(o, d, tmax, true, h);
+}

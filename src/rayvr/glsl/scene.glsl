@@ -1,0 +1,316 @@
+// The GPU scene (rayvr.scene.GpuScene): buffers, vertex pulling for raster, surfaces and materials.
+//
+// Spaces: vertices are object space; InstanceData holds object -> render space (world minus the
+// frame origin) as three rows of a 3x4 matrix, and the inverse. All results are render space.
+//
+// Raster: GpuScene.draw(program, instances_per_draw) issues ONE glMultiDrawArraysIndirect over
+// all instances, with no index buffer: command i draws instance i's mesh as 3*T vertices with
+// first = the mesh's first index slot, so gl_VertexID is a position in scene_indices[] (and
+// gl_VertexID / 3 the scene-wide triangle), instanceCount = instances_per_draw and
+// baseInstance = i * instances_per_draw. The vertex shader declares
+//     in uint rayvr_instance;        // per-instance attribute fed by GpuScene.draw
+// and calls scene_raster_vertex(rayvr_instance, gl_VertexID). With layered stereo
+// (instances_per_draw = views) gl_InstanceID is the view (layer); with GL_OVR_multiview2
+// (instances_per_draw = 1) gl_ViewID_OVR is.
+//
+// Feature #defines (GpuScene.defines(), 0 or 1): SCENE_HAS_TEXTURES, SCENE_HAS_NORMAL_MAPS,
+// SCENE_HAS_ALPHA_MASK, SCENE_HAS_TRANSMISSION, SCENE_HAS_PUNCTUAL_LIGHTS,
+// SCENE_HAS_EMISSIVE_TRIANGLES, SCENE_HAS_INSTANCING. Define SCENE_MATERIAL_IMPLICIT_LOD 1 in a
+// fragment shader to sample material textures with mip selection (elsewhere level 0 is read).
+#pragma once
+
+#ifndef SCENE_HAS_TEXTURES
+#define SCENE_HAS_TEXTURES 0
+#endif
+#ifndef SCENE_HAS_NORMAL_MAPS
+#define SCENE_HAS_NORMAL_MAPS 0
+#endif
+#ifndef SCENE_HAS_ALPHA_MASK
+#define SCENE_HAS_ALPHA_MASK 0
+#endif
+#ifndef SCENE_HAS_TRANSMISSION
+#define SCENE_HAS_TRANSMISSION 0
+#endif
+#ifndef SCENE_MATERIAL_IMPLICIT_LOD
+#define SCENE_MATERIAL_IMPLICIT_LOD 0
+#endif
+
+#define RAYVR_TRIANGLE_MATERIAL_SSBO RAYVR_SCENE_SSBO_12
+#define RAYVR_TANGENT_SSBO RAYVR_SCENE_SSBO_13
+
+#define ALPHA_MODE_OPAQUE 0u
+#define ALPHA_MODE_MASK 1u
+#define ALPHA_MODE_BLEND 2u
+
+// material texture slots (two vec4 rows each in MaterialData.tex)
+#define TEX_BASE_COLOR 0
+#define TEX_METALLIC_ROUGHNESS 1
+#define TEX_NORMAL 2
+#define TEX_OCCLUSION 3
+#define TEX_EMISSIVE 4
+#define TEX_TRANSMISSION 5
+
+struct VertexData {
+    vec4 position_u;   // object-space position, uv.x
+    vec4 normal_v;     // object-space normal, uv.y
+};
+
+struct MeshData {
+    uvec4 info;        // x: BLAS root node, y: first BVH triangle slot, z: first scene triangle, w: triangle count
+};
+
+struct InstanceData {
+    vec4 to_render[3];  // rows of the 3x4 object -> render space matrix
+    vec4 to_object[3];  // rows of its inverse
+    uvec4 info;         // x: mesh
+};
+
+struct MaterialData {
+    vec4 base_color;
+    vec4 emission_cutoff;  // rgb: emissive * emissive_strength, a: alpha cutoff
+    vec4 pbr;              // metallic, roughness, transmission, ior
+    uvec4 flags;           // x: Effect id, y: alpha mode, z: double sided
+    vec4 tex[12];          // per slot: (m00, m01, m02, layer or -1), (m10, m11, m12, scale/strength)
+};
+
+layout(std430, binding = RAYVR_VERTEX_SSBO) readonly buffer SceneVertices { VertexData scene_vertices[]; };
+layout(std430, binding = RAYVR_INDEX_SSBO) readonly buffer SceneIndices { uint scene_indices[]; };
+layout(std430, binding = RAYVR_MESH_SSBO) readonly buffer SceneMeshes { MeshData scene_meshes[]; };
+layout(std430, binding = RAYVR_INSTANCE_SSBO) readonly buffer SceneInstances {
+    uvec4 scene_info;      // x: instance count, y: material count
+    InstanceData scene_instances[];
+};
+layout(std430, binding = RAYVR_MATERIAL_SSBO) readonly buffer SceneMaterials { MaterialData scene_materials[]; };
+layout(std430, binding = RAYVR_TRIANGLE_MATERIAL_SSBO) readonly buffer SceneTriangleMaterials {
+    uint scene_triangle_materials[];   // per scene triangle
+};
+#if SCENE_HAS_NORMAL_MAPS
+layout(std430, binding = RAYVR_TANGENT_SSBO) readonly buffer SceneTangents { vec4 scene_tangents[]; };
+#endif
+#if SCENE_HAS_TEXTURES
+layout(binding = RAYVR_SCENE_TEXTURE_UNIT) uniform sampler2DArray scene_textures;
+#endif
+
+uint instance_count() { return scene_info.x; }
+
+vec3 instance_point_to_render(uint i, vec3 p) {
+    vec4 q = vec4(p, 1.0);
+    return vec3(dot(scene_instances[i].to_render[0], q), dot(scene_instances[i].to_render[1], q),
+                dot(scene_instances[i].to_render[2], q));
+}
+
+vec3 instance_vector_to_render(uint i, vec3 v) {
+    return vec3(dot(scene_instances[i].to_render[0].xyz, v), dot(scene_instances[i].to_render[1].xyz, v),
+                dot(scene_instances[i].to_render[2].xyz, v));
+}
+
+// Normals go by the inverse transpose: n' = transpose(to_object) * n.
+vec3 instance_normal_to_render(uint i, vec3 n) {
+    return n.x * scene_instances[i].to_object[0].xyz + n.y * scene_instances[i].to_object[1].xyz
+         + n.z * scene_instances[i].to_object[2].xyz;
+}
+
+vec3 safe_normalize(vec3 v, vec3 fallback) {
+    float l2 = dot(v, v);
+    return l2 > 1e-30 ? v * inversesqrt(l2) : fallback;
+}
+
+uint scene_triangle(uint instance, uint primitive) {
+    return scene_meshes[scene_instances[instance].info.x].info.z + primitive;
+}
+
+vec3 srgb_to_linear(vec3 c) {
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
+}
+
+// ---- materials ------------------------------------------------------------------------------
+
+struct MaterialParams {
+    vec3 base_color;
+    float alpha;
+    float metallic;
+    float roughness;
+    vec3 emissive;        // emitted radiance (emissive * strength * texture)
+    float occlusion;
+    float transmission;
+    float ior;
+    uint effect;          // rayvr.Effect id
+    uint alpha_mode;
+    bool double_sided;
+};
+
+#if SCENE_HAS_TEXTURES
+bool material_has_texture(uint m, int slot) { return scene_materials[m].tex[2 * slot].w >= 0.0; }
+
+vec4 material_texture(uint m, int slot, vec2 uv) {
+    vec4 r0 = scene_materials[m].tex[2 * slot], r1 = scene_materials[m].tex[2 * slot + 1];
+    vec3 st = vec3(dot(r0.xy, uv) + r0.z, dot(r1.xy, uv) + r1.z, r0.w);
+#if SCENE_MATERIAL_IMPLICIT_LOD
+    return texture(scene_textures, st);
+#else
+    return textureLod(scene_textures, st, 0.0);
+#endif
+}
+#endif
+
+MaterialParams material_params(uint m, vec2 uv) {
+    MaterialData d = scene_materials[m];
+    MaterialParams p;
+    p.base_color = d.base_color.rgb;
+    p.alpha = d.base_color.a;
+    p.metallic = d.pbr.x;
+    p.roughness = d.pbr.y;
+    p.emissive = d.emission_cutoff.rgb;
+    p.occlusion = 1.0;
+    p.transmission = 0.0;
+    p.ior = d.pbr.w;
+    p.effect = d.flags.x;
+    p.alpha_mode = d.flags.y;
+    p.double_sided = d.flags.z != 0u;
+#if SCENE_HAS_TRANSMISSION
+    p.transmission = d.pbr.z;
+#endif
+#if SCENE_HAS_TEXTURES
+    if (d.tex[2 * TEX_BASE_COLOR].w >= 0.0) {
+        vec4 t = material_texture(m, TEX_BASE_COLOR, uv);
+        p.base_color *= srgb_to_linear(t.rgb);
+        p.alpha *= t.a;
+    }
+    if (d.tex[2 * TEX_METALLIC_ROUGHNESS].w >= 0.0) {
+        vec4 t = material_texture(m, TEX_METALLIC_ROUGHNESS, uv);
+        p.roughness *= t.g;
+        p.metallic *= t.b;
+    }
+    if (d.tex[2 * TEX_EMISSIVE].w >= 0.0)
+        p.emissive *= srgb_to_linear(material_texture(m, TEX_EMISSIVE, uv).rgb);
+    if (d.tex[2 * TEX_OCCLUSION].w >= 0.0)
+        p.occlusion = mix(1.0, material_texture(m, TEX_OCCLUSION, uv).r, d.tex[2 * TEX_OCCLUSION + 1].w);
+#if SCENE_HAS_TRANSMISSION
+    if (d.tex[2 * TEX_TRANSMISSION].w >= 0.0)
+        p.transmission *= material_texture(m, TEX_TRANSMISSION, uv).r;
+#endif
+#endif
+    return p;
+}
+
+// Alpha of material m at uv against its cutoff (MASK); other modes always pass.
+bool material_alpha_passes(uint m, vec2 uv) {
+#if SCENE_HAS_ALPHA_MASK
+    if (scene_materials[m].flags.y != ALPHA_MODE_MASK) return true;
+    float a = scene_materials[m].base_color.a;
+#if SCENE_HAS_TEXTURES
+    if (scene_materials[m].tex[2 * TEX_BASE_COLOR].w >= 0.0) a *= material_texture(m, TEX_BASE_COLOR, uv).a;
+#endif
+    return a >= scene_materials[m].emission_cutoff.a;
+#else
+    return true;
+#endif
+}
+
+// ---- triangles ------------------------------------------------------------------------------
+
+vec2 triangle_uv(uint tri, vec2 bary) {
+    vec3 w = vec3(1.0 - bary.x - bary.y, bary);
+    VertexData a = scene_vertices[scene_indices[3u * tri]];
+    VertexData b = scene_vertices[scene_indices[3u * tri + 1u]];
+    VertexData c = scene_vertices[scene_indices[3u * tri + 2u]];
+    return w.x * vec2(a.position_u.w, a.normal_v.w) + w.y * vec2(b.position_u.w, b.normal_v.w)
+         + w.z * vec2(c.position_u.w, c.normal_v.w);
+}
+
+// ---- raster: vertex pulling -------------------------------------------------------------------
+
+struct RasterVertex {
+    vec3 position;   // render space
+    vec3 normal;     // render space, normalised
+    vec2 uv;
+    vec4 tangent;    // render space xyz, handedness w (0 without normal maps)
+    uint material;
+    uint triangle;   // scene triangle
+};
+
+RasterVertex scene_raster_vertex(uint instance, int vertex_id) {
+    RasterVertex r;
+    uint vi = scene_indices[uint(vertex_id)];
+    VertexData v = scene_vertices[vi];
+    r.position = instance_point_to_render(instance, v.position_u.xyz);
+    r.normal = safe_normalize(instance_normal_to_render(instance, v.normal_v.xyz), vec3(0, 1, 0));
+    r.uv = vec2(v.position_u.w, v.normal_v.w);
+    r.tangent = vec4(0.0);
+#if SCENE_HAS_NORMAL_MAPS
+    vec4 t = scene_tangents[vi];
+    r.tangent = vec4(safe_normalize(instance_vector_to_render(instance, t.xyz), vec3(1, 0, 0)), t.w);
+#endif
+    r.triangle = uint(vertex_id) / 3u;
+    r.material = scene_triangle_materials[r.triangle];
+    return r;
+}
+
+// ---- ray hits -----------------------------------------------------------------------------------
+
+// A closest hit (ray_query.glsl fills it): instance, mesh-local triangle, barycentrics of
+// vertices 1 and 2, distance t along the (unnormalised ok) ray direction.
+struct Hit {
+    float t;
+    vec2 barycentrics;
+    uint instance;
+    uint primitive;
+};
+
+struct SurfacePoint {
+    vec3 position;           // render space
+    vec3 normal;             // shading normal (normal map applied), faces the incoming ray
+    vec3 geometric_normal;   // faces the incoming ray
+    vec2 uv;
+    uint material;
+    bool front_face;         // the ray hit the side the winding makes the front
+    uint triangle;           // scene triangle
+};
+
+vec3 apply_normal_map(SurfacePoint s, uint tri, vec3 w, uint instance) {
+#if SCENE_HAS_NORMAL_MAPS
+    uint m = s.material;
+    if (scene_materials[m].tex[2 * TEX_NORMAL].w < 0.0) return s.normal;
+    vec4 t = w.x * scene_tangents[scene_indices[3u * tri]] + w.y * scene_tangents[scene_indices[3u * tri + 1u]]
+           + w.z * scene_tangents[scene_indices[3u * tri + 2u]];
+    vec3 tw = instance_vector_to_render(instance, t.xyz);
+    tw = tw - s.normal * dot(s.normal, tw);
+    if (dot(tw, tw) < 1e-20) return s.normal;
+    tw = normalize(tw);
+    vec3 bw = cross(s.normal, tw) * (t.w < 0.0 ? -1.0 : 1.0);
+    vec3 tn = material_texture(m, TEX_NORMAL, s.uv).xyz * 2.0 - 1.0;
+    tn.xy *= scene_materials[m].tex[2 * TEX_NORMAL + 1].w;
+    return safe_normalize(tn.x * tw + tn.y * bw + tn.z * s.normal, s.normal);
+#else
+    return s.normal;
+#endif
+}
+
+SurfacePoint surface_at(Hit h, vec3 dir) {
+    SurfacePoint s;
+    uint tri = scene_triangle(h.instance, h.primitive);
+    vec3 w = vec3(1.0 - h.barycentrics.x - h.barycentrics.y, h.barycentrics);
+    VertexData a = scene_vertices[scene_indices[3u * tri]];
+    VertexData b = scene_vertices[scene_indices[3u * tri + 1u]];
+    VertexData c = scene_vertices[scene_indices[3u * tri + 2u]];
+    vec3 p = w.x * a.position_u.xyz + w.y * b.position_u.xyz + w.z * c.position_u.xyz;
+    s.position = instance_point_to_render(h.instance, p);
+    vec3 ng = instance_normal_to_render(h.instance, cross(b.position_u.xyz - a.position_u.xyz,
+                                                          c.position_u.xyz - a.position_u.xyz));
+    vec3 n = instance_normal_to_render(h.instance, w.x * a.normal_v.xyz + w.y * b.normal_v.xyz + w.z * c.normal_v.xyz);
+    s.geometric_normal = safe_normalize(ng, -normalize(dir));
+    s.normal = safe_normalize(n, s.geometric_normal);
+    s.front_face = dot(s.geometric_normal, dir) < 0.0;
+    if (!s.front_face) {
+        s.geometric_normal = -s.geometric_normal;
+        s.normal = -s.normal;
+    }
+    s.uv = w.x * vec2(a.position_u.w, a.normal_v.w) + w.y * vec2(b.position_u.w, b.normal_v.w)
+         + w.z * vec2(c.position_u.w, c.normal_v.w);
+    s.material = scene_triangle_materials[tri];
+    s.triangle = tri;
+#if SCENE_HAS_NORMAL_MAPS
+    s.normal = apply_normal_map(s, tri, w, h.instance);
+#endif
+    return s;
+}

@@ -1,0 +1,145 @@
+"""The glTF 2.0 metallic-roughness material (+ emissive strength, transmission, ior) and the
+versioned table a scene keeps them in."""
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+
+import numpy as np
+
+from ..errors import SceneError, did_you_mean
+from .effect import Effect
+
+
+class AlphaMode(enum.IntEnum):
+    """glTF alphaMode."""
+
+    OPAQUE = 0
+    MASK = 1
+    BLEND = 2
+
+
+@dataclasses.dataclass
+class TextureRef:
+    """A material's use of one image: index into `Scene.textures`, uv set and KHR_texture_transform."""
+
+    texture: int
+    texcoord: int = 0
+    offset: tuple[float, float] = (0.0, 0.0)
+    rotation: float = 0.0
+    scale: tuple[float, float] = (1.0, 1.0)
+    strength: float = 1.0   # normalTexture.scale / occlusionTexture.strength
+
+    def uv_matrix(self) -> np.ndarray:
+        """The 2x3 matrix KHR_texture_transform defines: T * R * S (uv' = M @ (u, v, 1))."""
+        c, s = math.cos(self.rotation), math.sin(self.rotation)
+        rot = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+        sc = np.diag([self.scale[0], self.scale[1], 1.0])
+        tr = np.array([[1.0, 0.0, self.offset[0]], [0.0, 1.0, self.offset[1]], [0.0, 0.0, 1.0]])
+        return (tr @ rot @ sc)[:2]
+
+
+_VERSIONED = {"effect", "base_color", "metallic", "roughness", "emissive", "emissive_strength",
+              "transmission", "ior", "alpha_mode", "alpha_cutoff", "double_sided"}
+
+
+@dataclasses.dataclass(eq=False)
+class Material:
+    """One glTF metallic-roughness material. Setting a field bumps the owning table's version."""
+
+    name: str = "default"
+    base_color: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    metallic: float = 1.0
+    roughness: float = 1.0
+    emissive: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    emissive_strength: float = 1.0
+    transmission: float = 0.0
+    ior: float = 1.5
+    alpha_mode: AlphaMode = AlphaMode.OPAQUE
+    alpha_cutoff: float = 0.5
+    double_sided: bool = False
+    base_color_texture: TextureRef | None = None
+    metallic_roughness_texture: TextureRef | None = None
+    normal_texture: TextureRef | None = None
+    occlusion_texture: TextureRef | None = None
+    emissive_texture: TextureRef | None = None
+    transmission_texture: TextureRef | None = None
+    effect: Effect = Effect.SHADOWS
+
+    def __setattr__(self, key, value):
+        if key == "effect":
+            value = Effect.parse(value, f"material '{self.__dict__.get('name', '?')}'.effect")
+        elif key == "alpha_mode" and not isinstance(value, AlphaMode):
+            try:
+                value = AlphaMode[str(value).upper()] if isinstance(value, str) else AlphaMode(value)
+            except (KeyError, ValueError):
+                raise SceneError(f"material '{self.__dict__.get('name', '?')}'.alpha_mode: unknown "
+                                 f"{value!r}; use OPAQUE, MASK or BLEND") from None
+        super().__setattr__(key, value)
+        table = self.__dict__.get("_table")
+        if table is not None and key in _VERSIONED | {"base_color_texture", "normal_texture"}:
+            table.version += 1
+
+    @property
+    def emission(self) -> np.ndarray:
+        """Emitted radiance factor: emissive * emissive_strength."""
+        return np.asarray(self.emissive, dtype=np.float64) * self.emissive_strength
+
+    @property
+    def is_emissive(self) -> bool:
+        return bool(np.any(self.emission > 0))
+
+    def textures(self) -> dict[str, TextureRef]:
+        """The texture slots in use, by field name."""
+        names = ("base_color_texture", "metallic_roughness_texture", "normal_texture",
+                 "occlusion_texture", "emissive_texture", "transmission_texture")
+        return {n: getattr(self, n) for n in names if getattr(self, n) is not None}
+
+
+class MaterialTable:
+    """Materials by index and by name; `version` grows whenever one of them changes."""
+
+    def __init__(self, materials=()):
+        self._items: list[Material] = []
+        self._by_name: dict[str, int] = {}
+        self.version = 0
+        for m in materials:
+            self.add(m)
+
+    def add(self, material: Material) -> int:
+        """Append a material (a duplicate name gets a '.1', '.2' suffix) and return its index."""
+        name, k = material.name, 1
+        while name in self._by_name:
+            name = f"{material.name}.{k}"
+            k += 1
+        object.__setattr__(material, "name", name)
+        object.__setattr__(material, "_table", self)
+        self._by_name[name] = len(self._items)
+        self._items.append(material)
+        self.version += 1
+        return len(self._items) - 1
+
+    def index(self, name: str) -> int:
+        try:
+            return self._by_name[name]
+        except KeyError:
+            raise SceneError(f"no material named '{name}'{did_you_mean(name, self._by_name)}; "
+                             f"materials: {', '.join(self._by_name) or 'none'}") from None
+
+    def __getitem__(self, key) -> Material:
+        if isinstance(key, str):
+            return self._items[self.index(key)]
+        return self._items[key]
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __iter__(self):
+        return iter(self._items)
+
+    def __contains__(self, name) -> bool:
+        return name in self._by_name
+
+    def names(self) -> list[str]:
+        return [m.name for m in self._items]

@@ -1,0 +1,391 @@
+"""The scene on the GPU: SSBOs at the bindings of `rayvr.gpu.bindings`, the two-level BVH, the
+material/light tables and scene textures, and the one-call raster draw of every instance.
+
+Layouts are declared in `glsl/scene.glsl`, `glsl/ray_query.glsl` and `glsl/lights.glsl`.
+Per frame, `update(origin)` rewrites only what depends on the origin or on edits: instance
+transforms (render space), the TLAS over instances, punctual lights, and materials when
+`scene.materials.version` moved.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..errors import GpuError, SceneError
+from ..gpu.bindings import BINDINGS
+from ..materials.material import Material
+from . import bvh as bvh_mod
+from .model import FEATURES, LightType, Scene
+
+TEXTURE_SLOTS = ("base_color_texture", "metallic_roughness_texture", "normal_texture",
+                 "occlusion_texture", "emissive_texture", "transmission_texture")
+MATERIAL_FLOATS = 64          # 256 B, see MaterialData
+INSTANCE_FLOATS = 28          # 6 vec4 + uvec4
+MAX_TEXTURE_SIZE = 2048
+TRIANGLE_MATERIAL_SSBO = BINDINGS["RAYVR_SCENE_SSBO_12"]
+TANGENT_SSBO = BINDINGS["RAYVR_SCENE_SSBO_13"]
+
+
+def _luminance(rgb) -> np.ndarray:
+    rgb = np.asarray(rgb, dtype=np.float64)
+    return rgb[..., 0] * 0.2126 + rgb[..., 1] * 0.7152 + rgb[..., 2] * 0.0722
+
+
+def pack_materials(materials, texture_layers: dict[int, int] | None = None) -> np.ndarray:
+    """MaterialData records (see scene.glsl) as float32 (M, 64); uint fields hold their bits."""
+    mats = list(materials) or [Material()]
+    out = np.zeros((len(mats), MATERIAL_FLOATS), np.float32)
+    bits = out.view(np.uint32)
+    for i, m in enumerate(mats):
+        out[i, 0:4] = m.base_color
+        out[i, 4:7] = m.emission
+        out[i, 7] = m.alpha_cutoff
+        out[i, 8:12] = (m.metallic, m.roughness, m.transmission, m.ior)
+        bits[i, 12:16] = (int(m.effect), int(m.alpha_mode), int(bool(m.double_sided)), 0)
+        for s, slot in enumerate(TEXTURE_SLOTS):
+            row = 16 + 8 * s
+            ref = getattr(m, slot)
+            layer = -1.0
+            if ref is not None and texture_layers is not None and ref.texture in texture_layers:
+                layer = float(texture_layers[ref.texture])
+            mat = ref.uv_matrix() if ref is not None else np.array([[1.0, 0, 0], [0, 1.0, 0]])
+            out[i, row:row + 3] = mat[0]
+            out[i, row + 3] = layer
+            out[i, row + 4:row + 7] = mat[1]
+            out[i, row + 7] = ref.strength if ref is not None else 1.0
+    return out
+
+
+class GpuScene:
+    """GPU buffers, BVH and textures of one `Scene`. Build once; `update(origin)` per frame."""
+
+    def __init__(self, gpu, scene: Scene, bvh_method: str = "auto", progress: bool | None = None):
+        self.gpu = gpu
+        self.gl = gpu.gl if hasattr(gpu, "gl") else gpu
+        self.scene = scene
+        self.features = scene.features
+        self.timings: dict[str, float] = {}
+        self.buffers: dict[str, object] = {}
+        self._instance_meshes = [i.mesh for i in scene.instances]
+        self._build_meshes(bvh_method, progress)
+        self._build_textures()
+        self._material_version = None
+        self._upload_materials()
+        self._build_emissive_table()
+        self.origin = np.zeros(3)
+        self._draws: dict[tuple, tuple] = {}
+        self.update(np.zeros(3))
+
+    # ---- static data ------------------------------------------------------------------------
+    def _buffer(self, name: str, data) -> None:
+        data = np.ascontiguousarray(data)
+        if data.nbytes == 0:
+            data = np.zeros(4, np.uint32)
+        old = self.buffers.get(name)
+        if old is not None and old.size == data.nbytes:
+            old.write(data.tobytes())
+            return
+        if old is not None:
+            old.release()
+        self.buffers[name] = self.gl.buffer(data.tobytes())
+
+    def _build_meshes(self, method: str, progress, blas: list | None = None) -> None:
+        t0 = time.perf_counter()
+        s = self.scene
+        verts, idx, tri_mats, tri_slots, nodes, mesh_rows, tangents = [], [], [], [], [], [], []
+        self.blas: list[bvh_mod.Bvh] = []
+        v_base = t_base = n_base = 0
+        for k, mesh in enumerate(s.meshes):
+            if blas is not None:
+                b = blas[k]
+            else:
+                lo, hi = bvh_mod.triangle_bounds(mesh.triangles())
+                b = bvh_mod.build(lo, hi, method=method, progress=progress) if len(lo) else None
+            self.blas.append(b)
+            uv = mesh.uvs if mesh.uvs is not None else np.zeros((len(mesh.positions), 2), np.float32)
+            v = np.empty((len(mesh.positions), 8), np.float32)
+            v[:, 0:3], v[:, 3], v[:, 4:7], v[:, 7] = mesh.positions, uv[:, 0], mesh.normals, uv[:, 1]
+            verts.append(v)
+            if "SCENE_HAS_NORMAL_MAPS" in self.features:
+                tangents.append(mesh.tangents if mesh.tangents is not None
+                                else np.tile(np.array([1, 0, 0, 1], np.float32), (len(mesh.positions), 1)))
+            idx.append(mesh.indices + np.uint32(v_base))
+            tri_mats.append(mesh.material_ids)
+            root = n_base
+            if b is not None:
+                tri = mesh.triangles()[b.order]
+                slot = np.zeros((len(tri), 3, 4), np.float32)
+                slot[:, :, :3] = tri
+                slot.view(np.uint32)[:, 0, 3] = b.order.astype(np.uint32)
+                tri_slots.append(slot)
+                gn = b.nodes.copy()
+                bits = gn.view(np.uint32)
+                for c in (0, 8):
+                    leaf = bits[:, c + 7] > 0
+                    bits[:, c + 3] += np.where(leaf, np.uint32(t_base), np.uint32(n_base))
+                nodes.append(gn)
+                n_base += len(gn)
+            mesh_rows.append((root, t_base, t_base, mesh.triangle_count))
+            v_base += len(mesh.positions)
+            t_base += mesh.triangle_count
+        self.triangle_count = t_base
+        self._buffer("vertices", np.concatenate(verts) if verts else np.zeros((1, 8), np.float32))
+        self._buffer("indices", np.concatenate(idx) if idx else np.zeros(3, np.uint32))
+        self._buffer("triangle_materials", np.concatenate(tri_mats) if tri_mats else np.zeros(1, np.uint32))
+        self._buffer("triangles", np.concatenate(tri_slots) if tri_slots else np.zeros((1, 3, 4), np.float32))
+        self._buffer("blas_nodes", np.concatenate(nodes) if nodes else np.zeros((1, 16), np.float32))
+        self._buffer("meshes", np.array(mesh_rows, np.uint32).reshape(-1, 4))
+        if tangents:
+            self._buffer("tangents", np.concatenate(tangents))
+        self.mesh_index_offsets = np.cumsum([0] + [m.triangle_count * 3 for m in s.meshes])
+        self.timings["blas_build_ms"] = (time.perf_counter() - t0) * 1e3
+
+    def _build_textures(self) -> None:
+        self.texture_array = None
+        self.texture_layers: dict[int, int] = {}
+        if "SCENE_HAS_TEXTURES" not in self.features:
+            return
+        from PIL import Image
+
+        used = sorted({ref.texture for m in self.scene.materials for ref in m.textures().values()
+                       if 0 <= ref.texture < len(self.scene.textures)})
+        images = [self.scene.textures[i].image for i in used]
+        w = min(max(im.shape[1] for im in images), MAX_TEXTURE_SIZE)
+        h = min(max(im.shape[0] for im in images), MAX_TEXTURE_SIZE)
+        layers = []
+        for im in images:
+            if im.shape[:2] != (h, w):
+                im = np.asarray(Image.fromarray(im).resize((w, h), Image.BILINEAR))
+            layers.append(im[::-1])   # GL's row 0 is the bottom; glTF uv (0, 0) is the top-left
+        data = np.ascontiguousarray(np.stack(layers), dtype=np.uint8)
+        # glTF v runs downwards: flipping rows maps uv (u, v) to GL (u, 1 - v); scene.glsl expects
+        # the vertex uvs flipped at load, so sample coordinates are plain GL coordinates.
+        self.texture_array = self.gl.texture_array((w, h, len(layers)), 4, data.tobytes())
+        self.texture_array.build_mipmaps()
+        self.texture_array.repeat_x = self.texture_array.repeat_y = True
+        self.texture_layers = {t: k for k, t in enumerate(used)}
+
+    def _upload_materials(self) -> None:
+        self._buffer("materials", pack_materials(self.scene.materials, self.texture_layers))
+        self._material_version = self.scene.materials.version
+
+    def _build_emissive_table(self) -> None:
+        """Emissive triangles of every instance with their power (area x luminance of emission),
+        as a CDF for sampling by power. Degenerate (zero-area) triangles are left out."""
+        self.emissive_count = 0
+        self.emissive_power = 0.0
+        if "SCENE_HAS_EMISSIVE_TRIANGLES" not in self.features:
+            return
+        lum = np.array([_luminance(m.emission) for m in self.scene.materials], np.float64)
+        inst_ids, prims, mats, power, area_all = [], [], [], [], []
+        for i, inst in enumerate(self.scene.instances):
+            mesh = self.scene.meshes[inst.mesh]
+            m = mesh.material_ids
+            sel = np.flatnonzero(lum[m] > 0)
+            if not len(sel):
+                continue
+            tri = mesh.triangles()[sel].astype(np.float64) @ inst.transform[:3, :3].T
+            area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+            p = area * lum[m[sel]]
+            keep = p > 0
+            inst_ids.append(np.full(int(keep.sum()), i, np.uint32))
+            prims.append(sel[keep].astype(np.uint32))
+            mats.append(m[sel][keep])
+            power.append(p[keep])
+            area_all.append(area[keep])
+        if not power or not sum(len(p) for p in power):
+            return
+        power = np.concatenate(power)
+        total = float(power.sum())
+        table = np.zeros((len(power), 8), np.float32)
+        bits = table.view(np.uint32)
+        bits[:, 0], bits[:, 1], bits[:, 2] = np.concatenate(inst_ids), np.concatenate(prims), np.concatenate(mats)
+        table[:, 4] = np.cumsum(power) / total
+        table[:, 5] = power / total
+        table[:, 6] = np.concatenate(area_all)
+        header = np.zeros(8, np.float32)
+        header.view(np.uint32)[0] = len(power)
+        header[1] = total
+        self._buffer("emissive_triangles", np.concatenate([header, table.reshape(-1)]))
+        self.emissive_count, self.emissive_power = len(power), total
+
+    # ---- per frame --------------------------------------------------------------------------
+    def update(self, origin=None) -> None:
+        """Move to this frame's render-space origin (float64 world point): instance transforms,
+        TLAS and punctual lights; re-upload materials when `materials.version` changed."""
+        t0 = time.perf_counter()
+        self.origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64)
+        if self.scene.materials.version != self._material_version:
+            self._upload_materials()
+        s = self.scene
+        n = len(s.instances)
+        rows = np.zeros((max(n, 1), INSTANCE_FLOATS), np.float32)
+        bits = rows.view(np.uint32)
+        lo = np.zeros((n, 3))
+        hi = np.zeros((n, 3))
+        live = []
+        for i, inst in enumerate(s.instances):
+            m = inst.transform.copy()
+            m[:3, 3] -= self.origin
+            try:
+                inv = np.linalg.inv(m)
+            except np.linalg.LinAlgError:
+                raise SceneError(f"instance '{inst.name}'.transform: singular matrix; give it a non-zero scale") from None
+            rows[i, 0:12] = m[:3].reshape(-1)
+            rows[i, 12:24] = inv[:3].reshape(-1)
+            bits[i, 24] = inst.mesh
+            b = self.blas[inst.mesh]
+            if b is None:
+                continue
+            p = s.meshes[inst.mesh].positions
+            c = np.array([[x, y, z, 1.0] for x in (p[:, 0].min(), p[:, 0].max())
+                          for y in (p[:, 1].min(), p[:, 1].max()) for z in (p[:, 2].min(), p[:, 2].max())])
+            w = c @ m[:3].T
+            lo[i], hi[i] = w.min(0), w.max(0)
+            live.append(i)
+        header = np.zeros(4, np.uint32)
+        header[0] = n if live else 0     # 0: no geometry, traversal returns at once
+        header[1] = len(s.materials)
+        self._buffer("instances", np.concatenate([header.view(np.float32), rows.reshape(-1)]))
+        self._build_tlas(np.array(live, np.int64), lo, hi)
+        self._upload_lights()
+        self.timings["update_ms"] = (time.perf_counter() - t0) * 1e3
+
+    def _build_tlas(self, live: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
+        if not len(live):
+            self._buffer("tlas_nodes", np.zeros((1, 16), np.float32))
+            return
+        pad = 1e-6 * np.maximum(np.abs(lo[live]), np.abs(hi[live])).max(axis=1, keepdims=True)
+        t = bvh_mod.build(lo[live] - pad, hi[live] + pad, method="sah" if len(live) < 4096 else "lbvh",
+                          leaf_size=1, progress=False)
+        nodes = t.nodes.copy()
+        bits = nodes.view(np.uint32)
+        for c in (0, 8):
+            leaf = bits[:, c + 7] > 0
+            bits[leaf, c + 3] = live[t.order[bits[leaf, c + 3]]].astype(np.uint32)
+        self.tlas = t
+        self._buffer("tlas_nodes", nodes)
+
+    def _upload_lights(self) -> None:
+        lights = self.scene.lights
+        if not lights:
+            return
+        out = np.zeros((1 + 4 * len(lights), 4), np.float32)
+        out.view(np.uint32)[0, 0] = len(lights)
+        for k, L in enumerate(lights):
+            r = 1 + 4 * k
+            out[r, 0:3] = L.position - self.origin
+            out[r].view(np.uint32)[3] = L.type
+            out[r + 1, 0:3] = L.direction
+            out[r + 1, 3] = L.range
+            out[r + 2, 0:3] = np.asarray(L.color) * L.intensity
+            cos_outer, cos_inner = np.cos(L.outer_cone_angle), np.cos(L.inner_cone_angle)
+            out[r + 3, 0] = cos_outer
+            out[r + 3, 1] = 1.0 / max(cos_inner - cos_outer, 1e-4)
+        self._buffer("punctual_lights", out)
+
+    # ---- binding and drawing ----------------------------------------------------------------
+    _BINDING = {"vertices": "RAYVR_VERTEX_SSBO", "indices": "RAYVR_INDEX_SSBO",
+                "blas_nodes": "RAYVR_BLAS_NODE_SSBO", "tlas_nodes": "RAYVR_TLAS_NODE_SSBO",
+                "instances": "RAYVR_INSTANCE_SSBO", "materials": "RAYVR_MATERIAL_SSBO",
+                "punctual_lights": "RAYVR_PUNCTUAL_LIGHT_SSBO",
+                "emissive_triangles": "RAYVR_EMISSIVE_TRIANGLE_SSBO", "triangles": "RAYVR_TRIANGLE_SSBO",
+                "meshes": "RAYVR_MESH_SSBO", "triangle_materials": "RAYVR_SCENE_SSBO_12",
+                "tangents": "RAYVR_SCENE_SSBO_13"}
+
+    def bind(self) -> None:
+        """Bind every scene buffer to its SSBO point and the textures to the scene's unit."""
+        for name, buf in self.buffers.items():
+            buf.bind_to_storage_buffer(BINDINGS[self._BINDING[name]])
+        if self.texture_array is not None:
+            self.texture_array.use(BINDINGS["RAYVR_SCENE_TEXTURE_UNIT"])
+
+    def defines(self) -> dict[str, int]:
+        """The feature #defines every shader that includes the scene library is built with."""
+        return {f: int(f in self.features) for f in FEATURES}
+
+    def draw(self, program, instances_per_draw: int = 1, mode=None) -> None:
+        """Draw every instance in one glMultiDrawArraysIndirect (see scene.glsl): the program's
+        vertex shader declares `in uint rayvr_instance;` and pulls vertices with
+        scene_raster_vertex(rayvr_instance, gl_VertexID). Call bind() first."""
+        import moderngl
+
+        key = (id(program), instances_per_draw)
+        if key not in self._draws:
+            s = self.scene
+            cmds, ids = [], np.repeat(np.arange(len(s.instances), dtype=np.uint32), instances_per_draw)
+            for i, inst in enumerate(s.instances):
+                mesh = s.meshes[inst.mesh]
+                cmds.append((mesh.triangle_count * 3, instances_per_draw,
+                             int(self.mesh_index_offsets[inst.mesh]), i * instances_per_draw))
+            if not cmds:
+                self._draws[key] = (None, None, 0)
+            else:
+                ibuf = self.gl.buffer(np.array(cmds, np.uint32).tobytes())
+                abuf = self.gl.buffer(ids.tobytes())
+                try:
+                    vao = self.gl.vertex_array(program, [(abuf, "1u /i", "rayvr_instance")])
+                except (KeyError, moderngl.Error) as exc:
+                    raise GpuError(f"GpuScene.draw: the program has no 'in uint rayvr_instance;' "
+                                   f"vertex input ({exc}); declare it in the vertex shader") from exc
+                self._draws[key] = (vao, ibuf, len(cmds), abuf)
+        entry = self._draws[key]
+        if entry[0] is not None:
+            entry[0].render_indirect(entry[1], mode=self.gl.TRIANGLES if mode is None else mode, count=entry[2])
+
+    def refit(self, mesh: int, positions) -> None:
+        """New vertex positions for mesh `mesh` (animation): vertex buffer, BVH triangles and the
+        BLAS boxes are updated in place (same topology); the TLAS follows on the next update()."""
+        m = self.scene.meshes[mesh]
+        pos = np.ascontiguousarray(positions, dtype=np.float32).reshape(m.positions.shape)
+        if not np.isfinite(pos).all():
+            raise SceneError(f"mesh '{m.name}': refit positions contain NaN or Inf")
+        m.positions = pos
+        self._build_meshes_refit(mesh)
+
+    def _build_meshes_refit(self, mesh: int) -> None:
+        b = self.blas[mesh]
+        if b is not None:
+            lo, hi = bvh_mod.triangle_bounds(self.scene.meshes[mesh].triangles())
+            b.refit(lo, hi)
+        self._build_meshes("auto", False, blas=list(self.blas))
+
+    # ---- report -----------------------------------------------------------------------------
+    @property
+    def nbytes(self) -> int:
+        n = sum(b.size for b in self.buffers.values())
+        if self.texture_array is not None:
+            w, h = self.texture_array.size
+            n += int(w * h * self.texture_array.layers * 4 * 4 / 3)
+        return n
+
+    def report(self) -> dict:
+        """Features present and left out (with the buffers not allocated), bytes per buffer."""
+        absent = [f for f in FEATURES if f not in self.features]
+        skipped = {
+            "SCENE_HAS_PUNCTUAL_LIGHTS": "punctual_lights buffer",
+            "SCENE_HAS_EMISSIVE_TRIANGLES": "emissive_triangles buffer",
+            "SCENE_HAS_TEXTURES": "texture array",
+            "SCENE_HAS_NORMAL_MAPS": "tangents buffer",
+        }
+        return {
+            "scene": self.scene.name,
+            "triangles": self.triangle_count,
+            "instances": len(self.scene.instances),
+            "features": sorted(self.features),
+            "left_out": {f: skipped.get(f, "shader code only") for f in absent},
+            "buffers": {k: v.size for k, v in self.buffers.items()},
+            "texture_bytes": self.nbytes - sum(b.size for b in self.buffers.values()),
+            "bytes_per_triangle": self.nbytes / max(self.triangle_count, 1),
+            "blas_nodes": sum(b.node_count for b in self.blas if b is not None),
+            "emissive_triangles": self.emissive_count,
+            "timings_ms": dict(self.timings),
+        }
+
+    def release(self) -> None:
+        for b in self.buffers.values():
+            b.release()
+        self.buffers.clear()
+        if self.texture_array is not None:
+            self.texture_array.release()

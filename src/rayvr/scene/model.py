@@ -1,0 +1,240 @@
+"""The CPU scene: meshes, instances, materials, lights and cameras (glTF's units and axes)."""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..errors import SceneError
+from ..materials.effect import Effect
+from ..materials.material import AlphaMode, Material, MaterialTable
+
+FEATURES = ("SCENE_HAS_PUNCTUAL_LIGHTS", "SCENE_HAS_EMISSIVE_TRIANGLES", "SCENE_HAS_TEXTURES",
+            "SCENE_HAS_NORMAL_MAPS", "SCENE_HAS_ALPHA_MASK", "SCENE_HAS_TRANSMISSION",
+            "SCENE_HAS_INSTANCING")
+
+
+@dataclasses.dataclass(eq=False)
+class Mesh:
+    """Object-space triangles. `material_ids` holds one material index per triangle."""
+
+    name: str
+    positions: np.ndarray                  # (V, 3) float32
+    indices: np.ndarray                    # (T, 3) uint32
+    material_ids: np.ndarray               # (T,) uint32
+    normals: np.ndarray | None = None      # (V, 3) float32, computed when absent
+    uvs: np.ndarray | None = None          # (V, 2) float32
+    tangents: np.ndarray | None = None     # (V, 4) float32 (xyz, handedness)
+
+    def __post_init__(self):
+        self.positions = np.ascontiguousarray(self.positions, dtype=np.float32).reshape(-1, 3)
+        self.indices = np.ascontiguousarray(self.indices, dtype=np.uint32).reshape(-1, 3)
+        mids = np.asarray(self.material_ids, dtype=np.uint32)
+        self.material_ids = np.ascontiguousarray(np.broadcast_to(mids, (len(self.indices),)))
+        if not np.isfinite(self.positions).all():
+            raise SceneError(f"mesh '{self.name}'.positions: NaN or Inf vertex; fix the exporter or drop the mesh")
+        if len(self.indices) and int(self.indices.max()) >= len(self.positions):
+            raise SceneError(f"mesh '{self.name}'.indices: index {int(self.indices.max())} out of range "
+                             f"for {len(self.positions)} vertices")
+        if self.normals is None:
+            self.normals = vertex_normals(self.positions, self.indices)
+        self.normals = np.ascontiguousarray(self.normals, dtype=np.float32).reshape(-1, 3)
+        if self.uvs is not None:
+            self.uvs = np.ascontiguousarray(self.uvs, dtype=np.float32).reshape(-1, 2)
+        if self.tangents is not None:
+            self.tangents = np.ascontiguousarray(self.tangents, dtype=np.float32).reshape(-1, 4)
+
+    @property
+    def triangle_count(self) -> int:
+        return len(self.indices)
+
+    def triangles(self) -> np.ndarray:
+        """(T, 3, 3) float32 vertex positions per triangle."""
+        return self.positions[self.indices]
+
+
+def vertex_normals(positions: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals; vertices of degenerate triangles only get +Y (never NaN)."""
+    tri = positions[indices].astype(np.float64)
+    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n = np.zeros((len(positions), 3))
+    for k in range(3):
+        np.add.at(n, indices[:, k], fn)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    out = np.where(length > 1e-30, n / np.maximum(length, 1e-30), [0.0, 1.0, 0.0])
+    return out.astype(np.float32)
+
+
+@dataclasses.dataclass
+class Instance:
+    """One placement of a mesh: float64 4x4 object-to-world transform."""
+
+    mesh: int
+    transform: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(4))
+    name: str = ""
+
+    def __post_init__(self):
+        self.transform = np.asarray(self.transform, dtype=np.float64).reshape(4, 4)
+
+
+class LightType:
+    POINT = 0
+    SPOT = 1
+    DIRECTIONAL = 2
+    NAMES = {"point": 0, "spot": 1, "directional": 2}
+
+
+@dataclasses.dataclass
+class Light:
+    """A KHR_lights_punctual light placed in world space (intensity in candela or lux)."""
+
+    type: int = LightType.POINT
+    position: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    direction: np.ndarray = dataclasses.field(default_factory=lambda: np.array([0.0, 0.0, -1.0]))
+    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    intensity: float = 1.0
+    range: float = 0.0                     # 0: infinite
+    inner_cone_angle: float = 0.0
+    outer_cone_angle: float = math.pi / 4
+    name: str = ""
+
+    def __post_init__(self):
+        if isinstance(self.type, str):
+            self.type = LightType.NAMES[self.type]
+        self.position = np.asarray(self.position, dtype=np.float64)
+        d = np.asarray(self.direction, dtype=np.float64)
+        self.direction = d / max(np.linalg.norm(d), 1e-30)
+
+
+@dataclasses.dataclass
+class Camera:
+    """A perspective camera: world transform (looks down its -Z) and vertical field of view."""
+
+    transform: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(4))
+    yfov: float = math.radians(45.0)
+    aspect: float | None = None
+    znear: float = 0.05
+    zfar: float = 1000.0
+    name: str = ""
+
+    def __post_init__(self):
+        self.transform = np.asarray(self.transform, dtype=np.float64).reshape(4, 4)
+
+    @property
+    def position(self) -> np.ndarray:
+        return self.transform[:3, 3].copy()
+
+    @classmethod
+    def look_at(cls, eye, target, up=(0.0, 1.0, 0.0), yfov_deg: float = 45.0, name: str = "") -> "Camera":
+        eye, target, up = (np.asarray(v, dtype=np.float64) for v in (eye, target, up))
+        z = eye - target
+        z /= np.linalg.norm(z)
+        x = np.cross(up, z)
+        x /= np.linalg.norm(x)
+        y = np.cross(z, x)
+        m = np.eye(4)
+        m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, y, z, eye
+        return cls(m, math.radians(yfov_deg), name=name)
+
+
+@dataclasses.dataclass(eq=False)
+class Texture:
+    """An RGBA8 image (H, W, 4) uint8, row 0 at the top as in the file; `srgb` for colour data."""
+
+    image: np.ndarray
+    name: str = ""
+    srgb: bool = True
+
+
+class Scene:
+    """Everything to render: meshes, instances, materials, textures, lights, cameras."""
+
+    def __init__(self, name: str = "scene", path: str | None = None):
+        self.name = name
+        self.path = path
+        self.meshes: list[Mesh] = []
+        self.instances: list[Instance] = []
+        self.materials = MaterialTable()
+        self.textures: list[Texture] = []
+        self.lights: list[Light] = []
+        self.cameras: list[Camera] = []
+
+    # building -------------------------------------------------------------------------------
+    def add_material(self, material: Material) -> int:
+        return self.materials.add(material)
+
+    def add_mesh(self, mesh: Mesh) -> int:
+        if len(mesh.material_ids) and int(mesh.material_ids.max()) >= max(len(self.materials), 1):
+            raise SceneError(f"mesh '{mesh.name}'.material_ids: material {int(mesh.material_ids.max())} "
+                             f"does not exist ({len(self.materials)} materials); add materials first")
+        self.meshes.append(mesh)
+        return len(self.meshes) - 1
+
+    def add_instance(self, mesh: int, transform=None, name: str = "") -> int:
+        if not 0 <= mesh < len(self.meshes):
+            raise SceneError(f"instance '{name}'.mesh: index {mesh} out of range ({len(self.meshes)} meshes)")
+        self.instances.append(Instance(mesh, np.eye(4) if transform is None else transform,
+                                       name or self.meshes[mesh].name))
+        return len(self.instances) - 1
+
+    def add_object(self, name: str, positions, indices, material, transform=None, **attrs) -> int:
+        """Add a mesh with one material (index or name) and one instance of it; returns the instance."""
+        mid = self.materials.index(material) if isinstance(material, str) else int(material)
+        mesh = self.add_mesh(Mesh(name, positions, indices, np.uint32(mid), **attrs))
+        return self.add_instance(mesh, transform, name)
+
+    # queries ---------------------------------------------------------------------------------
+    @property
+    def triangle_count(self) -> int:
+        """Triangles over all instances."""
+        return sum(self.meshes[i.mesh].triangle_count for i in self.instances)
+
+    def bounds(self) -> np.ndarray:
+        """World-space AABB over all instances: [[min xyz], [max xyz]] float64."""
+        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        for inst in self.instances:
+            p = self.meshes[inst.mesh].positions.astype(np.float64)
+            if not len(p):
+                continue
+            corners = np.array([[x, y, z] for x in (p[:, 0].min(), p[:, 0].max())
+                                for y in (p[:, 1].min(), p[:, 1].max()) for z in (p[:, 2].min(), p[:, 2].max())])
+            w = corners @ inst.transform[:3, :3].T + inst.transform[:3, 3]
+            lo, hi = np.minimum(lo, w.min(0)), np.maximum(hi, w.max(0))
+        if not np.isfinite(lo).all():
+            return np.zeros((2, 3))
+        return np.stack([lo, hi])
+
+    def used_materials(self) -> set[int]:
+        used = set()
+        for m in {i.mesh for i in self.instances}:
+            used.update(np.unique(self.meshes[m].material_ids).tolist())
+        return used
+
+    def effects_used(self) -> set[Effect]:
+        return {self.materials[i].effect for i in self.used_materials() if i < len(self.materials)}
+
+    @property
+    def features(self) -> set[str]:
+        """Names (FEATURES) of what the scene has; shaders compile code only for these."""
+        mats = [self.materials[i] for i in self.used_materials() if i < len(self.materials)]
+        f = set()
+        if self.lights:
+            f.add("SCENE_HAS_PUNCTUAL_LIGHTS")
+        if any(m.is_emissive for m in mats):
+            f.add("SCENE_HAS_EMISSIVE_TRIANGLES")
+        if self.textures and any(m.textures() for m in mats):
+            f.add("SCENE_HAS_TEXTURES")
+        if self.textures and any(m.normal_texture is not None for m in mats):
+            f.add("SCENE_HAS_NORMAL_MAPS")
+        if any(m.alpha_mode == AlphaMode.MASK for m in mats):
+            f.add("SCENE_HAS_ALPHA_MASK")
+        if any(m.transmission > 0 for m in mats):
+            f.add("SCENE_HAS_TRANSMISSION")
+        if len(self.instances) > len({i.mesh for i in self.instances}):
+            f.add("SCENE_HAS_INSTANCING")
+        return f
+
+    def __repr__(self) -> str:
+        return (f"Scene({self.name!r}: {len(self.meshes)} meshes, {len(self.instances)} instances, "
+                f"{self.triangle_count} triangles, {len(self.materials)} materials, {len(self.lights)} lights)")
