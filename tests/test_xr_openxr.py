@@ -1,0 +1,411 @@
+"""OpenXRSink at the pyopenxr boundary: conversions, typed structs, the session lifecycle, and a
+whole frame loop against a scripted fake runtime (real pyopenxr structs, real GL swapchain images)."""
+import ctypes
+import math
+import os
+from collections import deque
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from rayvr.errors import XrError
+from rayvr.xr import Pose
+from rayvr.xr.openxr_convert import (fov_from_xr, pose_from_xr, projection_views, views_from_located,
+                                     xr_version)
+from rayvr.xr.openxr_gl import GL_RGBA8, GL_RGBA16F, GL_SRGB8_ALPHA8, GLPlatform, choose_format
+from rayvr.xr.openxr_lifecycle import Action, SessionLifecycle, SessionState
+from rayvr.xr.openxr_sink import NO_RUNTIME, OpenXRSink
+
+xr = pytest.importorskip("xr")
+S = SessionState
+
+
+def test_lifecycle_answers_each_state_with_the_spec_call():
+    lc = SessionLifecycle()
+    steps = [(S.IDLE, Action.NONE), (S.READY, Action.BEGIN), (S.SYNCHRONIZED, Action.NONE),
+             (S.VISIBLE, Action.NONE), (S.FOCUSED, Action.NONE), (S.VISIBLE, Action.NONE),
+             (S.SYNCHRONIZED, Action.NONE), (S.STOPPING, Action.END), (S.IDLE, Action.NONE),
+             (S.EXITING, Action.EXIT)]
+    for state, action in steps:
+        assert lc.on_state_changed(state) is action, state
+        if action is Action.BEGIN:
+            lc.began()
+        if action is Action.END:
+            lc.ended_session()
+    assert lc.anomalies == [] and lc.ended and not lc.running
+
+
+def test_lifecycle_loss_pending_recovers_and_records_anomalies():
+    lc = SessionLifecycle()
+    lc.on_state_changed(S.IDLE)
+    assert lc.on_state_changed(S.FOCUSED) is Action.NONE            # skipped READY..VISIBLE
+    assert lc.anomalies == [(S.IDLE, S.FOCUSED)]
+    assert lc.on_state_changed(S.LOSS_PENDING) is Action.RECOVER and lc.ended
+    with pytest.raises(XrError, match="unknown session state 42"):
+        SessionLifecycle().on_state_changed(42)
+
+
+def test_exit_request_is_sent_once_while_running():
+    lc = SessionLifecycle()
+    lc.on_state_changed(S.IDLE)
+    lc.on_state_changed(S.READY)
+    lc.began()
+    assert not lc.should_request_exit()
+    lc.exit_requested = True
+    assert lc.should_request_exit()
+    lc.exit_sent = True
+    assert not lc.should_request_exit()
+
+
+def test_xr_pose_and_fov_become_rayvr_views():
+    q = (0.1, 0.7, -0.2, 0.6)
+    n = math.sqrt(sum(c * c for c in q))
+    posef = xr.Posef(orientation=xr.Quaternionf(*(c / n for c in q)), position=xr.Vector3f(0.5, 1.7, -2.0))
+    fovf = xr.Fovf(angle_left=-0.9, angle_right=0.8, angle_up=0.85, angle_down=-0.95)
+    pose = pose_from_xr(posef)
+    rot = pytest.importorskip("scipy.spatial.transform").Rotation.from_quat([c / n for c in q]).as_matrix()
+    assert np.allclose(pose.rotation_matrix(), rot, atol=1e-6)
+    assert np.allclose(pose.position, [0.5, 1.7, -2.0], atol=1e-6)
+    located = [xr.View(pose=posef, fov=fovf)] * 2
+    vs = views_from_located(located, (40, 30), 0.1, 100.0)
+    l, r, u, d = (math.tan(a) for a in (-0.9, 0.8, 0.85, -0.95))
+    # XrMatrix4x4f_CreateProjectionFov (OpenXR SDK, GRAPHICS_OPENGL), written out independently
+    expected = np.array([[2 / (r - l), 0, (r + l) / (r - l), 0], [0, 2 / (u - d), (u + d) / (u - d), 0],
+                         [0, 0, -(100 + 0.1) / (100 - 0.1), -2 * 100 * 0.1 / (100 - 0.1)], [0, 0, -1, 0]])
+    assert np.allclose(vs[0].projection_matrix(), expected, atol=1e-6)
+    world_from_eye = np.eye(4)
+    world_from_eye[:3, :3], world_from_eye[:3, 3] = rot, [0.5, 1.7, -2.0]
+    assert np.allclose(vs[0].view_matrix(), np.linalg.inv(world_from_eye), atol=1e-5)
+    assert fov_from_xr(fovf).angle_up == pytest.approx(0.85)
+    # a world pose moves the reference space into the scene
+    placed = pose_from_xr(posef, Pose([10.0, 0.0, 0.0]))
+    assert np.allclose(placed.position, [10.5, 1.7, -2.0], atol=1e-6)
+
+
+def test_projection_views_are_typed_structs():
+    located = [xr.View(pose=xr.Posef(), fov=xr.Fovf(-1, 1, 1, -1)), xr.View(pose=xr.Posef(), fov=xr.Fovf(-1, 1, 1, -1))]
+    subs = [xr.SwapchainSubImage(image_array_index=i) for i in range(2)]
+    arr = projection_views(xr, located, subs)
+    assert [int(v.type) for v in arr] == [int(xr.StructureType.COMPOSITION_LAYER_PROJECTION_VIEW)] * 2
+    assert [v.sub_image.image_array_index for v in arr] == [0, 1]
+    layer = xr.CompositionLayerProjection(views=arr)
+    assert layer.view_count == 2 and int(layer.views[1].type) == int(xr.StructureType.COMPOSITION_LAYER_PROJECTION_VIEW)
+
+
+def test_swapchain_format_choice_prefers_srgb():
+    assert choose_format([GL_RGBA8, GL_RGBA16F, GL_SRGB8_ALPHA8], (GL_SRGB8_ALPHA8, GL_RGBA16F, GL_RGBA8)) == GL_SRGB8_ALPHA8
+    with pytest.raises(XrError, match="none of GL_SRGB8_ALPHA8"):
+        choose_format([0x1234], (GL_SRGB8_ALPHA8,))
+
+
+def _runtime_installed() -> bool:
+    return bool(os.environ.get("XR_RUNTIME_JSON")) or Path("/etc/xdg/openxr/1/active_runtime.json").exists() \
+        or Path.home().joinpath(".config/openxr/1/active_runtime.json").exists()
+
+
+def test_no_runtime_message(gpu):
+    class NoRuntime(SimpleNamespace):
+        exception = xr.exception
+
+        def enumerate_instance_extension_properties(self):
+            raise xr.exception.RuntimeUnavailableError("The loader was unable to find or load a runtime.")
+
+    with pytest.raises(XrError, match="^no OpenXR runtime: install SteamVR or Monado, or use SimulatedHeadset$"):
+        OpenXRSink(api=NoRuntime()).open(gpu)
+    if not _runtime_installed():      # the real loader, with nothing installed
+        with pytest.raises(XrError) as info:
+            OpenXRSink().open(gpu)
+        assert str(info.value) == NO_RUNTIME
+
+
+# --- a scripted runtime ------------------------------------------------------------------------
+
+GL_TEXTURE_2D, GL_TEXTURE_2D_ARRAY, GL_RGBA, GL_UNSIGNED_BYTE = 0x0DE1, 0x8C1A, 0x1908, 0x1401
+_U, _I = ctypes.c_uint, ctypes.c_int
+
+
+def _handle(kind, value: int):
+    """A real pyopenxr handle (typed pointer) with a recognisable value."""
+    return ctypes.cast(ctypes.c_void_p(value), kind)
+
+
+def _hid(handle) -> int:
+    return ctypes.cast(handle, ctypes.c_void_p).value
+
+
+class FakeRuntime:
+    """Stands in for the pyopenxr module: real structs/enums via __getattr__, scripted calls."""
+
+    def __init__(self, script, size=(16, 12), formats=(GL_SRGB8_ALPHA8, GL_RGBA8), array_ok=True):
+        self._script = dict(script)      # frames ended -> states the runtime announces then
+        self.size, self.formats, self.array_ok = size, formats, array_ok
+        self.calls, self.frames_ended, self.layers = [], 0, []
+        self.events = deque()
+        self.textures = {}
+        self.sessions = 0
+        self._gl = GLPlatform()
+        self._acquired = {}
+        self._announce()
+
+    def __getattr__(self, name):
+        return getattr(xr, name)
+
+    def _announce(self):
+        for state in self._script.pop(self.frames_ended, []):
+            self.events.append(state)
+
+    def _log(self, name, *args):
+        self.calls.append(name)
+
+    # instance and system
+    def enumerate_instance_extension_properties(self):
+        self._log("enumerate_instance_extension_properties")
+        return [SimpleNamespace(extension_name=e) for e in
+                (b"XR_KHR_opengl_enable", b"XR_MNDX_egl_enable", b"XR_KHR_composition_layer_depth")]
+
+    def create_instance(self, info):
+        self._log("create_instance")
+        self.enabled = [info.enabled_extension_names[i].decode() for i in range(info.enabled_extension_count)]
+        return _handle(xr.Instance, 0x100)
+
+    def get_system(self, instance, info):
+        self._log("get_system")
+        assert int(info.form_factor) == int(xr.FormFactor.HEAD_MOUNTED_DISPLAY)
+        return 7
+
+    def enumerate_view_configuration_views(self, instance, system, kind):
+        assert int(kind) == int(xr.ViewConfigurationType.PRIMARY_STEREO)
+        w, h = self.size
+        return [SimpleNamespace(recommended_image_rect_width=w, recommended_image_rect_height=h)] * 2
+
+    def enumerate_environment_blend_modes(self, instance, system, kind):
+        return [xr.EnvironmentBlendMode.OPAQUE]
+
+    def get_opengl_graphics_requirements_khr(self, instance, system):
+        self._log("get_opengl_graphics_requirements_khr")
+        return SimpleNamespace(min_api_version_supported=xr_version(4, 0), max_api_version_supported=xr_version(4, 6))
+
+    # session
+    def create_session(self, instance, info):
+        self._log("create_session")
+        binding = ctypes.cast(info.next, ctypes.POINTER(xr.GraphicsBindingEGLMNDX)).contents
+        assert int(binding.type) == int(xr.StructureType.GRAPHICS_BINDING_EGL_MNDX)
+        assert ctypes.cast(binding.display, ctypes.c_void_p).value and ctypes.cast(binding.context, ctypes.c_void_p).value
+        assert ctypes.cast(binding.config, ctypes.c_void_p).value
+        self.sessions += 1
+        if not self.events:
+            self.events.extend([S.IDLE, S.READY])
+        return _handle(xr.Session, 0x200 + self.sessions)
+
+    def enumerate_reference_spaces(self, session):
+        return [xr.ReferenceSpaceType.VIEW, xr.ReferenceSpaceType.LOCAL, xr.ReferenceSpaceType.STAGE]
+
+    def create_reference_space(self, session, info):
+        self.space_type = int(info.reference_space_type)
+        return _handle(xr.Space, 0x300)
+
+    def enumerate_swapchain_formats(self, session):
+        return list(self.formats)
+
+    def create_swapchain(self, session, info):
+        if info.array_size > 1 and not self.array_ok:
+            raise xr.exception.FeatureUnsupportedError("no array swapchains")
+        self._log(f"create_swapchain:{info.array_size}")
+        self.format = info.format
+        images = []
+        for _ in range(3):
+            names = (_U * 1)()
+            target = GL_TEXTURE_2D_ARRAY if info.array_size > 1 else GL_TEXTURE_2D
+            self._gl.proc("glCreateTextures", None, [_U, _I, ctypes.POINTER(_U)])(target, 1, names)
+            if target == GL_TEXTURE_2D_ARRAY:
+                self._gl.proc("glTextureStorage3D", None, [_U, _I, _U, _I, _I, _I])(
+                    names[0], 1, info.format, info.width, info.height, info.array_size)
+            else:
+                self._gl.proc("glTextureStorage2D", None, [_U, _I, _U, _I, _I])(
+                    names[0], 1, info.format, info.width, info.height)
+            images.append(names[0])
+        handle = 0x400 + len(self.textures)
+        self.textures[handle] = (images, info.array_size)
+        return _handle(xr.Swapchain, handle)
+
+    def enumerate_swapchain_images(self, handle, kind):
+        return [SimpleNamespace(image=i) for i in self.textures[_hid(handle)][0]]
+
+    def poll_event(self, instance):
+        if not self.events:
+            raise xr.exception.EventUnavailable()
+        buf = xr.EventDataBuffer()
+        ev = ctypes.cast(ctypes.byref(buf), ctypes.POINTER(xr.EventDataSessionStateChanged)).contents
+        ev._type = int(xr.StructureType.EVENT_DATA_SESSION_STATE_CHANGED)
+        ev._state = int(self.events.popleft())
+        return buf
+
+    def begin_session(self, session, info):
+        self._log("begin_session")
+        assert int(info.primary_view_configuration_type) == int(xr.ViewConfigurationType.PRIMARY_STEREO)
+
+    def end_session(self, session):
+        self._log("end_session")
+        self.events.extend([S.IDLE, S.EXITING])
+
+    def request_exit_session(self, session):
+        self._log("request_exit_session")
+        down = {S.FOCUSED: [S.VISIBLE, S.SYNCHRONIZED], S.VISIBLE: [S.SYNCHRONIZED]}.get(self._state, [])
+        self.events.extend([*down, S.STOPPING])
+
+    # frames
+    def wait_frame(self, session, info):
+        self._log("wait_frame")
+        self.state_at_wait = self._state
+        visible = self._state in (S.VISIBLE, S.FOCUSED)
+        return SimpleNamespace(predicted_display_time=1_000_000_000 + 11_111_111 * self.frames_ended,
+                               predicted_display_period=11_111_111, should_render=int(visible))
+
+    _state = S.UNKNOWN
+
+    def begin_frame(self, session, info):
+        self._log("begin_frame")
+
+    def locate_views(self, session, info):
+        assert _hid(info.space) == 0x300
+        views = [xr.View(pose=xr.Posef(position=xr.Vector3f(x, 1.6, 0.0)), fov=xr.Fovf(-0.9, 0.8, 0.85, -0.95))
+                 for x in (-0.032, 0.032)]
+        return SimpleNamespace(view_state_flags=0xF), views
+
+    def acquire_swapchain_image(self, handle, info):
+        h = _hid(handle)
+        self._acquired[h] = (self._acquired.get(h, -1) + 1) % 3
+        return self._acquired[h]
+
+    def wait_swapchain_image(self, handle, info):
+        assert info.timeout == xr.INFINITE_DURATION
+
+    def release_swapchain_image(self, handle, info):
+        self._log("release_swapchain_image")
+
+    def end_frame(self, session, info):
+        self._log("end_frame")
+        layers = []
+        for i in range(info.layer_count):
+            layer = ctypes.cast(info.layers[i], ctypes.POINTER(xr.CompositionLayerProjection)).contents
+            assert int(layer.type) == int(xr.StructureType.COMPOSITION_LAYER_PROJECTION)
+            layers.append([(int(v.type), _hid(v.sub_image.swapchain), v.sub_image.image_array_index,
+                            v.sub_image.image_rect.extent.width, v.fov.angle_left, v.pose.position.x)
+                           for v in layer.views])
+        self.layers.append(layers)
+        self.frames_ended += 1
+        self._announce()
+
+    def destroy_swapchain(self, h):
+        self._log("destroy_swapchain")
+
+    def destroy_space(self, h):
+        self._log("destroy_space")
+
+    def destroy_session(self, h):
+        self._log("destroy_session")
+
+    def destroy_instance(self, h):
+        self._log("destroy_instance")
+
+    def read_image(self, name, layers, w, h):
+        out = np.zeros((layers, h, w, 4), np.uint8)
+        self._gl.proc("glGetTextureImage", None, [_U, _I, _U, _U, _I, ctypes.c_void_p])(
+            name, 0, GL_RGBA, GL_UNSIGNED_BYTE, out.nbytes, out.ctypes.data)
+        return out
+
+
+class TrackingRuntime(FakeRuntime):
+    """Keeps `_state` in step with the events it hands out, as a runtime would."""
+
+    def poll_event(self, instance):
+        buf = super().poll_event(instance)
+        self._state = S(ctypes.cast(ctypes.byref(buf), ctypes.POINTER(xr.EventDataSessionStateChanged)).contents._state)
+        return buf
+
+
+def _eyes(gl, w, h):
+    data = np.zeros((2, h, w, 4), np.uint8)
+    data[0, ..., 0], data[1, ..., 1] = 180, 90
+    data[..., 2] = np.arange(w, dtype=np.uint8)[None, None, :] * 5
+    data[..., 3] = 255
+    return data, gl.texture_array((w, h, 2), 4, data.tobytes())
+
+
+def _run(sink, gpu, tex):
+    sink.open(gpu)
+    requests = []
+    while (r := sink.wait_frame()) is not None:
+        sink.submit(tex if r.should_render else None, r)
+        requests.append(r)
+    sink.close()
+    return requests
+
+
+def test_frame_loop_follows_the_lifecycle_and_submits_typed_layers(gpu, gl):
+    rt = TrackingRuntime({1: [S.SYNCHRONIZED], 2: [S.VISIBLE, S.FOCUSED]})
+    sink = OpenXRSink(api=rt, frames=4)
+    data, tex = _eyes(gl, 16, 12)
+    requests = _run(sink, gpu, tex)
+    assert sink.lifecycle.history == [S.UNKNOWN, S.IDLE, S.READY, S.SYNCHRONIZED, S.VISIBLE, S.FOCUSED,
+                                      S.VISIBLE, S.SYNCHRONIZED, S.STOPPING, S.IDLE, S.EXITING]
+    assert sink.lifecycle.anomalies == []
+    calls = rt.calls
+    assert calls.index("get_opengl_graphics_requirements_khr") < calls.index("create_session")
+    assert calls.index("begin_session") < calls.index("wait_frame")
+    assert calls.count("wait_frame") == calls.count("begin_frame") == calls.count("end_frame") == len(requests)
+    assert calls.index("request_exit_session") < calls.index("end_session") < calls.index("destroy_session")
+    assert calls[-1] == "destroy_instance" and "create_swapchain:2" in calls    # one array swapchain
+    assert rt.enabled == ["XR_KHR_opengl_enable", "XR_MNDX_egl_enable"]
+    assert rt.space_type == int(xr.ReferenceSpaceType.STAGE)
+    # frames before VISIBLE end with no layers; visible ones carry one projection layer of 2 typed views
+    rendered = [r.should_render for r in requests]
+    assert rendered[:2] == [False, False] and all(rendered[2:4])
+    for layers, r in zip(rt.layers, requests):
+        assert len(layers) == (1 if r.should_render else 0)
+    view_type = int(xr.StructureType.COMPOSITION_LAYER_PROJECTION_VIEW)
+    views = rt.layers[2][0]
+    assert [(v[0], v[2], v[3]) for v in views] == [(view_type, 0, 16), (view_type, 1, 16)]
+    assert views[0][4] == pytest.approx(-0.9) and views[1][5] == pytest.approx(0.032)
+    # the located poses became the request's views, in the stage space
+    assert np.allclose(requests[2].views[1].pose.position, [0.032, 1.6, 0.0], atol=1e-6)
+    assert requests[2].predicted_display_time == pytest.approx(1.0 + 0.011111111 * 2)
+    # the swapchain image holds exactly the rendered texels (rgba8 sRGB-encoded -> GL_SRGB8_ALPHA8)
+    images, layers = rt.textures[0x400]
+    got = rt.read_image(images[0], 2, 16, 12)
+    assert rt.format == GL_SRGB8_ALPHA8
+    assert np.array_equal(got, data)
+
+
+def test_per_eye_swapchains_when_arrays_are_refused_and_linear_rgba8(gpu, gl):
+    rt = TrackingRuntime({0: [], 1: [S.SYNCHRONIZED, S.VISIBLE]}, formats=(GL_RGBA8,), array_ok=False)
+    sink = OpenXRSink(api=rt, frames=2)
+    data, tex = _eyes(gl, 16, 12)
+    _run(sink, gpu, tex)
+    assert rt.calls.count("create_swapchain:1") == 2
+    visible = [l for l in rt.layers if l]
+    assert [(v[1], v[2]) for v in visible[0][0]] == [(0x400, 0), (0x401, 0)]
+    # sRGB-encoded source into a linear swapchain: decoded to linear on the GPU
+    left = rt.read_image(rt.textures[0x400][0][0], 1, 16, 12)[0]
+    c = 180 / 255
+    assert abs(int(left[0, 0, 0]) - round(((c + 0.055) / 1.055) ** 2.4 * 255)) <= 1
+    right = rt.read_image(rt.textures[0x401][0][0], 1, 16, 12)[0]
+    assert right[0, 0, 0] == 0 and right[0, 0, 1] > 0
+
+
+def test_loss_pending_recreates_the_session(gpu, gl):
+    rt = TrackingRuntime({1: [S.SYNCHRONIZED], 2: [S.LOSS_PENDING]})
+    sink = OpenXRSink(api=rt, frames=4)
+    _, tex = _eyes(gl, 16, 12)
+    _run(sink, gpu, tex)
+    assert rt.sessions == 2 and rt.calls.count("create_session") == 2
+    assert rt.calls.index("destroy_session") < len(rt.calls) - 1 - rt.calls[::-1].index("create_session")
+    assert sink.lifecycle.history[-1] == S.EXITING
+    assert rt.frames_ended >= 4
+
+
+def test_size_before_open_is_an_error():
+    with pytest.raises(XrError, match="call open"):
+        OpenXRSink().size
