@@ -1,0 +1,174 @@
+"""The hybrid pipeline against analytic values: Lambert shading under a point light, a shadow edge
+where geometry puts it, a mirror reflecting a known checker, pruning of ray work, no NaN/Inf."""
+import numpy as np
+import pytest
+
+import rayvr as rv
+from rayvr.passes.compaction import read_pixel_list
+from rayvr.renderer import Renderer
+from rayvr.scene import builtin
+
+SIZE = (40, 40)
+
+
+def render(scene, extra_outputs=(), size=SIZE, views=1, **graph_kw):
+    g = rv.graphs.hybrid(**graph_kw)
+    for o in extra_outputs:
+        g.mark_output(o)
+    r = Renderer(scene, g, views=views, size=size)
+    r.render()
+    return r
+
+
+def world_positions(r):
+    pos = r.read_output("GBuffer.posW")
+    return pos[..., :3].astype(np.float64) + r.view_set.origin(), pos[..., 3] > 0
+
+
+def material_ids(r):
+    e = r.read_output("GBuffer.effect")[..., 0]
+    return np.where((e & 0xFF) == 0xFF, -1, (e >> 8).astype(np.int64))
+
+
+def lambert_point(p, light, intensity, albedo, normal=(0, 1, 0), eye=None, roughness=1.0):
+    """Radiance of a glTF dielectric (metallic 0) under a point light: albedo/pi * E, plus the
+    GGX specular lobe (F0 = 0.04, height-correlated Smith) when `eye` is given."""
+    n = np.asarray(normal, dtype=np.float64)
+    to = light - p
+    d2 = (to ** 2).sum(-1)
+    l = to / np.sqrt(d2)[..., None]
+    cos = np.clip((l * n).sum(-1), 0, None)
+    radiance = albedo / np.pi * intensity * cos / d2
+    if eye is not None:
+        v = eye - p
+        v /= np.linalg.norm(v, axis=-1, keepdims=True)
+        h = v + l
+        h /= np.linalg.norm(h, axis=-1, keepdims=True)
+        a2 = roughness ** 4
+        nh, nv, vh = (h * n).sum(-1), (v * n).sum(-1), (v * h).sum(-1)
+        d = a2 / (np.pi * (nh * nh * (a2 - 1) + 1) ** 2)
+        lam = lambda c: 0.5 * (np.sqrt(1 + a2 * (1 - c * c) / (c * c)) - 1)
+        g = 1 / (1 + lam(nv) + lam(cos))
+        f = 0.04 + 0.96 * (1 - vh) ** 5
+        radiance = radiance + d * g * f / (4 * nv) * intensity / d2
+    return radiance
+
+
+@pytest.mark.parametrize("effect", [rv.Effect.RASTER, rv.Effect.SHADOWS])
+def test_lambert_plane_under_point_light_matches_cos_over_r2(gpu, effect):
+    scene = builtin.plane_with_point_light(height=1.0, intensity=1.0, albedo=0.8)
+    scene.materials["Plane"].effect = effect
+    with render(scene, ["GBuffer.posW"]) as r:
+        color = r.read_output("Composite.color")[..., :3].astype(np.float64)
+        p, hit = world_positions(r)
+    assert hit.all()
+    want = lambert_point(p, np.array([0.0, 1.0, 0.0]), 1.0, 0.8, eye=r.view_set[0].pose.position)
+    np.testing.assert_allclose(color[..., 0], want, rtol=5e-3, atol=1e-4)
+    np.testing.assert_allclose(color[..., 1], color[..., 0], rtol=1e-3)
+
+
+def segment_hits_box(p, light, lo, hi):
+    d = light - p
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0 = (lo - p) / d
+        t1 = (hi - p) / d
+    tmin = np.nanmax(np.minimum(t0, t1), axis=-1)
+    tmax = np.nanmin(np.maximum(t0, t1), axis=-1)
+    return (tmax >= np.maximum(tmin, 0)) & (tmin <= 1)
+
+
+def test_shadow_edge_lands_where_geometry_says(gpu):
+    from rayvr.scene.model import Camera
+
+    scene = builtin.box_on_plane(light_height=1.0)
+    scene.cameras[:] = [Camera.look_at((0.0, 4.0, 0.001), (0.0, 0.0, 0.0))]
+    light = np.array([0.0, 1.0, 0.0])
+    with render(scene, ["GBuffer.posW", "GBuffer.effect"], size=(64, 64)) as r:
+        color = r.read_output("Composite.color")[0, ..., 0].astype(np.float64)
+        p, _ = world_positions(r)
+        mats = material_ids(r)[0]
+        eye = r.view_set[0].pose.position
+    p = p[0]
+    names = [m.name for m in scene.materials]
+    plane = mats == names.index("Plane")
+    lo, hi = np.array([-0.25, 0.0, -0.25]), np.array([0.25, 0.5, 0.25])
+    surely_shadowed = segment_hits_box(p, light, lo + 2e-3, hi - 2e-3) & plane
+    surely_lit = ~segment_hits_box(p, light, lo - 2e-3, hi + 2e-3) & plane
+    assert surely_shadowed.sum() > 40 and surely_lit.sum() > 1000
+    assert np.all(color[surely_shadowed] == 0.0)
+    want = lambert_point(p, light, 10.0, 0.8, eye=eye)
+    np.testing.assert_allclose(color[surely_lit], want[surely_lit], rtol=5e-3)
+    # the shadow's extent is the light's projection of the box top: half-size 0.25 * 1 / 0.5
+    dark = plane & (color < 1e-6) & (np.abs(p[..., 2]) < 0.1)
+    assert np.abs(p[..., 0][dark]).max() == pytest.approx(0.5, abs=4.0 / 64)
+
+
+def test_raster_material_gets_no_shadow_and_no_ray_work(gpu):
+    scene = builtin.box_on_plane(light_height=3.0)
+    for m in scene.materials:
+        m.effect = rv.Effect.RASTER
+    with render(scene, ["GBuffer.posW"]) as r:
+        report = r.report()
+        color = r.read_output("Composite.color")[0, ..., 0].astype(np.float64)
+        p, _ = world_positions(r)
+        assert {"Compaction", "Shadows", "Reflections"} <= set(r.compiled.plan.pruned)
+        assert "Shadows" not in r.compiled.plan.order
+    assert "every material is RASTER" in str(report)
+    on_plane = np.abs(p[0][..., 1]) < 1e-4
+    want = lambert_point(p[0], np.array([0.0, 3.0, 0.0]), 10.0, 0.8, eye=r.view_set[0].pose.position)
+    np.testing.assert_allclose(color[on_plane], want[on_plane], rtol=5e-3)
+
+
+def test_shadows_without_reflections_list_no_reflection_pixels(gpu):
+    scene = builtin.box_on_plane()
+    with render(scene, ["Compaction.shadowPixels", "Compaction.reflectionPixels"]) as r:
+        n_shadow, _ = read_pixel_list(r.compiled.get_output("Compaction.shadowPixels"))
+        n_refl, _ = read_pixel_list(r.compiled.get_output("Compaction.reflectionPixels"))
+        assert "Reflections" in r.compiled.plan.pruned
+    assert n_shadow == SIZE[0] * SIZE[1]
+    assert n_refl == 0
+
+
+def test_mirror_reflects_the_checker(gpu):
+    tiles = 4
+    scene = builtin.mirror_and_checker(tiles=tiles)
+    with render(scene, ["GBuffer.posW", "GBuffer.effect"], size=(48, 48)) as r:
+        color = r.read_output("Composite.color")[0, ..., 0].astype(np.float64)
+        p, hit = world_positions(r)
+        mats = material_ids(r)[0]
+        n_refl = read_pixel_list(r.compiled.get_output("Compaction.reflectionPixels"))[0] \
+            if "Compaction.reflectionPixels" in r.compiled.plan.outputs else None
+    p = p[0]
+    mirror = mats == 0
+    assert mirror.sum() > 100
+    eye = np.array([0.0, 0.0, 1.0])
+    d = p - eye
+    d[..., 2] *= -1                                   # reflect about the mirror plane z = 0
+    t = (2.0 - p[..., 2]) / d[..., 2]
+    q = p + d * t[..., None]                          # where the reflected ray meets the checker
+    step = 2.0 / tiles
+    fx, fy = (q[..., 0] + 1) / step, (q[..., 1] + 1) / step
+    inside = (fx > 0) & (fx < tiles) & (fy > 0) & (fy < tiles)
+    away_from_edges = (np.abs(fx - np.round(fx)) > 0.08) & (np.abs(fy - np.round(fy)) > 0.08)
+    white = (np.floor(fx) + np.floor(fy)) % 2 == 0
+    albedo = np.where(white, 0.9, 0.05)
+    # the checker is seen from the mirror image of the eye (z = -1)
+    want = lambert_point(q, np.array([0.0, 0.0, 1.5]), 2.0, albedo, normal=(0, 0, -1), eye=np.array([0.0, 0.0, -1.0]))
+    sel = mirror & inside & away_from_edges
+    assert sel.sum() > 100 and white[sel].any() and (~white[sel]).any()
+    np.testing.assert_allclose(color[sel], want[sel], rtol=1e-2)
+
+
+def test_grazing_views_and_roughness_zero_stay_finite(gpu):
+    scene = builtin.mirror_and_checker(tiles=2)
+    scene.materials["CheckerWhite"].roughness = 0.0
+    scene.materials["CheckerWhite"].metallic = 0.0
+    scene.materials["CheckerWhite"].effect = rv.Effect.REFLECTIONS
+    scene.materials["Mirror"].roughness = 0.3
+    from rayvr.scene.model import Camera
+    scene.cameras[:] = [Camera.look_at((0.0, -0.999, 1.0), (0.0, 1.0, 1.0), up=(0, 0, 1))]  # along the planes
+    with render(scene, size=(32, 32), max_bounces=2) as r:
+        color = r.read_output("Composite.color")
+        out = r.read_output()
+    assert np.isfinite(color).all()
+    assert out.dtype == np.uint8 and out.shape == (1, 32, 32, 4)
