@@ -93,6 +93,24 @@ def test_script_errors_name_file_and_line(tmp_path):
         sample().save(tmp_path / "g.yaml")
 
 
+def test_falcor_style_create_pass(tmp_path):
+    path = tmp_path / "falcor.py"
+    path.write_text(
+        "from rayvr.rendergraph import RenderGraph, createPass\n"
+        "def render_graph_Falcor():\n"
+        "    g = RenderGraph('Falcor')\n"
+        "    Fill = createPass('Clear', {'color': [1, 0, 0, 1]})\n"
+        "    g.addPass(Fill, 'Fill')\n"
+        "    g.create_pass('Copy', 'Blit', {'format': 'rgba8'})\n"
+        "    g.addEdge('Fill.dst', 'Copy.src')\n"
+        "    g.markOutput('Copy.dst')\n"
+        "    return g\n"
+        "Falcor = render_graph_Falcor()\n")
+    g = RenderGraph.load(path)
+    assert g.get_pass("Fill").color == [1, 0, 0, 1] and type(g.get_pass("Copy")) is Blit
+    assert g.plan().order == ["Fill", "Copy"]
+
+
 def test_registry_registers_and_suggests():
     assert get_pass_class("Blit") is Blit
     assert {"Blit", "Clear", "Checkerboard", "ImageLoader"} <= set(registered_passes())

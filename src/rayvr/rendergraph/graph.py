@@ -73,6 +73,12 @@ class RenderGraph:
         self._passes[name] = render_pass
         return render_pass
 
+    def create_pass(self, name: str, type_name: str, props: dict | None = None) -> RenderPass:
+        """Add a new pass of registered class `type_name` under `name` (Falcor 7's create_pass)."""
+        from .registry import create_pass
+
+        return self.add_pass(create_pass(type_name, props), name)
+
     def remove_pass(self, name: str) -> None:
         """Remove a pass with its edges and marked outputs."""
         self._require_pass(name, "remove_pass")
@@ -229,4 +235,5 @@ class RenderGraph:
 
     # Falcor spellings
     addPass, removePass, updatePass, getPass = add_pass, remove_pass, update_pass, get_pass
+    createPass = create_pass
     addEdge, removeEdge, markOutput, unmarkOutput = add_edge, remove_edge, mark_output, unmark_output

@@ -52,3 +52,11 @@ def registered_passes() -> dict[str, type]:
     """All registered pass classes by name (after importing the pass packages)."""
     _import_pass_packages()
     return dict(_REGISTRY)
+
+
+def create_pass(type_name: str, props: dict | None = None):
+    """A new pass of the registered class `type_name` (Falcor's `createPass`)."""
+    return get_pass_class(type_name)(props or {})
+
+
+createPass = create_pass
