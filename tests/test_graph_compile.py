@@ -116,6 +116,7 @@ def test_prune_unused_skipped_and_chains_with_reasons(gpu):
     assert p["FeedsOnlyPruned"] == "feeds only pruned passes"
     cg.execute(cg.make_context())
     assert g.get_pass("UsesReflOptionally").saw_input is False
+    assert cg.plan.compile_data["UsesReflOptionally"].input_formats == {}
     assert (cg.read_output("UsesReflOptionally.dst") == 128).all()
     with pytest.raises(GraphError, match=r"output 'NeedsRefl.dst' is not produced: required input 'src'"):
         cg.get_output("NeedsRefl.dst")

@@ -251,7 +251,10 @@ def plan_graph(graph, scene=None, size=(64, 64), views: int = 1, caps=None) -> P
         bindings[p] = bind
 
     slots = _assign_slots(list(resources.values()))
-    return Plan(name, size, int(views), order, pruned, reflections, {p: cds[p] for p in order},
+    # compile() sees only the inputs that will be bound (not those from pruned passes).
+    compile_data = {p: dataclasses.replace(cds[p], input_formats={
+        pin: f for pin, f in cds[p].input_formats.items() if bindings[p].get(pin) is not None}) for p in order}
+    return Plan(name, size, int(views), order, pruned, reflections, compile_data,
                 resources, bindings, slots, kept_outputs, unavailable)
 
 
