@@ -1,0 +1,81 @@
+"""rv.Renderer: frames driven by a sink, run-time effect changes (recompile only when the set of
+used effects changes), outputs, profile and report; rv.graphs.hybrid() round-trips through JSON."""
+import numpy as np
+import pytest
+
+import rayvr as rv
+from rayvr.errors import OptionError
+from rayvr.renderer import Renderer
+from rayvr.scene import builtin
+
+
+def test_frames_drive_the_headset_and_effects_switch_at_run_time(gpu):
+    scene = builtin.cornell_box()
+    for m in scene.materials:
+        m.effect = rv.Effect.RASTER
+    headset = rv.xr.SimulatedHeadset(preset="index", size=(24, 20), frames=4)
+    orders = []
+    with Renderer(scene, rv.graphs.hybrid(), sink=headset) as r:
+        assert "Shadows" in r.compiled.plan.pruned
+        for frame in r.frames():
+            if frame.index == 1:
+                frame.materials["Floor"].effect = rv.Effect.REFLECTIONS
+            if frame.index == 2:
+                frame.materials["Floor"].base_color = (0.1, 0.9, 0.1, 1.0)   # same effects: no recompile
+            orders.append((frame.index, r.compiles))
+            assert frame.views is not None and len(frame.views) == 2
+        final_order = list(r.compiled.plan.order)
+        out = r.read_output()
+        prof = r.profile()
+    assert [i for i, _ in orders] == [0, 1, 2, 3]
+    assert r.compiles == 2                      # the RASTER -> REFLECTIONS switch only
+    assert {"Shadows", "Reflections", "Compaction"} <= set(final_order)
+    assert headset.stats()["frames"] == 4
+    assert out.shape == (2, 20, 24, 4) and out.dtype == np.uint8
+    assert set(prof.passes) >= {"GBuffer", "Reflections", "ToneMap"}
+
+
+def test_material_colour_change_reaches_the_pixels_without_recompiling(gpu):
+    scene = builtin.plane_with_point_light()
+    with Renderer(scene, rv.graphs.hybrid(tonemap="linear"), views=1, size=(16, 16)) as r:
+        r.render()
+        before = r.read_output("Composite.color").astype(np.float64)
+        scene.materials["Plane"].base_color = (0.4, 0.4, 0.4, 1.0)
+        r.render()
+        after = r.read_output("Composite.color").astype(np.float64)
+        assert r.compiles == 1
+    diffuse_ratio = after[..., 0].mean() / before[..., 0].mean()
+    assert 0.45 < diffuse_ratio < 0.55      # half the albedo: about half the radiance (plus a fixed specular)
+
+
+def test_report_names_pruned_passes_and_the_scene(gpu):
+    scene = builtin.cornell_box()
+    with Renderer(scene, rv.graphs.hybrid(), views=2, size=(16, 16)) as r:
+        text = str(r.report())
+    assert "Reflections: no material uses REFLECTIONS" in text
+    assert "cornell_box" in text
+
+
+def test_render_rejects_views_of_another_size(gpu):
+    scene = builtin.quad()
+    with Renderer(scene, rv.graphs.hybrid(), views=1, size=(16, 16)) as r:
+        other = rv.renderer.default_views(scene, 1, (8, 8))
+        with pytest.raises(OptionError, match="compiled for 1 of \\(16, 16\\)"):
+            r.render(other)
+
+
+def test_hybrid_graph_round_trips_through_json(tmp_path):
+    g = rv.graphs.hybrid(max_bounces=2, tonemap="reinhard")
+    path = g.save(tmp_path / "hybrid.json")
+    h = rv.RenderGraph.load(path)
+    assert list(h.passes) == list(g.passes)
+    assert h.get_pass("Reflections").get_properties()["max_bounces"] == 2
+    assert h.get_pass("ToneMap").get_properties()["operator"] == "reinhard"
+    assert [str(e) for e in h.edges] == [str(e) for e in g.edges]
+
+
+def test_graph_options_are_checked():
+    with pytest.raises(OptionError, match="operator"):
+        rv.graphs.hybrid(tonemap="sepia")
+    with pytest.raises(OptionError, match="multiview"):
+        rv.passes.GBufferRaster(multiview="sometimes")
