@@ -406,6 +406,11 @@ def test_loss_pending_recreates_the_session(gpu, gl):
     assert rt.frames_ended >= 4
 
 
-def test_size_before_open_is_an_error():
-    with pytest.raises(XrError, match="call open"):
-        OpenXRSink().size
+def test_size_and_view_count_come_from_the_runtime_before_open(gpu):
+    rt = TrackingRuntime({})
+    sink = OpenXRSink(api=rt)
+    assert (sink.view_count, sink.size) == (2, (16, 12))
+    assert "create_session" not in rt.calls and rt.calls.count("create_instance") == 1
+    sink.open(gpu)
+    assert rt.calls.count("create_instance") == 1 and "create_session" in rt.calls
+    sink.close()

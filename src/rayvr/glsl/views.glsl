@@ -20,8 +20,11 @@ layout(std430, binding = RAYVR_VIEWS_SSBO) readonly buffer ViewsBlock {
     ViewData views[];
 };
 
+#define RAYVR_VIEWS_FLAG_REVERSED_Z 1u   // projections are reversed-Z with an infinite far plane
+
 uint view_count() { return frame_info.x; }
 uint frame_index() { return frame_info.y; }
+bool views_reversed_z() { return (frame_info.w & RAYVR_VIEWS_FLAG_REVERSED_Z) != 0u; }
 
 // Eye-space direction through `uv` in [0,1]^2 of view v (uv.y = 0 at the bottom row).
 // Built from the same tangents as the projection, so rays register with the raster exactly.

@@ -90,20 +90,29 @@ class OpenXRSink(Sink):
 
     @property
     def view_count(self) -> int:
-        if self._view_count is None:
-            raise XrError("OpenXRSink.view_count is known once open(gpu) has asked the runtime; call open() first")
+        """The runtime's PRIMARY_STEREO view count (asks the runtime on first use)."""
+        self._ensure_system()
         return self._view_count
 
     @property
     def size(self) -> tuple[int, int]:
-        if self._size is None:
-            raise XrError("OpenXRSink.size is the runtime's recommended size, known after open(gpu); call open() first")
+        """The runtime's recommended per-view size (asks the runtime on first use)."""
+        self._ensure_system()
         return self._size
 
     def open(self, gpu) -> None:
-        xr = self.xr = self.xr or import_pyopenxr()
         self.gl = gpu.gl
         self.gl_version = int(getattr(gpu.caps, "gl_version", 450))
+        self._ensure_system()
+        self._create_session()
+
+    def _ensure_system(self) -> None:
+        """Instance, system and view configuration: what view_count and size need (no session yet).
+
+        Needs the GL context current (rayvr.gpu.get_context()), to choose the EGL or GLX binding."""
+        if self.instance is not None:
+            return
+        xr = self.xr = self.xr or import_pyopenxr()
         self.platform = GLPlatform()
         self._create_instance()
         self._get_system()
@@ -114,7 +123,6 @@ class OpenXRSink(Sink):
         modes = list(xr.enumerate_environment_blend_modes(self.instance, self.system,
                                                           xr.ViewConfigurationType.PRIMARY_STEREO))
         self.blend_mode = xr.EnvironmentBlendMode.OPAQUE if xr.EnvironmentBlendMode.OPAQUE in modes else modes[0]
-        self._create_session()
 
     def wait_frame(self) -> FrameRequest | None:
         xr = self.xr
