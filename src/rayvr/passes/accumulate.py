@@ -1,0 +1,1 @@
+"""Accumulate pass (owned by the path-tracing engineer)."""

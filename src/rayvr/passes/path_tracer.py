@@ -1,0 +1,1 @@
+"""PathTracer pass (owned by the path-tracing engineer)."""

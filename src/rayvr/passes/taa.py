@@ -1,0 +1,1 @@
+"""TAA pass (owned by the path-tracing engineer)."""
