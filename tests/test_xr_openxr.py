@@ -294,6 +294,8 @@ class FakeRuntime:
             layers.append([(int(v.type), _hid(v.sub_image.swapchain), v.sub_image.image_array_index,
                             v.sub_image.image_rect.extent.width, v.fov.angle_left, v.pose.position.x)
                            for v in layer.views])
+            self.depth_infos = [ctypes.cast(v.next, ctypes.POINTER(xr.CompositionLayerDepthInfoKHR)).contents
+                                if v.next else None for v in layer.views]
         self.layers.append(layers)
         self.frames_ended += 1
         self._announce()
@@ -414,3 +416,26 @@ def test_size_and_view_count_come_from_the_runtime_before_open(gpu):
     sink.open(gpu)
     assert rt.calls.count("create_instance") == 1 and "create_session" in rt.calls
     sink.close()
+
+
+def test_depth_submission_chains_depth_info_to_each_view(gpu, gl):
+    from rayvr.xr.openxr_gl import GL_DEPTH_COMPONENT32F
+
+    rt = TrackingRuntime({1: [S.SYNCHRONIZED, S.VISIBLE]}, formats=(GL_SRGB8_ALPHA8, GL_DEPTH_COMPONENT32F))
+    sink = OpenXRSink(api=rt, depth=True, near=0.1, far=50.0, frames=3)
+    _, tex = _eyes(gl, 16, 12)
+    names = (_U * 1)()
+    rt._gl.proc("glCreateTextures", None, [_U, _I, ctypes.POINTER(_U)])(GL_TEXTURE_2D_ARRAY, 1, names)
+    rt._gl.proc("glTextureStorage3D", None, [_U, _I, _U, _I, _I, _I])(names[0], 1, GL_DEPTH_COMPONENT32F, 16, 12, 2)
+    depth = SimpleNamespace(glo=names[0], width=16, height=12)
+    sink.open(gpu)
+    while (r := sink.wait_frame()) is not None:
+        sink.submit(tex if r.should_render else None, r, depth_array=depth if r.should_render else None)
+    sink.close()
+    assert "XR_KHR_composition_layer_depth" in rt.enabled
+    assert rt.calls.count("create_swapchain:2") == 2          # colour and depth, both arrays
+    info = rt.depth_infos[1]
+    assert int(info.type) == int(xr.StructureType.COMPOSITION_LAYER_DEPTH_INFO_KHR)
+    assert (info.min_depth, info.max_depth) == (0.0, 1.0)
+    assert info.near_z == pytest.approx(0.1) and info.far_z == pytest.approx(50.0)
+    assert info.sub_image.image_array_index == 1 and _hid(info.sub_image.swapchain) == 0x401

@@ -170,10 +170,11 @@ class OpenXRSink(Sink):
             if self.depth_swapchains and depth_array is not None:
                 self.copier.copy_depth(depth_array, self._acquire(self.depth_swapchains))
                 self._release(self.depth_swapchains)
+                # nearZ/farZ are the distances of minDepth/maxDepth: reversed-Z swaps them (0 = infinity)
+                near_z, far_z = (float("inf"), self.near) if self.reversed_z else (self.near, self.far)
                 depth_infos = [xr.CompositionLayerDepthInfoKHR(
                     sub_image=self._sub_image(self.depth_swapchains, i), min_depth=0.0, max_depth=1.0,
-                    near_z=self.near, far_z=float("inf") if self.reversed_z else self.far)
-                    for i in range(self.view_count)]
+                    near_z=near_z, far_z=far_z) for i in range(self.view_count)]
                 keep_alive.append(depth_infos)
             sub_images = [self._sub_image(self.swapchains, i) for i in range(self.view_count)]
             views = projection_views(xr, located, sub_images, depth_infos)
