@@ -62,17 +62,18 @@ class Bvh:
 
 def triangle_bounds(tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(T, 3, 3) triangles -> per-triangle (lo, hi) float32."""
-    return tris.min(axis=1), tris.max(axis=1)
+    a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
+    return np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
 
 
 def build(lo, hi, method: str = "auto", leaf_size: int = 4, progress: bool | None = None) -> Bvh:
     """Build a BVH over primitive boxes lo, hi (N, 3). method: 'lbvh', 'sah' or 'auto'
-    (SAH up to 300k primitives, LBVH beyond, where build time matters more)."""
+    (SAH up to 100k primitives, LBVH beyond, where build time matters more)."""
     lo = np.ascontiguousarray(lo, dtype=np.float32)
     hi = np.ascontiguousarray(hi, dtype=np.float32)
     n = len(lo)
     if method == "auto":
-        method = "sah" if n <= 300_000 else "lbvh"
+        method = "sah" if n <= 100_000 else "lbvh"
     if method not in ("lbvh", "sah"):
         raise SceneError(f"bvh method: unknown {method!r}; use 'lbvh', 'sah' or 'auto'")
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
@@ -83,8 +84,9 @@ def build(lo, hi, method: str = "auto", leaf_size: int = 4, progress: bool | Non
         bar = tqdm(total=n, unit="prim", desc=f"BVH ({method})", leave=False)
     centroid = (lo + hi) * 0.5
     if method == "lbvh":
-        order = _morton_order(centroid)
-        splitter = _LbvhSplitter(_morton_codes(centroid)[order])
+        codes = _morton_codes(centroid)
+        order = np.argsort(codes).astype(np.int64)
+        splitter = _LbvhSplitter(codes[order])
     else:
         order = np.arange(n, dtype=np.int64)
         splitter = _SahSplitter(order, centroid, lo, hi)
@@ -133,10 +135,6 @@ def _morton_codes(centroid: np.ndarray) -> np.ndarray:
     return (_expand_bits(q[:, 0]) << np.uint64(2)) | (_expand_bits(q[:, 1]) << np.uint64(1)) | _expand_bits(q[:, 2])
 
 
-def _morton_order(centroid: np.ndarray) -> np.ndarray:
-    return np.argsort(_morton_codes(centroid)).astype(np.int64)
-
-
 class _LbvhSplitter:
     def __init__(self, sorted_codes: np.ndarray):
         self.codes = sorted_codes
@@ -180,18 +178,21 @@ class _SahSplitter:
         cmax = np.maximum.reduceat(c, seg_first, axis=0)
         scale = BINS / np.maximum(cmax - cmin, 1e-30)
         b = np.clip(((c - cmin[seg]) * scale[seg]).astype(np.int64), 0, BINS - 1)
-        plo, phi = self.lo[prim], self.hi[prim]
+        plo_t = np.ascontiguousarray(self.lo[prim].T)
+        phi_t = np.ascontiguousarray(self.hi[prim].T)
         best = np.full(nseg, np.inf)
         best_axis = np.zeros(nseg, np.int64)
         best_k = np.zeros(nseg, np.int64)
         for axis in range(3):
             key = seg * BINS + b[:, axis]
             n_bin = np.bincount(key, minlength=nseg * BINS).reshape(nseg, BINS)
-            blo = np.full((nseg * BINS, 3), np.inf, np.float32)
-            bhi = np.full((nseg * BINS, 3), -np.inf, np.float32)
-            np.minimum.at(blo, key, plo)
-            np.maximum.at(bhi, key, phi)
-            blo, bhi = blo.reshape(nseg, BINS, 3), bhi.reshape(nseg, BINS, 3)
+            blo = np.full((3, nseg * BINS), np.inf, np.float32)
+            bhi = np.full((3, nseg * BINS), -np.inf, np.float32)
+            for c in range(3):   # 1-D ufunc.at is many times faster than on rows
+                np.minimum.at(blo[c], key, plo_t[c])
+                np.maximum.at(bhi[c], key, phi_t[c])
+            blo = blo.reshape(3, nseg, BINS).transpose(1, 2, 0)
+            bhi = bhi.reshape(3, nseg, BINS).transpose(1, 2, 0)
             l_area = _half_area(np.minimum.accumulate(blo, axis=1), np.maximum.accumulate(bhi, axis=1))
             r_area = _half_area(np.minimum.accumulate(blo[:, ::-1], axis=1)[:, ::-1],
                                 np.maximum.accumulate(bhi[:, ::-1], axis=1)[:, ::-1])
@@ -224,27 +225,34 @@ class _SahSplitter:
 # ---- bounds and the GPU layout ----------------------------------------------------------------
 
 def _tree_bounds(bvh: Bvh, lo_sorted: np.ndarray, hi_sorted: np.ndarray):
-    """Boxes of every tree node: leaves by segment reduction, then internal nodes bottom-up."""
+    """Boxes of every tree node: leaves by segment reduction, then internal nodes bottom-up.
+    Boxes are kept as (lo, -hi) rows so one minimum does both ends."""
+    nb = _tree_boxes(bvh, np.concatenate([lo_sorted, -hi_sorted], axis=1))
+    return nb[:, :3], -nb[:, 3:]
+
+
+def _tree_boxes(bvh: Bvh, boxes_sorted: np.ndarray) -> np.ndarray:
     count = len(bvh.start)
-    nlo = np.empty((count, 3), np.float32)
-    nhi = np.empty((count, 3), np.float32)
+    nb = np.empty((count, 6), np.float32)
     leaf = np.flatnonzero(bvh.left < 0)
-    if len(lo_sorted):
-        by_start = leaf[np.argsort(bvh.start[leaf], kind="stable")]
-        nlo[by_start] = np.minimum.reduceat(lo_sorted, bvh.start[by_start], axis=0)
-        nhi[by_start] = np.maximum.reduceat(hi_sorted, bvh.start[by_start], axis=0)
+    if len(boxes_sorted):
+        # leaves partition the slots: order them by first slot without a sort
+        owner = np.full(len(boxes_sorted), -1, np.int64)
+        owner[bvh.start[leaf]] = leaf
+        by_start = owner[owner >= 0]
+        nb[by_start] = np.minimum.reduceat(boxes_sorted, bvh.start[by_start], axis=0)
     else:
-        nlo[:], nhi[:] = _EMPTY_LO, _EMPTY_HI
+        nb[:, :3], nb[:, 3:] = _EMPTY_LO, -_EMPTY_HI
     for first, last in reversed(bvh.level_ranges):
-        ids = np.arange(first, last)
-        ids = ids[bvh.left[ids] >= 0]
-        nlo[ids] = np.minimum(nlo[bvh.left[ids]], nlo[bvh.right[ids]])
-        nhi[ids] = np.maximum(nhi[bvh.right[ids]], nhi[bvh.left[ids]])
-    return nlo, nhi
+        left = bvh.left[first:last]
+        ids = np.flatnonzero(left >= 0)
+        nb[first + ids] = np.minimum(nb[left[ids]], nb[bvh.right[first:last][ids]])
+    return nb
 
 
 def _gpu_nodes(bvh: Bvh, lo_sorted: np.ndarray, hi_sorted: np.ndarray) -> np.ndarray:
-    nlo, nhi = _tree_bounds(bvh, lo_sorted, hi_sorted)
+    nb = _tree_boxes(bvh, np.concatenate([lo_sorted, -hi_sorted], axis=1))
+    nlo, nhi = nb[:, :3], -nb[:, 3:]
     internal = np.flatnonzero(bvh.left >= 0)
     if not len(internal):   # the whole mesh fits one leaf: a root with one leaf child
         out = np.zeros((1, NODE_FLOATS), np.float32)
@@ -256,12 +264,14 @@ def _gpu_nodes(bvh: Bvh, lo_sorted: np.ndarray, hi_sorted: np.ndarray) -> np.nda
             out[0, 0:3], out[0, 4:7] = _EMPTY_LO, _EMPTY_HI
         return out
     gpu_index = np.cumsum(bvh.left >= 0) - 1
-    out = np.zeros((len(internal), NODE_FLOATS), np.float32)
+    out = np.empty((len(internal), 4, 4), np.float32)
     bits = out.view(np.uint32)
-    for slot, child in ((0, bvh.left[internal]), (8, bvh.right[internal])):
+    for row, child in ((0, bvh.left[internal]), (2, bvh.right[internal])):
         is_leaf = bvh.left[child] < 0
-        out[:, slot:slot + 3] = nlo[child]
-        out[:, slot + 4:slot + 7] = nhi[child]
-        bits[:, slot + 3] = np.where(is_leaf, bvh.start[child], gpu_index[child])
-        bits[:, slot + 7] = np.where(is_leaf, bvh.end[child] - bvh.start[child], 0)
+        box = nb[child]
+        out[:, row, :3] = box[:, :3]
+        out[:, row + 1, :3] = -box[:, 3:]
+        bits[:, row, 3] = np.where(is_leaf, bvh.start[child], gpu_index[child])
+        bits[:, row + 1, 3] = np.where(is_leaf, bvh.end[child] - bvh.start[child], 0)
+    out = out.reshape(-1, NODE_FLOATS)
     return out

@@ -157,10 +157,10 @@ class GpuScene:
         for im in images:
             if im.shape[:2] != (h, w):
                 im = np.asarray(Image.fromarray(im).resize((w, h), Image.BILINEAR))
-            layers.append(im[::-1])   # GL's row 0 is the bottom; glTF uv (0, 0) is the top-left
+            layers.append(im)
+        # Rows go up as stored (top row first), so GL's t = 0 is the image's top row, which is
+        # exactly glTF's v = 0: uvs and KHR_texture_transform apply unchanged.
         data = np.ascontiguousarray(np.stack(layers), dtype=np.uint8)
-        # glTF v runs downwards: flipping rows maps uv (u, v) to GL (u, 1 - v); scene.glsl expects
-        # the vertex uvs flipped at load, so sample coordinates are plain GL coordinates.
         self.texture_array = self.gl.texture_array((w, h, len(layers)), 4, data.tobytes())
         self.texture_array.build_mipmaps()
         self.texture_array.repeat_x = self.texture_array.repeat_y = True
@@ -322,7 +322,11 @@ class GpuScene:
             if not cmds:
                 self._draws[key] = (None, None, 0)
             else:
-                ibuf = self.gl.buffer(np.array(cmds, np.uint32).tobytes())
+                # 5 uints per command: moderngl's render_indirect steps by the 20-byte stride of
+                # DrawElementsIndirectCommand, also for array draws; the 5th word is padding.
+                packed = np.zeros((len(cmds), 5), np.uint32)
+                packed[:, :4] = cmds
+                ibuf = self.gl.buffer(packed.tobytes())
                 abuf = self.gl.buffer(ids.tobytes())
                 try:
                     vao = self.gl.vertex_array(program, [(abuf, "1u /i", "rayvr_instance")])
@@ -356,8 +360,8 @@ class GpuScene:
     def nbytes(self) -> int:
         n = sum(b.size for b in self.buffers.values())
         if self.texture_array is not None:
-            w, h = self.texture_array.size
-            n += int(w * h * self.texture_array.layers * 4 * 4 / 3)
+            w, h, layers = self.texture_array.size
+            n += int(w * h * layers * 4 * 4 / 3)   # with mipmaps
         return n
 
     def report(self) -> dict:
@@ -378,6 +382,7 @@ class GpuScene:
             "buffers": {k: v.size for k, v in self.buffers.items()},
             "texture_bytes": self.nbytes - sum(b.size for b in self.buffers.values()),
             "bytes_per_triangle": self.nbytes / max(self.triangle_count, 1),
+            "geometry_bytes_per_triangle": sum(b.size for b in self.buffers.values()) / max(self.triangle_count, 1),
             "blas_nodes": sum(b.node_count for b in self.blas if b is not None),
             "emissive_triangles": self.emissive_count,
             "timings_ms": dict(self.timings),
