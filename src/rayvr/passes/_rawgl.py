@@ -32,7 +32,9 @@ _SIGNATURES = {
     "glClearNamedFramebufferuiv": (None, [_U, _U, _I, ctypes.POINTER(_U)]),
     "glBindFramebuffer": (None, [_U, _U]),
     "glFramebufferTextureMultiviewOVR": (None, [_U, _U, _U, _I, _I, _I]),
+    "glGetIntegerv": (None, [_U, ctypes.POINTER(_I)]),
 }
+GL_MAX_VIEWS_OVR = 0x9631
 
 
 class RawGL:
@@ -71,6 +73,16 @@ def raw() -> RawGL:
     if _raw is None:
         _raw = RawGL()
     return _raw
+
+
+def max_multiview_views() -> int:
+    """GL_MAX_VIEWS_OVR of the current context (0 when the query fails)."""
+    value = _I(0)
+    try:
+        raw().glGetIntegerv(GL_MAX_VIEWS_OVR, ctypes.byref(value))
+    except GpuError:
+        return 0
+    return int(value.value)
 
 
 class LayeredTarget:

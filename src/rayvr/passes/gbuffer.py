@@ -7,8 +7,9 @@ from __future__ import annotations
 
 from ..errors import GpuError, OptionError
 from ..rendergraph.render_pass import Reflection, RenderPass
+from ..gpu.shaders import raster_program
 from ._common import SHADER_DIR, bind_scene, effect_defines, register, scene_defines
-from ._rawgl import LayeredTarget
+from ._rawgl import LayeredTarget, max_multiview_views
 
 # pin -> (format, clear value); the attachment order is this order. posW.w is the linear
 # (eye-space) depth, 0 where nothing was drawn.
@@ -53,36 +54,30 @@ class GBufferRaster(RenderPass):
             r.add_output(pin, DESCRIPTIONS[pin]).format(fmt)
         return r
 
-    def uses_multiview(self, caps) -> bool:
+    def uses_multiview(self, caps, views: int = 2) -> bool:
+        """OVR multiview when asked for (or 'auto') and the driver can draw `views` views at once."""
         if self.multiview == "off":
             return False
         has = bool(caps is not None and caps.multiview)
-        if self.multiview == "on" and not has:
-            raise GpuError(f"pass {self.name}: multiview='on' but the driver has no GL_OVR_multiview2; "
-                           f"use multiview='auto' (layered rendering)")
-        return has
+        limit = max_multiview_views() if has else 0
+        if self.multiview == "on" and not (has and views <= limit):
+            raise GpuError(f"pass {self.name}: multiview='on' but the driver has no GL_OVR_multiview2 for "
+                           f"{views} views (GL_MAX_VIEWS_OVR {limit}); use multiview='auto' (layered rendering)")
+        return has and views <= limit
 
     def compile(self, ctx, cd):
         if ctx.scene is None:
             from ..errors import GraphError
             raise GraphError(f"pass {self.name} (GBufferRaster) needs a scene: compile the graph with "
                              f"a scene (rv.Renderer(scene, graph) does)")
-        self._multiview = self.uses_multiview(ctx.caps)
+        self._multiview = self.uses_multiview(ctx.caps, cd.views)
         if not self._multiview and not ctx.caps.vertex_layer:
             raise GpuError(f"pass {self.name}: the driver has neither GL_OVR_multiview2 nor "
                            f"GL_ARB_shader_viewport_layer_array; one draw cannot reach every view")
         self._views = cd.views
         self._defines = {**scene_defines(ctx), **effect_defines(), "VIEW_COUNT": cd.views,
                          "RAYVR_MULTIVIEW": int(self._multiview)}
-        header = ("#extension GL_OVR_multiview2 : require" if self._multiview
-                  else "#extension GL_ARB_shader_viewport_layer_array : require")
-        frag_header = "#extension GL_OVR_multiview2 : require" if self._multiview else ""
-        from ..gpu.shaders import preprocess, _compile
-        vs = preprocess(SHADER_DIR / "gbuffer.vert", self._defines, header=header + "\n" + _draw_header())
-        fs = preprocess(SHADER_DIR / "gbuffer.frag", self._defines, header=frag_header)
-        gl = ctx.gl
-        self._prog = _compile(gl, "raster", {"vertex_shader": vs, "fragment_shader": fs},
-                              lambda: gl.program(vertex_shader=vs.text, fragment_shader=fs.text))
+        self._prog = raster_program(ctx.gl, SHADER_DIR / "gbuffer.vert", SHADER_DIR / "gbuffer.frag", self._defines)
         self._target = None
         self._target_key = None
 
@@ -148,6 +143,3 @@ class GBufferRaster(RenderPass):
             except Exception:
                 pass
 
-
-def _draw_header() -> str:
-    return "#extension GL_ARB_shader_draw_parameters : enable"

@@ -1,6 +1,11 @@
 // G-buffer vertex stage: vertex pulling from the GPU scene (scene.glsl), one draw for every view.
 // Layered: GpuScene.draw(program, views) draws each instance `views` times; gl_InstanceID is the
 // view and gl_Layer its layer. Multiview: gl_ViewID_OVR is the view.
+#if RAYVR_MULTIVIEW
+#extension GL_OVR_multiview2 : require
+#else
+#extension GL_ARB_shader_viewport_layer_array : require
+#endif
 #include "views.glsl"
 #include "scene.glsl"
 
