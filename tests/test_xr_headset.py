@@ -206,3 +206,12 @@ def test_offscreen_views_runs_its_frames_and_reads_back(gl):
         seen += 1
     assert seen == 2 and sink.submitted == 2
     assert (sink.read() == 77).all() and sink.read().shape == (1, 6, 8, 4)
+
+
+def test_place_restarts_the_trajectory_at_a_pose():
+    h = SimulatedHeadset("index", size=(8, 8), trajectory="walk")
+    assert not h.start_pose_given
+    h.place(Pose([5.0, 2.0, 1.0]))
+    r = h.wait_frame()
+    mid = (r.views[0].pose.position + r.views[1].pose.position) / 2
+    assert h.start_pose_given and mid[0] == pytest.approx(5.0) and mid[2] < 1.0

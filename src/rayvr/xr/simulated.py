@@ -17,7 +17,7 @@ from .compositor import Compositor
 from .presets import HeadsetPreset, get_preset
 from .sink import FrameRequest, Sink, check_texture_array
 from .trajectory import make_trajectory
-from .views import Pose
+from .views import Pose, ViewSet
 
 DEFAULT_START = Pose([0.0, 1.6, 0.0])   # standing eye height, looking down -Z
 
@@ -47,6 +47,8 @@ class SimulatedHeadset(Sink):
         if len(self._size) != 2 or min(self._size) <= 0:
             raise OptionError(f"SimulatedHeadset: size must be (width, height) in pixels, got {size!r}")
         self.start_pose = start_pose or DEFAULT_START
+        self.start_pose_given = start_pose is not None
+        self._trajectory_spec = trajectory
         self.trajectory = make_trajectory(trajectory, self.start_pose)
         self.frames = frames
         self.near, self.far, self.reversed_z = near, far, reversed_z
@@ -60,6 +62,11 @@ class SimulatedHeadset(Sink):
         self._video_writer = None
         self._last_views = None
         self.gpu = None
+
+    def place(self, start_pose: Pose) -> None:
+        """Start the (formula) trajectory from `start_pose`, e.g. the scene's camera; a pose log keeps its poses."""
+        self.start_pose, self.start_pose_given = start_pose, True
+        self.trajectory = make_trajectory(self._trajectory_spec, start_pose)
 
     @property
     def view_count(self) -> int:
@@ -81,8 +88,7 @@ class SimulatedHeadset(Sink):
         head = self.trajectory.pose_at(timing.predicted_display_time)
         views = stereo_views(head, self.ipd, self.preset.left_fov, self.preset.right_fov, self._size,
                              self.near, self.far, self.reversed_z)
-        if self._last_views is not None:
-            views._prev_view_proj = self._last_views._prev_view_proj
+        views = ViewSet(views.views, previous=self._last_views)   # motion vectors: last frame's matrices
         self._last_views = views
         return FrameRequest(timing.index, views, timing.predicted_display_time, head,
                             sink_data={"timing": timing, "wall_start": time.perf_counter()})
