@@ -1,1 +1,111 @@
-"""Accumulate pass (owned by the path-tracing engineer)."""
+"""Accumulate pass (owned by the path-tracing engineer): the progressive running mean of its
+input over frames (after Falcor's AccumulatePass), for converging path-traced renders.
+
+The sum lives in internal rgba32f pins (Kahan-compensated), so the mean of N frames equals the
+float mean of the inputs. It restarts when:
+- `reset()` is called;
+- the frame's views change (pose, field of view, size or count);
+- the scene changes (materials version, instance transforms, punctual lights);
+- `ctx.sample_index` falls back (0 after a positive value: the renderer's own reset signal).
+`max_frames` > 0 stops adding after that many frames; the output stays the mean of those.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import OptionError
+from ..rendergraph.render_pass import Reflection, RenderPass
+from ._common import build_compute, groups_2d, register
+
+
+@register
+class Accumulate(RenderPass):
+    """Progressive mean of `src` -> `dst` (rgba32f); see the module docstring for resets."""
+
+    SRC, DST = "src", "dst"
+    SUM, COMPENSATION = "sum", "compensation"
+    PROPERTIES = {"enabled": True, "max_frames": 0, "auto_reset": True}
+
+    def __init__(self, props: dict | None = None, **kwargs):
+        super().__init__(props, **kwargs)
+        self._count = 0
+        self._pending_reset = True
+        self._key = None
+        self._last_sample_index = 0
+
+    def validate_property(self, key, value):
+        value = super().validate_property(key, value)
+        if key == "max_frames" and (int(value) != value or value < 0):
+            raise OptionError(f"pass {self.name}: property 'max_frames' must be an integer >= 0 (0 = no limit), "
+                              f"got {value!r}")
+        return value
+
+    def on_properties_changed(self):
+        self.reset()
+
+    @property
+    def frame_count(self) -> int:
+        """Frames in the current mean."""
+        return self._count
+
+    def reset(self) -> None:
+        """Start the mean again at the next frame."""
+        self._pending_reset = True
+
+    def reflect(self, cd):
+        r = Reflection()
+        r.add_input(self.SRC, "this frame's estimate (any float format)")
+        r.add_output(self.DST, "mean over the accumulated frames").format("rgba32f")
+        r.add_internal(self.SUM, "running sum").format("rgba32f")
+        r.add_internal(self.COMPENSATION, "Kahan compensation of the sum").format("rgba32f")
+        return r
+
+    def compile(self, ctx, cd):
+        self._prog = build_compute(ctx.gl, "pt/accumulate.comp")
+        self.reset()
+
+    def _change_key(self, ctx, data) -> tuple:
+        """What invalidates the mean: views and scene state (small, per view / per instance)."""
+        parts: list = [data.size, data.views]
+        view_set = getattr(ctx, "view_set", None)
+        if view_set is not None:
+            parts += [np.round(v.pose.matrix(), 9).tobytes() + np.asarray(v.fov.tangents()).tobytes()
+                      for v in view_set]
+        gpu_scene = getattr(ctx, "scene", None)
+        scene = getattr(gpu_scene, "scene", None)
+        if scene is not None:
+            parts.append(getattr(scene.materials, "version", None))
+            parts.append(b"".join(i.transform.tobytes() for i in scene.instances))
+            parts.append(tuple((tuple(l.position), tuple(l.direction), tuple(l.color), l.intensity)
+                               for l in scene.lights))
+        return tuple(parts)
+
+    def _needs_reset(self, ctx, data) -> bool:
+        if self._pending_reset or not self.enabled:
+            return True
+        if not self.auto_reset:
+            return False
+        sample_index = int(getattr(ctx, "sample_index", 0) or 0)
+        fell_back = sample_index < self._last_sample_index
+        self._last_sample_index = sample_index
+        return fell_back or self._change_key(ctx, data) != self._key
+
+    def execute(self, ctx, data):
+        if self._needs_reset(ctx, data):
+            self._count = 0
+            self._pending_reset = False
+            self._last_sample_index = int(getattr(ctx, "sample_index", 0) or 0)
+            if self.auto_reset:
+                self._key = self._change_key(ctx, data)
+        add = self.max_frames == 0 or self._count < self.max_frames
+        if add:
+            self._count += 1
+        self._prog["acc_count"].value = self._count
+        if "acc_add" in self._prog:
+            self._prog["acc_add"].value = add
+        data[self.SRC].use(location=0)
+        data[self.SUM].bind_to_image(0, read=True, write=True)
+        data[self.COMPENSATION].bind_to_image(1, read=True, write=True)
+        data[self.DST].bind_to_image(2, read=False, write=True)
+        self._prog.run(*groups_2d(data.size, data.views))
+        ctx.gl.memory_barrier()

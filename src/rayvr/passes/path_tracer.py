@@ -1,1 +1,128 @@
-"""PathTracer pass (owned by the path-tracing engineer)."""
+"""PathTracer pass (owned by the path-tracing engineer): unidirectional path tracing with
+next-event estimation and MIS, every view in one dispatch.
+
+Two modes (property `mode`):
+- "full": every pixel from the camera (`view_primary_ray`, random sub-pixel offsets): the pure
+  path-traced graph (`rayvr.graphs_pt.path_traced()`) and reference renders.
+- "gbuffer": only the pixels whose material's effect is PATH_TRACED, starting at the G-buffer
+  surface (so the hybrid graph path traces per material). With the optional `pixels` input (a
+  pixel list of rayvr.passes.compaction) the dispatch is indirect over those pixels; without
+  it the pass runs over the screen and writes 0 where the effect is not PATH_TRACED.
+
+The output is the mean of `samples_per_pixel` paths (rgba32f); feed it to Accumulate for a
+progressive render. Paths are seeded by pixel, view, frame index and sample index (PCG).
+"""
+from __future__ import annotations
+
+from ..errors import GraphError, OptionError
+from ..gpu.bindings import BINDINGS
+from ..materials.effect import Effect
+from ..rendergraph.render_pass import Reflection, RenderPass
+from ._common import (GBUFFER_PINS, GBUFFER_UNITS, bind_scene, build_compute, effect_defines,
+                      effects_used, groups_2d, register, scene_defines)
+from .compaction import DISPATCH_OFFSET, pixel_list_bytes
+from .lighting import GBUFFER_FORMATS
+
+MODES = ("full", "gbuffer")
+PASS_SSBO_0 = BINDINGS["RAYVR_PASS_SSBO_0"]
+RNG_SALT = 7
+
+
+@register
+class PathTracer(RenderPass):
+    """Path-traced radiance per pixel (see the module docstring for the two modes).
+
+    Properties: `samples_per_pixel` (paths per pixel per frame), `max_bounces` (scattering events;
+    1 = direct light only, 0 = emission only), `rr_start` (bounce from which Russian roulette
+    may end a path), `clamp` (0 = off; > 0 caps each sample's radiance per channel, biased),
+    `background` (radiance of rays that escape), `pixel_jitter` (random sub-pixel offsets in
+    "full" mode: anti-aliasing once accumulated), `mode` ("full" or "gbuffer")."""
+
+    COLOR = "color"
+    PIXELS = "pixels"
+    PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
+                  "clamp": 0.0, "background": [0.0, 0.0, 0.0], "pixel_jitter": True}
+
+    def validate_property(self, key, value):
+        value = super().validate_property(key, value)
+        if key == "mode" and value not in MODES:
+            raise OptionError(f"pass {self.name}: property 'mode' is {value!r}; use 'full' or 'gbuffer'")
+        if key == "samples_per_pixel" and (int(value) != value or value < 1):
+            raise OptionError(f"pass {self.name}: property 'samples_per_pixel' must be an integer >= 1, got {value!r}")
+        if key in ("max_bounces", "rr_start") and (int(value) != value or value < 0):
+            raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= 0, got {value!r}")
+        if key == "clamp" and value < 0:
+            raise OptionError(f"pass {self.name}: property 'clamp' must be >= 0 (0 = off), got {value!r}")
+        if key == "background":
+            try:
+                value = [float(v) for v in value]
+            except (TypeError, ValueError):
+                value = []
+            if len(value) != 3:
+                raise OptionError(f"pass {self.name}: property 'background' must be three numbers (linear RGB)")
+        return value
+
+    def reflect(self, cd):
+        r = Reflection()
+        if self.mode == "gbuffer":
+            for pin in GBUFFER_PINS:
+                r.add_input(pin, f"G-buffer {pin}").format(GBUFFER_FORMATS[pin])
+            r.add_input(self.PIXELS, "PATH_TRACED pixels (EffectCompaction); absent: whole screen").buffer(
+                pixel_list_bytes(cd.size, cd.views)).optional()
+        r.add_output(self.COLOR, "path-traced radiance, mean of samples_per_pixel paths").format("rgba32f")
+        return r
+
+    def skip_reason(self, cd):
+        if self.mode != "gbuffer":
+            return None
+        used = effects_used(cd)
+        if used is not None and Effect.PATH_TRACED not in used:
+            return "no material uses PATH_TRACED"
+        return None
+
+    def compile(self, ctx, cd):
+        if ctx.scene is None:
+            raise GraphError(f"pass {self.name} (PathTracer) needs a scene: compile the graph with a scene "
+                             f"(rv.Renderer(scene, graph) does)")
+        self._programs = {}
+        base = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALT,
+                "PT_FROM_GBUFFER": int(self.mode == "gbuffer")}
+        if self.mode == "gbuffer":
+            base.update(GBUFFER_UNITS)
+            # with and without a pixel list: the input is optional and may be pruned
+            for listed in (0, 1):
+                self._programs[listed] = build_compute(
+                    ctx.gl, "pt/path_tracer.comp", {**base, "PT_PIXEL_LIST": listed, "PIXEL_LIST_SSBO": PASS_SSBO_0})
+        else:
+            self._programs[0] = build_compute(ctx.gl, "pt/path_tracer.comp", {**base, "PT_PIXEL_LIST": 0})
+        self._defines = base
+
+    def defines(self) -> dict:
+        return dict(getattr(self, "_defines", {}))
+
+    def _set_uniforms(self, prog) -> None:
+        values = {"pt_samples": int(self.samples_per_pixel), "pt_max_bounces": int(self.max_bounces),
+                  "pt_rr_start": int(self.rr_start), "pt_clamp": float(self.clamp),
+                  "pt_background": tuple(self.background), "pt_pixel_jitter": bool(self.pixel_jitter)}
+        for key, value in values.items():
+            if key in prog:   # the GLSL compiler drops unused uniforms
+                prog[key].value = value
+
+    def execute(self, ctx, data):
+        bind_scene(ctx)
+        pixels = data.get(self.PIXELS) if self.mode == "gbuffer" else None
+        prog = self._programs[int(pixels is not None)]
+        self._set_uniforms(prog)
+        if self.mode == "gbuffer":
+            for pin, unit in zip(GBUFFER_PINS, GBUFFER_UNITS.values()):
+                data[pin].use(location=unit)
+        data[self.COLOR].bind_to_image(0, read=False, write=True)
+        if pixels is not None:
+            pixels.bind_to_storage_buffer(PASS_SSBO_0)
+            prog.run_indirect(pixels, DISPATCH_OFFSET)
+        else:
+            prog.run(*groups_2d(data.size, data.views))
+        ctx.gl.memory_barrier()
+
+
+from .accumulate import Accumulate  # noqa: E402  (rayvr.passes imports both from here)

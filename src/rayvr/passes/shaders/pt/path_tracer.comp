@@ -1,0 +1,89 @@
+// PathTracer: `pt_samples` paths per pixel for every view in one dispatch.
+//   PT_FROM_GBUFFER 0: full screen from the camera (view_primary_ray, random sub-pixel offsets).
+//   PT_FROM_GBUFFER 1: only PATH_TRACED pixels, starting at the G-buffer surface; with
+//     PT_PIXEL_LIST 1 the dispatch is indirect over the compaction pass's pixel list.
+#include "views.glsl"
+#if PT_FROM_GBUFFER
+#include "gbuffer.glsl"
+#endif
+#if PT_PIXEL_LIST
+#include "pixel_list.glsl"
+#endif
+#include "path.glsl"
+
+#if PT_PIXEL_LIST
+layout(local_size_x = PIXEL_LIST_GROUP) in;
+#else
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#endif
+layout(rgba32f, binding = 0) writeonly uniform image2DArray dst;
+uniform int pt_samples;
+uniform float pt_clamp;
+uniform bool pt_pixel_jitter;
+
+Rng pt_rng(ivec3 p, int sample_index) {
+    return rng_init(uvec2(p.xy), uint(p.z), frame_index(), RNG_SALT + 0x9E3779B9u * uint(sample_index));
+}
+
+#if PT_FROM_GBUFFER
+vec3 pt_pixel(ivec3 p) {
+    GSurface g = gbuf_load(p);
+    PathVertex s;
+    s.pos = g.pos;
+    s.n = g.n;
+    s.ng = g.ng;
+    s.v = normalize(views[p.z].eye.xyz - g.pos);
+    s.m = bsdf_params(g.base_color, g.metallic, g.roughness);
+    vec3 sum = vec3(0.0);
+    for (int k = 0; k < pt_samples; ++k) {
+        Rng rng = pt_rng(p, k);
+        sum += pt_finite(g.emissive + pt_trace_from(s, rng), pt_clamp);
+    }
+    return sum / float(max(pt_samples, 1));
+}
+#else
+vec3 pt_sample(ivec3 p, inout Rng rng) {
+    vec2 offset = pt_pixel_jitter ? rng_next2(rng) : vec2(0.5);
+    vec3 o, d;
+    view_primary_ray(uint(p.z), vec2(p.xy) + offset, o, d);
+    Hit hit;
+    if (!trace_closest(o, d, 1e30, hit)) return pt_background;
+    SurfacePoint sp = surface_at(hit, d);
+    MaterialParams mp = material_params(sp.material, sp.uv);
+    vec3 radiance = (sp.front_face || mp.double_sided) ? mp.emissive : vec3(0.0);
+    PathVertex s;
+    s.pos = sp.position;
+    s.n = sp.normal;
+    s.ng = sp.geometric_normal;
+    s.v = -d;
+    s.m = bsdf_params(mp.base_color, mp.metallic, mp.roughness);
+    return radiance + pt_trace_from(s, rng);
+}
+
+vec3 pt_pixel(ivec3 p) {
+    vec3 sum = vec3(0.0);
+    for (int k = 0; k < pt_samples; ++k) {
+        Rng rng = pt_rng(p, k);
+        sum += pt_finite(pt_sample(p, rng), pt_clamp);
+    }
+    return sum / float(max(pt_samples, 1));
+}
+#endif
+
+void main() {
+#if PT_PIXEL_LIST
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pixel_count) return;
+    ivec3 p = pixel_list_unpack(pixel_items[i]);
+#else
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;
+#if PT_FROM_GBUFFER
+    if (gbuf_effect_of(texelFetch(gbuf_effect, p, 0).x) != EFFECT_PATH_TRACED) {
+        imageStore(dst, p, vec4(0.0));
+        return;
+    }
+#endif
+#endif
+    imageStore(dst, p, vec4(pt_pixel(p), 1.0));
+}
