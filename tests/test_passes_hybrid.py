@@ -10,6 +10,7 @@ from rayvr.passes.tonemap import ToneMapper
 from rayvr.rendergraph.render_pass import CompileData, RenderContext, RenderData
 
 NO_GEOMETRY = 0xFF
+PIXEL_LISTS = ("shadowPixels", "reflectionPixels", "pathPixels")
 
 
 def srgb(x):
@@ -76,20 +77,24 @@ def effect_texture(gl, ids):
     return gl.texture_array((w, h, v), 1, ids.astype("u4").tobytes(), dtype="u4")
 
 
-def test_compaction_lists_exactly_the_pixels_each_effect_needs(gpu):
+@pytest.mark.parametrize("path_list", [False, True])
+def test_compaction_lists_exactly_the_pixels_each_effect_needs(gpu, path_list):
     gl = gpu.gl
     rng = np.random.default_rng(1)
     size, views = (37, 29), 2
     effects = rng.choice([0, 1, 2, 3, NO_GEOMETRY], size=(views, size[1], size[0]))
     materials = rng.integers(0, 1000, size=effects.shape)
     tex = effect_texture(gl, (materials << 8) | effects)
-    lists = [gl.buffer(reserve=pixel_list_bytes(size, views)) for _ in range(2)]
-    p = EffectCompaction()
+    lists = [gl.buffer(reserve=pixel_list_bytes(size, views)) for _ in range(3)]
+    p = EffectCompaction(path_list=path_list)
     for _ in range(2):   # the second frame must start from empty lists
-        run_pass(gpu, p, {"effect": tex}, {"shadowPixels": lists[0], "reflectionPixels": lists[1]}, size, views)
-    for buf, level in zip(lists, (Effect.SHADOWS, Effect.REFLECTIONS)):
+        run_pass(gpu, p, {"effect": tex}, dict(zip(PIXEL_LISTS, lists)), size, views)
+    geo = effects != NO_GEOMETRY
+    path = (effects == Effect.PATH_TRACED) & path_list
+    wanted = [(effects >= Effect.SHADOWS) & geo & ~path, (effects >= Effect.REFLECTIONS) & geo & ~path, path]
+    for buf, want in zip(lists, wanted):
         n, xyz = read_pixel_list(buf)
-        v, y, x = np.nonzero((effects >= level) & (effects != NO_GEOMETRY))
+        v, y, x = np.nonzero(want)
         assert n == len(v)
         got = sorted(map(tuple, xyz.tolist()))
         assert got == sorted(zip(x.tolist(), y.tolist(), v.tolist()))
@@ -101,8 +106,8 @@ def test_compaction_of_raster_only_pixels_dispatches_nothing(gpu):
     gl = gpu.gl
     size, views = (16, 16), 2
     tex = effect_texture(gl, np.zeros((views, 16, 16), np.uint32))
-    lists = [gl.buffer(reserve=pixel_list_bytes(size, views)) for _ in range(2)]
-    run_pass(gpu, EffectCompaction(), {"effect": tex}, {"shadowPixels": lists[0], "reflectionPixels": lists[1]}, size, views)
+    lists = [gl.buffer(reserve=pixel_list_bytes(size, views)) for _ in range(3)]
+    run_pass(gpu, EffectCompaction(path_list=True), {"effect": tex}, dict(zip(PIXEL_LISTS, lists)), size, views)
     for buf in lists:
         assert list(np.frombuffer(buf.read(16), np.uint32)) == [0, 0, 1, 1]
 

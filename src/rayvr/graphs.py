@@ -1,8 +1,9 @@
 """Ready-made render graphs. `hybrid()` is rayvr's main job: the Ray-VR pipeline.
 
-    GBuffer ─┬─> Direct ─────────────────────────┐
-             ├─> Compaction ─┬─> Shadows ────────┼─> Composite ─> ToneMap
-             │               └─> Reflections ────┘
+    GBuffer ─┬─> Direct ───────────────────────────────────────┐
+             ├─> Compaction ─┬─> Shadows ──────────────────────┤
+             │               ├─> Reflections ──────────────────┼─> Composite ─> ToneMap
+             │               └─> PathTracer ───────────────────┘
              └─(G-buffer pins to every lighting pass; effect ids to Compaction and Composite)
 
 Passes that no material needs are pruned at compile time (see the compile report).
@@ -18,27 +19,36 @@ HDR_OUTPUT = "Composite.color"  # linear radiance (rgba16f), for EXR
 
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
            auto_exposure: bool = False, light_samples: int = 1, background=(0.0, 0.0, 0.0),
-           multiview: str = "auto", name: str = "Hybrid") -> RenderGraph:
+           multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid") -> RenderGraph:
     """The hybrid raster + ray-traced graph: multiview G-buffer, direct light for every pixel,
     ray-traced shadows and reflections only for the pixels whose material's effect asks for them,
-    composite and tone map. Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR)."""
+    path tracing (rayvr.passes.PathTracer in G-buffer mode) for PATH_TRACED materials, composite
+    and tone map.
+    Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR)."""
     from . import passes as P
 
     g = RenderGraph(name)
     g.add_pass(P.GBufferRaster(multiview=multiview), "GBuffer")
     g.add_pass(P.DirectLighting(light_samples=light_samples, background=list(background)), "Direct")
-    g.add_pass(P.EffectCompaction(), "Compaction")
+    path_tracing = hasattr(P, "PathTracer")
+    g.add_pass(P.EffectCompaction(path_list=path_tracing), "Compaction")
     g.add_pass(P.RTShadows(light_samples=light_samples), "Shadows")
     g.add_pass(P.RTReflections(max_bounces=max_bounces, light_samples=light_samples,
                                background=list(background)), "Reflections")
+    if path_tracing:
+        g.add_pass(P.PathTracer(mode="gbuffer", max_bounces=path_bounces, background=list(background)),
+                   "PathTracer")
     g.add_pass(P.HybridComposite(), "Composite")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
-    for lighting in ("Direct", "Shadows", "Reflections"):
+    for lighting in ("Direct", "Shadows", "Reflections", *(("PathTracer",) if path_tracing else ())):
         for pin in GBUFFER_TO_LIGHTING:
             g.add_edge(f"GBuffer.{pin}", f"{lighting}.{pin}")
     g.add_edge("GBuffer.effect", "Compaction.effect")
     g.add_edge("Compaction.shadowPixels", "Shadows.pixels")
     g.add_edge("Compaction.reflectionPixels", "Reflections.pixels")
+    if path_tracing:
+        g.add_edge("Compaction.pathPixels", "PathTracer.pixels")
+        g.add_edge("PathTracer.color", "Composite.pathTraced")
     g.add_edge("GBuffer.effect", "Composite.effect")
     g.add_edge("Direct.direct", "Composite.direct")
     g.add_edge("Shadows.shadowed", "Composite.shadowed")

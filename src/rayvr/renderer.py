@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import struct
 
 import numpy as np
 
@@ -112,6 +113,8 @@ class Renderer:
         self.views_buffer = self.gl.buffer(reserve=HEADER_BYTES + 4 * VIEW_STRUCT_FLOATS * self.view_count)
         self.profiling = profiling
         self.frame_index = 0
+        self.sample_index = 0   # frames accumulated since the views or materials last changed
+        self._accum_key = None
         self.compiles = 0
         self.compiled = None
         self._materials_version = None
@@ -152,9 +155,16 @@ class Renderer:
         self._maybe_recompile()
         origin = view_set.origin()
         self.gpu_scene.update(origin)
-        self.views_buffer.write(view_set.pack(origin, self.frame_index, 0))
+        packed = bytearray(view_set.pack(origin, self.frame_index, 0))
+        # Accumulation restarts when any view's matrices or the materials change.
+        mats = np.frombuffer(packed, np.float32, offset=HEADER_BYTES).reshape(len(view_set), -1)[:, :48]
+        key = (mats.tobytes(), self.scene.materials.version)
+        self.sample_index = self.sample_index + 1 if key == self._accum_key else 0
+        self._accum_key = key
+        struct.pack_into("<I", packed, 8, self.sample_index)
+        self.views_buffer.write(packed)
         ctx = RenderContext(self.gl, self.gpu.caps, scene=self.gpu_scene, views_buffer=self.views_buffer,
-                            view_set=view_set, frame_index=self.frame_index, sample_index=0)
+                            view_set=view_set, frame_index=self.frame_index, sample_index=self.sample_index)
         self.compiled.execute(ctx)
         self.frame_index += 1
 

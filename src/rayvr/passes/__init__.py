@@ -9,6 +9,17 @@ from .tonemap import ToneMapper
 __all__ = ["GBufferRaster", "DirectLighting", "EffectCompaction", "RTShadows", "RTReflections",
            "HybridComposite", "ToneMapper"]
 
+# The path-tracing passes (PathTracer, Accumulate, TAA) live in their own modules here.
+for _module, _names in (("path_tracer", ("PathTracer",)), ("accumulate", ("Accumulate",)), ("taa", ("TAA",))):
+    try:
+        _mod = __import__(f"{__name__}.{_module}", fromlist=list(_names))
+    except ImportError:   # still being written
+        continue
+    for _name in _names:
+        if hasattr(_mod, _name):
+            globals()[_name] = getattr(_mod, _name)
+            __all__.append(_name)
+
 try:
     from . import basic as _basic
 except ImportError:  # the basic passes land separately

@@ -28,11 +28,12 @@ def read_pixel_list(buffer) -> tuple[int, np.ndarray]:
 class EffectCompaction(RenderPass):
     """Reads the G-buffer's effect ids and appends each pixel to the lists of the ray work it needs:
     `shadowPixels` (effect >= SHADOWS) and `reflectionPixels` (effect >= REFLECTIONS), each with
-    its own indirect dispatch arguments. All views in one dispatch."""
+    its own indirect dispatch arguments. With `path_list` PATH_TRACED pixels go to `pathPixels`
+    only (for a PathTracer); without, they count as REFLECTIONS. All views in one dispatch."""
 
     EFFECT = "effect"
-    SHADOW_PIXELS, REFLECTION_PIXELS = "shadowPixels", "reflectionPixels"
-    PROPERTIES = {}
+    SHADOW_PIXELS, REFLECTION_PIXELS, PATH_PIXELS = "shadowPixels", "reflectionPixels", "pathPixels"
+    PROPERTIES = {"path_list": False}
 
     def reflect(self, cd):
         r = Reflection()
@@ -40,6 +41,7 @@ class EffectCompaction(RenderPass):
         n = pixel_list_bytes(cd.size, cd.views)
         r.add_output(self.SHADOW_PIXELS, "pixels needing shadow rays").buffer(n)
         r.add_output(self.REFLECTION_PIXELS, "pixels needing reflection rays").buffer(n)
+        r.add_output(self.PATH_PIXELS, "PATH_TRACED pixels (with path_list)").buffer(n if self.path_list else 16)
         return r
 
     def skip_reason(self, cd):
@@ -52,17 +54,21 @@ class EffectCompaction(RenderPass):
         return self._defines
 
     def on_properties_changed(self):
-        self._defines = {"COMPACT_REFLECTIONS": 1}
+        self._defines = {"COMPACT_REFLECTIONS": 1, "COMPACT_PATHS": int(self.path_list)}
 
     def compile(self, ctx, cd):
         used = effects_used(cd)
-        self._defines = {"COMPACT_REFLECTIONS": int(used is None or any(e >= Effect.REFLECTIONS for e in used))}
+        paths = bool(self.path_list) and (used is None or Effect.PATH_TRACED in used)
+        reflections = used is None or any(e >= Effect.REFLECTIONS and not (paths and e == Effect.PATH_TRACED)
+                                          for e in used)
+        self._defines = {"COMPACT_REFLECTIONS": int(reflections), "COMPACT_PATHS": int(paths)}
         self._reset = build_compute(ctx.gl, "compact_reset.comp")
         self._prog = build_compute(ctx.gl, "compact.comp", {**effect_defines(), **self._defines})
 
     def execute(self, ctx, data):
         data[self.SHADOW_PIXELS].bind_to_storage_buffer(16)
         data[self.REFLECTION_PIXELS].bind_to_storage_buffer(17)
+        data[self.PATH_PIXELS].bind_to_storage_buffer(18)
         self._reset.run(1)
         ctx.gl.memory_barrier()
         data[self.EFFECT].use(location=0)

@@ -1,5 +1,6 @@
 // Per-effect pixel lists: every pixel whose effect needs shadow rays goes to the shadow list,
-// every pixel that needs reflection rays to the reflection list (glsl/pixel_list.glsl layout).
+// every pixel that needs reflection rays to the reflection list, PATH_TRACED pixels to the path
+// list when the graph has a path tracer (glsl/pixel_list.glsl layout).
 // One global atomic per workgroup and list; the indirect group count grows as the list fills.
 #include "gbuffer.glsl"
 #include "pixel_list.glsl"
@@ -14,9 +15,12 @@ layout(std430, binding = RAYVR_PASS_SSBO_0) buffer ShadowList {
 layout(std430, binding = RAYVR_PASS_SSBO_1) buffer ReflectionList {
     uint reflection_count; uint reflection_dispatch[3]; uint reflection_items[];
 };
+layout(std430, binding = RAYVR_PASS_SSBO_2) buffer PathList {
+    uint path_count; uint path_dispatch[3]; uint path_items[];
+};
 
-shared uint s_count[2];
-shared uint s_base[2];
+shared uint s_count[3];
+shared uint s_base[3];
 
 // Groups of PIXEL_LIST_GROUP needed for [base, base + n) beyond those [0, base) needed.
 uint new_groups(uint base, uint n) {
@@ -25,7 +29,7 @@ uint new_groups(uint base, uint n) {
 }
 
 void main() {
-    if (gl_LocalInvocationIndex == 0u) { s_count[0] = 0u; s_count[1] = 0u; }
+    if (gl_LocalInvocationIndex == 0u) { s_count[0] = 0u; s_count[1] = 0u; s_count[2] = 0u; }
     barrier();
 
     ivec3 p = ivec3(gl_GlobalInvocationID);
@@ -33,11 +37,15 @@ void main() {
     uint effect = GBUF_NO_GEOMETRY;
     if (all(lessThan(p, size))) effect = gbuf_effect_of(texelFetch(effect_tex, p, 0).x);
     bool geo = effect != GBUF_NO_GEOMETRY;
-    bool wants_shadow = geo && effect >= EFFECT_SHADOWS;
-    bool wants_reflection = COMPACT_REFLECTIONS != 0 && geo && effect >= EFFECT_REFLECTIONS;
+    // With a path tracer in the graph, PATH_TRACED pixels get only its list; else they count as
+    // REFLECTIONS (the most the hybrid passes offer).
+    bool wants_path = COMPACT_PATHS != 0 && geo && effect == EFFECT_PATH_TRACED;
+    bool wants_shadow = geo && effect >= EFFECT_SHADOWS && !wants_path;
+    bool wants_reflection = COMPACT_REFLECTIONS != 0 && geo && effect >= EFFECT_REFLECTIONS && !wants_path;
 
     uint local_shadow = wants_shadow ? atomicAdd(s_count[0], 1u) : 0u;
     uint local_reflection = wants_reflection ? atomicAdd(s_count[1], 1u) : 0u;
+    uint local_path = wants_path ? atomicAdd(s_count[2], 1u) : 0u;
     barrier();
     if (gl_LocalInvocationIndex == 0u) {
         if (s_count[0] > 0u) {
@@ -48,8 +56,13 @@ void main() {
             s_base[1] = atomicAdd(reflection_count, s_count[1]);
             atomicAdd(reflection_dispatch[0], new_groups(s_base[1], s_count[1]));
         }
+        if (s_count[2] > 0u) {
+            s_base[2] = atomicAdd(path_count, s_count[2]);
+            atomicAdd(path_dispatch[0], new_groups(s_base[2], s_count[2]));
+        }
     }
     barrier();
     if (wants_shadow) shadow_items[s_base[0] + local_shadow] = pixel_list_pack(p);
     if (wants_reflection) reflection_items[s_base[1] + local_reflection] = pixel_list_pack(p);
+    if (wants_path) path_items[s_base[2] + local_path] = pixel_list_pack(p);
 }

@@ -1,6 +1,7 @@
 // Hybrid composite: per pixel, the lighting its effect asked for. RASTER pixels keep the unshadowed
 // direct light; SHADOWS and above take the ray-traced shadowed light; REFLECTIONS and above add
-// the reflected radiance (already weighted by the specular BSDF).
+// the reflected radiance (already weighted by the specular BSDF); PATH_TRACED pixels take the
+// path tracer's (accumulated) radiance when the graph has one.
 #include "gbuffer.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
@@ -12,6 +13,9 @@ layout(binding = 2) uniform sampler2DArray shadowed_tex;
 #endif
 #if HAS_REFLECTIONS
 layout(binding = 3) uniform sampler2DArray reflection_tex;
+#endif
+#if HAS_PATHS
+layout(binding = 4) uniform sampler2DArray path_tex;
 #endif
 layout(rgba16f, binding = 0) writeonly uniform image2DArray dst;
 
@@ -26,6 +30,9 @@ void main() {
 #endif
 #if HAS_REFLECTIONS
         if (effect >= EFFECT_REFLECTIONS) c += texelFetch(reflection_tex, p, 0).rgb;
+#endif
+#if HAS_PATHS
+        if (effect == EFFECT_PATH_TRACED) c = texelFetch(path_tex, p, 0).rgb;
 #endif
     }
     imageStore(dst, p, vec4(c, 1.0));
