@@ -3,7 +3,7 @@
     GBuffer ─┬─> Direct ───────────────────────────────────────┐
              ├─> Compaction ─┬─> Shadows ──────────────────────┤
              │               ├─> Reflections ──────────────────┼─> Composite ─> ToneMap
-             │               └─> PathTracer ───────────────────┘
+             │               └─> PathTracer ─> Accumulate ─────┘
              └─(G-buffer pins to every lighting pass; effect ids to Compaction and Composite)
 
 Passes that no material needs are pruned at compile time (see the compile report).
@@ -30,7 +30,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g = RenderGraph(name)
     g.add_pass(P.GBufferRaster(multiview=multiview), "GBuffer")
     g.add_pass(P.DirectLighting(light_samples=light_samples, background=list(background)), "Direct")
-    path_tracing = hasattr(P, "PathTracer")
+    path_tracing = hasattr(P, "PathTracer") and hasattr(P, "Accumulate")
     g.add_pass(P.EffectCompaction(path_list=path_tracing), "Compaction")
     g.add_pass(P.RTShadows(light_samples=light_samples), "Shadows")
     g.add_pass(P.RTReflections(max_bounces=max_bounces, light_samples=light_samples,
@@ -38,6 +38,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     if path_tracing:
         g.add_pass(P.PathTracer(mode="gbuffer", max_bounces=path_bounces, background=list(background)),
                    "PathTracer")
+        g.add_pass(P.Accumulate(), "Accumulate")
     g.add_pass(P.HybridComposite(), "Composite")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
     for lighting in ("Direct", "Shadows", "Reflections", *(("PathTracer",) if path_tracing else ())):
@@ -48,7 +49,8 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_edge("Compaction.reflectionPixels", "Reflections.pixels")
     if path_tracing:
         g.add_edge("Compaction.pathPixels", "PathTracer.pixels")
-        g.add_edge("PathTracer.color", "Composite.pathTraced")
+        g.add_edge("PathTracer.color", "Accumulate.src")
+        g.add_edge("Accumulate.dst", "Composite.pathTraced")
     g.add_edge("GBuffer.effect", "Composite.effect")
     g.add_edge("Direct.direct", "Composite.direct")
     g.add_edge("Shadows.shadowed", "Composite.shadowed")
