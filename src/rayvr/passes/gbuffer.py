@@ -105,35 +105,8 @@ class GBufferRaster(RenderPass):
         if self.cull_back_faces:
             gl.enable(moderngl.CULL_FACE)
         bind_scene(ctx)
-        self._draw(ctx.scene, 1 if self._multiview else data.views)
+        ctx.scene.draw(self._prog, 1 if self._multiview else data.views)
         gl.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
-
-    def _draw(self, gpu_scene, instances_per_draw: int) -> None:
-        """Every instance in one glMultiDrawArraysIndirect, as scene.glsl describes.
-
-        Same commands as GpuScene.draw, but 20-byte strided: moderngl's render_indirect steps
-        array commands by 20 bytes (its elements stride), so 16-byte commands fail past the first.
-        """
-        key = (id(gpu_scene), instances_per_draw)
-        if getattr(self, "_draw_key", None) != key:
-            import numpy as np
-
-            s = gpu_scene.scene
-            cmds = np.zeros((len(s.instances), 5), np.uint32)
-            for i, inst in enumerate(s.instances):
-                cmds[i, :4] = (s.meshes[inst.mesh].triangle_count * 3, instances_per_draw,
-                               int(gpu_scene.mesh_index_offsets[inst.mesh]), i * instances_per_draw)
-            ids = np.repeat(np.arange(len(s.instances), dtype=np.uint32), instances_per_draw)
-            gl = self._prog.ctx
-            self._cmds = gl.buffer(cmds.tobytes()) if len(cmds) else None
-            self._ids = gl.buffer(ids.tobytes()) if len(ids) else None
-            self._vao = gl.vertex_array(self._prog, [(self._ids, "1u /i", "rayvr_instance")]) if len(ids) else None
-            self._ncmds = len(cmds)
-            self._draw_key = key
-        if self._vao is not None:
-            import moderngl
-
-            self._vao.render_indirect(self._cmds, mode=moderngl.TRIANGLES, count=self._ncmds)
 
     def __del__(self):
         target = self.__dict__.get("_target")
