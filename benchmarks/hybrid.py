@@ -85,7 +85,9 @@ def run(args) -> dict:
         g.mark_output("GBuffer.effect")
         g.mark_output("Compaction.reflectionPixels")
         if label.endswith("REFLECTIONS"):
-            with Renderer(scene, rv.graphs.hybrid(), views=views) as probe:
+            probe_graph = rv.graphs.hybrid()
+            probe_graph.mark_output("GBuffer.effect")
+            with Renderer(scene, probe_graph, views=views) as probe:
                 probe.render()
                 reflect_name = _reflective_material(scene, probe, args.reflect)
             scene.materials[reflect_name].effect = rv.Effect.REFLECTIONS
