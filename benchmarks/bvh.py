@@ -1,0 +1,141 @@
+"""BVH build: time, SAH cost next to a binned-SAH reference build of the same triangles, and
+GPU bytes per triangle.
+
+Each scene's instances are flattened to world-space triangles and built as one BVH, with the
+builder GpuScene picks for that size ('auto': binned SAH up to 100k triangles, LBVH beyond), and
+again with the binned-SAH reference (16 bins, 3 axes; `--ref-max` skips it for huge inputs).
+SAH cost: traversal steps + triangle tests per ray, relative to the root box (C_trav = C_tri = 1).
+Targets (H100 machine): 1.04M triangles <= 200 ms, 2.7M <= 500 ms.
+
+Scenes: glTF paths (a folder means the .gltf/.glb inside it; relative paths are also looked up
+under ../shared/scenes and shared/scenes), built-in names (cornell_box), or generated:N (a
+displaced-grid terrain of about N triangles).
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+DEFAULT_SCENES = "tauray/test.glb,khronos/MetalRoughSpheresNoTextures,khronos/ToyCar,generated:2700000"
+QUICK_SCENES = "cornell_box,generated:20000"
+TARGETS_MS = [(1_040_000, 200.0), (2_700_000, 500.0)]
+REPO = Path(__file__).resolve().parents[1]
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--scenes", default=None,
+                        help=f"comma-separated scenes (default {DEFAULT_SCENES}; quick: {QUICK_SCENES})")
+    parser.add_argument("--method", default="auto", choices=["auto", "lbvh", "sah"], help="builder under test")
+    parser.add_argument("--repeat", type=int, default=3, help="builds per scene, the fastest counts (quick: 1)")
+    parser.add_argument("--ref-max", type=int, default=3_000_000,
+                        help="largest triangle count given a binned-SAH reference build")
+    parser.add_argument("--no-gpu-scene", action="store_true", help="skip uploading a GpuScene (bytes/triangle)")
+
+
+def generated_mesh(n_triangles: int):
+    """A displaced grid terrain with about n_triangles triangles (positions, indices)."""
+    n = max(2, int(round(np.sqrt(n_triangles / 2))) + 1)
+    x, z = np.meshgrid(np.linspace(-50, 50, n), np.linspace(-50, 50, n))
+    y = 3 * np.sin(x * 0.3) * np.cos(z * 0.25) + 0.5 * np.sin(x * 2.1 + z * 1.7)
+    pos = np.stack([x, y, z], axis=-1).reshape(-1, 3).astype(np.float32)
+    i = np.arange((n - 1) * (n - 1))
+    r, c = i // (n - 1), i % (n - 1)
+    a = r * n + c
+    quads = np.stack([a, a + n, a + 1, a + 1, a + n, a + n + 1], axis=1).reshape(-1, 3)
+    return pos, quads.astype(np.uint32)
+
+
+def resolve_scene(spec: str):
+    """A Scene from a path, folder, built-in name or generated:N."""
+    from rayvr.errors import OptionError
+    from rayvr.scene import Material, Scene, builtin, load_scene
+
+    if spec.startswith("generated:"):
+        pos, idx = generated_mesh(int(float(spec.split(":", 1)[1])))
+        s = Scene(f"generated {len(idx)}")
+        s.add_material(Material("Terrain", metallic=0.0))
+        s.add_object("Terrain", pos, idx, 0)
+        return s
+    for base in (Path.cwd(), REPO, REPO.parent / "shared" / "scenes", REPO / "shared" / "scenes",
+                 REPO.parent / "shared"):
+        p = (base / spec)
+        if p.is_dir():
+            found = sorted(p.glob("glTF-Binary/*.glb")) + sorted(p.glob("glTF/*.gltf")) + sorted(p.glob("*.gl[tb]*"))
+            if found:
+                return load_scene(found[0])
+        elif p.is_file():
+            return load_scene(p)
+    fn = getattr(builtin, spec, None)
+    if callable(fn):
+        return fn()
+    raise OptionError(f"--scenes: {spec!r} is not a file, a scene folder, a built-in scene or generated:N")
+
+
+def world_triangles(scene) -> np.ndarray:
+    parts = []
+    for inst in scene.instances:
+        t = scene.meshes[inst.mesh].triangles().astype(np.float64)
+        parts.append((t @ inst.transform[:3, :3].T + inst.transform[:3, 3]).astype(np.float32))
+    return np.concatenate(parts) if parts else np.zeros((0, 3, 3), np.float32)
+
+
+def _timed_build(lo, hi, method, repeat):
+    from rayvr.scene.bvh import build
+
+    best, b = float("inf"), None
+    for _ in range(max(1, repeat)):
+        t0 = time.perf_counter()
+        b = build(lo, hi, method=method, progress=False)
+        best = min(best, time.perf_counter() - t0)
+    return b, best * 1e3
+
+
+def run(args) -> dict:
+    from rayvr.gpu import get_context
+    from rayvr.scene import GpuScene
+    from rayvr.scene.bvh import NODE_BYTES, triangle_bounds
+
+    specs = (args.scenes or (QUICK_SCENES if args.quick else DEFAULT_SCENES)).split(",")
+    repeat = 1 if args.quick else args.repeat
+    rows, notes = [], []
+    for spec in specs:
+        t0 = time.perf_counter()
+        scene = resolve_scene(spec.strip())
+        load_s = time.perf_counter() - t0
+        tris = world_triangles(scene)
+        n = len(tris)
+        t0 = time.perf_counter()
+        lo, hi = triangle_bounds(tris)
+        bounds_ms = (time.perf_counter() - t0) * 1e3
+        b, build_ms = _timed_build(lo, hi, args.method, repeat)
+        cost = b.sah_cost(lo, hi)
+        ref_ms = ref_cost = None
+        if n <= args.ref_max:
+            ref, ref_ms = _timed_build(lo, hi, "sah", 1)
+            ref_cost = ref.sah_cost(lo, hi)
+        target = next((ms for count, ms in TARGETS_MS if abs(n - count) / count < 0.1), None)
+        gpu_bpt = None
+        if not args.no_gpu_scene:
+            try:
+                gs = GpuScene(get_context(), scene, progress=False)
+                gpu_bpt = gs.report()["geometry_bytes_per_triangle"]
+                gs.release()
+            except Exception as exc:   # e.g. llvmpipe's 128 MB SSBO limit
+                notes.append(f"{spec}: no GpuScene ({exc})")
+        rows.append({
+            "scene": spec, "triangles": n, "method": b.method, "build_ms": build_ms + bounds_ms,
+            "target_ms": target if target is not None else "",
+            "meets_target": ("yes" if build_ms + bounds_ms <= target else "no") if target else "",
+            "sah_cost": cost, "ref_sah_cost": ref_cost if ref_cost is not None else "",
+            "sah_vs_ref": cost / ref_cost if ref_cost else "", "ref_build_ms": ref_ms if ref_ms is not None else "",
+            "bvh_bytes_per_tri": (b.node_count * NODE_BYTES + n * 48) / max(n, 1),
+            "gpu_bytes_per_tri": gpu_bpt if gpu_bpt is not None else "", "load_s": load_s,
+        })
+    notes.append("build_ms: triangle boxes + build + GPU node layout (fastest of --repeat); one CPU thread (numpy)")
+    notes.append("bvh_bytes_per_tri: 64-byte nodes + 48-byte BVH-ordered triangles; gpu_bytes_per_tri adds "
+                 "vertices, indices, materials, instances (all scene buffers)")
+    cols = ["scene", "triangles", "method", "build_ms", "target_ms", "meets_target", "sah_cost", "ref_sah_cost",
+            "sah_vs_ref", "ref_build_ms", "bvh_bytes_per_tri", "gpu_bytes_per_tri", "load_s"]
+    return {"columns": cols, "rows": rows, "notes": notes}

@@ -1,0 +1,257 @@
+"""Ray throughput of the GLSL ray-query library: primary and diffuse-bounce rays per second at
+1920x1080, and their ratio to a brute-force ray-triangle roofline on the same GPU.
+
+Primary: one camera ray per pixel (trace_closest), from the scene's first camera or one framing
+its bounds. Diffuse: from every primary hit, a cosine-distributed direction about the geometric
+normal, origin moved by offset_ray_origin (trace_closest; incoherent rays). Roofline: every ray
+of a batch tested against every triangle of a small set with the same watertight test and no
+BVH: the rate of ray-triangle tests the GPU sustains. `ratio` = rays/s / tests/s; a BVH that
+needs ~N box and triangle tests per ray lands near 1/N. Targets (H100): >= 3 Grays/s primary,
+>= 1.5 Grays/s diffuse on tauray/test.glb and the 1.04M-triangle spheres.
+
+GPU time from timer queries where the driver has them, else finish + wall clock (llvmpipe).
+"""
+from __future__ import annotations
+
+import math
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .bvh import resolve_scene
+
+DEFAULT_SCENES = "tauray/test.glb,khronos/MetalRoughSpheresNoTextures,khronos/ToyCar,generated:2700000"
+QUICK_SCENES = "cornell_box"
+
+_HEADER = """
+#include "ray_query.glsl"
+layout(local_size_x = 8, local_size_y = 8) in;
+uniform vec3 cam_pos;
+uniform vec3 cam_right;    // scaled by tan(fov/2) * aspect
+uniform vec3 cam_up;       // scaled by tan(fov/2)
+uniform vec3 cam_forward;
+uniform ivec2 size;
+uint pixel_index(ivec2 px) { return uint(px.y * size.x + px.x); }
+vec3 camera_dir(ivec2 px) {
+    vec2 ndc = (vec2(px) + 0.5) / vec2(size) * 2.0 - 1.0;
+    return normalize(cam_forward + ndc.x * cam_right + ndc.y * cam_up);
+}
+"""
+
+PRIMARY = _HEADER + """
+layout(std430, binding = RAYVR_PASS_SSBO_0) writeonly buffer Result { float result[]; };
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (px.x >= size.x || px.y >= size.y) return;
+    Hit h;
+    bool hit = trace_closest(cam_pos, camera_dir(px), 1e29, h);
+    result[pixel_index(px)] = hit ? h.t : -1.0;
+}
+"""
+
+SURFACES = _HEADER + """
+layout(std430, binding = RAYVR_PASS_SSBO_1) writeonly buffer Surfaces { vec4 surfaces[]; };
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (px.x >= size.x || px.y >= size.y) return;
+    vec3 d = camera_dir(px);
+    Hit h;
+    uint i = pixel_index(px);
+    if (trace_closest(cam_pos, d, 1e29, h)) {
+        SurfacePoint s = surface_at(h, d);
+        surfaces[2u * i] = vec4(offset_ray_origin(s.position, s.geometric_normal), 1.0);
+        surfaces[2u * i + 1u] = vec4(s.geometric_normal, 0.0);
+    } else {
+        surfaces[2u * i] = vec4(0.0);
+    }
+}
+"""
+
+DIFFUSE = _HEADER + """
+layout(std430, binding = RAYVR_PASS_SSBO_0) writeonly buffer Result { float result[]; };
+layout(std430, binding = RAYVR_PASS_SSBO_1) readonly buffer Surfaces { vec4 surfaces[]; };
+uint hash(uint x) { x ^= x >> 16; x *= 0x7feb352du; x ^= x >> 15; x *= 0x846ca68bu; x ^= x >> 16; return x; }
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (px.x >= size.x || px.y >= size.y) return;
+    uint i = pixel_index(px);
+    vec4 p = surfaces[2u * i];
+    if (p.w == 0.0) { result[i] = -2.0; return; }
+    vec3 n = surfaces[2u * i + 1u].xyz;
+    uint h1 = hash(i * 2u + 1u), h2 = hash(h1 ^ 0x9e3779b9u);
+    float u1 = float(h1 >> 8) / 16777216.0, u2 = float(h2 >> 8) / 16777216.0;
+    float r = sqrt(u1), phi = 6.2831853 * u2;
+    vec3 t = normalize(abs(n.x) > 0.5 ? cross(n, vec3(0, 1, 0)) : cross(n, vec3(1, 0, 0)));
+    vec3 b = cross(n, t);
+    vec3 d = normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(0.0, 1.0 - u1)) * n);
+    Hit h;
+    bool hit = trace_closest(p.xyz, d, 1e29, h);
+    result[i] = hit ? h.t : -1.0;
+}
+"""
+
+ROOFLINE = """
+#include "ray_query.glsl"
+layout(local_size_x = 64) in;
+layout(std430, binding = RAYVR_PASS_SSBO_0) writeonly buffer Result { float result[]; };
+layout(std430, binding = RAYVR_PASS_SSBO_1) readonly buffer Tris { vec4 tris[]; };
+uniform uint tri_count;
+uniform uint ray_count;
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= ray_count) return;
+    float a = float(i) * 0.618034;
+    vec3 o = vec3(fract(a) * 2.0 - 1.0, fract(a * 7.31) * 2.0 - 1.0, 5.0);
+    RqRay r = rq_make_ray(o, normalize(vec3(0.1 * fract(a * 3.7), 0.1 * fract(a * 1.3), -1.0)));
+    float best = 1e29;
+    for (uint k = 0u; k < tri_count; ++k) {
+        float t;
+        vec2 bary;
+        if (rq_triangle(r, tris[3u * k].xyz, tris[3u * k + 1u].xyz, tris[3u * k + 2u].xyz, best, t, bary)) best = t;
+    }
+    result[i] = best;
+}
+"""
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--scenes", default=None,
+                        help=f"comma-separated scenes (default {DEFAULT_SCENES}; quick: {QUICK_SCENES})")
+    parser.add_argument("--size", default="1920x1080", help="WIDTHxHEIGHT (quick: 96x54)")
+    parser.add_argument("--iterations", type=int, default=10, help="timed dispatches per kind (quick: 1)")
+    parser.add_argument("--roofline-rays", type=int, default=1 << 20, help="rays in the roofline kernel (quick: 4096)")
+    parser.add_argument("--roofline-tris", type=int, default=1024, help="triangles per ray in the roofline (quick: 64)")
+
+
+def _camera(scene, aspect: float):
+    if scene.cameras:
+        cam = scene.cameras[0]
+        m = cam.transform
+        right, up, back = (m[:3, k] / np.linalg.norm(m[:3, k]) for k in range(3))
+        pos, yfov = m[:3, 3], cam.yfov
+    else:   # frame the bounds from the front, slightly above
+        lo, hi = scene.bounds()
+        centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
+        yfov = math.radians(45)
+        pos = centre + np.array([0.0, 0.35, 1.0]) / np.linalg.norm([0, 0.35, 1.0]) * radius / math.sin(yfov / 2)
+        back = (pos - centre) / np.linalg.norm(pos - centre)
+        right = np.cross([0.0, 1.0, 0.0], back)
+        right /= np.linalg.norm(right)
+        up = np.cross(back, right)
+    th = math.tan(yfov / 2)
+    return pos, right * th * aspect, up * th, -back
+
+
+def _time(gl, use_queries: bool, fn, iterations: int) -> float:
+    """Median milliseconds of fn() over iterations (after one warm-up run)."""
+    fn()
+    gl.finish()
+    times = []
+    for _ in range(iterations):
+        if use_queries:
+            q = gl.query(time=True)
+            with q:
+                fn()
+            times.append(q.elapsed / 1e6)
+        else:
+            gl.finish()
+            t0 = time.perf_counter()
+            fn()
+            gl.finish()
+            times.append((time.perf_counter() - t0) * 1e3)
+    return statistics.median(times)
+
+
+def _program(gl, folder: Path, name: str, text: str, defines: dict):
+    from rayvr.gpu import compute_program
+
+    path = folder / f"{name}.comp"
+    path.write_text(text)
+    return compute_program(gl, path, defines)
+
+
+def _roofline(gl, caps, folder: Path, rays: int, tris: int, iterations: int) -> float:
+    from rayvr.gpu.bindings import BINDINGS
+    from rayvr.scene import builtin, GpuScene
+    from rayvr.gpu import get_context
+
+    gs = GpuScene(get_context(), builtin.quad())   # only for the defines and bindings
+    prog = _program(gl, folder, "roofline", ROOFLINE, gs.defines())
+    rng = np.random.default_rng(0)
+    centre = rng.uniform(-1, 1, size=(tris, 1, 3))
+    tri = np.zeros((tris, 3, 4), np.float32)
+    tri[:, :, :3] = centre + rng.normal(0, 0.05, size=(tris, 3, 3))
+    tri[:, :, 2] = rng.uniform(-1, 1, size=(tris, 1))
+    tb, out = gl.buffer(tri.tobytes()), gl.buffer(reserve=rays * 4)
+    tb.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_1"])
+    out.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"])
+    prog["tri_count"] = tris
+    prog["ray_count"] = rays
+    ms = _time(gl, caps.timer_queries, lambda: prog.run((rays + 63) // 64), iterations)
+    tb.release(), out.release(), gs.release()
+    return rays * tris / (ms / 1e3)
+
+
+def run(args) -> dict:
+    from rayvr.gpu import get_context
+    from rayvr.gpu.bindings import BINDINGS
+    from rayvr.scene import GpuScene
+
+    gpu = get_context()
+    gl, caps = gpu.gl, gpu.caps
+    specs = (args.scenes or (QUICK_SCENES if args.quick else DEFAULT_SCENES)).split(",")
+    w, h = (96, 54) if args.quick and args.size == "1920x1080" else map(int, args.size.lower().split("x"))
+    iters = 1 if args.quick else args.iterations
+    folder = Path(tempfile.mkdtemp(prefix="rayvr-rays-"))
+    roof = _roofline(gl, caps, folder, 4096 if args.quick else args.roofline_rays,
+                     64 if args.quick else args.roofline_tris, iters)
+    rows = []
+    for spec in specs:
+        scene = resolve_scene(spec.strip())
+        t0 = time.perf_counter()
+        gs = GpuScene(gpu, scene, progress=False)
+        build_s = time.perf_counter() - t0
+        defines = gs.defines()
+        progs = {k: _program(gl, folder, k, src, defines) for k, src in
+                 (("primary", PRIMARY), ("surfaces", SURFACES), ("diffuse", DIFFUSE))}
+        pos, right, up, fwd = _camera(scene, w / h)
+        for p in progs.values():
+            for name, v in (("cam_pos", pos - gs.origin), ("cam_right", right), ("cam_up", up), ("cam_forward", fwd)):
+                if name in p:
+                    p[name] = tuple(float(x) for x in v)
+            p["size"] = (w, h)
+        result = gl.buffer(reserve=w * h * 4)
+        surfaces = gl.buffer(reserve=w * h * 32)
+        gs.bind()
+        result.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"])
+        surfaces.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_1"])
+        groups = ((w + 7) // 8, (h + 7) // 8)
+        primary_ms = _time(gl, caps.timer_queries, lambda: progs["primary"].run(*groups), iters)
+        hits = int((np.frombuffer(result.read(), np.float32) > 0).sum())
+        progs["surfaces"].run(*groups)
+        gl.memory_barrier()
+        diffuse_ms = _time(gl, caps.timer_queries, lambda: progs["diffuse"].run(*groups), iters)
+        d = np.frombuffer(result.read(), np.float32)
+        bounce_hits = int((d > 0).sum())
+        primary_rate = w * h / (primary_ms / 1e3)
+        diffuse_rate = hits / (diffuse_ms / 1e3) if hits else 0.0
+        rep = gs.report()
+        rows.append({
+            "scene": spec, "triangles": gs.triangle_count, "size": f"{w}x{h}",
+            "primary_ms": primary_ms, "primary_Grays_s": primary_rate / 1e9,
+            "diffuse_ms": diffuse_ms, "diffuse_Grays_s": diffuse_rate / 1e9,
+            "primary_hit_frac": hits / (w * h), "diffuse_hit_frac": bounce_hits / max(hits, 1),
+            "roofline_Gtests_s": roof / 1e9, "primary_ratio": primary_rate / roof, "diffuse_ratio": diffuse_rate / roof,
+            "gpu_bytes_per_tri": rep["geometry_bytes_per_triangle"], "scene_build_s": build_s,
+        })
+        result.release(), surfaces.release(), gs.release()
+    cols = ["scene", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_ms", "diffuse_Grays_s",
+            "primary_hit_frac", "diffuse_hit_frac", "roofline_Gtests_s", "primary_ratio", "diffuse_ratio",
+            "gpu_bytes_per_tri", "scene_build_s"]
+    notes = [f"timing: {'GPU timer queries' if caps.timer_queries else 'finish + wall clock'}, median of {iters}",
+             "diffuse rays are cast from primary hits only; rays/s counts those rays",
+             "roofline: brute-force watertight ray-triangle tests/s (same test as the traversal, no BVH)"]
+    return {"columns": cols, "rows": rows, "notes": notes}
