@@ -35,7 +35,7 @@ def test_side_by_side_and_effect_option(gpu, tmp_path, capsys):
 
 def test_exr_is_linear_hdr(gpu, tmp_path, capsys):
     OpenEXR = pytest.importorskip("OpenEXR")
-    code, out, err = run(capsys, "--views", "1", "--size", "16x12", "--out", str(tmp_path / "hdr.exr"))
+    code, out, err = run(capsys, "--views", "1", "--size", "16x12", "--exposure", "0", "--out", str(tmp_path / "hdr.exr"))
     assert code == 0, err
     with OpenEXR.File(str(tmp_path / "hdr.exr")) as f:
         rgb = f.channels()["RGB"].pixels
@@ -56,6 +56,7 @@ def test_light_field_grid_and_quilt(gpu, tmp_path, capsys):
     (["--effect", "Floor=shiny"], ["--effect Floor=shiny", "reflections"]),
     (["--effect", "Flor=reflections"], ["no material 'Flor'", "did you mean 'Floor'"]),
     (["--tonemap", "sepia"], ["--tonemap sepia", "aces"]),
+    (["--exposure", "bright"], ["--exposure bright", "auto"]),
     (["no_such_scene"], ["no_such_scene", "built-ins"]),
     (["--views", "3", "--grid", "2x2"], ["--grid 2x2", "--views is 3"]),
 ])

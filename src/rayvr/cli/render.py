@@ -29,8 +29,8 @@ def register(sub) -> None:
     p.add_argument("--effect", action="append", default=[], metavar="MATERIAL=EFFECT",
                    help="set a material's effect (raster, shadows, reflections, path_traced); '*' for all; repeatable")
     p.add_argument("--tonemap", default="aces", help="aces, reinhard or linear (default aces)")
-    p.add_argument("--exposure", type=float, default=0.0, help="exposure in stops (default 0)")
-    p.add_argument("--auto-exposure", action="store_true", help="expose for the frame's mean luminance")
+    p.add_argument("--exposure", default="auto",
+                   help="exposure in stops, or 'auto' for the frame's mean luminance (default auto)")
     p.add_argument("--max-bounces", type=int, default=1, help="reflection bounces (default 1)")
     p.add_argument("--light-samples", type=int, default=1, help="light samples per pixel (default 1)")
     p.add_argument("--frames", type=int, default=1, help="frames to render (timings average over them)")
@@ -50,6 +50,16 @@ def parse_size(text: str) -> tuple[int, int]:
     if w > 8192 or h > 8192:
         raise OptionError(f"--size {text}: at most 8192 pixels a side; use a smaller size")
     return w, h
+
+
+def parse_exposure(text) -> tuple[bool, float]:
+    """(auto, stops): 'auto' or a number of stops."""
+    if str(text).strip().lower() == "auto":
+        return True, 0.0
+    try:
+        return False, float(text)
+    except ValueError:
+        raise OptionError(f"--exposure {text}: give stops (e.g. 0, 1.5, -1) or 'auto'") from None
 
 
 def apply_effects(scene, specs) -> None:
@@ -149,6 +159,7 @@ def run(args) -> int:
         raise OptionError(f"--frames {args.frames}: need at least 1 frame")
     if args.tonemap.lower() not in OPERATORS:
         raise OptionError(f"--tonemap {args.tonemap}: use one of {', '.join(OPERATORS)}")
+    auto_exposure, exposure = parse_exposure(args.exposure)
     out = Path(args.out)
     if out.suffix.lower() not in (".png", ".exr"):
         raise OptionError(f"--out {args.out}: write .png (tone mapped) or .exr (HDR)")
@@ -163,8 +174,8 @@ def run(args) -> int:
     apply_effects(scene, args.effect)
 
     views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
-    graph = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=args.exposure,
-                   auto_exposure=args.auto_exposure, light_samples=args.light_samples,
+    graph = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
+                   auto_exposure=auto_exposure, light_samples=args.light_samples,
                    multiview=args.multiview)
     hdr = out.suffix.lower() == ".exr"
     written = []

@@ -4,6 +4,8 @@ layout(local_size_x = 16, local_size_y = 16, local_size_z = 1) in;
 layout(binding = 0) uniform sampler2DArray src;
 layout(std430, binding = RAYVR_PASS_SSBO_1) writeonly buffer Partials { vec2 partials[]; };
 
+const float BLACK_LUMINANCE = 1e-3;
+
 shared vec2 s_sum[256];
 
 void main() {
@@ -13,7 +15,8 @@ void main() {
     if (all(lessThan(p, size))) {
         vec3 c = texelFetch(src, p, 0).rgb;
         float l = dot(c, vec3(0.2126, 0.7152, 0.0722));
-        if (!(isnan(l) || isinf(l))) v = vec2(log2(max(l, 1e-4)), 1.0);
+        // Black pixels (sky, shadow, noise) would drag the log average down and over-expose the rest.
+        if (!(isnan(l) || isinf(l)) && l > BLACK_LUMINANCE) v = vec2(log2(l), 1.0);
     }
     uint i = gl_LocalInvocationIndex;
     s_sum[i] = v;
