@@ -257,3 +257,45 @@ def test_offset_ray_origin_prevents_self_intersection(gl, tmp_path, scale):
     assert out[:, 0, 0].all()
     assert (out[:, 0, 2] > 0).all()        # the normal faces the incoming ray (direction -d)
     assert out[:, 0, 1].sum() == 0
+
+
+def test_alpha_masked_materials_are_skipped_by_rays(gl, tmp_path):
+    img = np.full((2, 2, 4), 200, np.uint8)
+    img[..., 3] = [[255, 0], [0, 255]]                        # texel (row, col): opaque on the diagonal
+    rays = [[-0.25, -0.25, 1, 0], [0.25, -0.25, 1, 0], [-0.25, 0.25, 1, 0], [0.25, 0.25, 1, 0]]
+    body = ("Hit h; bool hit = trace_closest(q.xyz, vec3(0, 0, -1), 1e29, h);"
+            "bool occ = trace_occluded(q.xyz, vec3(0, 0, -1), 1e29);"
+            "out_[i] = vec4(hit ? 1.0 : 0.0, occ ? 1.0 : 0.0, 0.0, 0.0);")
+    for mode, expect in (("MASK", [1, 0, 0, 1]), ("BLEND", [1, 1, 1, 1])):
+        mat = Material("Leaf", alpha_mode=mode, alpha_cutoff=0.5, base_color_texture=TextureRef(0))
+        s = builtin.quad(material=mat)
+        s.textures.append(Texture(img))
+        gs = GpuScene(get_context(), s)
+        assert gs.defines()["SCENE_HAS_ALPHA_MASK"] == (mode == "MASK")
+        out, _ = run_kernel(gl, tmp_path, gs, body, rays, 1)
+        np.testing.assert_array_equal(out[:, 0, 0], expect)
+        np.testing.assert_array_equal(out[:, 0, 1], expect)
+
+
+def test_normal_maps_tilt_the_shading_normal(gl, tmp_path):
+    theta = math.radians(30)
+    n_ts = np.array([math.sin(theta), 0.0, math.cos(theta)])
+    img = np.zeros((2, 2, 4), np.uint8)
+    img[..., :3] = np.round((n_ts + 1) / 2 * 255)
+    img[..., 3] = 255
+    mat = Material("Bumpy", normal_texture=TextureRef(0), metallic=0.0)
+    s = builtin.quad(material=mat)
+    s.meshes[0].tangents = np.tile(np.array([1, 0, 0, 1], np.float32), (4, 1))
+    s.textures.append(Texture(img, srgb=False))
+    t = np.eye(4)
+    t[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]            # turn the quad to face +X
+    s.instances[0].transform = t
+    gs = GpuScene(get_context(), s)
+    assert gs.defines()["SCENE_HAS_NORMAL_MAPS"] == 1
+    body = ("Hit h; bool hit = trace_closest(q.xyz, vec3(-1, 0, 0), 1e29, h);"
+            "SurfacePoint sp = surface_at(h, vec3(-1, 0, 0));"
+            "out_[i] = vec4(sp.normal, hit ? 1.0 : 0.0);")
+    out, _ = run_kernel(gl, tmp_path, gs, body, [[1.0, 0.1, 0.1, 0]], 1)
+    assert out[0, 0, 3] == 1
+    expect = t[:3, :3] @ n_ts                                 # tangent +X -> world -Z, normal +Z -> +X
+    np.testing.assert_allclose(out[0, 0, :3], expect, atol=1e-2)

@@ -82,6 +82,11 @@ class GpuScene:
         data = np.ascontiguousarray(data)
         if data.nbytes == 0:
             data = np.zeros(4, np.uint32)
+        limit = int(self.gl.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 1 << 31))
+        if data.nbytes > limit:
+            raise SceneError(f"scene '{self.scene.name}': the {name} buffer needs {data.nbytes / 2**20:.0f} MiB, "
+                             f"more than this GPU's shader storage block limit ({limit / 2**20:.0f} MiB); "
+                             f"render fewer triangles (split or decimate the meshes) or use a larger GPU")
         old = self.buffers.get(name)
         if old is not None and old.size == data.nbytes:
             old.write(data.tobytes())
@@ -151,6 +156,10 @@ class GpuScene:
         used = sorted({ref.texture for m in self.scene.materials for ref in m.textures().values()
                        if 0 <= ref.texture < len(self.scene.textures)})
         images = [self.scene.textures[i].image for i in used]
+        max_layers = int(self.gl.info.get("GL_MAX_ARRAY_TEXTURE_LAYERS", 256))
+        if len(images) > max_layers:
+            raise SceneError(f"scene '{self.scene.name}': {len(images)} textures, more than this GPU's "
+                             f"{max_layers} texture array layers; merge textures into atlases")
         w = min(max(im.shape[1] for im in images), MAX_TEXTURE_SIZE)
         h = min(max(im.shape[0] for im in images), MAX_TEXTURE_SIZE)
         layers = []
@@ -385,6 +394,7 @@ class GpuScene:
             "geometry_bytes_per_triangle": sum(b.size for b in self.buffers.values()) / max(self.triangle_count, 1),
             "blas_nodes": sum(b.node_count for b in self.blas if b is not None),
             "emissive_triangles": self.emissive_count,
+            "punctual_light_kinds": sorted({("point", "spot", "directional")[L.type] for L in self.scene.lights}),
             "timings_ms": dict(self.timings),
         }
 
