@@ -29,7 +29,8 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
 
     g = RenderGraph(name)
     g.add_pass(P.GBufferRaster(multiview=multiview), "GBuffer")
-    g.add_pass(P.DirectLighting(light_samples=light_samples, background=list(background)), "Direct")
+    g.add_pass(P.DirectLighting(light_samples=light_samples, background=list(background), raster_only=True),
+               "Direct")
     path_tracing = hasattr(P, "PathTracer") and hasattr(P, "Accumulate")
     g.add_pass(P.EffectCompaction(path_list=path_tracing), "Compaction")
     g.add_pass(P.RTShadows(light_samples=light_samples), "Shadows")

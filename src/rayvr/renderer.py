@@ -185,7 +185,10 @@ class Renderer:
             yield frame
             if request.should_render:
                 self.render(request.views)
-                request.render_time_s = self._last_frame_ms() / 1e3
+                if self.profiling and not self.gpu.caps.timer_queries:
+                    # finish+wall timing is synchronous anyway; with timer queries reading the
+                    # profile would wait for this frame, so the sink keeps its own clock.
+                    request.render_time_s = self._last_frame_ms() / 1e3
                 self.sink.submit(self.output_texture(), request)
             else:
                 self.sink.submit(None, request)

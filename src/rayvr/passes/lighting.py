@@ -69,16 +69,18 @@ def _background(value):
 @register
 class DirectLighting(_GBufferLightingPass):
     """Emission + unshadowed direct light (punctual and emissive-triangle lights) for every pixel;
-    the sky gets `background`. RASTER materials use it as is."""
+    the sky gets `background`. RASTER materials use it as is. With `raster_only` the pixels whose
+    effect is SHADOWS or above are left unwritten (a ray pass lights them: the hybrid graph)."""
 
     SHADER = "direct_lighting.comp"
     OUTPUT = "direct"
     OUTPUT_DESC = "emission + unshadowed direct light; background where nothing was drawn"
     SALT = 1
-    PROPERTIES = {"light_samples": 1, "background": [0.0, 0.0, 0.0]}
+    PROPERTIES = {"light_samples": 1, "background": [0.0, 0.0, 0.0], "raster_only": False}
 
     def shader_defines(self):
-        return {"LIGHT_SAMPLES": max(1, int(self.light_samples)), "SHADE_SHADOWS": 0}
+        return {"LIGHT_SAMPLES": max(1, int(self.light_samples)), "SHADE_SHADOWS": 0,
+                "RASTER_ONLY": int(bool(self.raster_only))}
 
     def set_uniforms(self, prog):
         prog["background"] = tuple(_background(self.background))

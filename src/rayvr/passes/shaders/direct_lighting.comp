@@ -1,4 +1,5 @@
-// Emission + unshadowed direct light for every pixel of every view (RASTER materials use it as is).
+// Emission + unshadowed direct light for every pixel of every view (RASTER materials use it as is;
+// with RASTER_ONLY the pixels the ray passes light are skipped).
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "shading.glsl"
@@ -10,10 +11,14 @@ uniform vec3 background;
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(p, imageSize(dst)))) return;
-    if (gbuf_effect_of(texelFetch(gbuf_effect, p, 0).x) == GBUF_NO_GEOMETRY) {
+    uint effect = gbuf_effect_of(texelFetch(gbuf_effect, p, 0).x);
+    if (effect == GBUF_NO_GEOMETRY) {
         imageStore(dst, p, vec4(background, 1.0));
         return;
     }
+#if RASTER_ONLY
+    if (effect >= EFFECT_SHADOWS) return;   // lit by the ray passes instead
+#endif
     GSurface s = gbuf_load(p);
     vec3 v = normalize(views[p.z].eye.xyz - s.pos);
     Rng rng = rng_init(uvec2(p.xy), uint(p.z), frame_index(), RNG_SALT);
