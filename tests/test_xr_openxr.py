@@ -439,3 +439,19 @@ def test_depth_submission_chains_depth_info_to_each_view(gpu, gl):
     assert (info.min_depth, info.max_depth) == (0.0, 1.0)
     assert info.near_z == pytest.approx(0.1) and info.far_z == pytest.approx(50.0)
     assert info.sub_image.image_array_index == 1 and _hid(info.sub_image.swapchain) == 0x401
+
+
+def test_runtime_failures_become_xr_errors_naming_the_step(gpu):
+    class Failing(TrackingRuntime):
+        def get_system(self, instance, info):
+            raise xr.exception.InitializationFailedError("Initialization of object could not be completed.")
+
+    with pytest.raises(XrError, match="failed while creating the instance and system.*InitializationFailedError"):
+        OpenXRSink(api=Failing({})).open(gpu)
+
+    class NoHmd(TrackingRuntime):
+        def get_system(self, instance, info):
+            raise xr.exception.FormFactorUnavailableError("unavailable")
+
+    with pytest.raises(XrError, match="found no headset"):
+        OpenXRSink(api=NoHmd({})).size

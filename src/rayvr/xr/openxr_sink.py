@@ -14,6 +14,7 @@ projection layer whose views carry the located pose and fov.
 """
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import time
 
@@ -104,18 +105,34 @@ class OpenXRSink(Sink):
         self.gl = gpu.gl
         self.gl_version = int(getattr(gpu.caps, "gl_version", 450))
         self._ensure_system()
-        self._create_session()
+        with self._runtime_errors("creating the session and swapchains"):
+            self._create_session()
+
+    @contextlib.contextmanager
+    def _runtime_errors(self, step: str):
+        """Turn a pyopenxr error result into an XrError naming the step."""
+        try:
+            yield
+        except XrError:
+            raise
+        except Exception as exc:
+            if self.xr is not None and isinstance(exc, self.xr.exception.ErrorResult):
+                raise XrError(f"OpenXR runtime failed while {step}: {exc} ({type(exc).__name__}); "
+                              f"see the runtime's log, or use SimulatedHeadset") from exc
+            raise
 
     def _ensure_system(self) -> None:
         """Instance, system and view configuration: what view_count and size need (no session yet).
 
         Needs the GL context current (rayvr.gpu.get_context()), to choose the EGL or GLX binding."""
-        if self.instance is not None:
+        if self._size is not None:
             return
         xr = self.xr = self.xr or import_pyopenxr()
         self.platform = GLPlatform()
-        self._create_instance()
-        self._get_system()
+        with self._runtime_errors("creating the instance and system"):
+            if self.instance is None:
+                self._create_instance()
+            self._get_system()
         views = xr.enumerate_view_configuration_views(self.instance, self.system, xr.ViewConfigurationType.PRIMARY_STEREO)
         self._view_count = len(views)
         self._size = (max(v.recommended_image_rect_width for v in views),
@@ -233,6 +250,9 @@ class OpenXRSink(Sink):
             wanted.append(xr.KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME)
         layers = []
         if self.validation:
+            expose = getattr(getattr(xr, "api_layer", None), "expose_packaged_api_layers", None)
+            if expose is not None:
+                expose()   # pyopenxr ships the Khronos layers: put them on XR_API_LAYER_PATH
             names = {p.layer_name.decode() if isinstance(p.layer_name, bytes) else p.layer_name
                      for p in xr.enumerate_api_layer_properties()}
             if VALIDATION_LAYER not in names:
