@@ -112,3 +112,32 @@ def test_far_from_the_origin_renders_like_near_it(gpu):
     assert near.max() > 0
     close = np.abs(far - near) <= 0.01 * np.abs(near) + 1e-3
     assert close.mean() > 0.99      # a few shadow-edge pixels may flip
+
+
+def test_multiview_and_layered_draw_the_same_gbuffer(gpu):
+    """Runs where the driver has GL_OVR_multiview2 (NVIDIA); llvmpipe has only the layered path."""
+    if not gpu.caps.multiview:
+        pytest.skip("no GL_OVR_multiview2 on this driver (layered rendering is tested everywhere)")
+    scene = two_materials()
+    out = {}
+    for mode in ("on", "off"):
+        g = rv.RenderGraph("GBufferOnly")
+        g.add_pass(rv.passes.GBufferRaster(multiview=mode), "GBuffer")
+        for pin in PINS:
+            g.mark_output(f"GBuffer.{pin}")
+        with Renderer(scene, g, views=2, size=(32, 32)) as r:
+            r.render()
+            assert r.compiled.passes["GBuffer"]._multiview == (mode == "on")
+            out[mode] = {pin: r.read_output(f"GBuffer.{pin}") for pin in PINS}
+    for pin in PINS:
+        np.testing.assert_array_equal(out["on"][pin], out["off"][pin], err_msg=pin)
+
+
+def test_multiview_on_without_the_extension_is_refused(gpu):
+    if gpu.caps.multiview:
+        pytest.skip("the driver has multiview")
+    g = rv.RenderGraph("GBufferOnly")
+    g.add_pass(rv.passes.GBufferRaster(multiview="on"), "GBuffer")
+    g.mark_output("GBuffer.posW")
+    with pytest.raises(rv.GpuError, match="multiview='auto'"):
+        Renderer(builtin.quad(), g, views=2, size=(8, 8))
