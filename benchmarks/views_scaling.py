@@ -75,7 +75,7 @@ def run(args) -> dict:
     counts = [int(v) for v in args.views.split(",")]
     if args.quick and args.views == "1,2,4,8,16,32,64":
         counts = [1, 2, 4, 8]
-    frames, warmup = (3, 1) if args.quick else (args.frames, args.warmup)
+    frames, warmup = (3, 2) if args.quick else (args.frames, args.warmup)
     rows = []
     for effects in args.effects.split(","):
         scene = _scene(args.scene)
