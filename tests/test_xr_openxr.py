@@ -455,3 +455,27 @@ def test_runtime_failures_become_xr_errors_naming_the_step(gpu):
 
     with pytest.raises(XrError, match="found no headset"):
         OpenXRSink(api=NoHmd({})).size
+
+
+@pytest.mark.skipif(not os.environ.get("RAYVR_TEST_OPENXR"), reason="set RAYVR_TEST_OPENXR=1 with a runtime "
+                    "(e.g. Monado: XR_RUNTIME_JSON=... XRT_COMPOSITOR_NULL=1 SIMULATED_ENABLE=1)")
+def test_real_runtime_round_trip(gpu, gl):
+    """Against the machine's runtime with the core validation layer: lifecycle and swapchain texels."""
+    sink = OpenXRSink(frames=6, validation=True)
+    w, h = sink.size
+    data = np.zeros((2, h, w, 4), np.uint8)
+    data[0, ..., 0], data[1, ..., 1], data[..., 3] = 200, 100, 255
+    tex = gl.texture_array((w, h, 2), 4, data.tobytes())
+    sink.open(gpu)
+    matched = False
+    get = sink.platform.proc("glGetTextureImage", None, [_U, _I, _U, _U, _I, ctypes.c_void_p])
+    while (r := sink.wait_frame()) is not None:
+        sink.submit(tex if r.should_render else None, r)
+        if r.should_render and sink.swapchains[0].array:
+            for image in sink.swapchains[0].images:
+                out = np.zeros_like(data)
+                get(image, 0, GL_RGBA, GL_UNSIGNED_BYTE, out.nbytes, out.ctypes.data)
+                matched |= np.array_equal(out, data)
+    sink.close()
+    assert matched and sink.lifecycle.anomalies == []
+    assert sink.lifecycle.history[-1] == S.EXITING and sink.frame_count >= 6
