@@ -79,3 +79,26 @@ def test_graph_options_are_checked():
         rv.graphs.hybrid(tonemap="sepia")
     with pytest.raises(OptionError, match="multiview"):
         rv.passes.GBufferRaster(multiview="sometimes")
+
+
+def test_swapping_effects_between_materials_moves_ray_work_without_recompiling(gpu):
+    from rayvr.passes.compaction import read_pixel_list
+
+    scene = builtin.cornell_box()
+    scene.materials["Floor"].effect = rv.Effect.REFLECTIONS
+    g = rv.graphs.hybrid()
+    g.mark_output("Compaction.reflectionPixels")
+    g.mark_output("GBuffer.effect")
+    names = [m.name for m in scene.materials]
+    with Renderer(scene, g, views=2, size=(24, 24)) as r:
+        lists = []
+        for reflective in ("Floor", "BackWall"):
+            for m in ("Floor", "BackWall"):
+                scene.materials[m].effect = rv.Effect.REFLECTIONS if m == reflective else rv.Effect.SHADOWS
+            r.render()
+            n, xyz = read_pixel_list(r.compiled.get_output("Compaction.reflectionPixels"))
+            ids = r.read_output("GBuffer.effect")[..., 0]
+            listed = ids[xyz[:, 2], xyz[:, 1], xyz[:, 0]] >> 8
+            assert n > 0 and set(listed.tolist()) == {names.index(reflective)}
+            lists.append(n)
+        assert r.compiles == 1
