@@ -160,3 +160,20 @@ def test_far_from_origin_is_as_precise_as_near(gl, tmp_path):
     for t in far_t:
         t[:3, 3] += far
     compare(gl, scene_of(v, f, far_t), tmp_path, n=3000, origin=far)
+
+
+def test_moving_an_instance_moves_its_hits(gl, tmp_path):
+    v, f = next((v, f) for n, v, f in meshes() if n == "box")
+    scene = scene_of(v, f, [np.eye(4), np.eye(4)])
+    scene.instances[1].transform[:3, 3] = (5.0, 0.0, 0.0)
+    gs = GpuScene(gl_ctx(gl), scene)
+    o = np.array([[5.0, 0.0, 10.0], [9.0, 0.0, 10.0]])
+    d = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, -1.0]])
+    t, inst, *_ = gpu_trace(gl, gs, o, d, tmp_path)
+    np.testing.assert_allclose(t, [9.75, -1], rtol=1e-6)
+    assert inst[0] == 1
+    scene.instances[1].transform[:3, 3] = (9.0, 0.0, 1.0)
+    gs.update(np.array([1.0, 0.0, 0.0]))                     # and a new render origin
+    t, inst, *_ = gpu_trace(gl, gs, o - [1.0, 0.0, 0.0], d, tmp_path)
+    np.testing.assert_allclose(t, [-1, 8.75], rtol=1e-6)
+    assert inst[1] == 1

@@ -57,7 +57,7 @@ class Bvh:
 
     def refit(self, lo: np.ndarray, hi: np.ndarray) -> None:
         """New primitive boxes (same topology, e.g. animated vertices): recompute node boxes."""
-        self.nodes = _gpu_nodes(self, lo[self.order], hi[self.order])
+        self.nodes = _gpu_nodes(self, lo, hi)
 
 
 def triangle_bounds(tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -114,7 +114,7 @@ def build(lo, hi, method: str = "auto", leaf_size: int = 4, progress: bool | Non
         order = splitter.perm
     bvh = Bvh(np.zeros((0, NODE_FLOATS), np.float32), order, np.concatenate(starts), np.concatenate(ends),
               np.concatenate(lefts), np.concatenate(rights), ranges, method)
-    bvh.nodes = _gpu_nodes(bvh, lo[order], hi[order])
+    bvh.nodes = _gpu_nodes(bvh, lo, hi)
     return bvh
 
 
@@ -243,15 +243,17 @@ def _tree_boxes(bvh: Bvh, boxes_sorted: np.ndarray) -> np.ndarray:
         nb[by_start] = np.minimum.reduceat(boxes_sorted, bvh.start[by_start], axis=0)
     else:
         nb[:, :3], nb[:, 3:] = _EMPTY_LO, -_EMPTY_HI
-    for first, last in reversed(bvh.level_ranges):
-        left = bvh.left[first:last]
-        ids = np.flatnonzero(left >= 0)
-        nb[first + ids] = np.minimum(nb[left[ids]], nb[bvh.right[first:last][ids]])
+    # a level's internal nodes have their children as consecutive pairs filling the next level
+    for (first, last), (nfirst, nlast) in reversed(list(zip(bvh.level_ranges, bvh.level_ranges[1:]))):
+        ids = first + np.flatnonzero(bvh.left[first:last] >= 0)
+        pairs = nb[nfirst:nlast].reshape(-1, 2, 6)
+        nb[ids] = np.minimum(pairs[:, 0], pairs[:, 1])
     return nb
 
 
-def _gpu_nodes(bvh: Bvh, lo_sorted: np.ndarray, hi_sorted: np.ndarray) -> np.ndarray:
-    nb = _tree_boxes(bvh, np.concatenate([lo_sorted, -hi_sorted], axis=1))
+def _gpu_nodes(bvh: Bvh, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """GPU nodes from the primitive boxes (in original order)."""
+    nb = _tree_boxes(bvh, np.take(np.concatenate([lo, -hi], axis=1), bvh.order, axis=0))
     nlo, nhi = nb[:, :3], -nb[:, 3:]
     internal = np.flatnonzero(bvh.left >= 0)
     if not len(internal):   # the whole mesh fits one leaf: a root with one leaf child
@@ -264,14 +266,16 @@ def _gpu_nodes(bvh: Bvh, lo_sorted: np.ndarray, hi_sorted: np.ndarray) -> np.nda
             out[0, 0:3], out[0, 4:7] = _EMPTY_LO, _EMPTY_HI
         return out
     gpu_index = np.cumsum(bvh.left >= 0) - 1
-    out = np.empty((len(internal), 4, 4), np.float32)
+    child = bvh.left[internal][:, None] + np.array([0, 1])     # right child = left + 1
+    child = child.reshape(-1)
+    box = nb[child]
+    is_leaf = bvh.left[child] < 0
+    out = np.empty((len(internal) * 2, 2, 4), np.float32)      # per child: (min, link), (max, count)
     bits = out.view(np.uint32)
-    for row, child in ((0, bvh.left[internal]), (2, bvh.right[internal])):
-        is_leaf = bvh.left[child] < 0
-        box = nb[child]
-        out[:, row, :3] = box[:, :3]
-        out[:, row + 1, :3] = -box[:, 3:]
-        bits[:, row, 3] = np.where(is_leaf, bvh.start[child], gpu_index[child])
-        bits[:, row + 1, 3] = np.where(is_leaf, bvh.end[child] - bvh.start[child], 0)
+    out[:, 0, :3] = box[:, :3]
+    out[:, 1, :3] = -box[:, 3:]
+    start = bvh.start[child]
+    bits[:, 0, 3] = np.where(is_leaf, start, gpu_index[child])
+    bits[:, 1, 3] = np.where(is_leaf, bvh.end[child] - start, 0)
     out = out.reshape(-1, NODE_FLOATS)
     return out

@@ -135,6 +135,15 @@ class GpuScene:
             v_base += len(mesh.positions)
             t_base += mesh.triangle_count
         self.triangle_count = t_base
+        corners = np.zeros((max(len(s.meshes), 1), 8, 4))
+        for k, mesh in enumerate(s.meshes):
+            if mesh.triangle_count:
+                p = mesh.positions[mesh.indices.reshape(-1)]
+                lo, hi = p.min(axis=0).astype(np.float64), p.max(axis=0).astype(np.float64)
+                corners[k] = [[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+        self._mesh_corners = corners
+        self._mesh_live = np.array([b is not None for b in self.blas] or [False])
+        self._last_instances = None
         self._buffer("vertices", np.concatenate(verts) if verts else np.zeros((1, 8), np.float32))
         self._buffer("indices", np.concatenate(idx) if idx else np.zeros(3, np.uint32))
         self._buffer("triangle_materials", np.concatenate(tri_mats) if tri_mats else np.zeros(1, np.uint32))
@@ -229,37 +238,39 @@ class GpuScene:
             self._upload_materials()
         s = self.scene
         n = len(s.instances)
-        rows = np.zeros((max(n, 1), INSTANCE_FLOATS), np.float32)
-        bits = rows.view(np.uint32)
-        lo = np.zeros((n, 3))
-        hi = np.zeros((n, 3))
-        live = []
-        for i, inst in enumerate(s.instances):
-            m = inst.transform.copy()
-            m[:3, 3] -= self.origin
-            try:
-                inv = np.linalg.inv(m)
-            except np.linalg.LinAlgError:
-                raise SceneError(f"instance '{inst.name}'.transform: singular matrix; give it a non-zero scale") from None
-            rows[i, 0:12] = m[:3].reshape(-1)
-            rows[i, 12:24] = inv[:3].reshape(-1)
-            bits[i, 24] = inst.mesh
-            b = self.blas[inst.mesh]
-            if b is None:
-                continue
-            p = s.meshes[inst.mesh].positions
-            c = np.array([[x, y, z, 1.0] for x in (p[:, 0].min(), p[:, 0].max())
-                          for y in (p[:, 1].min(), p[:, 1].max()) for z in (p[:, 2].min(), p[:, 2].max())])
-            w = c @ m[:3].T
-            lo[i], hi[i] = w.min(0), w.max(0)
-            live.append(i)
-        header = np.zeros(4, np.uint32)
-        header[0] = n if live else 0     # 0: no geometry, traversal returns at once
-        header[1] = len(s.materials)
-        self._buffer("instances", np.concatenate([header.view(np.float32), rows.reshape(-1)]))
-        self._build_tlas(np.array(live, np.int64), lo, hi)
+        mats = np.array([inst.transform for inst in s.instances], np.float64).reshape(n, 4, 4)
+        mesh_ids = np.array([inst.mesh for inst in s.instances], np.int64)
+        if not (self._last_instances is not None and np.array_equal(self.origin, self._last_origin)
+                and np.array_equal(mats, self._last_instances[0]) and np.array_equal(mesh_ids, self._last_instances[1])):
+            self._upload_instances(mats, mesh_ids)
+            self._last_origin, self._last_instances = self.origin.copy(), (mats, mesh_ids)
         self._upload_lights()
         self.timings["update_ms"] = (time.perf_counter() - t0) * 1e3
+
+    def _upload_instances(self, mats: np.ndarray, mesh_ids: np.ndarray) -> None:
+        """Render-space instance matrices and the TLAS over their boxes (no per-vertex work)."""
+        n = len(mats)
+        m = mats.copy()
+        m[:, :3, 3] -= self.origin
+        det = np.linalg.det(m[:, :3, :3]) if n else np.zeros(0)
+        bad = np.flatnonzero(~(np.abs(det) > 1e-300) | ~np.isfinite(m).all(axis=(1, 2)))
+        if len(bad):
+            name = self.scene.instances[bad[0]].name
+            raise SceneError(f"instance '{name}'.transform: singular or non-finite matrix; give it a non-zero scale")
+        rows = np.zeros((max(n, 1), INSTANCE_FLOATS), np.float32)
+        if n:
+            rows[:n, 0:12] = m[:, :3].reshape(n, 12)
+            rows[:n, 12:24] = np.linalg.inv(m)[:, :3].reshape(n, 12)
+            rows[:n].view(np.uint32)[:, 24] = mesh_ids
+        corners = self._mesh_corners[mesh_ids] if n else np.zeros((0, 8, 4))
+        w = np.einsum("nij,nkj->nki", m[:, :3], corners) if n else np.zeros((0, 8, 3))
+        lo, hi = w.min(axis=1) if n else np.zeros((0, 3)), w.max(axis=1) if n else np.zeros((0, 3))
+        live = np.flatnonzero(self._mesh_live[mesh_ids]) if n else np.zeros(0, np.int64)
+        header = np.zeros(4, np.uint32)
+        header[0] = n if len(live) else 0     # 0: no geometry, traversal returns at once
+        header[1] = len(self.scene.materials)
+        self._buffer("instances", np.concatenate([header.view(np.float32), rows.reshape(-1)]))
+        self._build_tlas(live, lo, hi)
 
     def _build_tlas(self, live: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
         if not len(live):
