@@ -84,18 +84,13 @@ class PathTracer(RenderPass):
         if ctx.scene is None:
             raise GraphError(f"pass {self.name} (PathTracer) needs a scene: compile the graph with a scene "
                              f"(rv.Renderer(scene, graph) does)")
-        self._programs = {}
-        base = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALT,
-                "PT_FROM_GBUFFER": int(self.mode == "gbuffer")}
+        listed = self.mode == "gbuffer" and self.PIXELS in cd.input_formats
+        self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALT,
+                         "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PT_PIXEL_LIST": int(listed)}
         if self.mode == "gbuffer":
-            base.update(GBUFFER_UNITS)
-            # with and without a pixel list: the input is optional and may be pruned
-            for listed in (0, 1):
-                self._programs[listed] = build_compute(
-                    ctx.gl, "pt/path_tracer.comp", {**base, "PT_PIXEL_LIST": listed, "PIXEL_LIST_SSBO": PASS_SSBO_0})
-        else:
-            self._programs[0] = build_compute(ctx.gl, "pt/path_tracer.comp", {**base, "PT_PIXEL_LIST": 0})
-        self._defines = base
+            self._defines.update(GBUFFER_UNITS, PIXEL_LIST_SSBO=PASS_SSBO_0)
+        self._listed = listed
+        self._prog = build_compute(ctx.gl, "pt/path_tracer.comp", self._defines)
 
     def defines(self) -> dict:
         return dict(getattr(self, "_defines", {}))
@@ -110,8 +105,8 @@ class PathTracer(RenderPass):
 
     def execute(self, ctx, data):
         bind_scene(ctx)
-        pixels = data.get(self.PIXELS) if self.mode == "gbuffer" else None
-        prog = self._programs[int(pixels is not None)]
+        pixels = data.get(self.PIXELS) if self._listed else None
+        prog = self._prog
         self._set_uniforms(prog)
         if self.mode == "gbuffer":
             for pin, unit in zip(GBUFFER_PINS, GBUFFER_UNITS.values()):
