@@ -129,34 +129,35 @@ def test_shadows_without_reflections_list_no_reflection_pixels(gpu):
     assert n_refl == 0
 
 
-def test_mirror_reflects_the_checker(gpu):
+@pytest.mark.parametrize("views", [1, 2])
+def test_mirror_reflects_the_checker(gpu, views):
+    """Each view's reflection rays start at that view's own eye (stereo registration of rays)."""
     tiles = 4
     scene = builtin.mirror_and_checker(tiles=tiles)
-    with render(scene, ["GBuffer.posW", "GBuffer.effect"], size=(48, 48)) as r:
-        color = r.read_output("Composite.color")[0, ..., 0].astype(np.float64)
-        p, hit = world_positions(r)
-        mats = material_ids(r)[0]
-        n_refl = read_pixel_list(r.compiled.get_output("Compaction.reflectionPixels"))[0] \
-            if "Compaction.reflectionPixels" in r.compiled.plan.outputs else None
-    p = p[0]
-    mirror = mats == 0
-    assert mirror.sum() > 100
-    eye = np.array([0.0, 0.0, 1.0])
-    d = p - eye
-    d[..., 2] *= -1                                   # reflect about the mirror plane z = 0
-    t = (2.0 - p[..., 2]) / d[..., 2]
-    q = p + d * t[..., None]                          # where the reflected ray meets the checker
-    step = 2.0 / tiles
-    fx, fy = (q[..., 0] + 1) / step, (q[..., 1] + 1) / step
-    inside = (fx > 0) & (fx < tiles) & (fy > 0) & (fy < tiles)
-    away_from_edges = (np.abs(fx - np.round(fx)) > 0.08) & (np.abs(fy - np.round(fy)) > 0.08)
-    white = (np.floor(fx) + np.floor(fy)) % 2 == 0
-    albedo = np.where(white, 0.9, 0.05)
-    # the checker is seen from the mirror image of the eye (z = -1)
-    want = lambert_point(q, np.array([0.0, 0.0, 1.5]), 2.0, albedo, normal=(0, 0, -1), eye=np.array([0.0, 0.0, -1.0]))
-    sel = mirror & inside & away_from_edges
-    assert sel.sum() > 100 and white[sel].any() and (~white[sel]).any()
-    np.testing.assert_allclose(color[sel], want[sel], rtol=1e-2)
+    with render(scene, ["GBuffer.posW", "GBuffer.effect"], size=(48, 48), views=views) as r:
+        colors = r.read_output("Composite.color")[..., 0].astype(np.float64)
+        positions, _ = world_positions(r)
+        all_mats = material_ids(r)
+        eyes = [v.pose.position for v in r.view_set.views]
+    for color, p, mats, eye in zip(colors, positions, all_mats, eyes):
+        mirror = mats == 0
+        assert mirror.sum() > 100
+        d = p - eye
+        d[..., 2] *= -1                                   # reflect about the mirror plane z = 0
+        t = (2.0 - p[..., 2]) / d[..., 2]
+        q = p + d * t[..., None]                          # where the reflected ray meets the checker
+        step = 2.0 / tiles
+        fx, fy = (q[..., 0] + 1) / step, (q[..., 1] + 1) / step
+        inside = (fx > 0) & (fx < tiles) & (fy > 0) & (fy < tiles)
+        away_from_edges = (np.abs(fx - np.round(fx)) > 0.08) & (np.abs(fy - np.round(fy)) > 0.08)
+        white = (np.floor(fx) + np.floor(fy)) % 2 == 0
+        albedo = np.where(white, 0.9, 0.05)
+        # the checker is seen from the mirror image of the eye
+        mirrored_eye = eye * np.array([1.0, 1.0, -1.0])
+        want = lambert_point(q, np.array([0.0, 0.0, 1.5]), 2.0, albedo, normal=(0, 0, -1), eye=mirrored_eye)
+        sel = mirror & inside & away_from_edges
+        assert sel.sum() > 100 and white[sel].any() and (~white[sel]).any()
+        np.testing.assert_allclose(color[sel], want[sel], rtol=1e-2)
 
 
 def test_grazing_views_and_roughness_zero_stay_finite(gpu):
