@@ -2,7 +2,7 @@
 
     python examples/openxr_headset.py [SCENE.gltf] [--frames N] [--validation] < /dev/null
 
-SteamVR (Linux desktop, GLX: set RAYVR_GL_BACKEND=x11) or Monado (headless EGL, the default
+SteamVR (Linux desktop, GLX: set RAYVR_GL_BACKEND=default with DISPLAY set) or Monado (headless EGL, the default
 context) must be the active OpenXR runtime (XR_RUNTIME_JSON or /etc/xdg/openxr/1/active_runtime.json).
 For Monado's headless null compositor: XR_RUNTIME_JSON=<build>/openxr_monado-dev.json
 XRT_COMPOSITOR_NULL=1 SIMULATED_ENABLE=1. Keep stdin on /dev/null: some Monado builds close fd 0

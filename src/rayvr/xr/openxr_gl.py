@@ -38,6 +38,7 @@ EGL_CONFIG_ID = 0x3028
 EGL_NONE = 0x3038
 GLX_FBCONFIG_ID = 0x8013
 GLX_SCREEN = 0x800C
+GLX_VISUAL_ID = 0x800B
 GLX_NONE = 0x8000
 _P, _I, _U = ctypes.c_void_p, ctypes.c_int, ctypes.c_uint
 
@@ -134,18 +135,29 @@ class GLPlatform:
         fb_id, screen = _I(0), _I(0)
         glx.glXQueryContext(display, context, GLX_FBCONFIG_ID, ctypes.byref(fb_id))
         glx.glXQueryContext(display, context, GLX_SCREEN, ctypes.byref(screen))
-        glx.glXChooseFBConfig.restype = ctypes.POINTER(_P)
-        glx.glXChooseFBConfig.argtypes = [_P, _I, ctypes.POINTER(_I), ctypes.POINTER(_I)]
-        attribs = (_I * 3)(GLX_FBCONFIG_ID, fb_id.value, 0)
-        n = _I(0)
-        configs = glx.glXChooseFBConfig(display, screen.value, attribs, ctypes.byref(n))
-        if not configs or n.value < 1:
-            raise XrError("OpenXRSink: glXChooseFBConfig found no GLXFBConfig for rayvr's context")
-        fbconfig = configs[0]
-        glx.glXGetVisualFromFBConfig.restype = ctypes.POINTER(ctypes.c_ulong * 2)  # XVisualInfo: visual*, visualid
-        glx.glXGetVisualFromFBConfig.argtypes = [_P, _P]
-        visual = glx.glXGetVisualFromFBConfig(display, fbconfig)
-        visualid = visual.contents[1] if visual else 0
+        # Find the context's GLXFBConfig by id among the screen's configs (Mesa's glXChooseFBConfig
+        # does not match on GLX_FBCONFIG_ID alone).
+        glx.glXGetFBConfigs.restype = ctypes.POINTER(_P)
+        glx.glXGetFBConfigs.argtypes = [_P, _I, ctypes.POINTER(_I)]
+        glx.glXGetFBConfigAttrib.argtypes = [_P, _P, _I, ctypes.POINTER(_I)]
+        n, value = _I(0), _I(0)
+        configs = glx.glXGetFBConfigs(display, screen.value, ctypes.byref(n))
+        fbconfig = None
+        for i in range(n.value if configs else 0):
+            glx.glXGetFBConfigAttrib(display, configs[i], GLX_FBCONFIG_ID, ctypes.byref(value))
+            if value.value == fb_id.value:
+                fbconfig = configs[i]
+                break
+        if fbconfig is None:
+            raise XrError(f"OpenXRSink: no GLXFBConfig with id {fb_id.value} for rayvr's GLX context")
+        visual = _I(0)
+        glx.glXGetFBConfigAttrib(display, fbconfig, GLX_VISUAL_ID, ctypes.byref(visual))
+        if not visual.value:
+            raise XrError("OpenXRSink: rayvr's GLX context has no X visual (a pbuffer-only GLXFBConfig, as "
+                          "glcontext's standalone context makes); XR_KHR_opengl_enable on Xlib needs a "
+                          "window-capable context. Use the EGL context (RAYVR_GL_BACKEND=egl) with a runtime "
+                          "that has XR_MNDX_egl_enable (Monado), or create rayvr's context from a window")
+        visualid = visual.value
         fields = dict(xr.GraphicsBindingOpenGLXlibKHR._fields_)
         return xr.GraphicsBindingOpenGLXlibKHR(
             x_display=ctypes.cast(_P(display), fields["x_display"]), visualid=visualid,

@@ -243,7 +243,7 @@ class OpenXRSink(Sink):
         missing = [e for e in wanted if e not in available]
         if missing:
             how = ("this runtime has no headless EGL binding; run Monado, or create rayvr's context through "
-                   "GLX (RAYVR_GL_BACKEND=x11) on a desktop") if self.platform.kind == "egl" else \
+                   "GLX (RAYVR_GL_BACKEND=default with an X display) on a desktop") if self.platform.kind == "egl" else \
                   "this runtime cannot present OpenGL; use one that supports XR_KHR_opengl_enable"
             raise XrError(f"OpenXR runtime lacks {', '.join(missing)}: {how}")
         if self.want_depth and xr.KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME in available:
