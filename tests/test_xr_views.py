@@ -211,3 +211,10 @@ def test_glsl_reads_the_packed_views_like_numpy(gl, tmp_path):
         o, d = v.primary_ray((20.5, 60.5), origin)
         assert np.allclose(res[i, 1, :3], o, atol=1e-5) and res[i, 1, 3] == 2
         assert np.allclose(res[i, 2, :3], d, atol=1e-5) and res[i, 2, 3] == 5
+
+
+def test_camera_grid_baseline_is_first_to_last():
+    vs = camera_grid(5, 1, None, Fov.symmetric(40, 1), (8, 8), baseline=0.4)
+    assert vs[4].pose.position[0] - vs[0].pose.position[0] == pytest.approx(0.4)
+    with pytest.raises(OptionError, match="spacing"):
+        camera_grid(2, 2, None, Fov.symmetric(40, 1), (8, 8))

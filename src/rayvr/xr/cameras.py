@@ -54,17 +54,23 @@ def stereo_views(head_pose: Pose, ipd: float, fov_left: Fov, fov_right: Fov, siz
 
 def camera_grid(n_cols: int, n_rows: int, spacing, fov: Fov, size, center_pose: Pose | None = None,
                 focal_distance: float | None = None, near: float = 0.05, far: float = 1000.0,
-                reversed_z: bool = False) -> ViewSet:
+                reversed_z: bool = False, baseline=None) -> ViewSet:
     """An n_cols x n_rows grid of parallel cameras (Tauray's --camera-grid), for light fields.
 
     View i = row * n_cols + col; col 0 is the leftmost (-x) and row 0 the lowest (-y) camera, so
     a quilt with view 0 at the bottom-left shows the grid as seen from the front. `spacing` is
-    metres between neighbours, one number or (x, y). With `focal_distance`, each frustum is
+    metres between neighbours, one number or (x, y); or give `baseline` (metres from the first to
+    the last camera, one number or (x, y)) and spacing=None. With `focal_distance`, each frustum is
     sheared (off-axis) so all views frame the same rectangle at that distance, as a Looking
     Glass expects: points on that plane land on the same pixel in every view.
     """
     if n_cols < 1 or n_rows < 1:
         raise OptionError(f"camera_grid: n_cols and n_rows must be >= 1, got {n_cols}x{n_rows}")
+    if baseline is not None:
+        bx, by = (float(baseline), float(baseline)) if np.isscalar(baseline) else map(float, baseline)
+        spacing = (bx / max(n_cols - 1, 1), by / max(n_rows - 1, 1))
+    if spacing is None:
+        raise OptionError("camera_grid: give spacing (metres between cameras) or baseline (first to last)")
     sx, sy = (float(spacing), float(spacing)) if np.isscalar(spacing) else map(float, spacing)
     if focal_distance is not None and focal_distance <= 0:
         raise OptionError(f"camera_grid: focal_distance must be > 0 metres, got {focal_distance}")

@@ -6,11 +6,12 @@ Sources, per figure:
   per eye, 72/90/120 Hz, and Meta Quest 3: 2064x2208 per eye, 72/90/120 Hz, meta.com tech specs;
   HTC Vive Pro 2: 2448x2448 per eye, 90/120 Hz, vive.com/us/product/vive-pro2/specs).
 - Fields of view: OpenVR/Oculus raw projection tangents recorded with hmdq and published in the
-  HMD Geometry Database (risa2000.github.io/hmdgdb) where we have them (Quest 2: exact values of
-  "Quest2_Native_R72"; Valve Index: rounded from its "Native" entry). Where no recording was at
-  hand the per-eye angles are *derived* from the manufacturer's total FOV (Quest 3: 110 deg H x
-  96 deg V; Vive Pro 2: "up to 120 deg" H) with the inner half-angle assumed 45 deg as on
-  Quest 2; these are marked `approximate=True`. On a real headset, OpenXRSink uses the fov the
+  HMD Geometry Database (risa2000.github.io/hmdgdb). Quest 2: the exact values of its
+  "Quest2_Native_R72" page. Valve Index: approximate tangents of the same kind (about 54/51 deg
+  outer/inner, 55-56 deg up/down), not checked against the page when written: `approximate=True`.
+  Where no recording was at hand the per-eye angles are *derived* from the manufacturer's total
+  FOV (Quest 3: 110 deg H x 96 deg V; Vive Pro 2: "up to 120 deg" H) with the inner half-angle
+  assumed 45 deg as on Quest 2; also `approximate=True`. On a real headset, OpenXRSink uses the fov the
   runtime reports per frame (xrLocateViews), never these tables.
 - IPD: the headset's default (the hmdgdb eye-to-head offset where recorded) or 63 mm, the mean
   adult IPD (Dodgson 2004, "Variation and extrema of human interpupillary distance").
@@ -46,7 +47,7 @@ class HeadsetPreset:
 PRESETS: dict[str, HeadsetPreset] = {p.name: p for p in [
     HeadsetPreset("index", "Valve Index", (1440, 1600),
                   Fov.from_tangents(-1.3953, 1.2388, -1.4700, 1.4570),
-                  ipd=0.0635, refresh_rates=(80.0, 90.0, 120.0, 144.0), default_refresh=90.0),
+                  ipd=0.0635, refresh_rates=(80.0, 90.0, 120.0, 144.0), default_refresh=90.0, approximate=True),
     HeadsetPreset("quest2", "Meta Quest 2", (1832, 1920),
                   Fov.from_tangents(-1.279942, 1.0, -1.191754, 1.110613),   # hmdgdb Quest2_Native_R72
                   ipd=0.0635, refresh_rates=(72.0, 90.0, 120.0), default_refresh=90.0),
