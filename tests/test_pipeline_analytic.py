@@ -173,3 +173,52 @@ def test_grazing_views_and_roughness_zero_stay_finite(gpu):
         out = r.read_output()
     assert np.isfinite(color).all()
     assert out.dtype == np.uint8 and out.shape == (1, 32, 32, 4)
+
+
+def area_light_over_plate():
+    """A 0.5 m square emitter at y = 1 facing down, a 0.4 m square plate at y = 0.5, a plane at y = 0."""
+    from rayvr.materials.material import Material
+    from rayvr.scene.model import Camera, Scene
+
+    s = Scene("area_light_over_plate")
+    s.add_material(builtin.lambert("Plane", (0.8, 0.8, 0.8)))
+    s.add_material(builtin.lambert("Plate", (0.5, 0.5, 0.5)))
+    s.add_material(Material("Emitter", base_color=(0, 0, 0, 1), metallic=0.0, emissive=(10.0, 10.0, 10.0)))
+    s.add_object("Plane", *builtin.quad_mesh([(-2, 0, -2), (2, 0, -2), (2, 0, 2), (-2, 0, 2)], (0, 1, 0)), "Plane")
+    s.add_object("Plate", *builtin.quad_mesh([(-.2, .5, -.2), (.2, .5, -.2), (.2, .5, .2), (-.2, .5, .2)], (0, 1, 0)), "Plate")
+    s.add_object("Emitter", *builtin.quad_mesh([(-.25, 1, -.25), (.25, 1, -.25), (.25, 1, .25), (-.25, 1, .25)],
+                                               (0, -1, 0)), "Emitter")
+    s.cameras.append(Camera.look_at((1.6, 1.2, 0.0), (0.2, 0.0, 0.0), yfov_deg=50.0))
+    return s
+
+
+def test_area_light_soft_shadow_matches_the_visible_light_fraction(gpu):
+    images = {}
+    for effect in (rv.Effect.RASTER, rv.Effect.SHADOWS):
+        scene = area_light_over_plate()
+        for m in scene.materials:
+            m.effect = effect
+        with render(scene, ["GBuffer.posW", "GBuffer.effect"], size=(32, 32), light_samples=128) as r:
+            images[effect] = r.read_output("Composite.color")[0, ..., 0].astype(np.float64)
+            p, _ = world_positions(r)
+            mats = material_ids(r)[0]
+    p = p[0]
+    plane = (mats == 0) & (images[rv.Effect.RASTER] > 1e-3)
+    ratio = images[rv.Effect.SHADOWS][plane] / images[rv.Effect.RASTER][plane]
+    # oracle: integrate the emitter on a grid, weight cos * cos / r^2, visible unless the segment
+    # to the emitter point crosses the plate (y = 0.5, |x|, |z| < 0.2)
+    g = (np.arange(48) + 0.5) / 48 * 0.5 - 0.25
+    lx, lz = [a.ravel() for a in np.meshgrid(g, g)]
+    q = p[plane]
+    dx, dz = lx[None] - q[:, 0:1], lz[None] - q[:, 2:3]
+    r2 = dx * dx + dz * dz + 1.0
+    w = 1.0 / (r2 * r2)                      # cos at the plane * cos at the emitter / r^2, height 1
+    cx, cz = q[:, 0:1] + 0.5 * dx, q[:, 2:3] + 0.5 * dz   # where the segment crosses y = 0.5
+    blocked = (np.abs(cx) < 0.2) & (np.abs(cz) < 0.2)
+    visible = (w * ~blocked).sum(1) / w.sum(1)
+    penumbra = (visible > 0.15) & (visible < 0.85)
+    assert penumbra.sum() >= 10 and (visible < 0.01).sum() >= 5 and (visible > 0.999).sum() >= 50
+    err = ratio - visible                    # Monte Carlo noise of 128 light samples, no bias
+    assert np.abs(err).max() < 0.2
+    assert np.abs(err[penumbra]).mean() < 0.06 and abs(err[penumbra].mean()) < 0.02
+    assert (ratio[visible == 0.0] == 0.0).all()   # umbra: every sample blocked
