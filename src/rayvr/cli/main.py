@@ -9,7 +9,7 @@ import sys
 from ..errors import RayvrError
 
 # Subcommand modules, in the order `rayvr --help` lists them.
-COMMAND_MODULES = ["info", "render", "graph", "bench"]
+COMMAND_MODULES = ["info", "render", "graph", "tune", "bench"]
 
 
 def build_parser() -> argparse.ArgumentParser:
