@@ -121,7 +121,10 @@ class LayeredTarget:
         if status != GL_FRAMEBUFFER_COMPLETE:
             raise GpuError(f"G-buffer framebuffer incomplete (status 0x{status:x}, "
                            f"{'multiview' if multiview else 'layered'}); try multiview='off'")
-        self.framebuffer = gl.detect_framebuffer(self.fbo)
+        try:
+            self.framebuffer = gl.detect_framebuffer(self.fbo)
+        except Exception as exc:  # moderngl.Error with the driver's words
+            raise GpuError(f"G-buffer framebuffer: moderngl cannot wrap it ({exc})") from exc
         self.framebuffer.viewport = (0, 0, size[0], size[1])
         self._clear_values = []
 

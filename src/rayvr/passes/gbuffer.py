@@ -5,7 +5,7 @@ rendering, each instance drawn once per view with gl_Layer set in the vertex sha
 """
 from __future__ import annotations
 
-from ..errors import GpuError, OptionError
+from ..errors import GpuError, OptionError, ShaderError
 from ..rendergraph.render_pass import Reflection, RenderPass
 from ..gpu.shaders import raster_program
 from ._common import SHADER_DIR, bind_scene, effect_defines, register, scene_defines
@@ -75,11 +75,28 @@ class GBufferRaster(RenderPass):
             raise GpuError(f"pass {self.name}: the driver has neither GL_OVR_multiview2 nor "
                            f"GL_ARB_shader_viewport_layer_array; one draw cannot reach every view")
         self._views = cd.views
-        self._defines = {**scene_defines(ctx), **effect_defines(), "VIEW_COUNT": cd.views,
-                         "RAYVR_MULTIVIEW": int(self._multiview)}
-        self._prog = raster_program(ctx.gl, SHADER_DIR / "gbuffer.vert", SHADER_DIR / "gbuffer.frag", self._defines)
+        self.multiview_fallback = None
         self._target = None
         self._target_key = None
+        try:
+            self._build_program(ctx)
+        except ShaderError as exc:
+            if not (self._multiview and self.multiview == "auto"):
+                raise
+            self._fall_back_to_layered(ctx, f"multiview shader failed: {exc}")
+
+    def _build_program(self, ctx) -> None:
+        self._defines = {**scene_defines(ctx), **effect_defines(), "VIEW_COUNT": self._views,
+                         "RAYVR_MULTIVIEW": int(self._multiview)}
+        self._prog = raster_program(ctx.gl, SHADER_DIR / "gbuffer.vert", SHADER_DIR / "gbuffer.frag", self._defines)
+
+    def _fall_back_to_layered(self, ctx, reason: str) -> None:
+        """multiview='auto' on a driver whose multiview path fails: render layered instead."""
+        if not ctx.caps.vertex_layer:
+            raise GpuError(f"pass {self.name}: {reason}; and no GL_ARB_shader_viewport_layer_array to fall back on")
+        self._multiview = False
+        self.multiview_fallback = reason
+        self._build_program(ctx)
 
     def defines(self) -> dict:
         return dict(getattr(self, "_defines", {}))
@@ -90,7 +107,13 @@ class GBufferRaster(RenderPass):
         if key != self._target_key:   # first frame, or the graph re-allocated its textures
             if self._target is not None:
                 self._target.release()
-            self._target = LayeredTarget(ctx.gl, colors, data.size, data.views, self._multiview)
+            try:
+                self._target = LayeredTarget(ctx.gl, colors, data.size, data.views, self._multiview)
+            except GpuError as exc:
+                if not (self._multiview and self.multiview == "auto"):
+                    raise
+                self._fall_back_to_layered(ctx, f"multiview framebuffer failed: {exc}")
+                self._target = LayeredTarget(ctx.gl, colors, data.size, data.views, False)
             self._target.set_clear_values([clear for _, clear in OUTPUTS.values()])
             self._target_key = key
         return self._target
