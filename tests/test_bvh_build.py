@@ -107,3 +107,22 @@ def test_single_triangle_mesh_traces(gl, tmp_path):
     np.testing.assert_allclose(t, [1, -1, 1])
     np.testing.assert_array_equal(occ, [True, False, True])
     np.testing.assert_allclose(bary[0], [0.2, 0.2], rtol=1e-6)
+
+
+def test_threaded_lbvh_makes_the_same_tree(gl, tmp_path, monkeypatch):
+    import test_ray_query as rq
+    from rayvr.scene import bvh
+
+    m = trimesh.creation.icosphere(subdivisions=4)
+    lo, hi = triangle_bounds(m.triangles.astype(np.float32))
+    serial = build(lo, hi, "lbvh", threads=1)
+    monkeypatch.setattr(bvh, "PARALLEL_MIN", 100)
+    threaded = build(lo, hi, "lbvh", threads=3)
+    np.testing.assert_array_equal(threaded.order, serial.order)
+    assert threaded.node_count == serial.node_count
+    assert threaded.sah_cost() == pytest.approx(serial.sah_cost(), rel=1e-6)
+    check_structure(threaded, lo, hi)
+    before = threaded.nodes.copy()
+    threaded.refit(lo, hi)
+    np.testing.assert_array_equal(threaded.nodes, before)
+    rq.compare(gl, rq.scene_of(m.vertices, m.faces, [np.eye(4)]), tmp_path, n=2000, method="lbvh")

@@ -9,11 +9,18 @@ node holds both children's boxes, 64 bytes:
 
 (link and count are uint bits). count 0: link is a node index; count > 0: a leaf of `count`
 primitives starting at `link` in the reordered primitive list (`Bvh.order`). Only internal
-nodes exist on the GPU; leaves live in their parent's child slots.
+nodes exist on the GPU; leaves live in their parent's child slots. An empty child slot (only
+in a root whose whole mesh is one leaf) is a box at 1e30, which no ray with tmax <= 1e29 enters.
+
+Large LBVH builds run on a thread pool (numpy releases the GIL in its array loops): Morton
+codes and gathers in slices, then the tree is split serially into ~4 chunks per thread, the
+chunks are built in parallel and their GPU nodes stitched under the top nodes. Refit and SAH
+cost work from the GPU nodes alone.
 """
 from __future__ import annotations
 
 import dataclasses
+import os
 
 import numpy as np
 
@@ -27,16 +34,12 @@ _EMPTY_LO = _EMPTY_HI = 1e30    # a point no ray with tmax <= 1e29 reaches (an i
 
 @dataclasses.dataclass
 class Bvh:
-    """A built BVH: GPU nodes, primitive order, and the tree kept for refits and SAH cost."""
+    """A built BVH: GPU nodes (see the module docstring) and the primitive order of leaf slots."""
 
     nodes: np.ndarray        # (M, 16) float32, link/count columns hold uint32 bits
     order: np.ndarray        # (N,) int64: primitive index of each leaf slot
-    start: np.ndarray        # per tree node (internal and leaf): first slot
-    end: np.ndarray
-    left: np.ndarray         # child tree node, -1 for leaves
-    right: np.ndarray
-    level_ranges: list       # (first, last+1) tree node ids per level, root level first
     method: str
+    _levels: list | None = dataclasses.field(default=None, repr=False)
 
     @property
     def node_count(self) -> int:
@@ -46,18 +49,59 @@ class Bvh:
     def nbytes(self) -> int:
         return self.nodes.nbytes
 
-    def sah_cost(self, lo: np.ndarray, hi: np.ndarray, c_trav: float = 1.0, c_tri: float = 1.0) -> float:
-        """Surface-area-heuristic cost for primitive boxes (lo, hi): traversal steps + tests,
-        relative to the root's area."""
-        nlo, nhi = _tree_bounds(self, lo[self.order], hi[self.order])
-        area = _half_area(nlo, nhi)
-        leaf = self.left < 0
-        root = max(area[0], 1e-30)
-        return float((c_trav * area[~leaf].sum() + c_tri * (area[leaf] * (self.end - self.start)[leaf]).sum()) / root)
+    def _children(self):
+        v = self.nodes.reshape(-1, 2, 2, 4)            # node, child, (min|max row), xyzw
+        bits = v.view(np.uint32)
+        return v, bits[:, :, 0, 3], bits[:, :, 1, 3]     # boxes, link, count
+
+    def levels(self) -> list[np.ndarray]:
+        """GPU node indices by depth, root first (children always lie deeper than parents)."""
+        if self._levels is None:
+            _, link, count = self._children()
+            levels, frontier = [], np.array([0], np.int64)
+            while len(frontier):
+                levels.append(frontier)
+                c_link, c_count = link[frontier], count[frontier]
+                internal = (c_count == 0) & (self.nodes.reshape(-1, 2, 8)[frontier, :, 0] < 1e29)
+                frontier = c_link[internal].astype(np.int64)
+            self._levels = levels
+        return self._levels
+
+    def sah_cost(self, lo=None, hi=None, c_trav: float = 1.0, c_tri: float = 1.0) -> float:
+        """Surface-area-heuristic cost: expected traversal steps (c_trav per internal node) and
+        triangle tests (c_tri each) per ray, relative to the root's area. lo/hi: unused
+        (the node boxes are exact), kept for symmetry with build()."""
+        v, link, count = self._children()
+        valid = v[:, :, 0, 0] < 1e29
+        area = _half_area(v[:, :, 0, :3], v[:, :, 1, :3])
+        root_lo = np.where(valid[0, :, None], v[0, :, 0, :3], np.inf).min(axis=0)
+        root_hi = np.where(valid[0, :, None], v[0, :, 1, :3], -np.inf).max(axis=0)
+        root = max(float(_half_area(root_lo, root_hi)), 1e-30)
+        inner = valid & (count == 0)
+        return float((c_trav * (root + area[inner].sum()) + c_tri * (area * count)[valid & (count > 0)].sum()) / root)
 
     def refit(self, lo: np.ndarray, hi: np.ndarray) -> None:
         """New primitive boxes (same topology, e.g. animated vertices): recompute node boxes."""
-        self.nodes = _gpu_nodes(self, lo, hi)
+        boxes = np.take(np.concatenate([np.asarray(lo, np.float32), -np.asarray(hi, np.float32)], axis=1),
+                        self.order, axis=0)
+        v, link, count = self._children()
+        v = v.copy()
+        leaf = count > 0
+        node_i, child_i = np.nonzero(leaf)
+        starts = link[leaf].astype(np.int64)
+        owner = np.full(len(boxes), -1, np.int64)
+        owner[starts] = np.arange(len(starts))
+        by_start = owner[owner >= 0]
+        red = np.minimum.reduceat(boxes, starts[by_start], axis=0)
+        v[node_i[by_start], child_i[by_start], 0, :3] = red[:, :3]
+        v[node_i[by_start], child_i[by_start], 1, :3] = -red[:, 3:]
+        for level in reversed(self.levels()):
+            for c in (0, 1):
+                kids = level[(count[level, c] == 0) & (v[level, c, 0, 0] < 1e29)]
+                k = link[kids, c].astype(np.int64)
+                v[kids, c, 0, :3] = np.minimum(v[k, 0, 0, :3], v[k, 1, 0, :3])
+                v[kids, c, 1, :3] = np.maximum(v[k, 0, 1, :3], v[k, 1, 1, :3])
+        self.nodes = v.reshape(-1, NODE_FLOATS)
 
 
 def triangle_bounds(tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -66,9 +110,14 @@ def triangle_bounds(tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
 
 
-def build(lo, hi, method: str = "auto", leaf_size: int = 4, progress: bool | None = None) -> Bvh:
+PARALLEL_MIN = 200_000   # below this the threaded LBVH is not worth its stitching
+
+
+def build(lo, hi, method: str = "auto", leaf_size: int = 4, progress: bool | None = None,
+          threads: int | None = None) -> Bvh:
     """Build a BVH over primitive boxes lo, hi (N, 3). method: 'lbvh', 'sah' or 'auto'
-    (SAH up to 100k primitives, LBVH beyond, where build time matters more)."""
+    (SAH up to 100k primitives, LBVH beyond, where build time matters more). Large LBVH builds
+    run their subtrees on `threads` threads (default: all cores; numpy releases the GIL)."""
     lo = np.ascontiguousarray(lo, dtype=np.float32)
     hi = np.ascontiguousarray(hi, dtype=np.float32)
     n = len(lo)
@@ -82,40 +131,195 @@ def build(lo, hi, method: str = "auto", leaf_size: int = 4, progress: bool | Non
     if progress or (progress is None and n >= 500_000):
         from tqdm import tqdm
         bar = tqdm(total=n, unit="prim", desc=f"BVH ({method})", leave=False)
-    centroid = (lo + hi) * 0.5
-    if method == "lbvh":
-        codes = _morton_codes(centroid)
-        order = np.argsort(codes).astype(np.int64)
-        splitter = _LbvhSplitter(codes[order])
-    else:
-        order = np.arange(n, dtype=np.int64)
-        splitter = _SahSplitter(order, centroid, lo, hi)
-    starts, ends, lefts, rights, ranges = [], [], [], [], []
-    s, e = np.array([0], np.int64), np.array([n], np.int64)
-    base = 0
-    while len(s):
-        split = (e - s) > leaf_size
-        m = splitter.split(s[split], e[split])
-        nxt = base + len(s)
-        left = np.full(len(s), -1, np.int64)
-        right = np.full(len(s), -1, np.int64)
-        k = np.arange(int(split.sum()), dtype=np.int64)
-        left[split], right[split] = nxt + 2 * k, nxt + 2 * k + 1
-        starts.append(s), ends.append(e), lefts.append(left), rights.append(right)
-        ranges.append((base, nxt))
+    try:
+        centroid = (lo + hi) * 0.5
+        if method == "sah":
+            tree = _Tree.build(_SahSplitter(np.arange(n, dtype=np.int64), centroid, lo, hi), n, leaf_size, bar)
+            order = tree.splitter.perm
+            return Bvh(tree.gpu_nodes(np.take(np.concatenate([lo, -hi], axis=1), order, axis=0)), order, method)
+        threads = threads or os.cpu_count() or 1
+        if threads > 1 and n >= PARALLEL_MIN:
+            from concurrent.futures import ThreadPoolExecutor
+
+            with ThreadPoolExecutor(max_workers=threads) as pool:
+                order, codes, boxes = _sorted_inputs(lo, hi, centroid, pool, threads)
+                nodes = _parallel_lbvh(codes, boxes, leaf_size, threads, bar, pool)
+        else:
+            order, codes, boxes = _sorted_inputs(lo, hi, centroid)
+            nodes = _Tree.build(_LbvhSplitter(codes), n, leaf_size, bar).gpu_nodes(boxes)
+        return Bvh(nodes, order, method)
+    finally:
         if bar is not None:
-            bar.update(int((e - s)[~split].sum()))
-        base = nxt
-        s = np.stack([s[split], m], axis=1).reshape(-1)
-        e = np.stack([m, e[split]], axis=1).reshape(-1)
+            bar.close()
+
+
+class _Tree:
+    """The level-by-level tree of one build: node ranges [start, end) of leaf slots, children
+    (consecutive pairs filling the next level), and per-level id ranges."""
+
+    def __init__(self, splitter, start, end, left, ranges):
+        self.splitter, self.start, self.end, self.left, self.ranges = splitter, start, end, left, ranges
+
+    @classmethod
+    def build(cls, splitter, n: int, leaf_size: int, bar=None, first: int = 0) -> "_Tree":
+        starts, ends, lefts, ranges = [], [], [], []
+        s, e = np.array([first], np.int64), np.array([first + n], np.int64)
+        base = 0
+        while len(s):
+            split = (e - s) > leaf_size
+            m = splitter.split(s[split], e[split])
+            nxt = base + len(s)
+            left = np.full(len(s), -1, np.int64)
+            left[split] = nxt + 2 * np.arange(len(m), dtype=np.int64)
+            starts.append(s), ends.append(e), lefts.append(left)
+            ranges.append((base, nxt))
+            if bar is not None:
+                bar.update(int((e - s)[~split].sum()))
+            base = nxt
+            s = np.stack([s[split], m], axis=1).reshape(-1)
+            e = np.stack([m, e[split]], axis=1).reshape(-1)
+        return cls(splitter, np.concatenate(starts), np.concatenate(ends), np.concatenate(lefts), ranges)
+
+    def boxes(self, boxes_sorted: np.ndarray, first: int = 0) -> np.ndarray:
+        """(lo, -hi) boxes of every tree node: leaves by segment reduction, then bottom-up."""
+        nb = np.empty((len(self.start), 6), np.float32)
+        leaf = np.flatnonzero(self.left < 0)
+        if len(boxes_sorted):
+            owner = np.full(len(boxes_sorted), -1, np.int64)   # leaves partition the slots
+            owner[self.start[leaf] - first] = leaf
+            by_start = owner[owner >= 0]
+            nb[by_start] = np.minimum.reduceat(boxes_sorted, self.start[by_start] - first, axis=0)
+        else:
+            nb[:, :3], nb[:, 3:] = _EMPTY_LO, -_EMPTY_HI
+        for (lo_id, hi_id), (nlo, nhi) in reversed(list(zip(self.ranges, self.ranges[1:]))):
+            ids = lo_id + np.flatnonzero(self.left[lo_id:hi_id] >= 0)
+            pairs = nb[nlo:nhi].reshape(-1, 2, 6)
+            nb[ids] = np.minimum(pairs[:, 0], pairs[:, 1])
+        return nb
+
+    def gpu_nodes(self, boxes_sorted: np.ndarray) -> np.ndarray:
+        """GPU nodes of a whole tree from its slot-ordered (lo, -hi) primitive boxes."""
+        return self.gpu_nodes_from(self.boxes(boxes_sorted), 0)
+
+    def gpu_nodes_from(self, nb: np.ndarray, node_base: int) -> np.ndarray:
+        """GPU nodes from node boxes `nb`; node links are offset by node_base, leaf links are
+        the slots in `start`."""
+        internal = np.flatnonzero(self.left >= 0)
+        if not len(internal):   # everything in one leaf: a root with one leaf child
+            out = np.zeros((1, 2, 2, 4), np.float32)
+            bits = out.view(np.uint32)
+            out[0, 0, 0, :3], out[0, 0, 1, :3] = nb[0, :3], -nb[0, 3:]
+            bits[0, 0, 0, 3], bits[0, 0, 1, 3] = self.start[0], self.end[0] - self.start[0]
+            out[0, 1, :, :3] = _EMPTY_LO
+            if self.end[0] == self.start[0]:
+                out[0, 0, :, :3] = _EMPTY_LO
+            return out.reshape(-1, NODE_FLOATS)
+        gpu_index = np.cumsum(self.left >= 0) - 1 + node_base
+        child = (self.left[internal][:, None] + np.array([0, 1])).reshape(-1)   # right = left + 1
+        box = nb[child]
+        is_leaf = self.left[child] < 0
+        out = np.empty((len(child), 2, 4), np.float32)      # per child: (min, link), (max, count)
+        bits = out.view(np.uint32)
+        out[:, 0, :3] = box[:, :3]
+        out[:, 1, :3] = -box[:, 3:]
+        start = self.start[child]
+        bits[:, 0, 3] = np.where(is_leaf, start, gpu_index[child])
+        bits[:, 1, 3] = np.where(is_leaf, self.end[child] - start, 0)
+        return out.reshape(-1, NODE_FLOATS)
+
+
+def _sorted_inputs(lo, hi, centroid, pool=None, threads: int = 1):
+    """Morton order of the centroids, the sorted codes and the (lo, -hi) boxes in that order;
+    the element-wise parts run in slices on `pool` when given."""
+    n = len(lo)
+    cmin, cmax = centroid.min(axis=0), centroid.max(axis=0)
+    cuts = np.linspace(0, n, threads + 1).astype(np.int64)
+    spans = list(zip(cuts[:-1], cuts[1:]))
+    codes = np.empty(n, np.uint64)
+    boxes_in = np.empty((n, 6), np.float32)
+
+    def encode(span):
+        a, b = span
+        codes[a:b] = _morton_codes(centroid[a:b], cmin, cmax)
+        boxes_in[a:b, :3], boxes_in[a:b, 3:] = lo[a:b], -hi[a:b]
+
+    list(pool.map(encode, spans)) if pool else encode((0, n))
+    order = np.argsort(codes).astype(np.int64)
+    sorted_codes = np.empty_like(codes)
+    boxes = np.empty_like(boxes_in)
+
+    def gather(span):
+        a, b = span
+        sorted_codes[a:b] = codes[order[a:b]]
+        boxes[a:b] = np.take(boxes_in, order[a:b], axis=0)
+
+    list(pool.map(gather, spans)) if pool else gather((0, n))
+    return order, sorted_codes, boxes
+
+
+def _parallel_lbvh(codes: np.ndarray, boxes: np.ndarray, leaf_size: int, threads: int, bar, pool) -> np.ndarray:
+    """LBVH with its top split serially into ~4 chunks per thread, the chunks built on a thread
+    pool, and the GPU nodes stitched: top nodes first, then each chunk's nodes."""
+    n = len(codes)
+    splitter = _LbvhSplitter(codes)
+    chunk = max(n // (4 * threads), 4 * leaf_size)
+    top = []                       # [start, end, child0, child1]; a child >= 0 is a top node, < 0 ~chunk
+    chunks = []
+    stack = [(0, n, None, 0)]
+    while stack:
+        s, e, parent, side = stack.pop()
+        if e - s > chunk:
+            idx = len(top)
+            top.append([s, e, 0, 0])
+            m = int(splitter.split(np.array([s]), np.array([e]))[0])
+            stack += [(m, e, idx, 1), (s, m, idx, 0)]
+        else:
+            idx = ~len(chunks)
+            chunks.append((s, e))
+        if parent is not None:
+            top[parent][2 + side] = idx
+    if not top:
+        return _Tree.build(splitter, n, leaf_size, bar).gpu_nodes(boxes)
+
+    def job(se):
+        s, e = se
+        tree = _Tree.build(splitter, e - s, leaf_size, None, first=s)
+        return tree, tree.boxes(boxes[s:e], first=s)
+
+    results = list(pool.map(job, chunks))
     if bar is not None:
-        bar.close()
-    if method == "sah":
-        order = splitter.perm
-    bvh = Bvh(np.zeros((0, NODE_FLOATS), np.float32), order, np.concatenate(starts), np.concatenate(ends),
-              np.concatenate(lefts), np.concatenate(rights), ranges, method)
-    bvh.nodes = _gpu_nodes(bvh, lo, hi)
-    return bvh
+        bar.update(n)
+    base = len(top)
+    parts, roots = [], []          # each chunk: GPU nodes (or a leaf) and its box
+    for (s, e), (tree, nb) in zip(chunks, results):
+        roots.append((base, nb[0]))
+        nodes = tree.gpu_nodes_from(nb, base) if len(tree.start) > 1 else None
+        if nodes is None:          # a chunk that is a single leaf stays a leaf child
+            roots[-1] = (None, nb[0])
+        else:
+            parts.append(nodes)
+            base += len(nodes)
+    top_nodes = np.zeros((len(top), 2, 2, 4), np.float32)
+    bits = top_nodes.view(np.uint32)
+    top_box = np.zeros((len(top), 6), np.float32)
+    for t in reversed(range(len(top))):   # children have larger indices: bottom-up
+        for side in (0, 1):
+            c = top[t][2 + side]
+            if c >= 0:
+                box, link, count = top_box[c], c, 0
+            else:
+                node, box = roots[~c]
+                s, e = chunks[~c]
+                link, count = (node, 0) if node is not None else (s, e - s)
+            top_nodes[t, side, 0, :3], top_nodes[t, side, 1, :3] = box[:3], -box[3:]
+            bits[t, side, 0, 3], bits[t, side, 1, 3] = link, count
+        top_box[t] = np.minimum(_child_box(top, top_box, roots, t, 0), _child_box(top, top_box, roots, t, 1))
+    return np.concatenate([top_nodes.reshape(-1, NODE_FLOATS), *parts])
+
+
+def _child_box(top, top_box, roots, t, side):
+    c = top[t][2 + side]
+    return top_box[c] if c >= 0 else roots[~c][1]
 
 
 # ---- splitters: give each node range [s, e) a split point s < m < e -----------------------------
@@ -129,8 +333,10 @@ def _expand_bits(v: np.ndarray) -> np.ndarray:
     return v
 
 
-def _morton_codes(centroid: np.ndarray) -> np.ndarray:
-    lo, hi = centroid.min(axis=0), centroid.max(axis=0)
+def _morton_codes(centroid: np.ndarray, lo=None, hi=None) -> np.ndarray:
+    """63-bit Morton codes of the centroids quantised in the box [lo, hi] (default: their own)."""
+    lo = centroid.min(axis=0) if lo is None else lo
+    hi = centroid.max(axis=0) if hi is None else hi
     q = ((centroid - lo) * ((2**21 - 1) / np.maximum(hi - lo, 1e-30))).astype(np.uint32)
     return (_expand_bits(q[:, 0]) << np.uint64(2)) | (_expand_bits(q[:, 1]) << np.uint64(1)) | _expand_bits(q[:, 2])
 
@@ -220,62 +426,3 @@ class _SahSplitter:
         newpos = s[seg] + np.where(goes_left, l_rank, n_left[seg] + r_rank)
         self.perm[newpos] = prim
         return s + n_left
-
-
-# ---- bounds and the GPU layout ----------------------------------------------------------------
-
-def _tree_bounds(bvh: Bvh, lo_sorted: np.ndarray, hi_sorted: np.ndarray):
-    """Boxes of every tree node: leaves by segment reduction, then internal nodes bottom-up.
-    Boxes are kept as (lo, -hi) rows so one minimum does both ends."""
-    nb = _tree_boxes(bvh, np.concatenate([lo_sorted, -hi_sorted], axis=1))
-    return nb[:, :3], -nb[:, 3:]
-
-
-def _tree_boxes(bvh: Bvh, boxes_sorted: np.ndarray) -> np.ndarray:
-    count = len(bvh.start)
-    nb = np.empty((count, 6), np.float32)
-    leaf = np.flatnonzero(bvh.left < 0)
-    if len(boxes_sorted):
-        # leaves partition the slots: order them by first slot without a sort
-        owner = np.full(len(boxes_sorted), -1, np.int64)
-        owner[bvh.start[leaf]] = leaf
-        by_start = owner[owner >= 0]
-        nb[by_start] = np.minimum.reduceat(boxes_sorted, bvh.start[by_start], axis=0)
-    else:
-        nb[:, :3], nb[:, 3:] = _EMPTY_LO, -_EMPTY_HI
-    # a level's internal nodes have their children as consecutive pairs filling the next level
-    for (first, last), (nfirst, nlast) in reversed(list(zip(bvh.level_ranges, bvh.level_ranges[1:]))):
-        ids = first + np.flatnonzero(bvh.left[first:last] >= 0)
-        pairs = nb[nfirst:nlast].reshape(-1, 2, 6)
-        nb[ids] = np.minimum(pairs[:, 0], pairs[:, 1])
-    return nb
-
-
-def _gpu_nodes(bvh: Bvh, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """GPU nodes from the primitive boxes (in original order)."""
-    nb = _tree_boxes(bvh, np.take(np.concatenate([lo, -hi], axis=1), bvh.order, axis=0))
-    nlo, nhi = nb[:, :3], -nb[:, 3:]
-    internal = np.flatnonzero(bvh.left >= 0)
-    if not len(internal):   # the whole mesh fits one leaf: a root with one leaf child
-        out = np.zeros((1, NODE_FLOATS), np.float32)
-        bits = out.view(np.uint32)
-        out[0, 0:3], out[0, 4:7] = nlo[0], nhi[0]
-        bits[0, 7] = bvh.end[0] - bvh.start[0]
-        out[0, 8:11], out[0, 12:15] = _EMPTY_LO, _EMPTY_HI
-        if bits[0, 7] == 0:
-            out[0, 0:3], out[0, 4:7] = _EMPTY_LO, _EMPTY_HI
-        return out
-    gpu_index = np.cumsum(bvh.left >= 0) - 1
-    child = bvh.left[internal][:, None] + np.array([0, 1])     # right child = left + 1
-    child = child.reshape(-1)
-    box = nb[child]
-    is_leaf = bvh.left[child] < 0
-    out = np.empty((len(internal) * 2, 2, 4), np.float32)      # per child: (min, link), (max, count)
-    bits = out.view(np.uint32)
-    out[:, 0, :3] = box[:, :3]
-    out[:, 1, :3] = -box[:, 3:]
-    start = bvh.start[child]
-    bits[:, 0, 3] = np.where(is_leaf, start, gpu_index[child])
-    bits[:, 1, 3] = np.where(is_leaf, bvh.end[child] - start, 0)
-    out = out.reshape(-1, NODE_FLOATS)
-    return out
