@@ -3,8 +3,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import moderngl
-
 from ..gpu.shaders import compute_program
 
 SHADER_DIR = Path(__file__).resolve().parent / "shaders"
@@ -27,27 +25,14 @@ def scene_defines(ctx) -> dict:
     return {}
 
 
-def build_compute(gl, name: str, defines: dict | None = None) -> moderngl.ComputeShader:
+def build_compute(gl, name: str, defines: dict | None = None):
+    """A compute program from passes/shaders/NAME (cached per source and defines)."""
     return compute_program(gl, SHADER_DIR / name, defines)
 
 
 def groups_2d(size: tuple[int, int], views: int) -> tuple[int, int, int]:
     gx, gy, _ = COMPUTE_GROUP
     return (size[0] + gx - 1) // gx, (size[1] + gy - 1) // gy, views
-
-
-def use_textures(data, pins_units) -> None:
-    """Bind the textures of `pins_units` [(pin, unit)] as samplers; missing optional pins are skipped."""
-    for pin, unit in pins_units:
-        tex = data.get(pin)
-        if tex is not None:
-            tex.use(location=unit)
-
-
-def nearest(tex) -> None:
-    """Integer textures are incomplete with linear filtering: sample them nearest."""
-    if tex is not None and tex.filter != (moderngl.NEAREST, moderngl.NEAREST):
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
 
 
 def bind_scene(ctx) -> None:

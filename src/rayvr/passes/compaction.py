@@ -3,11 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..gpu.bindings import BINDINGS
 from ..materials.effect import Effect
 from ..rendergraph.render_pass import Reflection, RenderPass
 from ._common import build_compute, effect_defines, effects_used, groups_2d, register
 
 HEADER_BYTES = 16  # count + indirect dispatch args (glsl/pixel_list.glsl)
+PASS_SSBOS = tuple(BINDINGS[f"RAYVR_PASS_SSBO_{i}"] for i in range(3))
 DISPATCH_OFFSET = 4
 
 
@@ -66,9 +68,8 @@ class EffectCompaction(RenderPass):
         self._prog = build_compute(ctx.gl, "compact.comp", {**effect_defines(), **self._defines})
 
     def execute(self, ctx, data):
-        data[self.SHADOW_PIXELS].bind_to_storage_buffer(16)
-        data[self.REFLECTION_PIXELS].bind_to_storage_buffer(17)
-        data[self.PATH_PIXELS].bind_to_storage_buffer(18)
+        for pin, binding in zip((self.SHADOW_PIXELS, self.REFLECTION_PIXELS, self.PATH_PIXELS), PASS_SSBOS):
+            data[pin].bind_to_storage_buffer(binding)
         self._reset.run(1)
         ctx.gl.memory_barrier()
         data[self.EFFECT].use(location=0)

@@ -4,6 +4,7 @@ from __future__ import annotations
 import struct
 
 from ..errors import OptionError
+from ..gpu.bindings import BINDINGS
 from ..rendergraph.render_pass import Reflection, RenderPass
 from ._common import build_compute, groups_2d, register
 
@@ -64,8 +65,8 @@ class ToneMapper(RenderPass):
         src, dst = data[self.SRC], data[self.DST]
         src.use(location=0)
         if self.auto_exposure:
-            self._exposure.bind_to_storage_buffer(16)
-            self._partials.bind_to_storage_buffer(17)
+            self._exposure.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"])
+            self._partials.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_1"])
             self._lum.run(*self._lum_groups)
             ctx.gl.memory_barrier()
             self._reduce.run(1)
