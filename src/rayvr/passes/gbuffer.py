@@ -76,14 +76,21 @@ class GBufferRaster(RenderPass):
                            f"GL_ARB_shader_viewport_layer_array; one draw cannot reach every view")
         self._views = cd.views
         self.multiview_fallback = None
-        self._target = None
-        self._target_key = None
+        self.release()
         try:
             self._build_program(ctx)
         except ShaderError as exc:
             if not (self._multiview and self.multiview == "auto"):
                 raise
             self._fall_back_to_layered(ctx, f"multiview shader failed: {exc}")
+
+    def release(self) -> None:
+        """Free the framebuffer and depth array this pass made (it remakes them when needed)."""
+        target = self.__dict__.get("_target")
+        if target is not None:
+            target.release()
+        self._target = None
+        self._target_key = None
 
     def _build_program(self, ctx) -> None:
         self._defines = {**scene_defines(ctx), **effect_defines(), "VIEW_COUNT": self._views,
@@ -130,12 +137,3 @@ class GBufferRaster(RenderPass):
         bind_scene(ctx)
         ctx.scene.draw(self._prog, 1 if self._multiview else data.views)
         gl.disable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
-
-    def __del__(self):
-        target = self.__dict__.get("_target")
-        if target is not None:
-            try:
-                target.release()
-            except Exception:
-                pass
-
