@@ -240,8 +240,18 @@ class Renderer:
             self.sink.close()
             self._opened = False
         if self.compiled is not None:
+            for render_pass in self.compiled.passes.values():
+                release = getattr(render_pass, "release", None)
+                if callable(release):      # pass-owned GPU objects (the G-buffer's framebuffer)
+                    release()
             self.compiled.release()
             self.compiled = None
+        if self.gpu_scene is not None:
+            self.gpu_scene.release()
+            self.gpu_scene = None
+        if self.views_buffer is not None:
+            self.views_buffer.release()
+            self.views_buffer = None
 
     def __enter__(self):
         self._open()
