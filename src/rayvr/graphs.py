@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from .rendergraph.graph import RenderGraph
 
-GBUFFER_TO_LIGHTING = ("posW", "normW", "faceNormalW", "baseColor", "metalRough", "effect", "emissive")
 OUTPUT = "ToneMap.dst"        # display-referred rgba8, sRGB encoded
 HDR_OUTPUT = "Composite.color"  # linear radiance (rgba16f), for EXR
 
@@ -26,6 +25,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     and tone map.
     Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR)."""
     from . import passes as P
+    from .passes._common import GBUFFER_PINS
 
     g = RenderGraph(name)
     g.add_pass(P.GBufferRaster(multiview=multiview), "GBuffer")
@@ -43,7 +43,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_pass(P.HybridComposite(), "Composite")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
     for lighting in ("Direct", "Shadows", "Reflections", *(("PathTracer",) if path_tracing else ())):
-        for pin in GBUFFER_TO_LIGHTING:
+        for pin in GBUFFER_PINS:
             g.add_edge(f"GBuffer.{pin}", f"{lighting}.{pin}")
     g.add_edge("GBuffer.effect", "Compaction.effect")
     g.add_edge("Compaction.shadowPixels", "Shadows.pixels")
