@@ -101,12 +101,10 @@ class GpuScene:
         verts, idx, tri_mats, tri_slots, nodes, mesh_rows, tangents = [], [], [], [], [], [], []
         self.blas: list[bvh_mod.Bvh] = []
         v_base = t_base = n_base = 0
+        if blas is None:
+            blas = self._build_blas(method, progress)
         for k, mesh in enumerate(s.meshes):
-            if blas is not None:
-                b = blas[k]
-            else:
-                lo, hi = bvh_mod.triangle_bounds(mesh.triangles())
-                b = bvh_mod.build(lo, hi, method=method, progress=progress) if len(lo) else None
+            b = blas[k]
             self.blas.append(b)
             uv = mesh.uvs if mesh.uvs is not None else np.zeros((len(mesh.positions), 2), np.float32)
             v = np.empty((len(mesh.positions), 8), np.float32)
@@ -154,6 +152,28 @@ class GpuScene:
             self._buffer("tangents", np.concatenate(tangents))
         self.mesh_index_offsets = np.cumsum([0] + [m.triangle_count * 3 for m in s.meshes])
         self.timings["blas_build_ms"] = (time.perf_counter() - t0) * 1e3
+
+    def _build_blas(self, method: str, progress) -> list:
+        """One BLAS per mesh; several meshes build at once on a thread pool (numpy releases the
+        GIL), a single big mesh uses the threaded LBVH itself."""
+        import os
+        from concurrent.futures import ThreadPoolExecutor
+
+        def one(mesh, threads=None):
+            if not mesh.triangle_count:
+                return None
+            lo, hi = bvh_mod.triangle_bounds(mesh.triangles())
+            return bvh_mod.build(lo, hi, method=method, progress=progress, threads=threads)
+
+        meshes = self.scene.meshes
+        if len(meshes) <= 1 or (os.cpu_count() or 1) == 1:
+            return [one(m) for m in meshes]
+        big = [m.triangle_count >= bvh_mod.PARALLEL_MIN for m in meshes]
+        out = [one(m) if b else None for m, b in zip(meshes, big)]
+        with ThreadPoolExecutor(max_workers=os.cpu_count()) as pool:
+            small = list(pool.map(lambda m: one(m, threads=1), [m for m, b in zip(meshes, big) if not b]))
+        it = iter(small)
+        return [o if b else next(it) for o, b in zip(out, big)]
 
     def _build_textures(self) -> None:
         self.texture_array = None
