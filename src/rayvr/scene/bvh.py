@@ -334,10 +334,12 @@ def _expand_bits(v: np.ndarray) -> np.ndarray:
 
 
 def _morton_codes(centroid: np.ndarray, lo=None, hi=None) -> np.ndarray:
-    """63-bit Morton codes of the centroids quantised in the box [lo, hi] (default: their own)."""
+    """63-bit Morton codes of the centroids quantised in the box [lo, hi] (default: their own).
+    One scale for all axes (a cubic grid): per-axis scales stretch flat scenes such as terrain
+    and double their SAH cost."""
     lo = centroid.min(axis=0) if lo is None else lo
     hi = centroid.max(axis=0) if hi is None else hi
-    q = ((centroid - lo) * ((2**21 - 1) / np.maximum(hi - lo, 1e-30))).astype(np.uint32)
+    q = ((centroid - lo) * ((2**21 - 1) / max(float((hi - lo).max()), 1e-30))).astype(np.uint32)
     return (_expand_bits(q[:, 0]) << np.uint64(2)) | (_expand_bits(q[:, 1]) << np.uint64(1)) | _expand_bits(q[:, 2])
 
 
