@@ -134,6 +134,7 @@ def test_materials_extensions_lights_cameras_and_effect(tmp_path):
     np.testing.assert_allclose(cam.position, [0, 1, 5])
 
 
+@pytest.mark.filterwarnings("ignore:Conversion will leave")
 def test_glb_and_triangle_strips_load(tmp_path):
     import pygltflib
 
