@@ -60,3 +60,12 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.mark_output(OUTPUT)
     g.mark_output(HDR_OUTPUT)
     return g
+
+
+def __getattr__(name: str):
+    """The path-tracing graph builders (rayvr.graphs_pt: path_traced, hybrid_taa) under rv.graphs."""
+    if name in ("path_traced", "hybrid_taa"):
+        from . import graphs_pt
+
+        return getattr(graphs_pt, name)
+    raise AttributeError(f"module 'rayvr.graphs' has no attribute '{name}'")
