@@ -249,8 +249,10 @@ class _Loader:
             m.emissive_texture = self._texref(gm.emissiveTexture, f"{f}.emissiveTexture")
             if gm.emissiveFactor is not None:
                 m.emissive = tuple(float(c) for c in gm.emissiveFactor)
-            m.alpha_mode = AlphaMode[(gm.alphaMode or "OPAQUE").upper()] if (gm.alphaMode or "OPAQUE").upper() in AlphaMode.__members__ \
-                else self._bad(f"{f}.alphaMode", f"unknown {gm.alphaMode!r}; use OPAQUE, MASK or BLEND")
+            mode = (gm.alphaMode or "OPAQUE").upper()
+            if mode not in AlphaMode.__members__:
+                raise self.r.fail(f"{f}.alphaMode", f"unknown {gm.alphaMode!r}; use OPAQUE, MASK or BLEND")
+            m.alpha_mode = AlphaMode[mode]
             m.alpha_cutoff = 0.5 if gm.alphaCutoff is None else float(gm.alphaCutoff)
             m.double_sided = bool(gm.doubleSided)
             ext = gm.extensions or {}
@@ -274,9 +276,6 @@ class _Loader:
                 if not math.isfinite(v):
                     raise self.r.fail(f"{f}.{name}", f"{v} is not a finite number")
             self.scene.add_material(m)
-
-    def _bad(self, field, what):
-        raise self.r.fail(field, what)
 
     def _default_material(self) -> int:
         if not hasattr(self, "_default"):

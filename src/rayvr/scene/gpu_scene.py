@@ -389,6 +389,7 @@ class GpuScene:
         self._build_meshes_refit(mesh)
 
     def _build_meshes_refit(self, mesh: int) -> None:
+        # refit the one BLAS, then re-pack the static buffers around it (no other BLAS is rebuilt)
         b = self.blas[mesh]
         if b is not None:
             lo, hi = bvh_mod.triangle_bounds(self.scene.meshes[mesh].triangles())

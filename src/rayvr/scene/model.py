@@ -159,6 +159,7 @@ class Scene:
         self.textures: list[Texture] = []
         self.lights: list[Light] = []
         self.cameras: list[Camera] = []
+        self.warnings: list[str] = []          # what a loader skipped (e.g. line primitives)
 
     # building -------------------------------------------------------------------------------
     def add_material(self, material: Material) -> int:
