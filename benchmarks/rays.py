@@ -132,15 +132,16 @@ def _camera(scene, aspect: float):
         m = cam.transform
         right, up, back = (m[:3, k] / np.linalg.norm(m[:3, k]) for k in range(3))
         pos, yfov = m[:3, 3], cam.yfov
-    else:   # frame the bounds from the front, slightly above
+    else:   # look at the bounds' largest face, from just far enough that it fills the view
         lo, hi = scene.bounds()
-        centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
+        centre, ext = (lo + hi) / 2, hi - lo
+        eye3 = np.eye(3)
+        k = int(np.argmin(ext))
+        right, up = {0: (-eye3[2], eye3[1]), 1: (eye3[0], -eye3[2]), 2: (eye3[0], eye3[1])}[k]
+        back = eye3[k]
         yfov = math.radians(45)
-        pos = centre + np.array([0.0, 0.35, 1.0]) / np.linalg.norm([0, 0.35, 1.0]) * radius / math.sin(yfov / 2)
-        back = (pos - centre) / np.linalg.norm(pos - centre)
-        right = np.cross([0.0, 1.0, 0.0], back)
-        right /= np.linalg.norm(right)
-        up = np.cross(back, right)
+        dist = max(abs(ext @ right) / aspect, abs(ext @ up)) / 2 / math.tan(yfov / 2) + ext[k] / 2
+        pos = centre + back * dist
     th = math.tan(yfov / 2)
     return pos, right * th * aspect, up * th, -back
 
