@@ -56,7 +56,7 @@ def camera_pose(scene) -> tuple[Pose, float]:
 def default_views(scene, views: int = 1, size=(256, 256), ipd: float = DEFAULT_IPD,
                   grid: tuple[int, int] | None = None) -> ViewSet:
     """Views from the scene's camera: 1 = mono, 2 = stereo (IPD apart), N = a camera grid
-    (`grid` cols x rows, spacing ipd)."""
+    (`grid` cols x rows, spacing ipd, frusta converging on the scene's centre)."""
     from .xr.cameras import camera_grid, stereo_views
 
     w, h = int(size[0]), int(size[1])
@@ -77,7 +77,12 @@ def default_views(scene, views: int = 1, size=(256, 256), ipd: float = DEFAULT_I
     if grid[0] * grid[1] != views:
         raise OptionError(f"--grid {grid[0]}x{grid[1]} has {grid[0] * grid[1]} views but --views is {views}; "
                           f"make cols x rows equal the view count")
-    return camera_grid(grid[0], grid[1], ipd, fov, (w, h), center_pose=pose, near=near, far=far)
+    # Light-field displays expect frusta sheared to converge on a focal plane: put it at the
+    # scene's centre as seen from the camera.
+    lo, hi = np.asarray(scene.bounds(), dtype=np.float64)
+    focal = max(float(np.linalg.norm(0.5 * (lo + hi) - pose.position)), near * 2)
+    return camera_grid(grid[0], grid[1], ipd, fov, (w, h), center_pose=pose, focal_distance=focal,
+                       near=near, far=far)
 
 
 class Renderer:
@@ -196,6 +201,9 @@ class Renderer:
 
     def _open(self) -> None:
         if not self._opened and self.sink is not None:
+            if getattr(self.sink, "start_pose_given", True) is False:
+                # A simulated headset with no start pose stands where the scene's camera is.
+                self.sink.place(camera_pose(self.scene)[0])
             self.sink.open(self.gpu)
             self._opened = True
 

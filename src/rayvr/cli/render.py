@@ -7,14 +7,13 @@ in the same folder and renamed, so a failure never leaves a half-written output.
 """
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import OptionError, did_you_mean
+from ..fileio import write_exr, write_png
 
 LAYOUTS = ("per-view", "side-by-side")
 
@@ -110,40 +109,6 @@ def output_paths(out: Path, views: int, layout: str) -> list[Path]:
     if views == 2:
         return [out.with_name(f"{out.stem}_L{out.suffix}"), out.with_name(f"{out.stem}_R{out.suffix}")]
     return [out.with_name(f"{out.stem}_v{i}{out.suffix}") for i in range(views)]
-
-
-def write_atomic(path: Path, write) -> None:
-    """`write(tmp_path)` then rename over `path`: never a half-written file at `path`."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def write_png(path: Path, pixels: np.ndarray) -> None:
-    from PIL import Image
-
-    write_atomic(path, lambda tmp: Image.fromarray(np.ascontiguousarray(pixels[..., :3])).save(tmp, format="PNG"))
-
-
-def write_exr(path: Path, pixels: np.ndarray) -> None:
-    try:
-        import OpenEXR
-    except ImportError:
-        raise OptionError(f"--out {path}: EXR output needs the 'openexr' package: pip install openexr") from None
-    rgb = np.ascontiguousarray(pixels[..., :3].astype(np.float32))
-
-    def write(tmp: Path):
-        header = {"type": OpenEXR.scanlineimage, "compression": OpenEXR.ZIP_COMPRESSION}
-        with OpenEXR.File(header, {"RGB": rgb}) as f:
-            f.write(str(tmp))
-
-    write_atomic(path, write)
 
 
 def run(args) -> int:

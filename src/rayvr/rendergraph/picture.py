@@ -6,6 +6,7 @@ import subprocess
 from pathlib import Path
 
 from ..errors import GraphError
+from ..fileio import atomic_write
 
 
 def _q(*lines: str) -> str:
@@ -40,10 +41,9 @@ def save_picture(graph, path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     dot = shutil.which("dot")
     if dot:
-        tmp = path.with_name(f".{path.name}.tmp")
-        subprocess.run([dot, f"-T{fmt}", "-o", str(tmp)], input=graph_to_dot(graph).encode(), check=True)
-        tmp.replace(path)
-        return path
+        dot_text = graph_to_dot(graph).encode()
+        return atomic_write(path, lambda tmp: subprocess.run([dot, f"-T{fmt}", "-o", str(tmp)],
+                                                             input=dot_text, check=True))
     return _draw_matplotlib(graph, path)
 
 
@@ -87,8 +87,7 @@ def _draw_matplotlib(graph, path: Path) -> Path:
     ax.margins(0.15)
     ax.set_title(f"render graph '{graph.name}'")
     ax.axis("off")
-    tmp = path.with_name(f".{path.name}.tmp.{path.suffix.lstrip('.')}")
-    fig.savefig(tmp, dpi=100, bbox_inches="tight")
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    try:
+        return atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=100, bbox_inches="tight"))
+    finally:
+        plt.close(fig)

@@ -3,14 +3,13 @@ loading builds passes through the registry and runs no code)."""
 from __future__ import annotations
 
 import json
-import os
 import runpy
 import sys
-import tempfile
 import traceback
 from pathlib import Path
 
 from ..errors import GraphError, RayvrError
+from ..fileio import write_text
 from .registry import get_pass_class
 
 JSON_FORMAT = "rayvr.rendergraph"
@@ -122,18 +121,6 @@ def graph_to_script(graph) -> str:
         f"{var} = render_graph_{name}()", ""])
 
 
-def _write_atomic(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
-
-
 def save_graph(graph, path) -> Path:
     path = Path(path)
     suffix = path.suffix.lower()
@@ -143,7 +130,7 @@ def save_graph(graph, path) -> Path:
         text = json.dumps(graph_to_dict(graph), indent=2) + "\n"
     else:
         raise GraphError(f"save('{path}'): unknown suffix '{path.suffix}'; use .py (script) or .json")
-    _write_atomic(path, text)
+    write_text(path, text)
     return path
 
 

@@ -105,10 +105,6 @@ def read_quilt(texture, encode_srgb: bool = False):
 
 def write_quilt_png(texture, path: str | Path, encode_srgb: bool = False) -> Path:
     """Write the quilt to `path` (written to a temporary name first, so no half-written file)."""
-    from PIL import Image
+    from ..fileio import write_png
 
-    path = Path(path)
-    tmp = path.with_name(path.name + ".part")
-    Image.fromarray(read_quilt(texture, encode_srgb)).save(tmp, format="PNG")
-    tmp.replace(path)
-    return path
+    return write_png(path, read_quilt(texture, encode_srgb), alpha=True)
