@@ -111,15 +111,14 @@ class SimulatedHeadset(Sink):
                 self._record(texture_array, request.index)
 
     def _record(self, texture_array, index: int) -> None:
-        from PIL import Image
-
+        from ..fileio import write_png
         from .readback import read_layers, side_by_side
 
         eyes = read_layers(texture_array, self.encode_srgb)
         for name, img in zip(("left", "right"), eyes):
-            Image.fromarray(img).save(self.record_dir / f"frame_{index:05d}_{name}.png")
+            write_png(self.record_dir / f"frame_{index:05d}_{name}.png", img, alpha=True)
         sbs = side_by_side(eyes)
-        Image.fromarray(sbs).save(self.record_dir / f"frame_{index:05d}_sbs.png")
+        write_png(self.record_dir / f"frame_{index:05d}_sbs.png", sbs, alpha=True)
         if self.video:
             if self._video_writer is None:
                 import imageio.v2 as imageio
