@@ -244,7 +244,7 @@ def _sorted_inputs(lo, hi, centroid, pool=None, threads: int = 1):
         boxes_in[a:b, :3], boxes_in[a:b, 3:] = lo[a:b], -hi[a:b]
 
     list(pool.map(encode, spans)) if pool else encode((0, n))
-    order = np.argsort(codes).astype(np.int64)
+    order = _parallel_argsort(codes, pool) if pool else np.argsort(codes).astype(np.int64)
     sorted_codes = np.empty_like(codes)
     boxes = np.empty_like(boxes_in)
 
@@ -255,6 +255,24 @@ def _sorted_inputs(lo, hi, centroid, pool=None, threads: int = 1):
 
     list(pool.map(gather, spans)) if pool else gather((0, n))
     return order, sorted_codes, boxes
+
+
+def _parallel_argsort(codes: np.ndarray, pool) -> np.ndarray:
+    """argsort of 63-bit codes: a stable radix pass on the top 8 bits, then the 256 buckets
+    sorted on the pool."""
+    top = (codes >> np.uint64(55)).astype(np.uint8)
+    by_top = np.argsort(top, kind="stable")          # numpy sorts 8-bit keys by radix
+    edges = np.concatenate([[0], np.cumsum(np.bincount(top, minlength=256))])
+    bucketed = codes[by_top]
+    order = np.empty(len(codes), np.int64)
+
+    def sort_bucket(k):
+        a, b = edges[k], edges[k + 1]
+        if b > a:
+            order[a:b] = by_top[a:b][np.argsort(bucketed[a:b])]
+
+    list(pool.map(sort_bucket, range(256)))
+    return order
 
 
 def _parallel_lbvh(codes: np.ndarray, boxes: np.ndarray, leaf_size: int, threads: int, bar, pool) -> np.ndarray:
