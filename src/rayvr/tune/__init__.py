@@ -1,0 +1,19 @@
+"""rayvr.tune: image error against GPU time, and the per-material effect budget tuner.
+
+    import rayvr as rv
+    scene = rv.scenes.cornell_box()
+    results = rv.tune.measure(scene, rv.tune.standard_configs(scene), size=(64, 64), views=2)
+    print(results.table()); results.write("out/tune")
+    tuned = rv.tune.tune_effects(scene, budget_ms=11.1, size=(1440, 1600), views=2)
+    print(tuned.table())
+"""
+from .configs import Config, hybrid_graph, path_traced_graph, reflective_material, standard_configs
+from .measure import Timing, make_views, measure, timed_frames
+from .metrics import all_metrics, flip, flip_map, psnr, rel_mse, rel_mse_map, srgb_encode
+from .reference import ReferenceSettings, reference_image, render_reference
+from .results import ConfigResult, Results
+
+__all__ = ["Config", "hybrid_graph", "path_traced_graph", "reflective_material", "standard_configs",
+           "Timing", "make_views", "measure", "timed_frames", "all_metrics", "flip", "flip_map", "psnr",
+           "rel_mse", "rel_mse_map", "srgb_encode", "ReferenceSettings", "reference_image", "render_reference",
+           "ConfigResult", "Results"]

@@ -1,0 +1,181 @@
+"""Image error metrics against a reference: FLIP, relative MSE and PSNR.
+
+Images are numpy arrays shaped (views, h, w, c) (also accepted: (h, w, c) and (h, w)); only the
+first three channels count (alpha is ignored; one channel is grey). Float images are linear
+radiance (HDR); integer images (uint8/uint16) are display-encoded (LDR, sRGB). A NaN or Inf in
+an image is an error that names the image and the first bad pixel, never a silent NaN metric.
+
+    flip(test, ref)           mean FLIP (NVIDIA's flip-evaluator), HDR-FLIP for float, LDR-FLIP for integer
+    rel_mse(test, ref)        mean over pixels and channels of (t - r)^2 / (r^2 + eps)
+    psnr(test, ref, peak)     10 log10(peak^2 / MSE) in dB; inf for identical images
+
+The `*_map` functions return the per-pixel error (views, h, w) whose mean is the metric: the
+budget tuner sums them over each material's pixels.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import OptionError, RayvrError
+
+DYNAMIC_RANGES = ("auto", "ldr", "hdr")
+
+
+def as_views(image, name: str = "image") -> np.ndarray:
+    """`image` as a (views, h, w, c) array (no copy when it already is one)."""
+    a = np.asarray(image)
+    if a.ndim == 2:
+        a = a[None, :, :, None]
+    elif a.ndim == 3:
+        a = a[None]
+    if a.ndim != 4 or 0 in a.shape:
+        raise OptionError(f"{name}: shape {np.shape(image)} is not an image; expected (views, h, w, c), "
+                          f"(h, w, c) or (h, w) with no empty axis")
+    if not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)):
+        raise OptionError(f"{name}: dtype {a.dtype} is not a number type; pass float or uint8/uint16 pixels")
+    return a
+
+
+def check_finite(a: np.ndarray, name: str) -> None:
+    """Raise naming `name` and its first NaN/Inf pixel (view, y, x, channel) if there is one."""
+    if not np.issubdtype(a.dtype, np.floating):
+        return
+    bad = ~np.isfinite(a)
+    if bad.any():
+        v, y, x, c = (int(i) for i in np.argwhere(bad)[0])
+        raise RayvrError(f"{name}: {int(bad.sum())} NaN/Inf value(s), the first {a[v, y, x, c]} at view {v}, "
+                         f"row {y}, column {x}, channel {c}; the renderer produced invalid radiance there "
+                         f"(an image metric of it would be meaningless)")
+
+
+def pair(test, reference, names=("test", "reference")) -> tuple[np.ndarray, np.ndarray]:
+    """Validated (views, h, w, 3) float64 copies of `test` and `reference` (same shape, finite)."""
+    t, r = as_views(test, names[0]), as_views(reference, names[1])
+    if t.shape[:3] != r.shape[:3]:
+        raise OptionError(f"{names[0]} is {t.shape[0]} view(s) of {t.shape[2]}x{t.shape[1]} but {names[1]} is "
+                          f"{r.shape[0]} of {r.shape[2]}x{r.shape[1]}; compare images of the same size and views")
+    check_finite(t, names[0])
+    check_finite(r, names[1])
+    return rgb(t), rgb(r)
+
+
+def rgb(a: np.ndarray) -> np.ndarray:
+    """First three channels as float64 (one channel repeated); integer pixels scaled to [0, 1]."""
+    out = a.astype(np.float64)
+    if np.issubdtype(a.dtype, np.integer):
+        out /= float(np.iinfo(a.dtype).max)
+    if out.shape[-1] < 3:
+        out = np.repeat(out[..., :1], 3, axis=-1)
+    return out[..., :3]
+
+
+# -- relative MSE and PSNR ------------------------------------------------------------------
+def rel_mse_map(test, reference, eps: float = 1e-2, names=("test", "reference")) -> np.ndarray:
+    """Per-pixel relative squared error (views, h, w): channel mean of (t - r)^2 / (r^2 + eps)."""
+    if not eps > 0:
+        raise OptionError(f"rel_mse: eps must be > 0 (it keeps black reference pixels finite), got {eps!r}")
+    t, r = pair(test, reference, names)
+    return ((t - r) ** 2 / (r * r + eps)).mean(axis=-1)
+
+
+def rel_mse(test, reference, eps: float = 1e-2, names=("test", "reference")) -> float:
+    """Relative mean squared error: the mean over pixels and RGB channels of (t - r)^2 / (r^2 + eps)."""
+    return float(rel_mse_map(test, reference, eps, names).mean())
+
+
+def default_peak(a: np.ndarray) -> float:
+    return float(np.iinfo(a.dtype).max) if np.issubdtype(a.dtype, np.integer) else 1.0
+
+
+def psnr(test, reference, peak: float | None = None, names=("test", "reference")) -> float:
+    """Peak signal-to-noise ratio in dB over RGB: 10 log10(peak^2 / MSE); inf when identical.
+
+    `peak` is in the images' own units: default 255 for uint8 (65535 for uint16), 1.0 for float.
+    """
+    t, r = as_views(test, names[0]), as_views(reference, names[1])
+    if peak is None:
+        peak = default_peak(r)
+    if not (isinstance(peak, (int, float)) and math.isfinite(peak) and peak > 0):
+        raise OptionError(f"psnr: peak must be a finite number > 0 (the largest pixel value), got {peak!r}")
+    tf, rf = pair(t, r, names)
+    scale = float(np.iinfo(r.dtype).max) if np.issubdtype(r.dtype, np.integer) else 1.0
+    mse = float(((tf - rf) ** 2).mean()) * scale * scale   # back in the images' own units
+    return math.inf if mse == 0.0 else 10.0 * math.log10(peak * peak / mse)
+
+
+# -- FLIP ------------------------------------------------------------------------------------
+def flip_map(test, reference, dynamic_range: str = "auto", ppd: float | None = None,
+             names=("test", "reference")) -> np.ndarray:
+    """Per-pixel FLIP error (views, h, w) in [0, 1], each view evaluated on its own.
+
+    `dynamic_range`: "hdr" (linear radiance, HDR-FLIP over the reference's exposure range),
+    "ldr" (sRGB-encoded values in [0, 1] or integers), or "auto" (HDR for float, LDR for integer
+    images). `ppd`: pixels per degree of the display (FLIP's default 67 is a desktop monitor;
+    a VR headset is about 15-25)."""
+    import flip_evaluator
+
+    t0, r0 = as_views(test, names[0]), as_views(reference, names[1])
+    mode = str(dynamic_range).lower()
+    if mode not in DYNAMIC_RANGES:
+        raise OptionError(f"flip: dynamic_range {dynamic_range!r}; use one of {', '.join(DYNAMIC_RANGES)}")
+    if mode == "auto":
+        mode = "hdr" if np.issubdtype(r0.dtype, np.floating) else "ldr"
+    params = {}
+    if ppd is not None:
+        if not ppd > 0:
+            raise OptionError(f"flip: ppd (pixels per degree) must be > 0, got {ppd!r}")
+        params["ppd"] = float(ppd)
+    t, r = pair(t0, r0, names)
+    for img, name in ((t, names[0]), (r, names[1])):
+        if (img < 0).any():
+            raise RayvrError(f"{name}: {int((img < 0).sum())} negative value(s) (min {img.min():.3g}); FLIP needs "
+                             f"non-negative radiance: the renderer wrote invalid colour")
+        if mode == "ldr" and img.max() > 1.0:
+            raise OptionError(f"{name}: values up to {img.max():.3g} in LDR mode; LDR-FLIP takes sRGB values in "
+                              f"[0, 1] (or integers); use dynamic_range='hdr' for linear radiance")
+    out = np.empty(t.shape[:3], dtype=np.float32)
+    for v in range(t.shape[0]):
+        tv, rv = (np.ascontiguousarray(a[v], dtype=np.float32) for a in (t, r))
+        out[v] = _flip_view(flip_evaluator, tv, rv, mode, params)
+    return out
+
+
+def _flip_view(flip_evaluator, test: np.ndarray, ref: np.ndarray, mode: str, params: dict) -> np.ndarray:
+    if mode == "hdr" and not ref.any():
+        # flip-evaluator derives the exposure range from the reference and ends the process when
+        # the reference is all black; take the range from the test image instead.
+        if not test.any():
+            return np.zeros(test.shape[:2], np.float32)
+        _, _, derived = flip_evaluator.evaluate(test, test, "HDR", applyMagma=False, computeMeanError=False,
+                                                parameters=dict(params))
+        params = {**params, **{k: derived[k] for k in ("startExposure", "stopExposure", "numExposures")}}
+    error_map, _, _ = flip_evaluator.evaluate(ref, test, mode.upper(), applyMagma=False, computeMeanError=False,
+                                              parameters=dict(params))
+    return np.asarray(error_map, dtype=np.float32).reshape(test.shape[:2])
+
+
+def flip(test, reference, dynamic_range: str = "auto", ppd: float | None = None,
+         names=("test", "reference")) -> float:
+    """Mean FLIP error in [0, 1] (0 = identical); see `flip_map` for the options."""
+    return float(flip_map(test, reference, dynamic_range, ppd, names).mean())
+
+
+# -- display encoding (for PSNR of display-referred images) -----------------------------------
+def srgb_encode(linear) -> np.ndarray:
+    """Linear radiance clamped to [0, 1] and sRGB-encoded (float): what a display shows at exposure 0."""
+    x = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
+
+
+METRICS = {"flip": "FLIP (mean, HDR)", "relmse": "relMSE", "psnr": "PSNR dB (sRGB, clamped)"}
+LOWER_IS_BETTER = {"flip": True, "relmse": True, "psnr": False}
+
+
+def all_metrics(test, reference, ppd: float | None = None, eps: float = 1e-2, names=("test", "reference")) -> dict:
+    """{"flip", "relmse", "psnr"} of linear `test` against linear `reference`: FLIP in HDR mode,
+    relMSE on radiance, PSNR on the sRGB-encoded images clamped to [0, 1] (peak 1)."""
+    t, r = pair(test, reference, names)
+    return {"flip": flip(t, r, "hdr", ppd, names), "relmse": rel_mse(t, r, eps, names),
+            "psnr": psnr(srgb_encode(t), srgb_encode(r), 1.0, names)}

@@ -1,0 +1,177 @@
+"""Results of `rayvr.tune.measure`: one row per configuration (GPU ms per frame, per pass, image
+error), as a markdown table, CSV, JSON and error-vs-ms plots (matplotlib, Agg: no display)."""
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+from .metrics import LOWER_IS_BETTER, METRICS
+
+
+@dataclasses.dataclass
+class ConfigResult:
+    """One measured configuration."""
+
+    name: str
+    effects: dict          # material name -> effect name
+    options: dict
+    frame_ms: float        # GPU ms per frame (sum of the per-pass means)
+    pass_ms: dict          # pass -> GPU ms per frame
+    cpu_ms: float          # CPU ms inside the graph's execute() per frame
+    errors: dict           # metric -> value (see rayvr.tune.metrics.METRICS)
+    image: object = None   # the linear image (views, h, w, c) when measure(keep_images=True)
+
+    def as_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d.pop("image")
+        return d
+
+
+def write_atomic(path: Path, write) -> Path:
+    """`write(tmp)` then rename onto `path`: never a half-written file at `path`."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def write_text(path: Path, text: str) -> Path:
+    return write_atomic(path, lambda tmp: tmp.write_text(text))
+
+
+def _fmt(value) -> str:
+    if isinstance(value, float):
+        return "inf" if math.isinf(value) else f"{value:.4g}"
+    return str(value)
+
+
+class Results:
+    """`rows` (ConfigResult per configuration) and `info` (scene, views, size, frames, timing
+    method, reference)."""
+
+    def __init__(self, rows: list[ConfigResult], info: dict):
+        self.rows = list(rows)
+        self.info = dict(info)
+
+    @property
+    def method(self) -> str:
+        return self.info.get("method", "?")
+
+    def __getitem__(self, name: str) -> ConfigResult:
+        for row in self.rows:
+            if row.name == name:
+                return row
+        raise KeyError(f"no configuration '{name}'; have {', '.join(r.name for r in self.rows)}")
+
+    def metrics(self) -> list[str]:
+        return [m for m in METRICS if any(m in r.errors for r in self.rows)]
+
+    def passes(self) -> list[str]:
+        names = []
+        for row in self.rows:
+            names += [p for p in row.pass_ms if p not in names]
+        return names
+
+    def pareto(self, metric: str = "flip") -> list[ConfigResult]:
+        """The configurations no other one beats in both ms and `metric`, fastest first."""
+        sign = 1.0 if LOWER_IS_BETTER[metric] else -1.0
+        front, best = [], math.inf
+        for row in sorted(self.rows, key=lambda r: (r.frame_ms, sign * r.errors[metric])):
+            if sign * row.errors[metric] < best:
+                front.append(row)
+                best = sign * row.errors[metric]
+        return front
+
+    # -- text --------------------------------------------------------------------------------
+    def table(self, per_pass: bool = False) -> str:
+        """A markdown table: configuration, GPU ms per frame, each metric (and each pass's ms)."""
+        passes = self.passes() if per_pass else []
+        cols = ["configuration", "GPU ms/frame", *(METRICS[m] for m in self.metrics()), *(f"{p} ms" for p in passes)]
+        lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+        for r in self.rows:
+            cells = [r.name, _fmt(r.frame_ms), *(_fmt(r.errors[m]) for m in self.metrics()),
+                     *(_fmt(r.pass_ms[p]) if p in r.pass_ms else "-" for p in passes)]
+            lines.append("| " + " | ".join(c.replace("|", "/") for c in cells) + " |")
+        i = self.info
+        lines.append("")
+        lines.append(f"{i.get('scene')}: {i.get('views')} view(s) of {i.get('size', ['?', '?'])[0]}x"
+                     f"{i.get('size', ['?', '?'])[1]}, {i.get('frames')} timed frames after {i.get('warmup')} "
+                     f"warm-up; timing: {self.method}; reference: {i.get('reference')}")
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.table()
+
+    def as_dict(self) -> dict:
+        return {"info": self.info, "configurations": [r.as_dict() for r in self.rows]}
+
+    def to_json(self) -> str:
+        return json.dumps(self.as_dict(), indent=2, default=str,
+                          allow_nan=True) + "\n"
+
+    def to_csv(self) -> str:
+        passes, metrics = self.passes(), self.metrics()
+        out = io.StringIO()
+        w = csv.writer(out)
+        w.writerow(["configuration", "frame_ms", *metrics, *(f"{p}_ms" for p in passes), "method"])
+        for r in self.rows:
+            w.writerow([r.name, r.frame_ms, *(r.errors[m] for m in metrics),
+                        *(r.pass_ms.get(p, "") for p in passes), self.method])
+        return out.getvalue()
+
+    # -- plots -------------------------------------------------------------------------------
+    def plot(self, metric: str, path, budget_ms: float | None = None) -> Path:
+        """Error (`metric`) against GPU ms per frame, one labelled point per configuration and
+        the Pareto front as a line; a vertical line at `budget_ms`. Written atomically (PNG)."""
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        if metric not in self.metrics():
+            raise KeyError(f"no metric '{metric}' in these results; have {', '.join(self.metrics())}")
+        fig = Figure(figsize=(6.4, 4.4), dpi=110)
+        FigureCanvasAgg(fig)
+        ax = fig.add_subplot()
+        xs = [r.frame_ms for r in self.rows]
+        ys = [r.errors[metric] for r in self.rows]
+        ax.scatter(xs, ys, zorder=3)
+        for r, x, y in zip(self.rows, xs, ys):
+            ax.annotate(r.name, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        front = self.pareto(metric)
+        ax.plot([r.frame_ms for r in front], [r.errors[metric] for r in front], "--", lw=1, color="gray",
+                label="Pareto front", zorder=2)
+        if budget_ms:
+            ax.axvline(budget_ms, color="red", lw=1, label=f"budget {budget_ms:g} ms")
+        if metric == "relmse" and all(y > 0 for y in ys):
+            ax.set_yscale("log")
+        ax.set_xlabel(f"GPU ms per frame ({self.method})")
+        ax.set_ylabel(METRICS[metric] + ("  (lower is better)" if LOWER_IS_BETTER[metric] else "  (higher is better)"))
+        i = self.info
+        ax.set_title(f"{i.get('scene')}: {i.get('views')} x {i.get('size', ['?'])[0]}x{i.get('size', ['?', '?'])[1]}",
+                     fontsize=9)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        return write_atomic(Path(path), lambda tmp: fig.savefig(tmp, format="png"))
+
+    def write(self, folder, budget_ms: float | None = None, stem: str = "error_vs_ms") -> list[Path]:
+        """table.md, results.csv, results.json and one `{stem}_{metric}.png` per metric in
+        `folder`, each written atomically. Returns the paths."""
+        folder = Path(folder)
+        paths = [write_text(folder / "table.md", self.table(per_pass=True) + "\n"),
+                 write_text(folder / "results.csv", self.to_csv()),
+                 write_text(folder / "results.json", self.to_json())]
+        paths += [self.plot(m, folder / f"{stem}_{m}.png", budget_ms) for m in self.metrics()]
+        return paths
