@@ -105,7 +105,7 @@ def test_progressive_path_tracing_converges_like_one_over_sqrt_n(gpu):
     from rayvr.scene import builtin
 
     means = {}
-    with Renderer(builtin.cornell_box(), path_traced(max_bounces=2), size=(24, 24)) as r:
+    with Renderer(builtin.cornell_box(), path_traced(max_bounces=2), size=(16, 16)) as r:
         for k in range(1, 65):
             r.render()
             if k in (4, 16, 64):

@@ -21,8 +21,7 @@ def pt_graph(accumulate=True, **props):
         g.add_pass(Accumulate(), "Acc")
         g.add_edge("PT.color", "Acc.src")
         g.mark_output("Acc.dst")
-    else:
-        g.mark_output("PT.color")
+    g.mark_output("PT.color")
     return g
 
 
@@ -155,7 +154,7 @@ def test_gbuffer_mode_traces_only_path_traced_pixels(gpu, pixel_list):
     scene = builtin.box_on_plane(light_height=3.0)
     scene.materials["Plane"].effect = rv.Effect.PATH_TRACED
     scene.materials["Box"].effect = rv.Effect.SHADOWS
-    with Renderer(scene, gbuffer_pt_graph(pixel_list, max_bounces=1), size=(24, 24)) as r:
+    with Renderer(scene, gbuffer_pt_graph(pixel_list, max_bounces=1), size=(16, 16)) as r:
         r.render()
         color = r.read_output("PT.color")[0, ..., 0].astype(np.float64)
         pos = r.read_output("GBuffer.posW")[0].astype(np.float64)
@@ -183,13 +182,13 @@ def test_gbuffer_mode_is_pruned_without_path_traced_materials(gpu):
 
 def test_paths_are_deterministic_per_frame_and_differ_between_frames(gpu):
     scene = furnace_scene(0.5, 1.0)
-    g = pt_graph(accumulate=False, samples_per_pixel=1, max_bounces=3)
-    with Renderer(scene, g, size=(12, 12)) as r:
+    g = pt_graph(samples_per_pixel=1, max_bounces=3)
+    with Renderer(scene, g, size=(16, 16)) as r:
         r.render()
         first = r.read_output("PT.color")
         r.render()
         second = r.read_output("PT.color")
-    with Renderer(scene, g, size=(12, 12)) as r:
+    with Renderer(scene, g, size=(16, 16)) as r:
         r.render()
         again = r.read_output("PT.color")
     np.testing.assert_array_equal(first, again)
@@ -213,7 +212,7 @@ def hostile_scene():
 
 @pytest.mark.parametrize("clamp", [0.0, 4.0])
 def test_no_nan_or_inf_in_hostile_cases_and_clamp_caps(gpu, clamp):
-    color = render_pt(hostile_scene(), frames=2, size=(24, 24), samples_per_pixel=2, max_bounces=6, clamp=clamp)
+    color = render_pt(hostile_scene(), frames=2, size=(16, 16), samples_per_pixel=2, max_bounces=6, clamp=clamp)
     assert np.isfinite(color).all() and (color >= 0).all()
     assert color.max() > 0
     if clamp:

@@ -30,8 +30,8 @@ def test_path_traced_graph_accumulates_and_tone_maps(gpu):
 
 def test_path_traced_graph_restarts_when_the_camera_moves(gpu):
     scene = builtin.cornell_box()
-    with Renderer(scene, path_traced(max_bounces=1), size=(8, 8)) as r:
-        vs = default_views(scene, 1, (8, 8))
+    with Renderer(scene, path_traced(max_bounces=1), size=(16, 16)) as r:
+        vs = default_views(scene, 1, (16, 16))
         r.render(vs)
         r.render(vs)
         acc = r.compiled.passes["Accumulate"]
