@@ -7,13 +7,16 @@
     tuned = rv.tune.tune_effects(scene, budget_ms=11.1, size=(1440, 1600), views=2)
     print(tuned.table())
 """
+from .budget import CostModel, TuneResult, Upgrade, choose_effects, tune_effects
 from .configs import Config, hybrid_graph, path_traced_graph, reflective_material, standard_configs
 from .measure import Timing, make_views, measure, timed_frames
 from .metrics import all_metrics, flip, flip_map, psnr, rel_mse, rel_mse_map, srgb_encode
+from .probe import probe_cost_model
 from .reference import ReferenceSettings, reference_image, render_reference
 from .results import ConfigResult, Results
 
-__all__ = ["Config", "hybrid_graph", "path_traced_graph", "reflective_material", "standard_configs",
+__all__ = ["CostModel", "TuneResult", "Upgrade", "choose_effects", "tune_effects", "probe_cost_model",
+           "Config", "hybrid_graph", "path_traced_graph", "reflective_material", "standard_configs",
            "Timing", "make_views", "measure", "timed_frames", "all_metrics", "flip", "flip_map", "psnr",
            "rel_mse", "rel_mse_map", "srgb_encode", "ReferenceSettings", "reference_image", "render_reference",
            "ConfigResult", "Results"]

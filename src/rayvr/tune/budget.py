@@ -1,0 +1,236 @@
+"""The per-material effect budget tuner: pick each material's effect so the frame fits a GPU budget
+(11.1 ms at 90 Hz) with the least image error.
+
+The choice runs on a `CostModel` (no GPU needed, so it is unit-testable):
+
+    frame ms(a)  = base_ms + max(overhead_ms[e] for e used by a) + sum_m ms[m][a[m]]
+    error(a)     = rest_error + sum_m error[m][a[m]]
+
+`base_ms` is the all-RASTER frame, `overhead_ms[e]` the passes effect level e brings in whatever
+its pixel count (e.g. the compaction pass; shared passes are counted once, hence the max),
+`ms[m][e]` the GPU time of material m's pixels at level e (0 for RASTER) and `error[m][e]` their
+share of the image error. `rayvr.tune.probe.probe_cost_model` measures one on the GPU.
+
+`choose_effects` is the greedy of the multiple-choice knapsack: start from every material at its
+lowest allowed level; repeatedly take the upgrade (one material to any higher level) with the
+largest error reduction per added ms among those that keep the predicted frame within the
+budget (an upgrade that costs nothing and reduces error goes first); stop when none is left.
+If even the lowest levels exceed the budget it returns them, marked `fits=False`, with a note.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from ..errors import OptionError
+from ..materials.effect import Effect
+
+
+@dataclasses.dataclass
+class CostModel:
+    """Predicted GPU ms and image error of an effect assignment (see the module docstring)."""
+
+    base_ms: float
+    ms: dict                       # material -> {Effect: ms}
+    error: dict                    # material -> {Effect: error share}
+    overhead_ms: dict = dataclasses.field(default_factory=dict)   # Effect -> ms
+    rest_error: float = 0.0        # error of pixels no material covers (sky)
+    pixels: dict = dataclasses.field(default_factory=dict)        # material -> pixel count
+    metric: str = "flip"
+    method: str = "model"          # how the times were measured
+
+    def __post_init__(self):
+        self.ms = {m: {Effect.parse(e): float(v) for e, v in d.items()} for m, d in self.ms.items()}
+        self.error = {m: {Effect.parse(e): float(v) for e, v in d.items()} for m, d in self.error.items()}
+        self.overhead_ms = {Effect.parse(e): float(v) for e, v in self.overhead_ms.items()}
+        if set(self.ms) != set(self.error):
+            raise OptionError(f"CostModel: ms and error must name the same materials; ms has {sorted(self.ms)}, "
+                              f"error has {sorted(self.error)}")
+
+    @property
+    def materials(self) -> list[str]:
+        return list(self.ms)
+
+    def levels(self, material: str) -> list[Effect]:
+        """The effect levels the model knows for `material` (both ms and error)."""
+        return sorted(set(self.ms[material]) & set(self.error[material]))
+
+    def predict_ms(self, assignment: dict) -> float:
+        used = set(assignment.values())
+        overhead = max([self.overhead_ms.get(e, 0.0) for e in used] + [0.0])
+        return self.base_ms + overhead + sum(self.ms[m][e] for m, e in assignment.items())
+
+    def predict_error(self, assignment: dict) -> float:
+        return self.rest_error + sum(self.error[m][e] for m, e in assignment.items())
+
+    def as_dict(self) -> dict:
+        name = lambda d: {e.name: v for e, v in d.items()}  # noqa: E731
+        return {"base_ms": self.base_ms, "overhead_ms": name(self.overhead_ms), "rest_error": self.rest_error,
+                "metric": self.metric, "method": self.method, "pixels": dict(self.pixels),
+                "ms": {m: name(d) for m, d in self.ms.items()}, "error": {m: name(d) for m, d in self.error.items()}}
+
+
+@dataclasses.dataclass
+class Upgrade:
+    """One greedy step: `material` from `old` to `new`, what it added and what it saved."""
+
+    material: str
+    old: Effect
+    new: Effect
+    added_ms: float
+    error_reduction: float
+    frame_ms: float               # predicted frame ms after this step
+
+    @property
+    def ratio(self) -> float:
+        return math.inf if self.added_ms <= 0 else self.error_reduction / self.added_ms
+
+
+@dataclasses.dataclass
+class TuneResult:
+    """The chosen effect per material, its predicted (and, after `tune_effects`, measured) cost."""
+
+    assignment: dict              # material -> Effect
+    budget_ms: float
+    predicted_ms: float
+    predicted_error: float
+    fits: bool
+    steps: list
+    notes: list
+    model: CostModel
+    measured_ms: float | None = None
+    measured_error: float | None = None
+    method: str = "model"
+
+    def table(self) -> str:
+        """Markdown: each material's effect, pixels, predicted ms and error share; then totals."""
+        m = self.model
+        lines = ["| material | effect | pixels | ms | error |", "|---|---|---|---|---|"]
+        for name, effect in self.assignment.items():
+            lines.append(f"| {name} | {effect.name} | {m.pixels.get(name, '-')} | {m.ms[name][effect]:.4g} | "
+                         f"{m.error[name][effect]:.4g} |")
+        lines.append("")
+        lines.append(f"budget {self.budget_ms:g} ms: predicted {self.predicted_ms:.4g} ms, {m.metric} "
+                     f"{self.predicted_error:.4g}" + ("" if self.fits else " (does NOT fit)"))
+        if self.measured_ms is not None:
+            lines.append(f"measured {self.measured_ms:.4g} ms ({self.method}), {m.metric} {self.measured_error:.4g}")
+        lines += [f"note: {n}" for n in self.notes]
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.table()
+
+    def as_dict(self) -> dict:
+        return {"assignment": {k: v.name for k, v in self.assignment.items()}, "budget_ms": self.budget_ms,
+                "predicted_ms": self.predicted_ms, "predicted_error": self.predicted_error, "fits": self.fits,
+                "measured_ms": self.measured_ms, "measured_error": self.measured_error, "method": self.method,
+                "notes": list(self.notes),
+                "steps": [{"material": s.material, "from": s.old.name, "to": s.new.name, "added_ms": s.added_ms,
+                           "error_reduction": s.error_reduction, "frame_ms": s.frame_ms} for s in self.steps],
+                "model": self.model.as_dict()}
+
+
+def choose_effects(model: CostModel, budget_ms: float = 11.1, levels=tuple(Effect), fixed: dict | None = None) -> TuneResult:
+    """The greedy choice of the module docstring. `levels`: the effects it may choose;
+    `fixed`: {material: effect} kept as given."""
+    if not (isinstance(budget_ms, (int, float)) and budget_ms > 0 and math.isfinite(budget_ms)):
+        raise OptionError(f"budget_ms must be a positive number of milliseconds (11.1 at 90 Hz), got {budget_ms!r}")
+    allowed = sorted({Effect.parse(e, where="levels") for e in levels})
+    if not allowed:
+        raise OptionError("levels: allow at least one effect, e.g. levels=[Effect.RASTER, Effect.SHADOWS]")
+    fixed = {m: Effect.parse(e, where=f"fixed['{m}']") for m, e in (fixed or {}).items()}
+    for m in fixed:
+        if m not in model.ms:
+            raise OptionError(f"fixed: no material '{m}' in the cost model; materials: {', '.join(model.materials)}")
+    options = {}
+    for m in model.materials:
+        opts = [fixed[m]] if m in fixed else [e for e in allowed if e in model.levels(m)]
+        if not opts:
+            raise OptionError(f"material '{m}': the cost model has none of the allowed levels "
+                              f"{[e.name for e in allowed]} (it has {[e.name for e in model.levels(m)]})")
+        options[m] = opts
+    current = {m: opts[0] for m, opts in options.items()}
+    frame = model.predict_ms(current)
+    notes, steps = [], []
+    if frame > budget_ms:
+        notes.append(f"even the cheapest assignment ({frame:.3g} ms) exceeds the {budget_ms:g} ms budget: every "
+                     f"material stays at its lowest level; render fewer or smaller views or drop passes")
+    while frame <= budget_ms:
+        best = None
+        for m, opts in options.items():
+            for new in opts:
+                if new <= current[m]:
+                    continue
+                trial = {**current, m: new}
+                after = model.predict_ms(trial)
+                gain = model.error[m][current[m]] - model.error[m][new]
+                if after > budget_ms or gain <= 0:
+                    continue
+                step = Upgrade(m, current[m], new, after - frame, gain, after)
+                # Best error reduction per ms; ties: the larger reduction, then the cheaper frame.
+                key = (step.ratio, gain, -after)
+                if best is None or key > best[0]:
+                    best = (key, step)
+        if best is None:
+            break
+        step = best[1]
+        current[step.material] = step.new
+        frame = step.frame_ms
+        steps.append(step)
+    return TuneResult(current, float(budget_ms), frame, model.predict_error(current), frame <= budget_ms, steps,
+                      notes, model, method=model.method)
+
+
+def tune_effects(renderer_or_scene, budget_ms: float = 11.1, size=None, views=None, metric: str = "flip",
+                 levels=tuple(Effect), fixed: dict | None = None, graph=None, options: dict | None = None,
+                 frames: int = 10, warmup: int = 3, reference=None, reference_settings=None, cache_dir=None,
+                 ppd: float | None = None, verify: bool = True, apply: bool = True, progress: bool = True,
+                 gpu=None) -> TuneResult:
+    """Measure a CostModel on the GPU (`rayvr.tune.probe.probe_cost_model`: one render per effect
+    level), choose effects with `choose_effects`, then (with `verify`) render the choice and
+    record its measured ms and error. With `apply` the scene's materials get the chosen effects.
+
+    `renderer_or_scene`: a Scene (with `size`, `views`: default 2 views of 1440x1600) or an
+    rv.Renderer (its scene, views and graph; `graph` then defaults to a copy of its graph).
+    `graph`: a builder `graph(**options)` (default rayvr.tune.hybrid_graph)."""
+    from .probe import probe_cost_model, render_assignment
+
+    scene, view_set, builder, gpu = _target(renderer_or_scene, size, views, graph, gpu)
+    model, ref, pin = probe_cost_model(scene, view_set, builder, options or {}, metric=metric, levels=levels,
+                                       frames=frames, warmup=warmup, reference=reference,
+                                       reference_settings=reference_settings, cache_dir=cache_dir, ppd=ppd,
+                                       progress=progress, gpu=gpu)
+    result = choose_effects(model, budget_ms, levels, fixed)
+    if verify:
+        result.measured_ms, result.measured_error, result.method = render_assignment(
+            scene, view_set, builder, options or {}, result.assignment, ref, metric, frames, warmup, ppd, gpu)
+        if result.measured_ms > budget_ms:
+            result.notes.append(f"measured {result.measured_ms:.3g} ms is over the budget (predicted "
+                                f"{result.predicted_ms:.3g} ms); leave headroom with a lower budget_ms")
+    if apply:
+        for name, effect in result.assignment.items():
+            if scene.materials[name].effect != effect:
+                scene.materials[name].effect = effect
+    return result
+
+
+def _target(renderer_or_scene, size, views, graph, gpu):
+    from ..renderer import Renderer
+    from ..rendergraph.graph import RenderGraph
+    from .configs import hybrid_graph
+    from .measure import make_views
+
+    if isinstance(renderer_or_scene, Renderer):
+        r = renderer_or_scene
+        if size is not None or views is not None:
+            raise OptionError("tune_effects: a Renderer brings its own views; pass size/views only with a Scene")
+        view_set = r.view_set
+        if view_set is None:
+            from ..renderer import default_views
+            view_set = default_views(r.scene, r.view_count, r.size)
+        if graph is None:
+            data = r.graph.to_dict()
+            graph = lambda **_: RenderGraph.from_dict(data)  # noqa: E731
+        return r.scene, view_set, graph, gpu or r.gpu
+    view_set = make_views(renderer_or_scene, 2 if views is None else views, size or (1440, 1600))
+    return renderer_or_scene, view_set, graph or hybrid_graph, gpu
