@@ -147,13 +147,16 @@ class Results:
         xs = [r.frame_ms for r in self.rows]
         ys = [r.errors[metric] for r in self.rows]
         ax.scatter(xs, ys, zorder=3)
-        for r, x, y in zip(self.rows, xs, ys):
-            ax.annotate(r.name, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        for i, (r, x, y) in enumerate(zip(self.rows, xs, ys)):
+            # Staggered offsets keep the labels of nearby points apart.
+            ax.annotate(r.name, (x, y), textcoords="offset points", xytext=(5, 4 - 10 * (i % 3)), fontsize=7)
         front = self.pareto(metric)
         ax.plot([r.frame_ms for r in front], [r.errors[metric] for r in front], "--", lw=1, color="gray",
                 label="Pareto front", zorder=2)
         if budget_ms:
             ax.axvline(budget_ms, color="red", lw=1, label=f"budget {budget_ms:g} ms")
+        if min(xs) > 0 and max(xs) > 20 * min(xs):
+            ax.set_xscale("log")
         if metric == "relmse" and all(y > 0 for y in ys):
             ax.set_yscale("log")
         ax.set_xlabel(f"GPU ms per frame ({self.method})")

@@ -1,0 +1,115 @@
+"""`rayvr tune [SCENE] --budget-ms 11.1 --views 2 --size WxH [--report DIR]`: choose each
+material's effect to fit a GPU frame budget, and set it against the standard configurations.
+
+Prints the error-vs-time table (all RASTER, all SHADOWS, SHADOWS + REFLECTIONS, PATH_TRACED at
+each --spp, and the tuned assignment) and the assignment. With --report it writes table.md,
+results.csv, results.json, error_vs_ms_<metric>.png, assignment.md and tune.json into DIR, each
+under a temporary name first and then renamed. The budget holds for the size and views given:
+tune at the headset's resolution on the GPU that will render it.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..errors import OptionError
+
+METRICS = ("flip", "relmse")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("tune", help="fit per-material effects to a GPU frame budget; error vs time report")
+    p.add_argument("scene", nargs="?", help="glTF file or built-in scene name (default: the Cornell box)")
+    p.add_argument("--budget-ms", type=float, default=11.1, help="GPU ms per frame (default 11.1: 90 Hz)")
+    p.add_argument("--views", type=int, default=2, help="view count: 1 mono, 2 stereo, N a camera grid (default 2)")
+    p.add_argument("--size", default="1440x1600", help="per-view size WIDTHxHEIGHT (default 1440x1600)")
+    p.add_argument("--report", help="folder for the table, CSV, JSON, plots and assignment")
+    p.add_argument("--metric", default="flip", choices=METRICS, help="error the tuner minimises (default flip)")
+    p.add_argument("--levels", default="raster,shadows,reflections,path_traced",
+                   help="effects the tuner may choose, comma-separated (default all four)")
+    p.add_argument("--spp", default="1,4,16", help="samples per pixel of the PATH_TRACED table rows (default 1,4,16)")
+    p.add_argument("--frames", type=int, default=20, help="timed frames per configuration (default 20)")
+    p.add_argument("--warmup", type=int, default=3, help="untimed frames first (default 3)")
+    p.add_argument("--reference-frames", type=int, default=256, help="frames of the converged reference (default 256)")
+    p.add_argument("--reference-spp", type=int, default=4, help="paths per pixel per reference frame (default 4)")
+    p.add_argument("--cache", help="reference cache folder (default ~/.cache/rayvr/references)")
+    p.add_argument("--ppd", type=float, help="display pixels per degree for FLIP (default FLIP's 67)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(func=run)
+
+
+def parse_list(text: str, option: str, parse) -> list:
+    items = [s.strip() for s in str(text).split(",") if s.strip()]
+    if not items:
+        raise OptionError(f"{option} {text!r}: give a comma-separated list")
+    return [parse(s) for s in items]
+
+
+def parse_spp(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise OptionError(f"--spp {text!r}: samples per pixel must be integers >= 1, e.g. --spp 1,4,16")
+    return n
+
+
+def check(args) -> tuple:
+    from ..materials.effect import Effect
+    from .render import parse_size
+
+    size = parse_size(args.size)
+    if not args.budget_ms > 0:
+        raise OptionError(f"--budget-ms {args.budget_ms}: the budget must be > 0 ms (11.1 at 90 Hz)")
+    for option, value, low in (("--views", args.views, 1), ("--frames", args.frames, 1), ("--warmup", args.warmup, 0),
+                               ("--reference-frames", args.reference_frames, 1),
+                               ("--reference-spp", args.reference_spp, 1)):
+        if value < low:
+            raise OptionError(f"{option} {value}: must be >= {low}")
+    if args.ppd is not None and not args.ppd > 0:
+        raise OptionError(f"--ppd {args.ppd}: pixels per degree must be > 0")
+    levels = parse_list(args.levels, "--levels", lambda s: Effect.parse(s, where="--levels"))
+    spp = parse_list(args.spp, "--spp", parse_spp)
+    return size, levels, spp
+
+
+def run(args) -> int:
+    from ..tune import Config, ReferenceSettings, choose_effects, make_views, measure, standard_configs
+    from ..tune.probe import probe_cost_model
+    from ..tune.configs import hybrid_graph
+    from ..tune.results import write_text
+    from .render import load
+
+    size, levels, spp = check(args)
+    report = Path(args.report) if args.report else None
+    if report is not None and report.exists() and not report.is_dir():
+        raise OptionError(f"--report {report}: exists and is not a folder; name a folder")
+    scene = load(args.scene)
+    view_set = make_views(scene, args.views, size)
+    settings = ReferenceSettings(args.reference_frames, args.reference_spp)
+    progress = not args.quiet
+    model, ref, _ = probe_cost_model(scene, view_set, hybrid_graph, {}, metric=args.metric, levels=levels,
+                                     frames=args.frames, warmup=args.warmup, reference_settings=settings,
+                                     cache_dir=args.cache, ppd=args.ppd, progress=progress)
+    tuned = choose_effects(model, args.budget_ms, levels)
+    tuned_name = f"tuned for {args.budget_ms:g} ms"
+    configs = standard_configs(scene, spp=spp) + [Config(tuned_name, dict(tuned.assignment))]
+    results = measure(scene, configs, reference=ref, views=view_set, frames=args.frames, warmup=args.warmup,
+                      ppd=args.ppd, progress=progress)
+    row = results[tuned_name]
+    tuned.measured_ms, tuned.measured_error, tuned.method = row.frame_ms, row.errors[args.metric], results.method
+    if tuned.measured_ms > args.budget_ms:
+        tuned.notes.append(f"measured {tuned.measured_ms:.3g} ms is over the budget (predicted "
+                           f"{tuned.predicted_ms:.3g} ms); leave headroom with a lower --budget-ms")
+    print(results.table())
+    print()
+    print(f"assignment for {scene.name} within {args.budget_ms:g} ms ({len(view_set)} view(s) of {size[0]}x{size[1]}):")
+    print(tuned.table())
+    if report is not None:
+        written = results.write(report, budget_ms=args.budget_ms)
+        written.append(write_text(report / "assignment.md", tuned.table() + "\n"))
+        written.append(write_text(report / "tune.json", json.dumps(tuned.as_dict(), indent=2, default=str) + "\n"))
+        for path in written:
+            print(f"wrote {path}")
+    return 0
