@@ -112,23 +112,38 @@ def lambert_ggx_under_point_light(p, n, eye, light, intensity, albedo, roughness
     return (albedo / np.pi * nl + spec) * intensity / d2
 
 
+def plane_radiance_through_pixels(view, size, offset, intensity=2.0):
+    """Closed-form radiance of plane_with_point_light seen through (x, y) + offset of every pixel."""
+    ys, xs = np.mgrid[0:size[1], 0:size[0]]
+    rays = [view.primary_ray((x + offset[0], y + offset[1])) for x, y in zip(xs.ravel(), ys.ravel())]
+    o = np.array([ro for ro, _ in rays])
+    d = np.array([rd for _, rd in rays])
+    p = o + (-o[:, 1] / d[:, 1])[:, None] * d
+    want = lambert_ggx_under_point_light(p, np.array([0.0, 1.0, 0.0]), view.pose.position,
+                                         np.array([0.0, 1.0, 0.0]), intensity, 0.8)
+    inside = (np.abs(p[:, 0]) < 1.9) & (np.abs(p[:, 2]) < 1.9)
+    return want.reshape(size[1], size[0]), inside.reshape(size[1], size[0])
+
+
 def test_next_event_estimation_matches_point_light_closed_form(gpu):
+    from rayvr.rendergraph.render_pass import RenderContext
+
     scene = builtin.plane_with_point_light(height=1.0, intensity=2.0, albedo=0.8)
     size = (16, 16)
     with Renderer(scene, pt_graph(max_bounces=1, pixel_jitter=False), size=size) as r:
         r.render()
-        color = r.read_output("Acc.dst")[0, ..., 0].astype(np.float64)
-        view, origin = r.view_set[0], r.view_set.origin()
-    ys, xs = np.mgrid[0:size[1], 0:size[0]]
-    rays = [view.primary_ray((x + 0.5, y + 0.5)) for x, y in zip(xs.ravel(), ys.ravel())]
-    o = np.array([ro for ro, _ in rays])
-    d = np.array([rd for _, rd in rays])
-    t = -o[:, 1] / d[:, 1]
-    p = o + t[:, None] * d
-    want = lambert_ggx_under_point_light(p, np.array([0.0, 1.0, 0.0]), view.pose.position,
-                                         np.array([0.0, 1.0, 0.0]), 2.0, 0.8).reshape(size[1], size[0])
-    inside = (np.abs(p[:, 0]) < 1.9) & (np.abs(p[:, 2]) < 1.9)
-    np.testing.assert_allclose(color.ravel()[inside], want.ravel()[inside], rtol=2e-3)
+        color = r.read_output("PT.color")[0, ..., 0].astype(np.float64)
+        view = r.view_set[0]
+        want, inside = plane_radiance_through_pixels(view, size, (0.5, 0.5))
+        np.testing.assert_allclose(color[inside], want[inside], rtol=2e-3)
+        # the views' TAA jitter moves the rays off the pixel centres
+        r.views_buffer.write(r.view_set.pack(r.view_set.origin(), 1, 0, jitter=(0.25, -0.25)))
+        r.compiled.execute(RenderContext(r.gl, r.gpu.caps, scene=r.gpu_scene, views_buffer=r.views_buffer,
+                                         view_set=r.view_set, frame_index=1))
+        jittered = r.read_output("PT.color")[0, ..., 0].astype(np.float64)
+    want, inside = plane_radiance_through_pixels(view, size, (0.75, 0.25))
+    np.testing.assert_allclose(jittered[inside], want[inside], rtol=2e-3)
+    assert np.abs(jittered - color)[inside].max() > 1e-3
 
 
 def gbuffer_pt_graph(pixel_list=False, **props):

@@ -36,7 +36,8 @@ class PathTracer(RenderPass):
     1 = direct light only, 0 = emission only), `rr_start` (bounce from which Russian roulette
     may end a path), `clamp` (0 = off; > 0 caps each sample's radiance per channel, biased),
     `background` (radiance of rays that escape), `pixel_jitter` (random sub-pixel offsets in
-    "full" mode: anti-aliasing once accumulated), `mode` ("full" or "gbuffer")."""
+    "full" mode: anti-aliasing once accumulated; off: pixel centres moved by the views' TAA
+    jitter), `mode` ("full" or "gbuffer")."""
 
     COLOR = "color"
     PIXELS = "pixels"

@@ -43,7 +43,9 @@ vec3 pt_pixel(ivec3 p) {
 }
 #else
 vec3 pt_sample(ivec3 p, inout Rng rng) {
-    vec2 offset = pt_pixel_jitter ? rng_next2(rng) : vec2(0.5);
+    // random sub-pixel positions (anti-aliasing once accumulated), else the centre moved by the
+    // views' TAA jitter so the rays register with a jittered raster
+    vec2 offset = pt_pixel_jitter ? rng_next2(rng) : vec2(0.5) + views[p.z].jitter.xy;
     vec3 o, d;
     view_primary_ray(uint(p.z), vec2(p.xy) + offset, o, d);
     Hit hit;
