@@ -146,6 +146,19 @@ def test_next_event_estimation_matches_point_light_closed_form(gpu):
     assert np.abs(jittered - color)[inside].max() > 1e-3
 
 
+def test_all_views_in_one_dispatch_each_view_its_own_rays(gpu):
+    scene = builtin.plane_with_point_light(height=1.0, intensity=2.0, albedo=0.8)
+    size = (16, 16)
+    with Renderer(scene, pt_graph(max_bounces=1, pixel_jitter=False), views=2, size=size) as r:
+        r.render()
+        color = r.read_output("PT.color")[..., 0].astype(np.float64)
+        views = list(r.view_set)
+    assert color.shape[0] == 2 and np.abs(color[0] - color[1]).max() > 1e-3
+    for layer, view in enumerate(views):
+        want, inside = plane_radiance_through_pixels(view, size, (0.5, 0.5))
+        np.testing.assert_allclose(color[layer][inside], want[inside], rtol=2e-3)
+
+
 def gbuffer_pt_graph(pixel_list=False, **props):
     from rayvr.passes import EffectCompaction, GBufferRaster
     from rayvr.passes._common import GBUFFER_PINS
