@@ -111,3 +111,15 @@ def test_hybrid_path_traced_pixels_match_the_full_screen_path_tracer(gpu):
         got = r.read_output("Composite.color")[..., :3].astype(np.float64)
     assert got.mean() == pytest.approx(want.mean(), rel=0.01)
     assert np.abs(got - want).mean() < 0.01 * want.mean()
+
+
+def test_graphs_round_trip_through_json_and_python(tmp_path):
+    import json
+
+    import rayvr as rv
+
+    for g in (path_traced(samples_per_pixel=2, clamp=5.0, max_frames=100), hybrid_taa(alpha=0.2, sigma=1.5)):
+        d = g.to_dict()
+        assert rv.RenderGraph.from_dict(json.loads(json.dumps(d))).to_dict() == d
+        for ext in ("py", "json"):
+            assert rv.RenderGraph.load(g.save(tmp_path / f"{g.name}.{ext}")).to_dict() == d
