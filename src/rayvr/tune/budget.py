@@ -15,6 +15,8 @@ share of the image error. `rayvr.tune.probe.probe_cost_model` measures one on th
 lowest allowed level; repeatedly take the upgrade (one material to any higher level) with the
 largest error reduction per added ms among those that keep the predicted frame within the
 budget (an upgrade that costs nothing and reduces error goes first); stop when none is left.
+Ratio-greedy alone can miss one large upgrade (the 0/1 knapsack counter-example), so it also
+runs once starting from the largest single error reduction that fits and keeps the better.
 If even the lowest levels exceed the budget it returns them, marked `fits=False`, with a note.
 """
 from __future__ import annotations
@@ -149,36 +151,51 @@ def choose_effects(model: CostModel, budget_ms: float = 11.1, levels=tuple(Effec
             raise OptionError(f"material '{m}': the cost model has none of the allowed levels "
                               f"{[e.name for e in allowed]} (it has {[e.name for e in model.levels(m)]})")
         options[m] = opts
-    current = {m: opts[0] for m, opts in options.items()}
-    frame = model.predict_ms(current)
-    notes, steps = [], []
+    lowest = {m: opts[0] for m, opts in options.items()}
+    frame = model.predict_ms(lowest)
+    notes = []
     if frame > budget_ms:
         notes.append(f"even the cheapest assignment ({frame:.3g} ms) exceeds the {budget_ms:g} ms budget: every "
                      f"material stays at its lowest level; render fewer or smaller views or drop passes")
-    while frame <= budget_ms:
-        best = None
-        for m, opts in options.items():
-            for new in opts:
-                if new <= current[m]:
-                    continue
-                trial = {**current, m: new}
-                after = model.predict_ms(trial)
-                gain = model.error[m][current[m]] - model.error[m][new]
-                if after > budget_ms or gain <= 0:
-                    continue
-                step = Upgrade(m, current[m], new, after - frame, gain, after)
-                # Best error reduction per ms; ties: the larger reduction, then the cheaper frame.
-                key = (step.ratio, gain, -after)
-                if best is None or key > best[0]:
-                    best = (key, step)
-        if best is None:
-            break
-        step = best[1]
-        current[step.material] = step.new
-        frame = step.frame_ms
-        steps.append(step)
+        current, steps = lowest, []
+    else:
+        current, steps = _greedy(model, options, lowest, budget_ms, [])
+        # Ratio-greedy alone can miss one large upgrade that fits (the knapsack counter-example):
+        # also start from the single largest error reduction and keep the better result.
+        first = max(_upgrades(model, options, lowest, budget_ms), key=lambda u: (u.error_reduction, -u.frame_ms),
+                    default=None)
+        if first is not None:
+            alt, alt_steps = _greedy(model, options, {**lowest, first.material: first.new}, budget_ms, [first])
+            if model.predict_error(alt) < model.predict_error(current) - 1e-12:
+                current, steps = alt, alt_steps
+        frame = model.predict_ms(current)
     return TuneResult(current, float(budget_ms), frame, model.predict_error(current), frame <= budget_ms, steps,
                       notes, model, method=model.method)
+
+
+def _upgrades(model: CostModel, options: dict, current: dict, budget_ms: float):
+    """Every single-material upgrade from `current` that fits the budget and lowers the error."""
+    frame = model.predict_ms(current)
+    for m, opts in options.items():
+        for new in opts:
+            if new <= current[m]:
+                continue
+            after = model.predict_ms({**current, m: new})
+            gain = model.error[m][current[m]] - model.error[m][new]
+            if after <= budget_ms and gain > 0:
+                yield Upgrade(m, current[m], new, after - frame, gain, after)
+
+
+def _greedy(model: CostModel, options: dict, current: dict, budget_ms: float, steps: list):
+    """Take the best error reduction per added ms (ties: larger reduction, cheaper frame) until none fits."""
+    current, steps = dict(current), list(steps)
+    while True:
+        best = max(_upgrades(model, options, current, budget_ms),
+                   key=lambda u: (u.ratio, u.error_reduction, -u.frame_ms), default=None)
+        if best is None:
+            return current, steps
+        current[best.material] = best.new
+        steps.append(best)
 
 
 def tune_effects(renderer_or_scene, budget_ms: float = 11.1, size=None, views=None, metric: str = "flip",

@@ -1,0 +1,110 @@
+"""The budget tuner's greedy choice on hand-made cost models (no GPU)."""
+import itertools
+
+import numpy as np
+import pytest
+
+from rayvr import Effect
+from rayvr.errors import OptionError
+from rayvr.tune import CostModel, choose_effects
+
+R, S, F, P = Effect.RASTER, Effect.SHADOWS, Effect.REFLECTIONS, Effect.PATH_TRACED
+
+
+def model(ms, error, base=2.0, overhead=None, rest=0.0):
+    return CostModel(base, ms, error, overhead or {}, rest)
+
+
+def maximal(model_, result, budget, levels=tuple(Effect)):
+    """No single further upgrade both fits and lowers the error (the greedy stops only then)."""
+    for m, e in result.assignment.items():
+        for new in levels:
+            if new > e:
+                trial = {**result.assignment, m: new}
+                if model_.predict_ms(trial) <= budget and model_.error[m][new] < model_.error[m][e]:
+                    return False
+    return True
+
+
+def test_prefers_the_larger_error_reduction_per_ms():
+    m = model({"A": {R: 0, S: 4.0}, "B": {R: 0, S: 1.0}},
+              {"A": {R: 1.0, S: 0.2}, "B": {R: 1.0, S: 0.7}})   # A: 0.2/ms, B: 0.3/ms
+    out = choose_effects(m, budget_ms=3.5, levels=[R, S])
+    assert out.assignment == {"A": R, "B": S}
+    assert out.predicted_ms == pytest.approx(3.0) and out.fits
+    assert out.predicted_error == pytest.approx(1.7)
+    out = choose_effects(m, budget_ms=7.0, levels=[R, S])      # room for both, B still first
+    assert out.assignment == {"A": S, "B": S}
+    assert [s.material for s in out.steps] == ["B", "A"]
+
+
+def test_jumps_levels_when_the_higher_level_pays_off_better():
+    m = model({"A": {R: 0, S: 1.0, F: 2.0, P: 3.0}},
+              {"A": {R: 1.0, S: 0.99, F: 0.98, P: 0.1}})
+    out = choose_effects(m, budget_ms=10.0)
+    assert out.assignment == {"A": P}
+    assert [(s.old, s.new) for s in out.steps] == [(R, P)]
+
+
+def test_all_raster_over_budget_degrades_gracefully():
+    m = model({"A": {R: 0, S: 1.0}}, {"A": {R: 1.0, S: 0.5}}, base=20.0)
+    out = choose_effects(m, budget_ms=11.1)
+    assert out.assignment == {"A": R}
+    assert not out.fits and out.predicted_ms == pytest.approx(20.0)
+    assert "exceeds the 11.1 ms budget" in out.notes[0]
+    assert "does NOT fit" in out.table()
+
+
+def test_level_overhead_is_paid_once_and_counted_in_the_budget():
+    m = model({"A": {R: 0, S: 1.0}, "B": {R: 0, S: 1.0}},
+              {"A": {R: 1.0, S: 0.0}, "B": {R: 1.0, S: 0.0}}, base=1.0, overhead={S: 2.0})
+    assert m.predict_ms({"A": S, "B": S}) == pytest.approx(5.0)   # 1 + 2 (once) + 1 + 1
+    assert choose_effects(m, budget_ms=3.9).assignment == {"A": R, "B": R}   # 1 + 2 + 1 = 4 > 3.9
+    out = choose_effects(m, budget_ms=4.0)
+    assert sorted(out.assignment.values()) == [R, S] and out.predicted_ms == pytest.approx(4.0)
+
+
+def test_no_upgrade_without_error_reduction_and_free_upgrades_first():
+    m = model({"Hidden": {R: 0, S: 0.0}, "Worse": {R: 0, S: 0.5}, "Free": {R: 0, S: 0.0}},
+              {"Hidden": {R: 0.0, S: 0.0}, "Worse": {R: 0.1, S: 0.2}, "Free": {R: 0.3, S: 0.1}})
+    out = choose_effects(m, budget_ms=100.0, levels=[R, S])
+    assert out.assignment == {"Hidden": R, "Worse": R, "Free": S}
+
+
+def test_levels_and_fixed_are_respected():
+    m = model({"A": {R: 0, S: 1, F: 2, P: 3}, "B": {R: 0, S: 1, F: 2, P: 3}},
+              {"A": {R: 4, S: 3, F: 2, P: 1}, "B": {R: 4, S: 3, F: 2, P: 1}})
+    out = choose_effects(m, budget_ms=100.0, levels=[R, S, F], fixed={"B": S})
+    assert out.assignment == {"A": F, "B": S}
+    with pytest.raises(OptionError, match="no material 'C'"):
+        choose_effects(m, fixed={"C": S})
+    with pytest.raises(OptionError, match="budget_ms"):
+        choose_effects(m, budget_ms=0)
+
+
+@pytest.mark.parametrize("seed", range(25))
+def test_random_models_fit_and_come_close_to_the_exhaustive_optimum(seed):
+    rng = np.random.default_rng(seed)
+    names = [f"M{i}" for i in range(5)]
+    ms = {n: dict(zip(Effect, np.cumsum([0, *rng.uniform(0.1, 3.0, 3)]))) for n in names}
+    err = {n: dict(zip(Effect, rng.uniform(0, 1, 4))) for n in names}
+    base = float(rng.uniform(0.5, 3.0))
+    m = model(ms, err, base=base, overhead={S: 0.3, F: 0.5, P: 0.8})
+    budget = base + float(rng.uniform(0.5, 12.0))
+    out = choose_effects(m, budget_ms=budget)
+    assert out.fits and out.predicted_ms <= budget + 1e-9
+    assert out.predicted_ms == pytest.approx(m.predict_ms(out.assignment))
+    assert out.predicted_error == pytest.approx(m.predict_error(out.assignment))
+    assert maximal(m, out, budget)
+    # the exhaustive optimum over all 4^5 assignments is the oracle: greedy keeps most of its gain
+    combos = [dict(zip(names, c)) for c in itertools.product(Effect, repeat=len(names))]
+    best = min(m.predict_error(a) for a in combos if m.predict_ms(a) <= budget)
+    start = m.predict_error({n: R for n in names})
+    assert start - out.predicted_error >= 0.8 * (start - best) - 1e-9
+
+
+def test_as_dict_round_trips_names():
+    m = model({"A": {R: 0, S: 1.0}}, {"A": {R: 1.0, S: 0.5}})
+    d = choose_effects(m, 5.0).as_dict()
+    assert d["assignment"] == {"A": "SHADOWS"} and d["steps"][0]["to"] == "SHADOWS"
+    assert d["model"]["ms"]["A"]["SHADOWS"] == 1.0
