@@ -13,7 +13,7 @@ from rayvr.rendergraph.profile import RollingTimes
 class Maybe(RenderPass):
     """Clear-like pass the scene may not need (skip_reason), with an optional input."""
 
-    PROPERTIES = {"skip": "", "value": 0.5}
+    PROPERTIES = {"skip": "", "value": 128 / 255}   # no .5 tie in unorm8
 
     def reflect(self, cd):
         r = Reflection()

@@ -91,7 +91,8 @@ def test_colour_box_clamping_stops_ghosting(gpu):
     run(grey)
     white = np.full((1, H, W, 4), 3.0, np.float32)
     out = run(white)   # flat neighbourhood: the box is the new colour; the old grey is clamped away
-    np.testing.assert_allclose(out[..., :3], 3.0, rtol=1e-5)
+    # (ghosting would leave 2.8; NVIDIA's YCoCg round trip lands 8e-5 off exact)
+    np.testing.assert_allclose(out[..., :3], 3.0, rtol=2e-4)
     unclamped = Frames(gpu, TAA(alpha=0.1, clamp=False, format="rgba32f"))
     unclamped(grey)
     np.testing.assert_allclose(unclamped(white)[..., :3], 0.9 * 1.0 + 0.1 * 3.0, rtol=1e-5)
