@@ -40,8 +40,8 @@ def run(args) -> dict:
     configs = rv.tune.standard_configs(scene, reflect=args.reflect, spp=spp)
     results = rv.tune.measure(scene, configs, size=size, views=args.views, frames=frames, warmup=warmup,
                               reference_settings=settings, cache_dir=args.cache, ppd=args.ppd)
-    notes = [f"timing: {results.method}; error of one frame against {settings.frames} x {settings.spp} spp "
-             f"path-traced reference ({results.info['reference']})"]
+    notes = [(f"timing: {results.method}; error of one frame against {settings.frames} x {settings.spp} spp "
+              f"path-traced reference ({results.info['reference']})")]
     if not getattr(args, "no_save", False):
         for metric in results.metrics():
             path = results.plot(metric, Path(args.out) / f"error_vs_time_{metric}.png")

@@ -118,8 +118,8 @@ def test_probed_model_splits_time_and_error_by_material(gpu, scene, reference):
 
 def test_tune_effects_fits_the_budget_or_says_why(gpu, scene, reference):
     ref, _ = reference
-    kw = dict(size=SIZE, views=1, levels=[Effect.RASTER, Effect.SHADOWS], frames=2, warmup=1, reference=ref,
-              progress=False)
+    kw = {"size": SIZE, "views": 1, "levels": [Effect.RASTER, Effect.SHADOWS], "frames": 2, "warmup": 1,
+          "reference": ref, "progress": False}
     tight = rv.tune.tune_effects(scene, budget_ms=1e-3, apply=False, **kw)
     assert not tight.fits and set(tight.assignment.values()) == {Effect.RASTER}
     assert "exceeds" in tight.notes[0] and tight.measured_ms is not None

@@ -75,9 +75,16 @@ def check(args) -> tuple:
 
 
 def run(args) -> int:
-    from ..tune import Config, ReferenceSettings, choose_effects, make_views, measure, standard_configs
-    from ..tune.probe import probe_cost_model
+    from ..tune import (
+        Config,
+        ReferenceSettings,
+        choose_effects,
+        make_views,
+        measure,
+        standard_configs,
+    )
     from ..tune.configs import hybrid_graph
+    from ..tune.probe import probe_cost_model
     from ..tune.results import write_text
     from .render import load
 

@@ -66,7 +66,9 @@ class CostModel:
         return self.rest_error + sum(self.error[m][e] for m, e in assignment.items())
 
     def as_dict(self) -> dict:
-        name = lambda d: {e.name: v for e, v in d.items()}  # noqa: E731
+        def name(d):
+            return {e.name: v for e, v in d.items()}
+
         return {"base_ms": self.base_ms, "overhead_ms": name(self.overhead_ms), "rest_error": self.rest_error,
                 "metric": self.metric, "method": self.method, "pixels": dict(self.pixels),
                 "ms": {m: name(d) for m, d in self.ms.items()}, "error": {m: name(d) for m, d in self.error.items()}}
@@ -213,7 +215,7 @@ def tune_effects(renderer_or_scene, budget_ms: float = 11.1, size=None, views=No
     from .probe import probe_cost_model, render_assignment
 
     scene, view_set, builder, gpu = _target(renderer_or_scene, size, views, graph, gpu)
-    model, ref, pin = probe_cost_model(scene, view_set, builder, options or {}, metric=metric, levels=levels,
+    model, ref, _ = probe_cost_model(scene, view_set, builder, options or {}, metric=metric, levels=levels,
                                        frames=frames, warmup=warmup, reference=reference,
                                        reference_settings=reference_settings, cache_dir=cache_dir, ppd=ppd,
                                        progress=progress, gpu=gpu)
@@ -247,7 +249,9 @@ def _target(renderer_or_scene, size, views, graph, gpu):
             view_set = default_views(r.scene, r.view_count, r.size)
         if graph is None:
             data = r.graph.to_dict()
-            graph = lambda **_: RenderGraph.from_dict(data)  # noqa: E731
+
+            def graph(**_):
+                return RenderGraph.from_dict(data)
         return r.scene, view_set, graph, gpu or r.gpu
     view_set = make_views(renderer_or_scene, 2 if views is None else views, size or (1440, 1600))
     return renderer_or_scene, view_set, graph or hybrid_graph, gpu
