@@ -141,3 +141,23 @@ def test_multiview_on_without_the_extension_is_refused(gpu):
     g.mark_output("GBuffer.posW")
     with pytest.raises(rv.GpuError, match="multiview='auto'"):
         Renderer(builtin.quad(), g, views=2, size=(8, 8))
+
+
+def test_taa_jitter_moves_the_raster_sample_like_the_rays(gpu):
+    """With jitter j the G-buffer samples pixel centre + j, as view_primary_ray does."""
+    from rayvr.passes.taa import halton_jitter
+
+    scene = two_materials()
+    views = default_views(scene, 1, (16, 16))
+    j = np.array(halton_jitter(1))         # frame 1's: both components away from 0
+    assert np.abs(j).min() > 0.05
+    with Renderer(scene, gbuffer_graph(), views=views, jitter=True) as r:
+        r.render()
+        r.render()
+        pos = r.read_output("GBuffer.posW")[0, ..., :3].astype(np.float64)
+        origin = views.origin()
+    v = views[0]
+    for x, y in [(3, 4), (8, 8), (12, 10)]:
+        o, d = v.primary_ray((x + 0.5 + j[0], y + 0.5 + j[1]), origin)
+        want = o + d * (-(o[2] + origin[2]) / d[2])          # the plane z = 0 in world space
+        np.testing.assert_allclose(pos[y, x], want, atol=2e-4)

@@ -18,6 +18,7 @@ import struct
 import numpy as np
 
 from .errors import OptionError, RayvrError
+from .passes.taa import TAA, halton_jitter
 from .xr.views import HEADER_BYTES, VIEW_STRUCT_FLOATS, Fov, Pose, View, ViewSet
 
 DEFAULT_IPD = 0.063   # metres; the adult mean (Dodgson 2004)
@@ -88,11 +89,13 @@ def default_views(scene, views: int = 1, size=(256, 256), ipd: float = DEFAULT_I
 class Renderer:
     """Renders `graph` over `scene` for a sink's views (or fixed `views`), see the module docstring.
 
-    `views`: a ViewSet, or an int view count (from the scene's camera); `size`: per-view pixels.
+    `views`: a ViewSet, or an int view count (from the scene's camera); `size`: per-view pixels;
+    `jitter`: sub-pixel camera jitter per frame (default: when the graph has TAA).
     Without a sink the Renderer renders `render(view_set)` calls for its fixed views.
     """
 
-    def __init__(self, scene, graph, sink=None, views=None, size=None, gpu=None, profiling: bool = True):
+    def __init__(self, scene, graph, sink=None, views=None, size=None, gpu=None, profiling: bool = True,
+                 jitter: bool | None = None):
         from .gpu import get_context
 
         self.scene = scene
@@ -125,6 +128,9 @@ class Renderer:
         self._materials_version = None
         self._effects = None
         self._opened = False
+        # Sub-pixel jitter (Halton 2,3) only helps a graph that resolves it over time: on by
+        # default when the graph has a TAA pass.
+        self._jitter = any(isinstance(p, TAA) for p in graph.passes.values()) if jitter is None else jitter
         self._compile()
 
     # -- compile -----------------------------------------------------------------------------
@@ -160,7 +166,8 @@ class Renderer:
         self._maybe_recompile()
         origin = view_set.origin()
         self.gpu_scene.update(origin)
-        packed = bytearray(view_set.pack(origin, self.frame_index, 0))
+        jitter = halton_jitter(self.frame_index) if self._jitter else (0.0, 0.0)
+        packed = bytearray(view_set.pack(origin, self.frame_index, 0, jitter=jitter))
         # Accumulation restarts when any view's matrices or the materials change.
         mats = np.frombuffer(packed, np.float32, offset=HEADER_BYTES).reshape(len(view_set), -1)[:, :48]
         key = (mats.tobytes(), self.scene.materials.version)

@@ -39,6 +39,9 @@ void main() {
     v_clip = views[view].view_proj * vec4(r.position, 1.0);
     v_prev_clip = views[view].prev_view_proj * vec4(r.position, 1.0);
     gl_Position = v_clip;
+    // TAA jitter: sample at pixel centre + jitter (as the ray passes do), so the geometry moves by
+    // -jitter; v_clip/v_prev_clip stay unjittered so motion vectors carry no jitter.
+    gl_Position.xy -= views[view].jitter.xy * (2.0 / views[view].clip.zw) * gl_Position.w;
 #if !RAYVR_MULTIVIEW
     gl_Layer = int(view);
 #endif
