@@ -34,6 +34,7 @@ def test_tune_prints_table_and_assignment_and_writes_the_report(gpu, tmp_path, c
     (["--views", "0"], "--views 0: must be >= 1"),
     (["--levels", "raster,mirrors"], "--levels: unknown effect 'mirrors'"),
     (["--spp", "1,x"], "--spp 'x': samples per pixel must be integers"),
+    (["--metrics", "flip,ssim"], "--metrics flip,ssim: unknown metric 'ssim'"),
     (["--ppd", "-3"], "--ppd -3.0: pixels per degree must be > 0"),
 ])
 def test_bad_options_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, args, message):

@@ -87,6 +87,9 @@ def test_measure_refuses_bad_input(gpu, scene, reference):
         measure(scene, [Config("r", Effect.RASTER)], reference=ref, size=SIZE, views=2, progress=False)
     with pytest.raises(OptionError, match="no material 'Flor'.*did you mean 'Floor'"):
         measure(scene, [Config("r", {"Flor": Effect.RASTER})], reference=ref, size=SIZE, views=1, progress=False)
+    with pytest.raises(OptionError, match="unknown metric 'ssim'"):
+        measure(scene, [Config("r", Effect.RASTER)], reference=ref, size=SIZE, views=1, metrics=("ssim",),
+                progress=False)
     with pytest.raises(OptionError, match="unique"):
         measure(scene, [Config("r", Effect.RASTER)] * 2, reference=ref, size=SIZE, views=1, progress=False)
     bad = ref.copy()
@@ -111,6 +114,9 @@ def test_probed_model_splits_time_and_error_by_material(gpu, scene, reference):
                      progress=False)["r"]
     assert model.predict_error({n: Effect.RASTER for n in model.materials}) == pytest.approx(
         raster.errors["relmse"], rel=1e-5)
+    only = measure(scene, [Config("r", Effect.RASTER)], reference=ref, views=views, frames=2, warmup=1,
+                   metrics=("relmse",), progress=False)
+    assert only["r"].errors == {"relmse": pytest.approx(raster.errors["relmse"])} and only.metrics() == ["relmse"]
     # ray time is shared by pixel count: bigger materials cost more
     assert model.ms["BackWall"][Effect.SHADOWS] > model.ms["Light"][Effect.SHADOWS] > 0
     assert all(model.ms[n][Effect.RASTER] == 0 for n in model.materials)

@@ -14,7 +14,8 @@ from pathlib import Path
 
 from ..errors import OptionError
 
-METRICS = ("flip", "relmse")
+METRICS = ("flip", "relmse")                 # the tuner's: per-pixel error maps
+TABLE_METRICS = ("flip", "relmse", "psnr")
 
 
 def register(sub) -> None:
@@ -25,6 +26,8 @@ def register(sub) -> None:
     p.add_argument("--size", default="1440x1600", help="per-view size WIDTHxHEIGHT (default 1440x1600)")
     p.add_argument("--report", help="folder for the table, CSV, JSON, plots and assignment")
     p.add_argument("--metric", default="flip", choices=METRICS, help="error the tuner minimises (default flip)")
+    p.add_argument("--metrics", default="flip,relmse,psnr",
+                   help="metrics of the table, comma-separated (default flip,relmse,psnr; FLIP is the slow one)")
     p.add_argument("--levels", default="raster,shadows,reflections,path_traced",
                    help="effects the tuner may choose, comma-separated (default all four)")
     p.add_argument("--spp", default="1,4,16", help="samples per pixel of the PATH_TRACED table rows (default 1,4,16)")
@@ -71,7 +74,13 @@ def check(args) -> tuple:
         raise OptionError(f"--ppd {args.ppd}: pixels per degree must be > 0")
     levels = parse_list(args.levels, "--levels", lambda s: Effect.parse(s, where="--levels"))
     spp = parse_list(args.spp, "--spp", parse_spp)
-    return size, levels, spp
+    table_metrics = parse_list(args.metrics, "--metrics", str.lower)
+    for m in table_metrics:
+        if m not in TABLE_METRICS:
+            raise OptionError(f"--metrics {args.metrics}: unknown metric '{m}'; use some of {', '.join(TABLE_METRICS)}")
+    if args.metric not in table_metrics:
+        table_metrics.append(args.metric)
+    return size, levels, spp, table_metrics
 
 
 def run(args) -> int:
@@ -88,7 +97,7 @@ def run(args) -> int:
     from ..tune.results import write_text
     from .render import load
 
-    size, levels, spp = check(args)
+    size, levels, spp, table_metrics = check(args)
     report = Path(args.report) if args.report else None
     if report is not None and report.exists() and not report.is_dir():
         raise OptionError(f"--report {report}: exists and is not a folder; name a folder")
@@ -103,7 +112,7 @@ def run(args) -> int:
     tuned_name = f"tuned for {args.budget_ms:g} ms"
     configs = standard_configs(scene, spp=spp) + [Config(tuned_name, dict(tuned.assignment))]
     results = measure(scene, configs, reference=ref, views=view_set, frames=args.frames, warmup=args.warmup,
-                      ppd=args.ppd, progress=progress)
+                      ppd=args.ppd, metrics=table_metrics, progress=progress)
     row = results[tuned_name]
     tuned.measured_ms, tuned.measured_error, tuned.method = row.frame_ms, row.errors[args.metric], results.method
     if tuned.measured_ms > args.budget_ms:

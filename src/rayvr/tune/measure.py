@@ -77,14 +77,16 @@ def make_views(scene, views=2, size=(256, 256)):
 
 def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: int = 20, warmup: int = 3,
             reference_settings: ReferenceSettings | None = None, cache_dir=None, ppd: float | None = None,
-            eps: float = 1e-2, keep_images: bool = False, progress: bool = True, gpu=None) -> Results:
+            eps: float = 1e-2, metrics=tuple(M.METRICS), keep_images: bool = False, progress: bool = True,
+            gpu=None) -> Results:
     """Render every `Config` of `configs` over `scene` and return its GPU ms and image error.
 
     `reference`: a (views, h, w, c) linear image (row 0 at the top), an .npz file with an
     'image' array, or None to render the converged reference (cached, see
     rayvr.tune.reference). `views`: a ViewSet or a view count from the scene's camera, `size`
     per view. Error metrics: FLIP (HDR, `ppd` pixels per degree), relMSE (`eps`), PSNR of the
-    sRGB-encoded images. The scene's material effects are restored afterwards."""
+    sRGB-encoded images; `metrics` picks some (HDR-FLIP of a 1440x1600 view takes seconds of CPU).
+    The scene's material effects are restored afterwards."""
     from tqdm import tqdm
 
     from ..renderer import Renderer
@@ -98,6 +100,7 @@ def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: in
     for c in configs:
         if not isinstance(c, Config):
             raise OptionError(f"measure: {c!r} is not a rayvr.tune.Config")
+    metrics = M.check_metrics(metrics)
     view_set = make_views(scene, views, size)
     ref, ref_source = load_reference(scene, view_set, reference, reference_settings, cache_dir, gpu, progress)
     saved = {m.name: m.effect for m in scene.materials}
@@ -110,7 +113,8 @@ def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: in
             with Renderer(scene, graph, views=view_set, gpu=gpu) as r:
                 timing = timed_frames(r, frames, warmup)
                 image = r.read_output(pin, flip_y=True)
-            errors = M.all_metrics(image, ref, ppd=ppd, eps=eps, names=(f"config '{config.name}' {pin}", "reference"))
+            errors = M.all_metrics(image, ref, ppd=ppd, eps=eps, names=(f"config '{config.name}' {pin}", "reference"),
+                                   which=metrics)
             rows.append(ConfigResult(config.name, {k: v.name for k, v in assignment.items()}, dict(config.options),
                                      timing.frame_ms, timing.pass_ms, timing.cpu_ms, errors,
                                      image if keep_images else None))

@@ -15,6 +15,7 @@ budget tuner sums them over each material's pixels.
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -135,11 +136,17 @@ def flip_map(test, reference, dynamic_range: str = "auto", ppd: float | None = N
         if mode == "ldr" and img.max() > 1.0:
             raise OptionError(f"{name}: values up to {img.max():.3g} in LDR mode; LDR-FLIP takes sRGB values in "
                               f"[0, 1] (or integers); use dynamic_range='hdr' for linear radiance")
-    out = np.empty(t.shape[:3], dtype=np.float32)
-    for v in range(t.shape[0]):
+    def one_view(v: int) -> np.ndarray:
         tv, rv = (np.ascontiguousarray(a[v], dtype=np.float32) for a in (t, r))
-        out[v] = _flip_view(flip_evaluator, tv, rv, mode, params)
-    return out
+        return _flip_view(flip_evaluator, tv, rv, mode, params)
+
+    if t.shape[0] == 1:
+        return one_view(0)[None]
+    # HDR-FLIP of a 1440x1600 view takes seconds of CPU; views run in threads.
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(min(t.shape[0], os.cpu_count() or 1)) as pool:
+        return np.stack(list(pool.map(one_view, range(t.shape[0]))))
 
 
 def _flip_view(flip_evaluator, test: np.ndarray, ref: np.ndarray, mode: str, params: dict) -> np.ndarray:
@@ -173,9 +180,22 @@ METRICS = {"flip": "FLIP (mean, HDR)", "relmse": "relMSE", "psnr": "PSNR dB (sRG
 LOWER_IS_BETTER = {"flip": True, "relmse": True, "psnr": False}
 
 
-def all_metrics(test, reference, ppd: float | None = None, eps: float = 1e-2, names=("test", "reference")) -> dict:
-    """{"flip", "relmse", "psnr"} of linear `test` against linear `reference`: FLIP in HDR mode,
-    relMSE on radiance, PSNR on the sRGB-encoded images clamped to [0, 1] (peak 1)."""
+def check_metrics(which) -> tuple[str, ...]:
+    """`which` as a tuple of known metric names (an error names the unknown one)."""
+    which = (which,) if isinstance(which, str) else tuple(which)
+    for m in which:
+        if m not in METRICS:
+            raise OptionError(f"metrics: unknown metric {m!r}; use some of {', '.join(METRICS)}")
+    if not which:
+        raise OptionError(f"metrics: choose at least one of {', '.join(METRICS)}")
+    return which
+
+
+def all_metrics(test, reference, ppd: float | None = None, eps: float = 1e-2, names=("test", "reference"),
+                which=tuple(METRICS)) -> dict:
+    """The metrics `which` (default all) of linear `test` against linear `reference`: "flip" in
+    HDR mode, "relmse" on radiance, "psnr" of the sRGB-encoded images clamped to [0, 1] (peak 1)."""
     t, r = pair(test, reference, names)
-    return {"flip": flip(t, r, "hdr", ppd, names), "relmse": rel_mse(t, r, eps, names),
-            "psnr": psnr(srgb_encode(t), srgb_encode(r), 1.0, names)}
+    compute = {"flip": lambda: flip(t, r, "hdr", ppd, names), "relmse": lambda: rel_mse(t, r, eps, names),
+               "psnr": lambda: psnr(srgb_encode(t), srgb_encode(r), 1.0, names)}
+    return {m: compute[m]() for m in check_metrics(which)}
