@@ -79,6 +79,10 @@ def test_measure_times_passes_and_scores_against_the_reference(gpu, scene, refer
     assert (tmp_path / "report" / "error_vs_ms_flip.png").read_bytes()[:4] == b"\x89PNG"
     assert "| shadows |" in res.table() and res.to_csv().splitlines()[0].startswith("configuration,frame_ms,flip")
     assert not list((tmp_path / "report").glob(".*"))                   # no temporary files left
+    loaded = rv.tune.Results.load(tmp_path / "report" / "results.json")
+    assert loaded.table() == res.table() and loaded["shadows"].pass_ms == shadows.pass_ms
+    with pytest.raises(OptionError, match="not a rayvr.tune results.json"):
+        rv.tune.Results.load(tmp_path / "report" / "table.md")
 
 
 def test_measure_refuses_bad_input(gpu, scene, reference):

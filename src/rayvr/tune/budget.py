@@ -210,7 +210,8 @@ def tune_effects(renderer_or_scene, budget_ms: float = 11.1, size=None, views=No
     record its measured ms and error. With `apply` the scene's materials get the chosen effects.
 
     `renderer_or_scene`: a Scene (with `size`, `views`: default 2 views of 1440x1600) or an
-    rv.Renderer (its scene, views and graph; `graph` then defaults to a copy of its graph).
+    rv.Renderer (its scene, views and graph; `graph` then defaults to a copy of its graph; with a
+    sink, views from the scene's camera at the sink's view count and size).
     `graph`: a builder `graph(**options)` (default rayvr.tune.hybrid_graph)."""
     from .probe import probe_cost_model, render_assignment
 

@@ -66,6 +66,18 @@ class Results:
         self.rows = list(rows)
         self.info = dict(info)
 
+    @classmethod
+    def load(cls, path) -> Results:
+        """Results from a results.json that `write()` made (images are not stored)."""
+        from ..errors import OptionError
+
+        try:
+            doc = json.loads(Path(path).read_text())
+            rows = [ConfigResult(**c) for c in doc["configurations"]]
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise OptionError(f"{path}: not a rayvr.tune results.json ({exc})") from None
+        return cls(rows, doc.get("info", {}))
+
     @property
     def method(self) -> str:
         return self.info.get("method", "?")
