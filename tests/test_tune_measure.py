@@ -140,3 +140,18 @@ def test_tune_effects_fits_the_budget_or_says_why(gpu, scene, reference):
         assert e == Effect.SHADOWS or roomy.model.error[n][Effect.SHADOWS] >= roomy.model.error[n][Effect.RASTER]
     for m in scene.materials:
         m.effect = Effect.SHADOWS
+
+
+def test_tune_effects_on_a_renderer_uses_its_views_and_graph(gpu, scene, reference):
+    ref, _ = reference
+    with rv.Renderer(scene, rv.graphs.hybrid(), views=1, size=SIZE) as r:
+        with pytest.raises(OptionError, match="brings its own views"):
+            rv.tune.tune_effects(r, size=SIZE)
+        tuned = rv.tune.tune_effects(r, budget_ms=1e4, levels=[Effect.RASTER, Effect.SHADOWS], frames=1, warmup=1,
+                                     reference=ref, verify=False, progress=False)
+        assert tuned.measured_ms is None and tuned.fits
+        assert {m.name: m.effect for m in scene.materials} == tuned.assignment
+        r.render()                                   # the renderer picks the new effects up
+        assert ("Shadows" in r.profile().passes) == (Effect.SHADOWS in tuned.assignment.values())
+    for m in scene.materials:
+        m.effect = Effect.SHADOWS
