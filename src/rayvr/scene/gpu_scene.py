@@ -23,8 +23,8 @@ TEXTURE_SLOTS = ("base_color_texture", "metallic_roughness_texture", "normal_tex
 MATERIAL_FLOATS = 64          # 256 B, see MaterialData
 INSTANCE_FLOATS = 28          # 6 vec4 + uvec4
 MAX_TEXTURE_SIZE = 2048
-TRIANGLE_MATERIAL_SSBO = BINDINGS["RAYVR_SCENE_SSBO_12"]
-TANGENT_SSBO = BINDINGS["RAYVR_SCENE_SSBO_13"]
+TRIANGLE_MATERIAL_SSBO = BINDINGS["RAYVR_TRIANGLE_MATERIAL_SSBO"]
+TANGENT_SSBO = BINDINGS["RAYVR_TANGENT_SSBO"]
 
 
 def _luminance(rgb) -> np.ndarray:
@@ -331,8 +331,8 @@ class GpuScene:
                 "instances": "RAYVR_INSTANCE_SSBO", "materials": "RAYVR_MATERIAL_SSBO",
                 "punctual_lights": "RAYVR_PUNCTUAL_LIGHT_SSBO",
                 "emissive_triangles": "RAYVR_EMISSIVE_TRIANGLE_SSBO", "triangles": "RAYVR_TRIANGLE_SSBO",
-                "meshes": "RAYVR_MESH_SSBO", "triangle_materials": "RAYVR_SCENE_SSBO_12",
-                "tangents": "RAYVR_SCENE_SSBO_13"}
+                "meshes": "RAYVR_MESH_SSBO", "triangle_materials": "RAYVR_TRIANGLE_MATERIAL_SSBO",
+                "tangents": "RAYVR_TANGENT_SSBO"}
 
     def bind(self) -> None:
         """Bind every scene buffer to its SSBO point and the textures to the scene's unit."""
