@@ -13,7 +13,16 @@
 #include "scene.glsl"
 
 #ifndef RQ_STACK_SIZE
-#define RQ_STACK_SIZE 40
+#define RQ_STACK_SIZE 64
+#endif
+#ifndef RQ_TRAVERSAL
+#define RQ_TRAVERSAL 1       // 0: nested TLAS/BLAS loops (old), 1: one loop over both levels
+#endif
+#ifndef RQ_TRIANGLE
+#define RQ_TRIANGLE 0        // 0: watertight (Woop et al. 2013), 1: Moeller-Trumbore, 2: watertight without the fp64 edge fallback
+#endif
+#ifndef RQ_STATS
+#define RQ_STATS 0
 #endif
 #ifndef RQ_TLAS_STACK_SIZE
 #define RQ_TLAS_STACK_SIZE 24
@@ -61,6 +70,7 @@ float rq_box(vec3 lo, vec3 hi, vec3 inv, vec3 oi, float tmax) {
 // permuted so that z is the dominant axis of d (swizzles, no dynamic indexing).
 struct RqRay {
     vec3 o;
+    vec3 d;
     vec3 inv;
     vec3 oi;
     int perm;    // which of the six axis permutations (kx, ky, kz)
@@ -81,6 +91,7 @@ vec3 rq_permute(vec3 v, int perm) {
 RqRay rq_make_ray(vec3 o, vec3 d) {
     RqRay r;
     r.o = o;
+    r.d = d;
     r.inv = rq_safe_inverse(d);
     r.oi = o * r.inv;
     vec3 ad = abs(d);
@@ -92,6 +103,7 @@ RqRay rq_make_ray(vec3 o, vec3 d) {
     return r;
 }
 
+#if RQ_TRIANGLE != 1
 // Watertight ray/triangle test: on a hit nearer than tmax, returns true with t and barycentrics.
 bool rq_triangle(RqRay r, vec3 v0, vec3 v1, vec3 v2, float tmax, out float t, out vec2 bary) {
     vec3 a = rq_permute(v0 - r.o, r.perm), b = rq_permute(v1 - r.o, r.perm), c = rq_permute(v2 - r.o, r.perm);
@@ -101,11 +113,13 @@ bool rq_triangle(RqRay r, vec3 v0, vec3 v1, vec3 v2, float tmax, out float t, ou
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
     float w = bx * ay - by * ax;
+#if RQ_TRIANGLE == 0
     if (u == 0.0 || v == 0.0 || w == 0.0) {   // on an edge in float: decide in double
         u = float(double(cx) * double(by) - double(cy) * double(bx));
         v = float(double(ax) * double(cy) - double(ay) * double(cx));
         w = float(double(bx) * double(ay) - double(by) * double(ax));
     }
+#endif
     t = 0.0;
     bary = vec2(0.0);
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return false;
@@ -120,10 +134,39 @@ bool rq_triangle(RqRay r, vec3 v0, vec3 v1, vec3 v2, float tmax, out float t, ou
     return true;
 }
 
+#else
+// Moeller-Trumbore ray/triangle test, same contract as the watertight one. Edges are inclusive,
+// so a ray through a shared edge hits one of its triangles except in rare rounding cases.
+bool rq_triangle(RqRay r, vec3 v0, vec3 v1, vec3 v2, float tmax, out float t, out vec2 bary) {
+    vec3 e1 = v1 - v0, e2 = v2 - v0;
+    vec3 p = cross(r.d, e2);
+    float rcp = 1.0 / dot(e1, p);   // +-inf for a ray in the triangle's plane: u, v become NaN or inf
+    vec3 s = r.o - v0;
+    float u = dot(s, p) * rcp;
+    vec3 q = cross(s, e1);
+    float v = dot(r.d, q) * rcp;
+    t = dot(e2, q) * rcp;
+    bary = vec2(u, v);
+    return u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < tmax;
+}
+
+#endif
+
+#if RQ_STATS
+// Per-invocation counters (RQ_STATS 1): the calling kernel reads and stores them.
+uint rq_stat_nodes = 0u;       // internal nodes visited (TLAS and BLAS; two box tests each)
+uint rq_stat_triangles = 0u;   // ray/triangle tests
+uint rq_stat_instances = 0u;   // BLAS entries (instance transforms)
+#define RQ_COUNT(c) ++c
+#else
+#define RQ_COUNT(c)
+#endif
+
 // Intersect the triangles of one leaf (BVH slots [first, first + count)); updates hit/tmax.
 bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, inout Hit hit, bool any_hit) {
     bool found = false;
     for (uint s = first; s < first + count; ++s) {
+        RQ_COUNT(rq_stat_triangles);
         vec4 v0 = rq_triangles[3u * s], v1 = rq_triangles[3u * s + 1u], v2 = rq_triangles[3u * s + 2u];
         float t;
         vec2 b;
@@ -144,6 +187,7 @@ bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, i
     return found;
 }
 
+#if RQ_TRAVERSAL == 0
 // Traverse one instance's BLAS in its object space; updates hit/tmax.
 bool rq_trace_blas(vec3 o_render, vec3 d_render, uint instance, bool any_hit, inout float tmax, inout Hit hit) {
     vec3 o = vec3(dot(scene_instances[instance].to_object[0], vec4(o_render, 1.0)),
@@ -243,6 +287,93 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
     }
     return found;
 }
+
+#else
+RqRay rq_object_ray(vec3 o_render, vec3 d_render, uint instance) {
+    vec4 m0 = scene_instances[instance].to_object[0], m1 = scene_instances[instance].to_object[1],
+         m2 = scene_instances[instance].to_object[2];
+    vec3 o = vec3(dot(m0, vec4(o_render, 1.0)), dot(m1, vec4(o_render, 1.0)), dot(m2, vec4(o_render, 1.0)));
+    vec3 d = vec3(dot(m0.xyz, d_render), dot(m1.xyz, d_render), dot(m2.xyz, d_render));
+    return rq_make_ray(o, d);
+}
+
+// A traversal work item: an internal node index, or (RQ_LEAF_BIT) a leaf: first slot in bits
+// 0..27, count - 1 in bits 28..30 (leaves hold 1..8 triangles; a TLAS leaf is one instance).
+#define RQ_LEAF_BIT 0x80000000u
+#define RQ_NO_INSTANCE 0xFFFFFFFFu
+
+uint rq_item(uint link, uint count) {
+    return count == 0u ? link : (RQ_LEAF_BIT | ((count - 1u) << 28) | link);
+}
+
+// One loop over both levels: a TLAS leaf switches the ray to the instance's object space and
+// continues in its BLAS; popping back to the stack depth at entry switches back. One node fetch
+// or one leaf per iteration, from one call site, keeps a warp's threads in step.
+bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
+    hit.t = tmax_in;
+    hit.barycentrics = vec2(0.0);
+    hit.instance = RQ_NO_INSTANCE;
+    hit.primitive = RQ_NO_INSTANCE;
+    bool found = false;
+    if (instance_count() == 0u) return false;
+    float tmax = min(tmax_in, 1e29);
+    RqRay world = rq_make_ray(o, d);
+    RqRay r = world;
+    uint instance = RQ_NO_INSTANCE;
+    int blas_base = -1;          // stack depth when the current BLAS was entered
+    uint stack[RQ_STACK_SIZE];
+    int sp = 0;
+    uint item = 0u;
+    while (true) {
+        if ((item & RQ_LEAF_BIT) == 0u) {
+            RQ_COUNT(rq_stat_nodes);
+            uint base = item * 4u;
+            vec4 n0, n1, n2, n3;
+            if (instance == RQ_NO_INSTANCE) {
+                n0 = rq_tlas_nodes[base]; n1 = rq_tlas_nodes[base + 1u];
+                n2 = rq_tlas_nodes[base + 2u]; n3 = rq_tlas_nodes[base + 3u];
+            } else {
+                n0 = rq_blas_nodes[base]; n1 = rq_blas_nodes[base + 1u];
+                n2 = rq_blas_nodes[base + 2u]; n3 = rq_blas_nodes[base + 3u];
+            }
+            float t0 = rq_box(n0.xyz, n1.xyz, r.inv, r.oi, tmax);
+            float t1 = rq_box(n2.xyz, n3.xyz, r.inv, r.oi, tmax);
+            uint c0 = rq_item(floatBitsToUint(n0.w), floatBitsToUint(n1.w));
+            uint c1 = rq_item(floatBitsToUint(n2.w), floatBitsToUint(n3.w));
+            bool go0 = t0 >= 0.0, go1 = t1 >= 0.0;
+            if (go0 && go1) {
+                bool near0 = t0 <= t1;
+                if (sp < RQ_STACK_SIZE) stack[sp++] = near0 ? c1 : c0;
+                item = near0 ? c0 : c1;
+                continue;
+            }
+            if (go0 || go1) {
+                item = go0 ? c0 : c1;
+                continue;
+            }
+        } else if (instance == RQ_NO_INSTANCE) {   // a TLAS leaf: enter the instance's BLAS
+            RQ_COUNT(rq_stat_instances);
+            instance = item & 0x0FFFFFFFu;
+            r = rq_object_ray(o, d, instance);
+            blas_base = sp;
+            item = scene_meshes[scene_instances[instance].info.x].info.x;
+            continue;
+        } else {
+            found = rq_leaf(r, instance, item & 0x0FFFFFFFu, ((item >> 28) & 7u) + 1u, tmax, hit, any_hit) || found;
+            if (any_hit && found) break;
+        }
+        if (sp == blas_base) {   // this BLAS is done: back to the TLAS and the render-space ray
+            instance = RQ_NO_INSTANCE;
+            r = world;
+            blas_base = -1;
+        }
+        if (sp == 0) break;
+        item = stack[--sp];
+    }
+    return found;
+}
+
+#endif
 
 bool trace_closest(vec3 o, vec3 d, float tmax, out Hit hit) { return rq_trace(o, d, tmax, false, hit); }
 
