@@ -8,7 +8,9 @@ node holds both children's boxes, 64 bytes:
     vec4(child0.min, link0)  vec4(child0.max, count0)  vec4(child1.min, link1)  vec4(child1.max, count1)
 
 (link and count are uint bits). count 0: link is a node index; count > 0: a leaf of `count`
-primitives starting at `link` in the reordered primitive list (`Bvh.order`). Only internal
+primitives starting at `link` in the reordered primitive list (`Bvh.order`); the traversal
+packs a leaf as 28 bits of `link` and 3 of `count - 1`, so leaves hold 1..8 primitives and leaf
+links stay below 2**28 (GpuScene checks both). Only internal
 nodes exist on the GPU; leaves live in their parent's child slots. An empty child slot (only
 in a root whose whole mesh is one leaf) is a box at 1e30, which no ray with tmax <= 1e29 enters.
 
@@ -113,6 +115,10 @@ def triangle_bounds(tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 PARALLEL_MIN = 200_000   # below this the threaded LBVH is not worth its stitching
 
 
+MAX_LEAF_SIZE = 8    # ray_query.glsl packs count - 1 into 3 bits
+MAX_LEAF_LINK = 1 << 28
+
+
 def build(lo, hi, method: str = "auto", leaf_size: int = 4, progress: bool | None = None,
           threads: int | None = None) -> Bvh:
     """Build a BVH over primitive boxes lo, hi (N, 3). method: 'lbvh', 'sah' or 'auto'
@@ -123,6 +129,9 @@ def build(lo, hi, method: str = "auto", leaf_size: int = 4, progress: bool | Non
     n = len(lo)
     if method == "auto":
         method = "sah" if n <= 100_000 else "lbvh"
+    if not 1 <= leaf_size <= MAX_LEAF_SIZE:
+        raise SceneError(f"bvh leaf_size: {leaf_size} is outside 1..{MAX_LEAF_SIZE} (the GPU node packs "
+                         f"count - 1 in 3 bits); pass a leaf_size in that range")
     if method not in ("lbvh", "sah"):
         raise SceneError(f"bvh method: unknown {method!r}; use 'lbvh', 'sah' or 'auto'")
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()):

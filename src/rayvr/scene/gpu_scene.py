@@ -133,6 +133,9 @@ class GpuScene:
             v_base += len(mesh.positions)
             t_base += mesh.triangle_count
         self.triangle_count = t_base
+        if t_base >= bvh_mod.MAX_LEAF_LINK or len(s.instances) >= bvh_mod.MAX_LEAF_LINK:
+            raise SceneError(f"scene '{s.name}': {t_base} triangles / {len(s.instances)} instances; "
+                             f"ray_query.glsl addresses at most {bvh_mod.MAX_LEAF_LINK - 1}; split the scene")
         corners = np.zeros((max(len(s.meshes), 1), 8, 4))
         for k, mesh in enumerate(s.meshes):
             if mesh.triangle_count:
