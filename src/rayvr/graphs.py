@@ -18,17 +18,20 @@ HDR_OUTPUT = "Composite.color"  # linear radiance (rgba16f), for EXR
 
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
            auto_exposure: bool = False, light_samples: int = 1, background=(0.0, 0.0, 0.0),
-           multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid") -> RenderGraph:
+           multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid",
+           gbuffer: str = "auto") -> RenderGraph:
     """The hybrid raster + ray-traced graph: multiview G-buffer, direct light for every pixel,
     ray-traced shadows and reflections only for the pixels whose material's effect asks for them,
     path tracing (rayvr.passes.PathTracer in G-buffer mode) for PATH_TRACED materials, composite
-    and tone map.
+    and tone map. `gbuffer`: 'raster', 'rt' (ray-traced, rayvr.passes.GBufferRT) or 'auto' (raster
+    unless the GPU's raster is weak against its compute: Capabilities.weak_raster, chosen at compile
+    and named in the compile report); the pass is "GBuffer" either way.
     Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR)."""
     from . import passes as P
     from .passes._common import GBUFFER_PINS
 
     g = RenderGraph(name)
-    g.add_pass(P.GBufferRaster(multiview=multiview), "GBuffer")
+    g.add_pass(P.GBufferAuto(mode=gbuffer, multiview=multiview), "GBuffer")
     g.add_pass(P.DirectLighting(light_samples=light_samples, background=list(background), raster_only=True),
                "Direct")
     path_tracing = hasattr(P, "PathTracer") and hasattr(P, "Accumulate")

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import re
 
 import moderngl
 
@@ -35,9 +36,24 @@ class Capabilities:
     max_texture_layers: int
     max_compute_work_group_invocations: int
     is_software: bool        # llvmpipe / softpipe: ~1e4 times slower than a GPU
+    weak_raster: bool = False  # rasterising is slow against compute: see is_weak_raster()
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
+
+
+# NVIDIA datacenter compute GPUs: graphics runs on only a few of their TPCs, so fragment work is
+# ~30x slower than compute there (H100: 14 ms raster vs a few ms ray-traced G-buffer). A heuristic
+# on the renderer string: A100/A800, H100/H200/H800/H20, GH200/GB200, B100/B200/B200A.
+_WEAK_RASTER = re.compile(r"\b(G?[AHB](?:100|200|800|20)[A-Z]?)\b")
+
+
+def is_weak_raster(renderer: str) -> bool:
+    """True for NVIDIA datacenter compute GPUs without full graphics (a heuristic on the renderer
+    string, e.g. 'NVIDIA H100 80GB HBM3/PCIe/SSE2'); then a ray-traced G-buffer beats raster."""
+    if "nvidia" not in renderer.lower():
+        return False
+    return _WEAK_RASTER.search(renderer.upper()) is not None
 
 
 def probe(ctx: moderngl.Context) -> Capabilities:
@@ -60,6 +76,7 @@ def probe(ctx: moderngl.Context) -> Capabilities:
         max_texture_layers=int(ctx.info.get("GL_MAX_ARRAY_TEXTURE_LAYERS", 256)),
         max_compute_work_group_invocations=int(ctx.info.get("GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS", 1024)),
         is_software=software,
+        weak_raster=is_weak_raster(renderer),
     )
 
 

@@ -6,10 +6,12 @@ from .basic import __all__ as _basic_all
 from .compaction import EffectCompaction
 from .composite import HybridComposite
 from .gbuffer import GBufferRaster
+from .gbuffer_auto import GBufferAuto
+from .gbuffer_rt import GBufferRT
 from .lighting import DirectLighting, RTReflections, RTShadows
 from .path_tracer import PathTracer
 from .taa import TAA
 from .tonemap import ToneMapper
 
-__all__ = ["GBufferRaster", "DirectLighting", "EffectCompaction", "RTShadows", "RTReflections",
+__all__ = ["GBufferRaster", "GBufferRT", "GBufferAuto", "DirectLighting", "EffectCompaction", "RTShadows", "RTReflections",
            "HybridComposite", "ToneMapper", "PathTracer", "Accumulate", "TAA", *_basic_all]

@@ -1,5 +1,6 @@
 // G-buffer fragment stage: material parameters, normals facing the viewer, effect id, motion.
 #define SCENE_MATERIAL_IMPLICIT_LOD 1
+#define GBUF_WRITER 1
 #include "views.glsl"
 #include "scene.glsl"
 #include "gbuffer.glsl"
@@ -8,8 +9,6 @@ in vec3 v_pos;
 in vec3 v_normal;
 in vec2 v_uv;
 in vec4 v_tangent;
-in vec4 v_prev_clip;
-in vec4 v_clip;
 flat in uint v_material;
 flat in uint v_view;
 
@@ -43,16 +42,13 @@ void main() {
         n = safe_normalize(tn.x * t + tn.y * b + tn.z * n, n);
     }
 #endif
-    float depth = -(views[v_view].view * vec4(v_pos, 1.0)).z;
-    o_pos = vec4(v_pos, depth);
-    o_normal = vec4(n, 0.0);
-    o_face_normal = vec4(ng, 0.0);
-    o_base_color = vec4(m.base_color, m.alpha);
-    o_metal_rough = vec2(m.metallic, m.roughness);
-    o_emissive = vec4(m.emissive, 0.0);
-    o_effect = gbuf_pack_effect(m.effect, v_material);
-    vec2 size = views[v_view].clip.zw;
-    vec2 now = (v_clip.xy / v_clip.w * 0.5 + 0.5) * size;
-    vec2 before = (v_prev_clip.xy / v_prev_clip.w * 0.5 + 0.5) * size;
-    o_motion = now - before;
+    GBufferTexel t = gbuf_encode(v_view, v_pos, n, ng, m, v_material);
+    o_pos = t.pos;
+    o_normal = t.normal;
+    o_face_normal = t.face_normal;
+    o_base_color = t.base_color;
+    o_metal_rough = t.metal_rough;
+    o_emissive = t.emissive;
+    o_effect = t.effect;
+    o_motion = t.motion;
 }

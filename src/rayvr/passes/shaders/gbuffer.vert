@@ -22,8 +22,6 @@ out vec3 v_pos;
 out vec3 v_normal;
 out vec2 v_uv;
 out vec4 v_tangent;
-out vec4 v_prev_clip;
-out vec4 v_clip;
 flat out uint v_material;
 flat out uint v_view;
 
@@ -36,11 +34,9 @@ void main() {
     v_tangent = r.tangent;
     v_material = r.material;
     v_view = view;
-    v_clip = views[view].view_proj * vec4(r.position, 1.0);
-    v_prev_clip = views[view].prev_view_proj * vec4(r.position, 1.0);
-    gl_Position = v_clip;
+    gl_Position = views[view].view_proj * vec4(r.position, 1.0);
     // TAA jitter: sample at pixel centre + jitter (as the ray passes do), so the geometry moves by
-    // -jitter; v_clip/v_prev_clip stay unjittered so motion vectors carry no jitter.
+    // -jitter; motion vectors (gbuf_encode) use the unjittered matrices.
     gl_Position.xy -= views[view].jitter.xy * (2.0 / views[view].clip.zw) * gl_Position.w;
 #if !RAYVR_MULTIVIEW
     gl_Layer = int(view);

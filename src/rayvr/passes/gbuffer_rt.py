@@ -1,0 +1,50 @@
+"""GBufferRT: the G-buffer by ray tracing, in one compute dispatch for every view.
+
+The same pins, formats and encoding as GBufferRaster (glsl/gbuffer.glsl gbuf_encode), so either can
+feed the hybrid lighting passes. It pays off where fragment work is slow against compute (NVIDIA
+datacenter GPUs with few graphics-capable TPCs: Capabilities.weak_raster); GBufferAuto chooses.
+Differences from the raster path: textures are read at mip 0 (no screen-space derivatives), and
+nothing is clipped by the near/far planes.
+"""
+from __future__ import annotations
+
+from ..errors import GraphError
+from ..rendergraph.render_pass import Reflection, RenderPass
+from ._common import bind_scene, build_compute, effect_defines, groups_2d, register, scene_defines
+from .gbuffer import DESCRIPTIONS, OUTPUTS
+
+
+def gbuffer_reflection() -> Reflection:
+    """The G-buffer's output pins (GBufferRaster, GBufferRT and GBufferAuto declare the same)."""
+    r = Reflection()
+    for pin, (fmt, _) in OUTPUTS.items():
+        r.add_output(pin, DESCRIPTIONS[pin]).format(fmt)
+    return r
+
+
+@register
+class GBufferRT(RenderPass):
+    """Traces one primary ray per pixel and view (pixel centre + the view's jitter) and writes the
+    G-buffer targets (see the module docstring)."""
+
+    PROPERTIES: dict = {}
+
+    def reflect(self, cd):
+        return gbuffer_reflection()
+
+    def compile(self, ctx, cd):
+        if ctx.scene is None:
+            raise GraphError(f"pass {self.name} (GBufferRT) needs a scene: compile the graph with "
+                             f"a scene (rv.Renderer(scene, graph) does)")
+        self._defines = {**scene_defines(ctx), **effect_defines()}
+        self._prog = build_compute(ctx.gl, "gbuffer_rt.comp", self._defines)
+
+    def defines(self) -> dict:
+        return dict(getattr(self, "_defines", {}))
+
+    def execute(self, ctx, data):
+        bind_scene(ctx)
+        for unit, pin in enumerate(OUTPUTS):
+            data[pin].bind_to_image(unit, read=False, write=True)
+        self._prog.run(*groups_2d(data.size, data.views))
+        ctx.gl.memory_barrier()

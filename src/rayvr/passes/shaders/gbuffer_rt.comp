@@ -1,0 +1,43 @@
+// Ray-traced G-buffer: one primary ray per pixel of every view (z of the dispatch = view), through
+// the pixel centre + the view's TAA jitter like GBufferRaster samples; the same encoding
+// (gbuf_encode) and the same targets. Alpha-masked materials are cut in the ray query's any-hit step.
+#define GBUF_WRITER 1
+#include "views.glsl"
+#include "scene.glsl"
+#include "ray_query.glsl"
+#include "gbuffer.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 0) writeonly uniform image2DArray o_pos;
+layout(rgba16f, binding = 1) writeonly uniform image2DArray o_normal;
+layout(rgba16f, binding = 2) writeonly uniform image2DArray o_face_normal;
+layout(rgba8, binding = 3) writeonly uniform image2DArray o_base_color;
+layout(rg16f, binding = 4) writeonly uniform image2DArray o_metal_rough;
+layout(rgba16f, binding = 5) writeonly uniform image2DArray o_emissive;
+layout(r32ui, binding = 6) writeonly uniform uimage2DArray o_effect;
+layout(rg16f, binding = 7) writeonly uniform image2DArray o_motion;
+
+GBufferTexel primary_surface(uint v, ivec2 pixel) {
+    vec3 o, d;
+    view_primary_ray(v, vec2(pixel) + 0.5 + views[v].jitter.xy, o, d);
+    Hit hit;
+    if (!trace_closest(o, d, 1e30, hit)) return gbuf_no_geometry();
+    SurfacePoint s = surface_at(hit, d);
+    // as the raster path: the shading normal turned to the side of the (viewer-facing) face normal
+    vec3 n = dot(s.normal, s.geometric_normal) < 0.0 ? -s.normal : s.normal;
+    return gbuf_encode(v, s.position, n, s.geometric_normal, material_params(s.material, s.uv), s.material);
+}
+
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    if (any(greaterThanEqual(p.xy, ivec2(views[p.z].clip.zw)))) return;
+    GBufferTexel t = primary_surface(uint(p.z), p.xy);
+    imageStore(o_pos, p, t.pos);
+    imageStore(o_normal, p, t.normal);
+    imageStore(o_face_normal, p, t.face_normal);
+    imageStore(o_base_color, p, t.base_color);
+    imageStore(o_metal_rough, p, vec4(t.metal_rough, 0.0, 0.0));
+    imageStore(o_emissive, p, t.emissive);
+    imageStore(o_effect, p, uvec4(t.effect));
+    imageStore(o_motion, p, vec4(t.motion, 0.0, 0.0));
+}

@@ -1,0 +1,164 @@
+"""GBufferRT against GBufferRaster pin by pin (stereo, motion, alpha mask, far from the origin,
+TAA jitter), and GBufferAuto's choice between them."""
+import types
+
+import numpy as np
+import pytest
+
+import rayvr as rv
+from rayvr.materials.material import Material
+from rayvr.passes.gbuffer_auto import choose_gbuffer
+from rayvr.renderer import Renderer, default_views
+from rayvr.scene import builtin
+from rayvr.scene.model import Camera
+
+PINS = ("posW", "normW", "faceNormalW", "baseColor", "metalRough", "emissive", "effect", "motion")
+
+
+def gbuffer_graph(kind: str):
+    g = rv.RenderGraph("GBufferOnly")
+    g.add_pass(rv.passes.GBufferRT() if kind == "rt" else rv.passes.GBufferRaster(), "GBuffer")
+    for pin in PINS:
+        g.mark_output(f"GBuffer.{pin}")
+    return g
+
+
+def render_both(scene, views, size, move=None, **renderer_kw):
+    """Both G-buffers of the same frame(s) of `views` default views: {kind: {pin: array}}.
+    `move(view_set)` runs between two frames (motion vectors)."""
+    out = {}
+    for kind in ("raster", "rt"):
+        with Renderer(scene, gbuffer_graph(kind), views=default_views(scene, views, size), **renderer_kw) as r:
+            r.render()
+            if move is not None:
+                move(r.view_set)
+                r.render()
+            out[kind] = {pin: r.read_output(f"GBuffer.{pin}") for pin in PINS}
+    return out
+
+
+def interior(effect: np.ndarray) -> np.ndarray:
+    """Pixels whose 3x3 neighbourhood has one effect word (silhouettes and material edges excluded)."""
+    e = effect[..., 0].astype(np.int64)
+    pad = np.pad(e, ((0, 0), (1, 1), (1, 1)), mode="edge")
+    same = np.ones(e.shape, bool)
+    h, w = e.shape[1:]
+    for dy in (0, 1, 2):
+        for dx in (0, 1, 2):
+            same &= pad[:, dy:dy + h, dx:dx + w] == e
+    return same
+
+
+def assert_same_gbuffer(out, min_interior=0.3):
+    ra, rt = out["raster"], out["rt"]
+    mask = interior(ra["effect"]) & interior(rt["effect"])
+    assert mask.mean() > min_interior, f"only {mask.mean():.2f} of the pixels are interior"
+    np.testing.assert_array_equal(ra["effect"][mask], rt["effect"][mask], err_msg="effect")
+    hit = mask & (ra["effect"][..., 0] != 0xFF)
+    assert hit.any()
+    pos_a, pos_b = ra["posW"][hit].astype(np.float64), rt["posW"][hit].astype(np.float64)
+    scale = np.abs(pos_a).max()
+    np.testing.assert_allclose(pos_b[:, :3], pos_a[:, :3], atol=1e-4 * scale, err_msg="posW")
+    np.testing.assert_allclose(pos_b[:, 3], pos_a[:, 3], rtol=1e-4, err_msg="posW.w (linear depth)")
+    for pin in ("normW", "faceNormalW"):
+        np.testing.assert_allclose(rt[pin][hit][:, :3].astype(np.float64), ra[pin][hit][:, :3].astype(np.float64),
+                                   atol=2e-3, err_msg=pin)
+    for pin in ("baseColor", "metalRough", "emissive"):
+        np.testing.assert_array_equal(rt[pin][mask], ra[pin][mask], err_msg=pin)
+    np.testing.assert_allclose(rt["motion"][hit].astype(np.float64), ra["motion"][hit].astype(np.float64),
+                               atol=2e-2, err_msg="motion")
+    sky = mask & (ra["effect"][..., 0] == 0xFF)
+    for pin in PINS:   # sky pixels hold the raster path's clear values exactly
+        np.testing.assert_array_equal(rt[pin][sky], ra[pin][sky], err_msg=f"{pin} on sky pixels")
+
+
+def test_rt_equals_raster_in_stereo_with_motion(gpu):
+    scene = builtin.spheres(n=2, subdivisions=2)
+    views, size = 2, (48, 48)
+
+    def move(view_set):
+        for v in view_set.views:
+            v.pose.position = v.pose.position + np.array([0.04, -0.02, 0.03])
+
+    out = render_both(scene, views, size, move)
+    assert np.abs(out["raster"]["motion"]).max() > 0.3         # the camera moved: motion to compare
+    assert (out["raster"]["effect"][..., 0] == 0xFF).any()       # some sky to compare too
+    assert_same_gbuffer(out)
+    for kind in out:   # both views got their own image
+        assert not np.array_equal(out[kind]["posW"][0], out[kind]["posW"][1])
+
+
+def test_alpha_masked_quad_is_seen_through_like_the_raster(gpu):
+    """A veil of alpha 0.3 between the camera and a box: cut out at cutoff 0.5, drawn at 0.2."""
+    scene = builtin.box_on_plane()
+    scene.add_material(Material("Cut", base_color=(1, 1, 1, 0.3), metallic=0.0, alpha_mode="MASK",
+                                alpha_cutoff=0.5))
+    scene.add_object("Veil", *builtin.quad_mesh([(-2, 0.3, 1), (2, 0.3, 1), (2, 3, 1), (-2, 3, 1)], (0, 0, 1)), "Cut")
+    scene.cameras[:] = [Camera.look_at((0.0, 1.5, 2.5), (0.0, 0.2, 0.0))]
+    cut = scene.materials.index("Cut")
+    for cutoff, veil in ((0.5, False), (0.2, True)):
+        scene.materials["Cut"].alpha_cutoff = cutoff
+        out = render_both(scene, 1, (32, 32))
+        for kind in out:
+            drawn = (out[kind]["effect"][..., 0] >> 8 == cut).mean()
+            assert (drawn > 0.5) if veil else (drawn == 0), f"{kind}: veil covers {drawn:.2f} at cutoff {cutoff}"
+        assert_same_gbuffer(out)
+
+
+def test_rt_equals_raster_far_from_the_origin(gpu):
+    shift = np.array([1.0e6, 0.0, -1.0e6])
+    scene = builtin.box_on_plane()
+    for inst in scene.instances:
+        inst.transform[:3, 3] += shift
+    scene.cameras[:] = [Camera.look_at(np.array([1.5, 2.0, 1.5]) + shift, shift)]
+    views, size = 2, (32, 32)
+    out = render_both(scene, views, size)
+    assert_same_gbuffer(out)
+    depth = out["rt"]["posW"][..., 3]
+    assert depth.max() < 10.0 and (depth > 0).mean() > 0.5      # render space stays near the head
+
+
+def test_rt_follows_the_taa_jitter_like_the_raster(gpu):
+    scene = builtin.box_on_plane()
+    views, size = 2, (32, 32)
+    out = render_both(scene, views, size, move=lambda view_set: None, jitter=True)   # frame 1: jittered
+    assert_same_gbuffer(out)
+    plain = render_both(scene, views, size)
+    assert not np.array_equal(out["rt"]["posW"], plain["rt"]["posW"]), "jitter did not move the rays"
+
+
+def test_auto_chooses_raster_here_and_rt_on_weak_raster_gpus(gpu):
+    assert not gpu.caps.weak_raster                      # llvmpipe rasterises
+    assert choose_gbuffer("auto", gpu.caps)[0] == "raster"
+    h100 = types.SimpleNamespace(weak_raster=True, renderer="NVIDIA H100 80GB HBM3/PCIe/SSE2")
+    kind, why = choose_gbuffer("auto", h100)
+    assert kind == "rt" and "H100" in why
+    assert choose_gbuffer("auto", h100, cull_back_faces=True)[0] == "raster"
+    assert choose_gbuffer("raster", h100)[0] == "raster"
+    from rayvr.gpu.context import is_weak_raster
+
+    for name in ("NVIDIA H100 PCIe/PCIe/SSE2", "NVIDIA H200/PCIe/SSE2", "NVIDIA GH200 480GB/PCIe/SSE2",
+                 "NVIDIA A100-SXM4-80GB/PCIe/SSE2", "NVIDIA B200/PCIe/SSE2", "NVIDIA H800/PCIe/SSE2"):
+        assert is_weak_raster(name), name
+    for name in ("NVIDIA GeForce RTX 4090/PCIe/SSE2", "NVIDIA RTX A6000/PCIe/SSE2", "NVIDIA L40S/PCIe/SSE2",
+                 "llvmpipe (LLVM 15.0.7, 256 bits)", "AMD Radeon RX 7900 XTX"):
+        assert not is_weak_raster(name), name
+
+
+def test_hybrid_gbuffer_option_renders_the_same_image(gpu):
+    scene = builtin.box_on_plane()
+    images = {}
+    for mode in ("auto", "rt"):
+        with Renderer(scene, rv.graphs.hybrid(gbuffer=mode), views=2, size=(32, 32)) as r:
+            r.render()
+            gb = r.compiled.passes["GBuffer"]
+            assert gb.chosen == ("raster" if mode == "auto" else "rt")
+            assert ("GBufferRT" if mode == "rt" else "GBufferRaster") in str(r.report())
+            images[mode] = r.read_output("Composite.color").astype(np.float64)
+    close = np.abs(images["rt"] - images["auto"]) <= 0.01 * np.abs(images["auto"]) + 1e-3
+    assert images["auto"].max() > 0 and close.mean() > 0.97     # silhouette pixels may differ
+
+
+def test_unknown_gbuffer_mode_is_refused(gpu):
+    with pytest.raises(rv.OptionError, match="'mode'.*auto, raster or rt"):
+        rv.graphs.hybrid(gbuffer="fast")
