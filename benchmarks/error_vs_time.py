@@ -30,7 +30,8 @@ def add_arguments(parser) -> None:
 
 def run(args) -> dict:
     import rayvr as rv
-    from rayvr.cli.render import load, parse_size
+    from rayvr.cli.options import load_scene_arg as load
+    from rayvr.cli.options import parse_size
     from rayvr.cli.tune import parse_list, parse_spp
 
     quick = args.quick

@@ -28,12 +28,6 @@ def add_arguments(parser) -> None:
     parser.add_argument("--light-samples", type=int, default=1)
 
 
-def _scene(arg: str):
-    from rayvr.cli.render import load
-
-    return load(arg)
-
-
 def _reflective_material(scene, renderer, choice: str) -> str:
     names = [m.name for m in scene.materials]
     if choice != "auto":
@@ -62,12 +56,12 @@ def _time(renderer, frames: int, warmup: int) -> dict:
 
 def run(args) -> dict:
     import rayvr as rv
-    from rayvr.cli.render import parse_size
+    from rayvr.cli.options import load_scene_arg, parse_size
     from rayvr.passes.compaction import read_pixel_list
     from rayvr.renderer import Renderer, default_views
 
     quick = args.quick
-    scene = _scene("cornell_box" if quick and args.scene == DEFAULT_SCENE else args.scene)
+    scene = load_scene_arg("cornell_box" if quick and args.scene == DEFAULT_SCENE else args.scene)
     size = (64, 64) if quick else parse_size(args.size)
     frames, warmup = (2, 1) if quick else (args.frames, args.warmup)
     views = default_views(scene, args.views, size)

@@ -13,6 +13,8 @@ import time
 
 import numpy as np
 
+from rayvr.cli.options import load_scene_arg, parse_size
+
 
 def add_arguments(parser) -> None:
     parser.add_argument("--scene", default="cornell_box",
@@ -25,30 +27,6 @@ def add_arguments(parser) -> None:
     parser.add_argument("--warmup", type=int, default=3, help="untimed frames first (quick: 1)")
     parser.add_argument("--reference-frames", type=int, default=0,
                         help="frames of the reference for relMSE (0: no relMSE; quick: 8 if given)")
-
-
-def _scene(arg: str):
-    from pathlib import Path
-
-    from rayvr.errors import OptionError
-    from rayvr.scene import builtin, load_scene
-
-    if Path(arg).exists():
-        return load_scene(arg)
-    fn = getattr(builtin, arg, None)
-    if not callable(fn):
-        raise OptionError(f"--scene {arg}: no such file and no built-in scene of that name")
-    return fn()
-
-
-def _size(text: str) -> tuple[int, int]:
-    from rayvr.errors import OptionError
-
-    try:
-        w, h = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise OptionError(f"--size {text!r}: use WIDTHxHEIGHT, e.g. 512x512") from None
-    return w, h
 
 
 def _renderer(scene, spp: int, views: int, size, max_bounces: int):
@@ -65,12 +43,12 @@ def _relmse(image: np.ndarray, reference: np.ndarray) -> float:
 
 
 def run(args) -> dict:
-    size = (32, 32) if args.quick and args.size == "512x512" else _size(args.size)
+    size = (32, 32) if args.quick and args.size == "512x512" else parse_size(args.size)
     frames, warmup = (2, 1) if args.quick else (args.frames, args.warmup)
     spps = [int(v) for v in args.spp.split(",")]
     view_counts = [int(v) for v in args.views.split(",")]
     ref_frames = min(args.reference_frames, 8) if args.quick else args.reference_frames
-    scene = _scene(args.scene)
+    scene = load_scene_arg(args.scene)
     references = {}
     if ref_frames:
         for n in view_counts:

@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 import time
 
+from rayvr.cli.options import load_scene_arg
+
 TARGET_RATIO_64 = 1.10
 
 
@@ -25,20 +27,6 @@ def add_arguments(parser) -> None:
     parser.add_argument("--effects", default="scene",
                         help="comma-separated: 'scene' (as authored) and/or an effect for every material "
                              "(raster, shadows, reflections, path_traced)")
-
-
-def _scene(arg: str):
-    from pathlib import Path
-
-    from rayvr.errors import OptionError
-    from rayvr.scene import builtin, load_scene
-
-    if Path(arg).exists():
-        return load_scene(arg)
-    fn = getattr(builtin, arg, None)
-    if not callable(fn):
-        raise OptionError(f"--scene {arg}: no such file and no built-in scene of that name")
-    return fn()
 
 
 def _time_frames(renderer, frames: int, warmup: int) -> float:
@@ -78,7 +66,7 @@ def run(args) -> dict:
     frames, warmup = (3, 2) if args.quick else (args.frames, args.warmup)
     rows = []
     for effects in args.effects.split(","):
-        scene = _scene(args.scene)
+        scene = load_scene_arg(args.scene)
         if effects != "scene":
             effect = Effect.parse(effects, where="--effects")
             for m in scene.materials:

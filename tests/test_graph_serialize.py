@@ -140,4 +140,4 @@ def test_cli_graph_show(tmp_path, capsys, gpu):
     assert cli(["graph", "show", str(tmp_path / "missing.json")]) == 2
     assert "file not found" in capsys.readouterr().err
     assert cli(["graph", "show", str(path), "--size", "big"]) == 2
-    assert "--size: expected WIDTHxHEIGHT" in capsys.readouterr().err
+    assert "--size big: expected WIDTHxHEIGHT" in capsys.readouterr().err

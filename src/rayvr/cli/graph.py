@@ -4,36 +4,7 @@ from __future__ import annotations
 import json
 
 from ..errors import OptionError
-
-
-def _size(text: str) -> tuple[int, int]:
-    try:
-        w, h = (int(v) for v in text.lower().split("x"))
-        if w > 0 and h > 0:
-            return w, h
-    except ValueError:
-        pass
-    raise OptionError(f"--size: expected WIDTHxHEIGHT such as 640x480, got {text!r}")
-
-
-def _load_scene(arg: str):
-    """A glTF file, or a function of rayvr.scene.builtin called by name."""
-    from pathlib import Path
-
-    if Path(arg).suffix.lower() in (".gltf", ".glb") or Path(arg).exists():
-        from ..scene import load_scene
-
-        return load_scene(arg)
-    from ..scene import builtin
-
-    maker = getattr(builtin, arg, None)
-    names = [n for n in ("cornell_box", "spheres", "quad", "plane_with_point_light") if hasattr(builtin, n)]
-    if not callable(maker) or arg.startswith("_"):
-        from ..errors import did_you_mean
-
-        raise OptionError(f"--scene: {arg!r} is neither a glTF file nor a built-in scene"
-                          f"{did_you_mean(arg, names)}; built-in: {', '.join(names)}")
-    return maker()
+from .options import load_scene_arg, parse_size
 
 
 def register(sub) -> None:
@@ -55,7 +26,7 @@ def register(sub) -> None:
 def run_show(args) -> int:
     from ..rendergraph.graph import RenderGraph
 
-    size = _size(args.size)
+    size = parse_size(args.size)
     if args.views < 1:
         raise OptionError(f"--views: must be >= 1, got {args.views}")
     graph = RenderGraph.load(args.file)
@@ -70,7 +41,7 @@ def run_show(args) -> int:
         from ..gpu import get_context
         from ..scene import GpuScene
 
-        scene = _load_scene(args.scene)
+        scene = load_scene_arg(args.scene)
         gpu_scene = GpuScene(get_context(), scene)
         extra.append(gpu_scene.report())
     report = graph.compile(scene=scene, size=size, views=args.views, gpu_scene=gpu_scene,

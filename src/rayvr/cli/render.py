@@ -7,13 +7,13 @@ in the same folder and renamed, so a failure never leaves a half-written output.
 """
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import OptionError, did_you_mean
 from ..fileio import write_exr, write_png
+from .options import load_scene_arg, parse_size
 
 LAYOUTS = ("per-view", "side-by-side")
 
@@ -39,16 +39,6 @@ def register(sub) -> None:
     p.add_argument("--multiview", default="auto", choices=("auto", "on", "off"), help="G-buffer multiview")
     p.add_argument("--report", action="store_true", help="print the graph's compile report")
     p.set_defaults(func=run)
-
-
-def parse_size(text: str) -> tuple[int, int]:
-    m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", str(text))
-    if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
-        raise OptionError(f"--size {text}: expected WIDTHxHEIGHT in pixels, e.g. --size 1440x1600")
-    w, h = int(m.group(1)), int(m.group(2))
-    if w > 8192 or h > 8192:
-        raise OptionError(f"--size {text}: at most 8192 pixels a side; use a smaller size")
-    return w, h
 
 
 def parse_exposure(text) -> tuple[bool, float]:
@@ -82,24 +72,8 @@ def apply_effects(scene, specs) -> None:
 
 
 def load(scene_arg):
-    from ..scene import builtin
-
-    if not scene_arg:
-        return builtin.cornell_box()
-    path = Path(scene_arg)
-    if not path.exists() and not path.suffix:
-        fn = getattr(builtin, scene_arg, None)
-        if callable(fn) and scene_arg in BUILTIN_SCENES:
-            return fn()
-        raise OptionError(f"scene '{scene_arg}': no such file and no built-in scene of that name"
-                          f"{did_you_mean(scene_arg, BUILTIN_SCENES)}; built-ins: {', '.join(BUILTIN_SCENES)}")
-    from ..scene import load_scene
-
-    return load_scene(path)
-
-
-BUILTIN_SCENES = ("cornell_box", "spheres", "box_on_plane", "mirror_and_checker", "plane_with_point_light",
-                  "instanced_boxes", "quad")
+    """The scene named on the command line (see `options.load_scene_arg`)."""
+    return load_scene_arg(scene_arg)
 
 
 def output_paths(out: Path, views: int, layout: str) -> list[Path]:
@@ -113,9 +87,9 @@ def output_paths(out: Path, views: int, layout: str) -> list[Path]:
 
 def run(args) -> int:
     from ..graphs import HDR_OUTPUT, OUTPUT, hybrid
+    from ..passes.tonemap import OPERATORS
     from ..renderer import Renderer, default_views
     from ..rendergraph.render_pass import RenderPass  # noqa: F401  (import errors surface early)
-    from ..passes.tonemap import OPERATORS
 
     size = parse_size(args.size)
     if args.views < 1:

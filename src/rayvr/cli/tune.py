@@ -60,7 +60,7 @@ def parse_spp(text: str) -> int:
 
 def check(args) -> tuple:
     from ..materials.effect import Effect
-    from .render import parse_size
+    from .options import parse_size
 
     size = parse_size(args.size)
     if not args.budget_ms > 0:
@@ -95,7 +95,7 @@ def run(args) -> int:
     from ..tune.configs import hybrid_graph
     from ..tune.probe import probe_cost_model
     from ..tune.results import write_text
-    from .render import load
+    from .options import load_scene_arg as load
 
     size, levels, spp, table_metrics = check(args)
     report = Path(args.report) if args.report else None

@@ -195,5 +195,9 @@ def instanced_boxes(n: int = 4) -> Scene:
     return s
 
 
-__all__ = ["cornell_box", "spheres", "quad", "plane_with_point_light", "box_on_plane",
+# The built-in scenes by name, as the CLI and benchmarks accept them.
+SCENES = {f.__name__: f for f in (cornell_box, spheres, quad, plane_with_point_light, box_on_plane,
+                                  mirror_and_checker, instanced_boxes)}
+
+__all__ = ["SCENES", "cornell_box", "spheres", "quad", "plane_with_point_light", "box_on_plane",
            "mirror_and_checker", "instanced_boxes", "box", "prism", "quad_mesh", "merge", "lambert"]

@@ -38,12 +38,15 @@ def list_driven_passes(graph) -> set[str]:
     return {e.dst_pass for e in graph.edges if e.is_data and e.src_pass in compaction}
 
 
+GBUFFER_PASSES = ("GBufferRaster", "GBufferRT", "GBufferAuto")   # all write the same `effect` word
+
+
 def effect_pin(graph) -> str:
     for name, p in graph.passes.items():
-        if type(p).__name__ == "GBufferRaster":
+        if type(p).__name__ in GBUFFER_PASSES:
             return f"{name}.effect"
-    raise OptionError(f"tune: graph '{graph.name}' has no GBufferRaster pass, so pixels cannot be told apart by "
-                      f"material; tune the hybrid graph (rayvr.tune.hybrid_graph)")
+    raise OptionError(f"tune: graph '{graph.name}' has no G-buffer pass ({', '.join(GBUFFER_PASSES)}), so pixels "
+                      f"cannot be told apart by material; tune the hybrid graph (rayvr.tune.hybrid_graph)")
 
 
 def _check_metric(metric: str) -> str:
