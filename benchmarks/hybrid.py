@@ -1,6 +1,7 @@
 """The hybrid pipeline per pass: stereo 2 x 1440x1600 on a scene, for all-RASTER, all-SHADOWS and
 SHADOWS + REFLECTIONS on the floor (or the material covering the most pixels), plus the G-buffer
-drawn for both views in one multiview/layered pass against two single-view passes.
+drawn for both views in one multiview/layered pass against two single-view passes, and ray traced
+for both views in one compute dispatch (GBufferRT). `--gbuffer` picks the hybrid rows' G-buffer.
 
 Targets (H100): tauray/test.glb, SHADOWS everywhere + REFLECTIONS on >= 20% of the pixels,
 <= 5.5 ms GPU per stereo frame; multiview G-buffer <= 0.7x two single-view passes.
@@ -26,6 +27,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--reflect", default="auto",
                         help="material that gets REFLECTIONS: a name, or 'auto' (a floor, else the most pixels)")
     parser.add_argument("--light-samples", type=int, default=1)
+    parser.add_argument("--gbuffer", default="auto", choices=("auto", "raster", "rt"),
+                        help="G-buffer of the hybrid rows: raster, ray-traced, or auto (rt on weak-raster GPUs)")
 
 
 def _reflective_material(scene, renderer, choice: str) -> str:
@@ -72,10 +75,11 @@ def run(args) -> dict:
     configs = [("all RASTER", None), ("all SHADOWS", None), ("SHADOWS + REFLECTIONS", None)]
     reflect_name = None
     method = "?"
+    gbuffer_choice = "?"
     for label, _ in configs:
         for m in scene.materials:
             m.effect = rv.Effect.RASTER if label == "all RASTER" else rv.Effect.SHADOWS
-        g = rv.graphs.hybrid(light_samples=args.light_samples)
+        g = rv.graphs.hybrid(light_samples=args.light_samples, gbuffer=args.gbuffer)
         g.mark_output("GBuffer.effect")
         g.mark_output("Compaction.reflectionPixels")
         if label.endswith("REFLECTIONS"):
@@ -87,6 +91,8 @@ def run(args) -> dict:
             scene.materials[reflect_name].effect = rv.Effect.REFLECTIONS
         with Renderer(scene, g, views=views) as r:
             times, method = _time(r, frames, warmup)
+            gb_pass = r.compiled.passes["GBuffer"]
+            gbuffer_choice = f"{type(gb_pass.impl).__name__} ({gb_pass.why})"
             refl = 0
             if "Compaction.reflectionPixels" in r.compiled.plan.outputs:
                 refl = read_pixel_list(r.compiled.get_output("Compaction.reflectionPixels"))[0]
@@ -95,26 +101,34 @@ def run(args) -> dict:
                      *[round(times[p], 3) if p in times else "pruned" for p in passes], round(total, 3)])
     if reflect_name:
         notes.append(f"REFLECTIONS on material '{reflect_name}'")
+    notes.append(f"hybrid rows: GBuffer = {gbuffer_choice}")
     notes.append(f"timing: {method}; frame target {TARGET_FRAME_MS} ms (SHADOWS + REFLECTIONS on >= 20% px)")
 
     # G-buffer: every view in one pass vs one pass per view.
     for m in scene.materials:
         m.effect = rv.Effect.RASTER
     gb = {}
-    for label, n in (("one pass, all views", args.views), ("one view", 1)):
+    for label, n, make in (("one pass, all views", args.views, rv.passes.GBufferRaster),
+                           ("one view", 1, rv.passes.GBufferRaster),
+                           ("ray traced, all views", args.views, rv.passes.GBufferRT)):
         g = rv.RenderGraph("GBufferOnly")
-        g.add_pass(rv.passes.GBufferRaster(), "GBuffer")
+        g.add_pass(make(), "GBuffer")
         g.mark_output("GBuffer.posW")
         vs = views if n == args.views else rv.xr.ViewSet([views[0]])
         with Renderer(scene, g, views=vs) as r:
             times, _ = _time(r, frames, warmup)
             gb[label] = times["GBuffer"]
-            mode = "multiview" if r.compiled.passes["GBuffer"]._multiview else "layered"
+            if make is rv.passes.GBufferRaster:
+                mode = "multiview" if r.compiled.passes["GBuffer"]._multiview else "layered"
     ratio = gb["one pass, all views"] / (args.views * gb["one view"])
-    rows.append([f"G-buffer {mode}, {args.views} views in one pass", f"{args.views}x{size[0]}x{size[1]}", "",
-                 round(gb["one pass, all views"], 3), *[""] * (len(passes) - 1), round(gb["one pass, all views"], 3)])
-    rows.append([f"G-buffer {args.views} single-view passes", f"{args.views}x{size[0]}x{size[1]}", "",
-                 round(args.views * gb["one view"], 3), *[""] * (len(passes) - 1), round(args.views * gb["one view"], 3)])
+    shape = f"{args.views}x{size[0]}x{size[1]}"
+    for label, ms in ((f"G-buffer {mode}, {args.views} views in one pass", gb["one pass, all views"]),
+                      (f"G-buffer {args.views} single-view passes", args.views * gb["one view"]),
+                      (f"G-buffer ray traced (GBufferRT), {args.views} views in one dispatch",
+                       gb["ray traced, all views"])):
+        rows.append([label, shape, "", round(ms, 3), *[""] * (len(passes) - 1), round(ms, 3)])
     notes.append(f"G-buffer one pass / {args.views} passes = {ratio:.3f} (target <= {TARGET_GBUFFER_RATIO})")
+    notes.append(f"G-buffer ray traced / raster one pass = "
+                 f"{gb['ray traced, all views'] / gb['one pass, all views']:.3f}")
     return {"columns": ["config", "views x size", "reflection px %", *[f"{p} ms" for p in passes], "total ms"],
             "rows": rows, "notes": notes}
