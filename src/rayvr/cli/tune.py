@@ -84,6 +84,7 @@ def check(args) -> tuple:
 
 
 def run(args) -> int:
+    from ..fileio import write_text
     from ..tune import (
         Config,
         ReferenceSettings,
@@ -94,7 +95,6 @@ def run(args) -> int:
     )
     from ..tune.configs import hybrid_graph
     from ..tune.probe import probe_cost_model
-    from ..tune.results import write_text
     from .options import load_scene_arg as load
 
     size, levels, spp, table_metrics = check(args)

@@ -12,12 +12,12 @@ import dataclasses
 import hashlib
 import json
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import OptionError
+from ..fileio import atomic_write
 
 CACHE_VERSION = 1
 
@@ -108,15 +108,7 @@ def reference_image(scene, view_set, settings: ReferenceSettings = ReferenceSett
         except (OSError, ValueError, KeyError):
             pass   # a damaged cache file: render again and replace it
     image = render_reference(scene, view_set, settings, gpu, progress)
-    folder.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{path.stem}.", suffix=".npz")
-    os.close(fd)
-    try:
-        meta = json.dumps({"scene": scene.name, "views": len(view_set), "size": list(view_set.size),
-                           **dataclasses.asdict(settings)})
-        np.savez_compressed(tmp, image=image, meta=np.array(meta))
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    meta = json.dumps({"scene": scene.name, "views": len(view_set), "size": list(view_set.size),
+                       **dataclasses.asdict(settings)})
+    atomic_write(path, lambda tmp: np.savez_compressed(tmp, image=image, meta=np.array(meta)))
     return image, path

@@ -7,10 +7,9 @@ import dataclasses
 import io
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 
+from ..fileio import atomic_write, write_text
 from .metrics import LOWER_IS_BETTER, METRICS
 
 
@@ -31,25 +30,6 @@ class ConfigResult:
         d = dataclasses.asdict(self)
         d.pop("image")
         return d
-
-
-def write_atomic(path: Path, write) -> Path:
-    """`write(tmp)` then rename onto `path`: never a half-written file at `path`."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
-def write_text(path: Path, text: str) -> Path:
-    return write_atomic(path, lambda tmp: tmp.write_text(text))
 
 
 def _fmt(value) -> str:
@@ -179,7 +159,7 @@ class Results:
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
         fig.tight_layout()
-        return write_atomic(Path(path), lambda tmp: fig.savefig(tmp, format="png"))
+        return atomic_write(Path(path), lambda tmp: fig.savefig(tmp, format="png"))
 
     def write(self, folder, budget_ms: float | None = None, stem: str = "error_vs_ms") -> list[Path]:
         """table.md, results.csv, results.json and one `{stem}_{metric}.png` per metric in
