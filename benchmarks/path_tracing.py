@@ -9,11 +9,11 @@ also gets the relMSE of one frame against an N-frame mean at the highest spp, an
 """
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from rayvr.cli.options import load_scene_arg, parse_size
+
+from ._timing import wall_ms_per_frame
 
 
 def add_arguments(parser) -> None:
@@ -61,15 +61,7 @@ def run(args) -> dict:
     for n in view_counts:
         for spp in spps:
             with _renderer(scene, spp, n, size, args.max_bounces) as r:
-                gl = r.gl
-                for _ in range(warmup):
-                    r.render()
-                gl.finish()
-                t0 = time.perf_counter()
-                for _ in range(frames):
-                    r.render()
-                gl.finish()
-                frame_ms = (time.perf_counter() - t0) / frames * 1e3
+                frame_ms = wall_ms_per_frame(r, frames, warmup)
                 prof = r.profile()
                 stats = prof.passes.get("PathTracer")
                 pt_ms = stats.mean_ms if stats is not None else frame_ms

@@ -10,9 +10,10 @@ Sponza). `--effects path_traced` sets every material's effect, for the path-trac
 from __future__ import annotations
 
 import math
-import time
 
 from rayvr.cli.options import load_scene_arg
+
+from ._timing import wall_ms_per_frame
 
 TARGET_RATIO_64 = 1.10
 
@@ -29,23 +30,11 @@ def add_arguments(parser) -> None:
                              "(raster, shadows, reflections, path_traced)")
 
 
-def _time_frames(renderer, frames: int, warmup: int) -> float:
-    gl = renderer.gl
-    for _ in range(warmup):
-        renderer.render()
-    gl.finish()
-    t0 = time.perf_counter()
-    for _ in range(frames):
-        renderer.render()
-    gl.finish()
-    return (time.perf_counter() - t0) / frames * 1e3
-
-
 def _measure(scene, view_set, frames: int, warmup: int) -> float:
     import rayvr as rv
 
     with rv.Renderer(scene, rv.graphs.hybrid(), views=view_set) as r:
-        return _time_frames(r, frames, warmup)
+        return wall_ms_per_frame(r, frames, warmup)
 
 
 def _grid(n: int) -> tuple[int, int]:

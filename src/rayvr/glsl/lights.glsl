@@ -32,6 +32,10 @@ struct LightSample {
     bool valid;
 };
 
+LightSample no_light_sample() {
+    return LightSample(vec3(0.0, 1.0, 0.0), 0.0, vec3(0.0), 0.0, false);
+}
+
 #if SCENE_HAS_PUNCTUAL_LIGHTS
 struct PunctualLight {
     vec4 position_type;    // render-space position, type (uint bits)
@@ -112,12 +116,7 @@ uint emissive_find(float u) {   // first entry whose CDF exceeds u
 }
 
 LightSample sample_emissive(vec3 p, vec3 u, float p_strategy) {
-    LightSample s;
-    s.valid = false;
-    s.weight = vec3(0.0);
-    s.pdf = 0.0;
-    s.direction = vec3(0.0, 1.0, 0.0);
-    s.distance = 0.0;
+    LightSample s = no_light_sample();
     uint k = emissive_find(u.x);
     EmissiveTriangle e = emissive_triangles[k];
     uint inst = e.ids.x;
@@ -164,12 +163,7 @@ float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p) {
 #endif
 
 LightSample sample_light(vec3 p, vec3 u) {
-    LightSample s;
-    s.valid = false;
-    s.weight = vec3(0.0);
-    s.pdf = 0.0;
-    s.direction = vec3(0.0, 1.0, 0.0);
-    s.distance = 0.0;
+    LightSample s = no_light_sample();
 #if SCENE_HAS_PUNCTUAL_LIGHTS && SCENE_HAS_EMISSIVE_TRIANGLES
     float pe = emissive_strategy_probability();
     if (u.x < pe) return sample_emissive(p, vec3(u.x / pe, u.yz), pe);
