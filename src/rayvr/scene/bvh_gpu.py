@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import SceneError
 from ..gpu.bindings import BINDINGS
 from ..gpu.shaders import compute_program
-from .bvh import NODE_BYTES, NODE_FLOATS, Bvh
+from .bvh import MAX_LEAF_SIZE, NODE_BYTES, NODE_FLOATS, Bvh
 
 SHADERS = Path(__file__).resolve().parent / "shaders"
 WG = 256
@@ -63,8 +63,9 @@ class GpuBvhBuilder:
 
     def __init__(self, gpu, leaf_size: int = 4):
         self.gl = gpu.gl if hasattr(gpu, "gl") else gpu
-        if not 1 <= leaf_size <= 64:
-            raise SceneError(f"GpuBvhBuilder: leaf_size {leaf_size} out of range; use 1..64")
+        if not 1 <= leaf_size <= MAX_LEAF_SIZE:
+            raise SceneError(f"GpuBvhBuilder: leaf_size {leaf_size} is outside 1..{MAX_LEAF_SIZE} (the GPU node "
+                             f"packs count - 1 in 3 bits); pass a leaf_size in that range")
         self.leaf_size = leaf_size
         defines = {"TILE": f"{TILE}u", "SCAN_BLOCK": f"{SCAN_BLOCK}u", "LEAF_SIZE": leaf_size}
         prog = lambda name, **extra: compute_program(self.gl, SHADERS / name, {**defines, **extra})  # noqa: E731

@@ -25,6 +25,7 @@ INSTANCE_FLOATS = 28          # 6 vec4 + uvec4
 MAX_TEXTURE_SIZE = 2048
 TRIANGLE_MATERIAL_SSBO = BINDINGS["RAYVR_TRIANGLE_MATERIAL_SSBO"]
 TANGENT_SSBO = BINDINGS["RAYVR_TANGENT_SSBO"]
+GPU_BVH_MIN = 200_000         # 'auto' builds meshes this big on the GPU (hardware drivers only)
 
 
 def _luminance(rgb) -> np.ndarray:
@@ -158,25 +159,43 @@ class GpuScene:
 
     def _build_blas(self, method: str, progress) -> list:
         """One BLAS per mesh; several meshes build at once on a thread pool (numpy releases the
-        GIL), a single big mesh uses the threaded LBVH itself."""
+        GIL), a single big mesh uses the threaded LBVH itself. method 'gpu': every mesh on the
+        GPU builder (bvh_gpu); 'auto': the GPU builder for meshes of GPU_BVH_MIN triangles and
+        more on a hardware driver, binned SAH / LBVH on the CPU otherwise."""
         import os
         from concurrent.futures import ThreadPoolExecutor
+
+        from . import bvh_gpu
+
+        if method not in ("auto", "gpu", "lbvh", "sah"):
+            raise SceneError(f"GpuScene bvh_method: unknown {method!r}; use 'auto', 'gpu', 'lbvh' or 'sah'")
+        caps = getattr(self.gpu, "caps", None)
+        hardware = caps is not None and not caps.is_software
+        on_gpu = [m.triangle_count > 0 and (method == "gpu" or (method == "auto" and hardware
+                                                                  and m.triangle_count >= GPU_BVH_MIN))
+                  for m in self.scene.meshes]
+        gpu_built = {k: bvh_gpu.build_gpu(self.gpu, m.triangles())   # GL calls: this thread only
+                     for k, (m, g) in enumerate(zip(self.scene.meshes, on_gpu)) if g}
+        cpu_method = "auto" if method == "gpu" else method
 
         def one(mesh, threads=None):
             if not mesh.triangle_count:
                 return None
             lo, hi = bvh_mod.triangle_bounds(mesh.triangles())
-            return bvh_mod.build(lo, hi, method=method, progress=progress, threads=threads)
+            return bvh_mod.build(lo, hi, method=cpu_method, progress=progress, threads=threads)
 
-        meshes = self.scene.meshes
+        meshes = [m for m, g in zip(self.scene.meshes, on_gpu) if not g]   # the rest, on the CPU
         if len(meshes) <= 1 or (os.cpu_count() or 1) == 1:
-            return [one(m) for m in meshes]
-        big = [m.triangle_count >= bvh_mod.PARALLEL_MIN for m in meshes]
-        out = [one(m) if b else None for m, b in zip(meshes, big)]
-        with ThreadPoolExecutor(max_workers=os.cpu_count()) as pool:
-            small = list(pool.map(lambda m: one(m, threads=1), [m for m, b in zip(meshes, big) if not b]))
-        it = iter(small)
-        return [o if b else next(it) for o, b in zip(out, big)]
+            cpu = [one(m) for m in meshes]
+        else:
+            big = [m.triangle_count >= bvh_mod.PARALLEL_MIN for m in meshes]
+            out = [one(m) if b else None for m, b in zip(meshes, big)]
+            with ThreadPoolExecutor(max_workers=os.cpu_count()) as pool:
+                small = list(pool.map(lambda m: one(m, threads=1), [m for m, b in zip(meshes, big) if not b]))
+            it = iter(small)
+            cpu = [o if b else next(it) for o, b in zip(out, big)]
+        it = iter(cpu)
+        return [gpu_built[k] if g else next(it) for k, g in enumerate(on_gpu)]
 
     def _build_textures(self) -> None:
         self.texture_array = None
