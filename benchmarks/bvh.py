@@ -28,7 +28,9 @@ REPO = Path(__file__).resolve().parents[1]
 def add_arguments(parser) -> None:
     parser.add_argument("--scenes", default=None,
                         help=f"comma-separated scenes (default {DEFAULT_SCENES}; quick: {QUICK_SCENES})")
-    parser.add_argument("--method", default="auto", choices=["auto", "lbvh", "sah"], help="builder under test")
+    parser.add_argument("--method", default="auto", choices=["auto", "lbvh", "sah", "gpu"],
+                        help="builder under test (gpu: the compute-shader LBVH of rayvr.scene.bvh_gpu)")
+    parser.add_argument("--no-gpu-build", action="store_true", help="skip the gpu_build_ms column")
     parser.add_argument("--repeat", type=int, default=3, help="builds per scene, the fastest counts (quick: 1)")
     parser.add_argument("--ref-max", type=int, default=3_000_000,
                         help="largest triangle count given a binned-SAH reference build")
@@ -83,6 +85,10 @@ def world_triangles(scene) -> np.ndarray:
     return np.concatenate(parts) if parts else np.zeros((0, 3, 3), np.float32)
 
 
+def _blank(v):
+    return v if v is not None else ""
+
+
 def _timed_build(lo, hi, method, repeat, threads=None):
     from rayvr.scene.bvh import build
 
@@ -94,10 +100,35 @@ def _timed_build(lo, hi, method, repeat, threads=None):
     return b, best * 1e3
 
 
+def _timed_gpu_build(tris, repeat):
+    """GPU LBVH: upload + all kernels + glFinish (the fastest of `repeat`; the first build, which
+    also compiles the kernels and allocates scratch, is reported apart), then the read-back."""
+    from rayvr.gpu import get_context
+    from rayvr.scene.bvh_gpu import builder_for
+
+    gpu = get_context()
+    t0 = time.perf_counter()
+    builder = builder_for(gpu)
+    g = builder.build(tris)
+    gpu.gl.finish()
+    first = time.perf_counter() - t0
+    best = float("inf")
+    for _ in range(max(1, repeat)):
+        t0 = time.perf_counter()
+        g = builder.build(tris)
+        gpu.gl.finish()
+        best = min(best, time.perf_counter() - t0)
+    t0 = time.perf_counter()
+    b = g.to_bvh()
+    readback = time.perf_counter() - t0
+    return b, best * 1e3, first * 1e3, readback * 1e3
+
+
 def run(args) -> dict:
     from rayvr.gpu import get_context
     from rayvr.scene import GpuScene
     from rayvr.scene.bvh import NODE_BYTES, triangle_bounds
+    from rayvr.scene.bvh_gpu import MIN_TRIANGLES
 
     specs = (args.scenes or (QUICK_SCENES if args.quick else DEFAULT_SCENES)).split(",")
     repeat = 1 if args.quick else args.repeat
@@ -111,7 +142,14 @@ def run(args) -> dict:
         t0 = time.perf_counter()
         lo, hi = triangle_bounds(tris)
         bounds_ms = (time.perf_counter() - t0) * 1e3
-        b, build_ms = _timed_build(lo, hi, args.method, repeat, args.threads)
+        gpu_ms = gpu_first_ms = gpu_read_ms = gpu_cost = None
+        if n >= MIN_TRIANGLES and (args.method == "gpu" or not args.no_gpu_build):
+            gb, gpu_ms, gpu_first_ms, gpu_read_ms = _timed_gpu_build(tris, repeat)
+            gpu_cost = gb.sah_cost()
+        if args.method == "gpu" and gpu_ms is not None:
+            b, build_ms, bounds_ms = gb, gpu_ms, 0.0
+        else:
+            b, build_ms = _timed_build(lo, hi, args.method, repeat, args.threads)
         cost = b.sah_cost(lo, hi)
         ref_ms = ref_cost = None
         if n <= args.ref_max:
@@ -121,7 +159,8 @@ def run(args) -> dict:
         gpu_bpt = blas_ms = None
         if not args.no_gpu_scene:
             try:
-                gs = GpuScene(get_context(), scene, progress=False)
+                gs = GpuScene(get_context(), scene, progress=False,
+                              bvh_method="gpu" if args.method == "gpu" else "auto")
                 gpu_bpt = gs.report()["geometry_bytes_per_triangle"]
                 blas_ms = gs.timings["blas_build_ms"]
                 gs.release()
@@ -136,16 +175,23 @@ def run(args) -> dict:
             "bvh_bytes_per_tri": (b.node_count * NODE_BYTES + n * 48) / max(n, 1),
             "gpu_bytes_per_tri": gpu_bpt if gpu_bpt is not None else "", "load_s": load_s,
             "meshes": len(scene.meshes), "gpu_scene_blas_ms": blas_ms if blas_ms is not None else "",
+            "gpu_build_ms": _blank(gpu_ms), "gpu_first_build_ms": _blank(gpu_first_ms),
+            "gpu_readback_ms": _blank(gpu_read_ms), "gpu_sah_vs_ref": gpu_cost / ref_cost if gpu_cost and ref_cost else "",
         })
     import os
 
     notes.append(f"build_ms: triangle boxes + build + GPU node layout (fastest of --repeat); numpy, LBVH above "
                  f"200k triangles on {args.threads or os.cpu_count()} threads")
+    notes.append("gpu_build_ms: GPU LBVH (compute shaders, 30-bit Morton codes, radix sort, leaves <= 4): triangle "
+                 "upload + all kernels + glFinish, fastest of --repeat; gpu_first_build_ms: the first build "
+                 "(kernel compile + scratch allocation); gpu_readback_ms: copying nodes and order back to a "
+                 "CPU Bvh (not needed to trace)")
     notes.append("gpu_scene_blas_ms: what GpuScene spends on its per-mesh BLAS builds and uploads (meshes in "
                  "parallel; SAH for meshes up to 100k triangles)")
     notes.append("bvh_bytes_per_tri: 64-byte nodes + 48-byte BVH-ordered triangles; gpu_bytes_per_tri adds "
                  "vertices, indices, materials, instances (all scene buffers)")
     cols = ["scene", "triangles", "method", "build_ms", "target_ms", "meets_target", "sah_cost", "ref_sah_cost",
-            "sah_vs_ref", "ref_build_ms", "bvh_bytes_per_tri", "gpu_bytes_per_tri", "meshes", "gpu_scene_blas_ms",
+            "sah_vs_ref", "ref_build_ms", "gpu_build_ms", "gpu_first_build_ms", "gpu_readback_ms", "gpu_sah_vs_ref",
+            "bvh_bytes_per_tri", "gpu_bytes_per_tri", "meshes", "gpu_scene_blas_ms",
             "load_s"]
     return {"columns": cols, "rows": rows, "notes": notes}
