@@ -23,12 +23,15 @@ def gbuffer_graph(kind: str):
     return g
 
 
-def render_both(scene, views, size, move=None, **renderer_kw):
+def render_both(scene, views, size, move=None, setup=None, **renderer_kw):
     """Both G-buffers of the same frame(s) of `views` default views: {kind: {pin: array}}.
-    `move(view_set)` runs between two frames (motion vectors)."""
+    `setup(view_set)` runs before the first frame, `move(view_set)` between two frames (motion)."""
     out = {}
     for kind in ("raster", "rt"):
-        with Renderer(scene, gbuffer_graph(kind), views=default_views(scene, views, size), **renderer_kw) as r:
+        view_set = default_views(scene, views, size)
+        if setup is not None:
+            setup(view_set)
+        with Renderer(scene, gbuffer_graph(kind), views=view_set, **renderer_kw) as r:
             r.render()
             if move is not None:
                 move(r.view_set)
@@ -125,6 +128,24 @@ def test_rt_follows_the_taa_jitter_like_the_raster(gpu):
     assert_same_gbuffer(out)
     plain = render_both(scene, views, size)
     assert not np.array_equal(out["rt"]["posW"], plain["rt"]["posW"]), "jitter did not move the rays"
+
+
+def test_rt_clips_at_the_near_and_far_planes_like_the_raster(gpu):
+    """box_on_plane from above: the near plane cuts the box's top, the far plane the plane's edge."""
+    scene = builtin.box_on_plane()
+    scene.cameras[:] = [Camera.look_at((0.0, 1.2, 1.2), (0.0, 0.0, 0.0))]
+
+    def clip_planes(view_set):
+        for v in view_set.views:
+            v.near, v.far = 1.1, 2.0
+
+    out = render_both(scene, 1, (32, 32), setup=clip_planes)
+    for kind in out:
+        depth = out[kind]["posW"][..., 3]
+        seen = depth > 0
+        assert 0.2 < seen.mean() < 0.9, f"{kind}: the clip planes cut nothing ({seen.mean():.2f} seen)"
+        assert depth[seen].min() >= 1.1 - 1e-4 and depth[seen].max() <= 2.0 + 1e-4, kind
+    assert_same_gbuffer(out, min_interior=0.2)
 
 
 def test_auto_chooses_raster_here_and_rt_on_weak_raster_gpus(gpu):

@@ -3,8 +3,9 @@
 The same pins, formats and encoding as GBufferRaster (glsl/gbuffer.glsl gbuf_encode), so either can
 feed the hybrid lighting passes. It pays off where fragment work is slow against compute (NVIDIA
 datacenter GPUs with few graphics-capable TPCs: Capabilities.weak_raster); GBufferAuto chooses.
-Differences from the raster path: textures are read at mip 0 (no screen-space derivatives), and
-nothing is clipped by the near/far planes.
+Like the raster path, only surfaces between the views' near and far planes are seen. Differences:
+textures are read at mip 0 (no screen-space derivatives), and silhouettes and sub-pixel triangles
+may land on other pixels (a ray samples the pixel centre exactly, raster follows its fill rules).
 """
 from __future__ import annotations
 

@@ -20,8 +20,12 @@ layout(rg16f, binding = 7) writeonly uniform image2DArray o_motion;
 GBufferTexel primary_surface(uint v, ivec2 pixel) {
     vec3 o, d;
     view_primary_ray(v, vec2(pixel) + 0.5 + views[v].jitter.xy, o, d);
+    // the raster's clip planes: only eye depths in [near, far] (reversed-Z: no far plane)
+    float depth_per_t = -(views[v].view * vec4(d, 0.0)).z;
+    float t_near = views[v].clip.x / depth_per_t;
+    float t_far = views_reversed_z() ? 1e30 : views[v].clip.y / depth_per_t;
     Hit hit;
-    if (!trace_closest(o, d, 1e30, hit)) return gbuf_no_geometry();
+    if (!trace_closest(o + d * t_near, d, t_far - t_near, hit)) return gbuf_no_geometry();
     SurfacePoint s = surface_at(hit, d);
     // as the raster path: the shading normal turned to the side of the (viewer-facing) face normal
     vec3 n = dot(s.normal, s.geometric_normal) < 0.0 ? -s.normal : s.normal;
