@@ -183,3 +183,11 @@ def test_hybrid_gbuffer_option_renders_the_same_image(gpu):
 def test_unknown_gbuffer_mode_is_refused(gpu):
     with pytest.raises(rv.OptionError, match="'mode'.*auto, raster or rt"):
         rv.graphs.hybrid(gbuffer="fast")
+
+
+@pytest.mark.parametrize("suffix", [".json", ".py"])
+def test_hybrid_with_rt_gbuffer_saves_and_loads(tmp_path, suffix):
+    g = rv.graphs.hybrid(gbuffer="rt")
+    loaded = rv.RenderGraph.load(g.save(tmp_path / f"hybrid{suffix}"))
+    gb = loaded.passes["GBuffer"]
+    assert type(gb).__name__ == "GBufferAuto" and gb.mode == "rt"

@@ -11,7 +11,14 @@ from __future__ import annotations
 
 from ..errors import GraphError
 from ..rendergraph.render_pass import Reflection, RenderPass
-from ._common import bind_scene, build_compute, effect_defines, groups_2d, register, scene_defines
+from ._common import (
+    bind_scene,
+    build_compute,
+    effect_defines,
+    groups_2d,
+    register,
+    scene_defines,
+)
 from .gbuffer import DESCRIPTIONS, OUTPUTS
 
 
@@ -27,8 +34,6 @@ def gbuffer_reflection() -> Reflection:
 class GBufferRT(RenderPass):
     """Traces one primary ray per pixel and view (pixel centre + the view's jitter) and writes the
     G-buffer targets (see the module docstring)."""
-
-    PROPERTIES: dict = {}
 
     def reflect(self, cd):
         return gbuffer_reflection()
