@@ -37,6 +37,8 @@ def register(sub) -> None:
     p.add_argument("--grid", help="light-field camera grid COLSxROWS (its product must equal --views)")
     p.add_argument("--quilt", help="also write a Looking Glass quilt PNG of the views (with --grid)")
     p.add_argument("--multiview", default="auto", choices=("auto", "on", "off"), help="G-buffer multiview")
+    p.add_argument("--gbuffer", default="auto", choices=("auto", "raster", "rt"),
+                   help="G-buffer: raster, ray-traced, or auto (ray-traced on GPUs with weak raster units)")
     p.add_argument("--report", action="store_true", help="print the graph's compile report")
     p.set_defaults(func=run)
 
@@ -115,7 +117,7 @@ def run(args) -> int:
     views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
     graph = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
                    auto_exposure=auto_exposure, light_samples=args.light_samples,
-                   multiview=args.multiview)
+                   multiview=args.multiview, gbuffer=args.gbuffer)
     hdr = out.suffix.lower() == ".exr"
     written = []
     with Renderer(scene, graph, views=views) as r:
