@@ -79,6 +79,8 @@ class GpuBvhBuilder:
         self.k_emit = prog("lbvh_emit.comp")
         self._capacity = 0
         self._bufs: dict[str, object] = {}
+        self.profile = False                       # True: glFinish after each stage, times in stage_ms
+        self.stage_ms: dict[str, float] = {}
 
     # ---- scratch --------------------------------------------------------------------------------
     def _reserve(self, n: int) -> None:
@@ -109,6 +111,17 @@ class GpuBvhBuilder:
         for slot_name, buf_name in named.items():
             self._bufs[buf_name].bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"] + _SLOT[slot_name])
 
+    def _stage(self, name: str | None) -> None:
+        if not self.profile:
+            return
+        import time
+
+        self.gl.finish()
+        now = time.perf_counter()
+        if name is not None:
+            self.stage_ms[name] = (now - self._t) * 1e3
+        self._t = now
+
     def _run(self, prog, dispatch: int, **uniforms) -> None:
         for k, v in uniforms.items():
             if k in prog:
@@ -136,27 +149,35 @@ class GpuBvhBuilder:
         if n < MIN_TRIANGLES:
             raise SceneError(f"GpuBvhBuilder.build: {n} triangles; the GPU builder needs at least "
                              f"{MIN_TRIANGLES}, build tiny meshes with bvh.build()")
+        self.stage_ms = {}
+        self._stage(None)
         self._reserve(n)
         b = self._bufs
         b["tri_in"].write(tris)
         b["bounds"].write(_BOUNDS_INIT)
         b["arrivals"].clear(size=4 * n)
+        self._stage("upload")
         groups = -(-n // WG)
         self._bind(tri_in="tri_in", bounds="bounds", keys="keys", vals="vals")
         self._run(self.k_bounds, min(groups, 1024), n=n)
         self._run(self.k_morton, groups, n=n)
+        self._stage("morton")
         self._sort(n)
+        self._stage("sort")
         self._bind(keys="keys", scan="scan", children="children", ranges="ranges",
                    internal_parent="internal_parent", leaf_parent="leaf_parent")
         self._run(self.k_hierarchy, groups, n=n)
+        self._stage("hierarchy")
         self._bind(tri_in="tri_in", vals="vals", children="children", internal_parent="internal_parent",
                    leaf_parent="leaf_parent", arrivals="arrivals", leaf_box="leaf_box", node_box="node_box",
                    tri_out="tri_out")
         self._run(self.k_boxes, groups, n=n)
+        self._stage("boxes")
         scan_groups = self._scan(n - 1, add=True)
         self._bind(scan="scan", keys_out="nodes", children="children", ranges="ranges", leaf_box="leaf_box",
                    node_box="node_box")
         self._run(self.k_emit, groups, n=n, node_base=node_base, tri_base=tri_base)
+        self._stage("emit")
         node_count = int(np.frombuffer(b["sums"].read(size=4, offset=4 * scan_groups), np.uint32)[0])
         return GpuBvh(b["nodes"], b["tri_out"], b["vals"], node_count, n)
 
