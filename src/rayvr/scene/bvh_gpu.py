@@ -4,7 +4,8 @@ Kernels (rayvr/scene/shaders/): centroid bounds (group reduction + atomics) -> 3
 codes on a cubic grid -> a stable 4 x 8-bit radix sort of (code, triangle) pairs (per-tile
 histograms, one exclusive scan, a stable scatter) -> Karras' parallel hierarchy (one thread per
 internal node, parents, ranges) -> the bottom-up box pass with atomic arrival counters, which
-also gathers the BVH-ordered triangles -> a scan of the nodes that stay internal (more than
+also gathers the BVH-ordered triangles and (rotations=True) applies Kensler's tree rotations
+where they shrink the SAH cost (a few % below the CPU LBVH) -> a scan of the nodes that stay internal (more than
 `leaf_size` triangles; smaller subtrees become leaves, as the CPU LBVH cuts them) -> the
 64-byte nodes at their compacted indices. Everything stays on the GPU: `GpuBvh` holds the
 node and triangle buffers; `to_bvh()` reads them back into a `bvh.Bvh`.
@@ -29,7 +30,7 @@ MAX_GROUPS = 65535
 MIN_TRIANGLES = 8       # below this the CPU builder makes the (tiny) tree
 _SLOT = {"tri_in": 0, "bounds": 1, "keys": 2, "vals": 3, "scan": 4, "sums": 5, "keys_out": 6, "vals_out": 7,
          "children": 8, "ranges": 9, "internal_parent": 10, "leaf_parent": 11, "arrivals": 12,
-         "leaf_box": 13, "node_box": 14, "tri_out": 15}
+         "leaf_box": 13, "node_box": 14, "tri_out": 15, "sizes": 16}
 _BOUNDS_INIT = np.array([0xFFFFFFFF] * 3 + [0] * 3, np.uint32).tobytes()
 
 
@@ -61,13 +62,14 @@ class GpuBvhBuilder:
     """Builds LBVHs on the GPU. Compiles its kernels once and keeps scratch buffers (grown on
     demand) between builds; one builder per GL context."""
 
-    def __init__(self, gpu, leaf_size: int = 4):
+    def __init__(self, gpu, leaf_size: int = 4, rotations: bool = True):
         self.gl = gpu.gl if hasattr(gpu, "gl") else gpu
         if not 1 <= leaf_size <= MAX_LEAF_SIZE:
             raise SceneError(f"GpuBvhBuilder: leaf_size {leaf_size} is outside 1..{MAX_LEAF_SIZE} (the GPU node "
                              f"packs count - 1 in 3 bits); pass a leaf_size in that range")
-        self.leaf_size = leaf_size
-        defines = {"TILE": f"{TILE}u", "SCAN_BLOCK": f"{SCAN_BLOCK}u", "LEAF_SIZE": leaf_size}
+        self.leaf_size, self.rotations = leaf_size, rotations
+        defines = {"TILE": f"{TILE}u", "SCAN_BLOCK": f"{SCAN_BLOCK}u", "LEAF_SIZE": leaf_size,
+                   "ROTATIONS": int(rotations)}
         prog = lambda name, **extra: compute_program(self.gl, SHADERS / name, {**defines, **extra})  # noqa: E731
         self.k_bounds = prog("lbvh_bounds.comp")
         self.k_morton = prog("lbvh_morton.comp")
@@ -92,7 +94,7 @@ class GpuBvhBuilder:
         sizes = {"tri_in": 36 * n, "bounds": 24, "keys": 4 * n, "vals": 4 * n, "scan": 4 * scan_len,
                  "sums": 4 * (-(-scan_len // SCAN_BLOCK) + 1), "keys_out": 4 * n, "vals_out": 4 * n,
                  "children": 8 * n, "ranges": 8 * n, "internal_parent": 4 * n, "leaf_parent": 4 * n,
-                 "arrivals": 4 * n, "leaf_box": 32 * n, "node_box": 32 * n, "tri_out": 48 * n,
+                 "arrivals": 4 * n, "sizes": 4 * n, "leaf_box": 32 * n, "node_box": 32 * n, "tri_out": 48 * n,
                  "nodes": NODE_BYTES * n}
         limit = int(self.gl.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 1 << 31))
         if max(sizes.values()) > limit:
@@ -165,17 +167,17 @@ class GpuBvhBuilder:
         self._sort(n)
         self._stage("sort")
         self._bind(keys="keys", scan="scan", children="children", ranges="ranges",
-                   internal_parent="internal_parent", leaf_parent="leaf_parent")
+                   internal_parent="internal_parent", leaf_parent="leaf_parent", sizes="sizes")
         self._run(self.k_hierarchy, groups, n=n)
         self._stage("hierarchy")
         self._bind(tri_in="tri_in", vals="vals", children="children", internal_parent="internal_parent",
                    leaf_parent="leaf_parent", arrivals="arrivals", leaf_box="leaf_box", node_box="node_box",
-                   tri_out="tri_out")
+                   tri_out="tri_out", sizes="sizes")
         self._run(self.k_boxes, groups, n=n)
         self._stage("boxes")
         scan_groups = self._scan(n - 1, add=True)
         self._bind(scan="scan", keys_out="nodes", children="children", ranges="ranges", leaf_box="leaf_box",
-                   node_box="node_box")
+                   node_box="node_box", sizes="sizes")
         self._run(self.k_emit, groups, n=n, node_base=node_base, tri_base=tri_base)
         self._stage("emit")
         node_count = int(np.frombuffer(b["sums"].read(size=4, offset=4 * scan_groups), np.uint32)[0])
@@ -199,20 +201,20 @@ class GpuBvhBuilder:
 _builders: dict[int, GpuBvhBuilder] = {}
 
 
-def builder_for(gpu, leaf_size: int = 4) -> GpuBvhBuilder:
+def builder_for(gpu, leaf_size: int = 4, rotations: bool = True) -> GpuBvhBuilder:
     """The shared builder of this GL context (kernels compiled once)."""
     gl = gpu.gl if hasattr(gpu, "gl") else gpu
-    key = (id(gl), leaf_size)
+    key = (id(gl), leaf_size, rotations)
     if key not in _builders:
-        _builders[key] = GpuBvhBuilder(gl, leaf_size)
+        _builders[key] = GpuBvhBuilder(gl, leaf_size, rotations)
     return _builders[key]
 
 
-def build_gpu(gpu, triangles: np.ndarray, leaf_size: int = 4) -> Bvh:
+def build_gpu(gpu, triangles: np.ndarray, leaf_size: int = 4, rotations: bool = True) -> Bvh:
     """GPU LBVH of (N, 3, 3) triangles, read back as a CPU `Bvh` (tiny meshes use the CPU LBVH)."""
     tris = np.asarray(triangles, dtype=np.float32).reshape(-1, 3, 3)
     if len(tris) < MIN_TRIANGLES:
         from .bvh import build, triangle_bounds
 
         return build(*triangle_bounds(tris), method="lbvh", leaf_size=leaf_size)
-    return builder_for(gpu, leaf_size).build(tris).to_bvh()
+    return builder_for(gpu, leaf_size, rotations).build(tris).to_bvh()

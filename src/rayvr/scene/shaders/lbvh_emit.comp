@@ -9,6 +9,7 @@ layout(std430, binding = RAYVR_PASS_SSBO_0 + 8) readonly buffer Children { uvec2
 layout(std430, binding = RAYVR_PASS_SSBO_0 + 9) readonly buffer Ranges { uvec2 ranges[]; };
 layout(std430, binding = RAYVR_PASS_SSBO_0 + 13) readonly buffer LeafBox { vec4 leaf_box[]; };
 layout(std430, binding = RAYVR_PASS_SSBO_0 + 14) readonly buffer NodeBox { vec4 node_box[]; };
+layout(std430, binding = RAYVR_PASS_SSBO_0 + 16) readonly buffer Sizes { uint sizes[]; };
 #include "lbvh_common.glsl"
 uniform uint n;
 uniform uint node_base;
@@ -23,9 +24,8 @@ void emit_child(uint out_at, uint c) {
         link = tri_base + k; count = 1u;
     } else {
         lo = node_box[2u * k].xyz; hi = node_box[2u * k + 1u].xyz;
-        uvec2 r = ranges[k];
-        count = r.y - r.x + 1u;
-        if (count <= uint(LEAF_SIZE)) link = tri_base + r.x;
+        count = sizes[k];
+        if (count <= uint(LEAF_SIZE)) link = tri_base + ranges[k].x;   // never rotated: still a slot range
         else { link = node_base + new_index[k]; count = 0u; }
     }
     nodes[out_at] = vec4(lo, uintBitsToFloat(link));
@@ -34,8 +34,7 @@ void emit_child(uint out_at, uint c) {
 
 void main() {
     FOR_EACH(i, n - 1u) {
-        uvec2 r = ranges[i];
-        if (i != 0u && r.y - r.x + 1u <= uint(LEAF_SIZE)) continue;
+        if (i != 0u && sizes[i] <= uint(LEAF_SIZE)) continue;
         uint o = 4u * new_index[i];
         uvec2 ch = children[i];
         emit_child(o, ch.x);

@@ -1,6 +1,6 @@
 // Karras 2012: internal node i of the sorted codes finds its key range and split in parallel.
 // children[i]: two child references (LEAF_FLAG | slot, or an internal node index);
-// ranges[i]: its slots [first, last]; parents of both kinds of nodes; keep[i] = 1 when the node
+// ranges[i]: its slots [first, last] (sizes[i] their count); parents of both kinds of nodes; keep[i] = 1 when the node
 // stays an internal node of the output (more than LEAF_SIZE slots; smaller ones become leaves).
 layout(local_size_x = 256) in;
 layout(std430, binding = RAYVR_PASS_SSBO_0 + 2) readonly buffer Keys { uint keys[]; };
@@ -9,6 +9,7 @@ layout(std430, binding = RAYVR_PASS_SSBO_0 + 8) writeonly buffer Children { uvec
 layout(std430, binding = RAYVR_PASS_SSBO_0 + 9) writeonly buffer Ranges { uvec2 ranges[]; };
 layout(std430, binding = RAYVR_PASS_SSBO_0 + 10) writeonly buffer InternalParent { uint internal_parent[]; };
 layout(std430, binding = RAYVR_PASS_SSBO_0 + 11) writeonly buffer LeafParent { uint leaf_parent[]; };
+layout(std430, binding = RAYVR_PASS_SSBO_0 + 16) writeonly buffer Sizes { uint sizes[]; };
 #include "lbvh_common.glsl"
 uniform uint n;
 
@@ -45,6 +46,7 @@ void main() {
         uint right = last == gamma + 1 ? LEAF_FLAG | uint(gamma + 1) : uint(gamma + 1);
         children[u] = uvec2(left, right);
         ranges[u] = uvec2(first, last);
+        sizes[u] = uint(last - first) + 1u;
         keep[u] = (u == 0u || uint(last - first) + 1u > uint(LEAF_SIZE)) ? 1u : 0u;
         if ((left & LEAF_FLAG) != 0u) leaf_parent[gamma] = u; else internal_parent[gamma] = u;
         if ((right & LEAF_FLAG) != 0u) leaf_parent[gamma + 1] = u; else internal_parent[gamma + 1] = u;
