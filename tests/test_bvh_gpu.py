@@ -41,7 +41,7 @@ def walk(b: bvh.Bvh):
     return leaves, nested
 
 
-@pytest.mark.parametrize("rotations", [True, False], ids=["rotated", "plain"])
+@pytest.mark.parametrize("rotations", [3, 0], ids=["rotated", "plain"])
 @pytest.mark.parametrize("tris", [soup(3000), duplicates(2000), soup(9, seed=5)], ids=["soup", "duplicates", "tiny"])
 def test_gpu_bvh_is_a_valid_tree(gpu, tris, rotations):
     b = bvh_gpu.build_gpu(gpu, tris, rotations=rotations)
@@ -70,13 +70,13 @@ def test_gpu_bvh_quality_matches_cpu_lbvh(gpu, name):
     sphere = trimesh.creation.icosphere(subdivisions=5)
     tris = soup(5000) if name == "soup" else sphere.vertices[sphere.faces].astype(np.float32)
     cpu = bvh.build(*bvh.triangle_bounds(tris), method="lbvh")
-    plain = bvh_gpu.build_gpu(gpu, tris, rotations=False)     # the same Karras tree as the CPU LBVH
+    plain = bvh_gpu.build_gpu(gpu, tris, rotations=0)     # the same Karras tree as the CPU LBVH
     assert plain.sah_cost() == pytest.approx(cpu.sah_cost(), rel=0.01)
     assert abs(plain.node_count - cpu.node_count) <= 0.02 * cpu.node_count
     rotated = bvh_gpu.build_gpu(gpu, tris)
     assert rotated.sah_cost() <= plain.sah_cost()
-    if name == "sphere":   # regular meshes: Morton order alone splits them poorly, rotations win ~3%
-        assert rotated.sah_cost() <= 0.985 * cpu.sah_cost()
+    if name == "sphere":   # regular meshes: Morton order alone splits them poorly, rotations win ~4%
+        assert rotated.sah_cost() <= 0.975 * cpu.sah_cost()
 
 
 def test_ordered_triangles_and_link_offsets(gpu):

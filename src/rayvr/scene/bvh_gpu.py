@@ -4,8 +4,8 @@ Kernels (rayvr/scene/shaders/): centroid bounds (group reduction + atomics) -> 3
 codes on a cubic grid -> a stable 4 x 8-bit radix sort of (code, triangle) pairs (per-tile
 histograms, one exclusive scan, a stable scatter) -> Karras' parallel hierarchy (one thread per
 internal node, parents, ranges) -> the bottom-up box pass with atomic arrival counters, which
-also gathers the BVH-ordered triangles and (rotations=True) applies Kensler's tree rotations
-where they shrink the SAH cost (a few % below the CPU LBVH) -> a scan of the nodes that stay internal (more than
+also gathers the BVH-ordered triangles and applies Kensler's tree rotations where they shrink
+the SAH cost (`rotations` rounds of that pass; 0: the plain Karras tree of the CPU LBVH) -> a scan of the nodes that stay internal (more than
 `leaf_size` triangles; smaller subtrees become leaves, as the CPU LBVH cuts them) -> the
 64-byte nodes at their compacted indices. Everything stays on the GPU: `GpuBvh` holds the
 node and triangle buffers; `to_bvh()` reads them back into a `bvh.Bvh`.
@@ -62,14 +62,14 @@ class GpuBvhBuilder:
     """Builds LBVHs on the GPU. Compiles its kernels once and keeps scratch buffers (grown on
     demand) between builds; one builder per GL context."""
 
-    def __init__(self, gpu, leaf_size: int = 4, rotations: bool = True):
+    def __init__(self, gpu, leaf_size: int = 4, rotations: int = 3):
         self.gl = gpu.gl if hasattr(gpu, "gl") else gpu
         if not 1 <= leaf_size <= MAX_LEAF_SIZE:
             raise SceneError(f"GpuBvhBuilder: leaf_size {leaf_size} is outside 1..{MAX_LEAF_SIZE} (the GPU node "
                              f"packs count - 1 in 3 bits); pass a leaf_size in that range")
-        self.leaf_size, self.rotations = leaf_size, rotations
+        self.leaf_size, self.rotations = leaf_size, int(rotations)
         defines = {"TILE": f"{TILE}u", "SCAN_BLOCK": f"{SCAN_BLOCK}u", "LEAF_SIZE": leaf_size,
-                   "ROTATIONS": int(rotations)}
+                   "ROTATIONS": int(self.rotations > 0)}
         prog = lambda name, **extra: compute_program(self.gl, SHADERS / name, {**defines, **extra})  # noqa: E731
         self.k_bounds = prog("lbvh_bounds.comp")
         self.k_morton = prog("lbvh_morton.comp")
@@ -79,6 +79,7 @@ class GpuBvhBuilder:
         self.k_hierarchy = prog("lbvh_hierarchy.comp")
         self.k_boxes = prog("lbvh_boxes.comp")
         self.k_emit = prog("lbvh_emit.comp")
+        self.k_parents = prog("lbvh_parents.comp")
         self._capacity = 0
         self._bufs: dict[str, object] = {}
         self.profile = False                       # True: glFinish after each stage, times in stage_ms
@@ -173,7 +174,15 @@ class GpuBvhBuilder:
         self._bind(tri_in="tri_in", vals="vals", children="children", internal_parent="internal_parent",
                    leaf_parent="leaf_parent", arrivals="arrivals", leaf_box="leaf_box", node_box="node_box",
                    tri_out="tri_out", sizes="sizes")
-        self._run(self.k_boxes, groups, n=n)
+        self._run(self.k_boxes, groups, n=n, first_round=1)
+        for _ in range(self.rotations - 1):   # more rounds of rotations over the rotated tree
+            self._bind(children="children", internal_parent="internal_parent", leaf_parent="leaf_parent")
+            self._run(self.k_parents, groups, n=n)
+            b["arrivals"].clear(size=4 * n)
+            self._bind(tri_in="tri_in", vals="vals", children="children", internal_parent="internal_parent",
+                       leaf_parent="leaf_parent", arrivals="arrivals", leaf_box="leaf_box", node_box="node_box",
+                       tri_out="tri_out", sizes="sizes")
+            self._run(self.k_boxes, groups, n=n, first_round=0)
         self._stage("boxes")
         scan_groups = self._scan(n - 1, add=True)
         self._bind(scan="scan", keys_out="nodes", children="children", ranges="ranges", leaf_box="leaf_box",
@@ -201,7 +210,7 @@ class GpuBvhBuilder:
 _builders: dict[int, GpuBvhBuilder] = {}
 
 
-def builder_for(gpu, leaf_size: int = 4, rotations: bool = True) -> GpuBvhBuilder:
+def builder_for(gpu, leaf_size: int = 4, rotations: int = 3) -> GpuBvhBuilder:
     """The shared builder of this GL context (kernels compiled once)."""
     gl = gpu.gl if hasattr(gpu, "gl") else gpu
     key = (id(gl), leaf_size, rotations)
@@ -210,7 +219,7 @@ def builder_for(gpu, leaf_size: int = 4, rotations: bool = True) -> GpuBvhBuilde
     return _builders[key]
 
 
-def build_gpu(gpu, triangles: np.ndarray, leaf_size: int = 4, rotations: bool = True) -> Bvh:
+def build_gpu(gpu, triangles: np.ndarray, leaf_size: int = 4, rotations: int = 3) -> Bvh:
     """GPU LBVH of (N, 3, 3) triangles, read back as a CPU `Bvh` (tiny meshes use the CPU LBVH)."""
     tris = np.asarray(triangles, dtype=np.float32).reshape(-1, 3, 3)
     if len(tris) < MIN_TRIANGLES:

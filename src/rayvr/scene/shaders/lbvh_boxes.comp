@@ -21,6 +21,7 @@ layout(std430, binding = RAYVR_PASS_SSBO_0 + 16) coherent buffer Sizes { uint si
 #define HAS_TRI_IN
 #include "lbvh_common.glsl"
 uniform uint n;
+uniform uint first_round;   // later rounds (rotations only) keep the gathered triangles and leaf boxes
 
 void child_box(uint c, out vec3 lo, out vec3 hi) {
     uint k = c & ~LEAF_FLAG;
@@ -79,13 +80,15 @@ void rotate(uint node, uvec2 ch) {
 
 void main() {
     FOR_EACH(slot, n) {
-        uint t = vals[slot];
-        vec3 a = load_vertex(t, 0u), b = load_vertex(t, 1u), c = load_vertex(t, 2u);
-        tri_out[3u * slot] = vec4(a, uintBitsToFloat(t));
-        tri_out[3u * slot + 1u] = vec4(b, 0.0);
-        tri_out[3u * slot + 2u] = vec4(c, 0.0);
-        leaf_box[2u * slot] = vec4(min(min(a, b), c), 0.0);
-        leaf_box[2u * slot + 1u] = vec4(max(max(a, b), c), 0.0);
+        if (first_round != 0u) {
+            uint t = vals[slot];
+            vec3 a = load_vertex(t, 0u), b = load_vertex(t, 1u), c = load_vertex(t, 2u);
+            tri_out[3u * slot] = vec4(a, uintBitsToFloat(t));
+            tri_out[3u * slot + 1u] = vec4(b, 0.0);
+            tri_out[3u * slot + 2u] = vec4(c, 0.0);
+            leaf_box[2u * slot] = vec4(min(min(a, b), c), 0.0);
+            leaf_box[2u * slot + 1u] = vec4(max(max(a, b), c), 0.0);
+        }
         uint node = leaf_parent[slot];
         while (true) {
             memoryBarrierBuffer();
