@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .bvh import resolve_scene
+from .bvh import resolve_scene, world_triangles
 
 DEFAULT_SCENES = "tauray/test.glb,khronos/MetalRoughSpheresNoTextures,khronos/ToyCar,generated:2700000"
 QUICK_SCENES = "cornell_box"
@@ -35,6 +35,12 @@ uniform vec3 cam_up;       // scaled by tan(fov/2)
 uniform vec3 cam_forward;
 uniform ivec2 size;
 uint pixel_index(ivec2 px) { return uint(px.y * size.x + px.x); }
+#if RQ_STATS
+layout(std430, binding = RAYVR_PASS_SSBO_2) writeonly buffer Stats { uvec4 stats[]; };
+#define WRITE_STATS(i) stats[i] = uvec4(rq_stat_nodes, rq_stat_triangles, rq_stat_instances, 1u)
+#else
+#define WRITE_STATS(i)
+#endif
 vec3 camera_dir(ivec2 px) {
     vec2 ndc = (vec2(px) + 0.5) / vec2(size) * 2.0 - 1.0;
     return normalize(cam_forward + ndc.x * cam_right + ndc.y * cam_up);
@@ -49,6 +55,7 @@ void main() {
     Hit h;
     bool hit = trace_closest(cam_pos, camera_dir(px), 1e29, h);
     result[pixel_index(px)] = hit ? h.t : -1.0;
+    WRITE_STATS(pixel_index(px));
 }
 """
 
@@ -79,7 +86,7 @@ void main() {
     if (px.x >= size.x || px.y >= size.y) return;
     uint i = pixel_index(px);
     vec4 p = surfaces[2u * i];
-    if (p.w == 0.0) { result[i] = -2.0; return; }
+    if (p.w == 0.0) { result[i] = -2.0; WRITE_STATS(i); return; }
     vec3 n = surfaces[2u * i + 1u].xyz;
     uint h1 = hash(i * 2u + 1u), h2 = hash(h1 ^ 0x9e3779b9u);
     float u1 = float(h1 >> 8) / 16777216.0, u2 = float(h2 >> 8) / 16777216.0;
@@ -90,6 +97,7 @@ void main() {
     Hit h;
     bool hit = trace_closest(p.xyz, d, 1e29, h);
     result[i] = hit ? h.t : -1.0;
+    WRITE_STATS(i);
 }
 """
 
@@ -124,6 +132,14 @@ def add_arguments(parser) -> None:
     parser.add_argument("--iterations", type=int, default=10, help="timed dispatches per kind (quick: 1)")
     parser.add_argument("--roofline-rays", type=int, default=1 << 20, help="rays in the roofline kernel (quick: 4096)")
     parser.add_argument("--roofline-tris", type=int, default=1024, help="triangles per ray in the roofline (quick: 64)")
+    parser.add_argument("--variants", default="",
+                        help="ray_query.glsl #define sets to compare, 'NAME:KEY=V;KEY=V|NAME2:...' "
+                             "(default: one row per scene with the library's defaults)")
+    parser.add_argument("--rounds", type=int, default=3,
+                        help="interleaved timing rounds over the variants; the fastest round counts "
+                             "(a shared GPU's timings vary between dispatches; quick: 1)")
+    parser.add_argument("--stats", action="store_true",
+                        help="also count node visits, triangle tests and instance entries per ray (RQ_STATS)")
 
 
 def _camera(scene, aspect: float):
@@ -196,6 +212,45 @@ def _roofline(gl, caps, folder: Path, rays: int, tris: int, iterations: int) -> 
     return rays * tris / (ms / 1e3)
 
 
+def _scene(spec: str):
+    """resolve_scene, or with 'flat:' (or 'flat-sah:') every instance's triangles in world space
+    as one mesh and one instance: the one-level BVH a static scene could use."""
+    kind, _, rest = spec.partition(":")
+    if kind not in ("flat", "flat-sah"):
+        return resolve_scene(spec), "auto"
+    from rayvr.scene import Material, Scene
+
+    src = resolve_scene(rest)
+    tris = world_triangles(src)
+    s = Scene(f"flat {src.name}")
+    s.add_material(Material("Flat"))
+    s.add_object("Flat", tris.reshape(-1, 3), np.arange(3 * len(tris), dtype=np.uint32), 0)
+    s.cameras = list(src.cameras)
+    return s, "sah" if kind == "flat-sah" else "auto"
+
+
+def parse_variants(text: str) -> list[tuple[str, dict]]:
+    """'NAME:KEY=V;KEY=V|NAME2' -> [(name, {KEY: V})]; empty text: one default variant."""
+    out = []
+    for part in filter(None, (p.strip() for p in text.split("|"))):
+        name, _, defs = part.partition(":")
+        out.append((name, {k.strip(): int(v) for k, v in (d.split("=") for d in defs.split(";") if d.strip())}))
+    return out or [("default", {})]
+
+
+def _stats(gl, progs: dict, groups, stats_buf, hits_mask) -> dict:
+    """Mean node visits, triangle tests and instance entries per ray of the RQ_STATS kernels."""
+    out = {}
+    for kind in ("primary", "diffuse"):
+        progs[kind].run(*groups)
+        gl.finish()
+        st = np.frombuffer(stats_buf.read(), np.uint32).reshape(-1, 4).astype(np.float64)
+        rays = st if kind == "primary" else st[hits_mask]
+        for k, col in enumerate(("nodes", "tris", "instances")):
+            out[f"{kind}_{col}"] = float(rays[:, k].mean()) if len(rays) else 0.0
+    return out
+
+
 def run(args) -> dict:
     from rayvr.gpu import get_context
     from rayvr.gpu.bindings import BINDINGS
@@ -206,53 +261,81 @@ def run(args) -> dict:
     specs = (args.scenes or (QUICK_SCENES if args.quick else DEFAULT_SCENES)).split(",")
     w, h = (96, 54) if args.quick and args.size == "1920x1080" else map(int, args.size.lower().split("x"))
     iters = 1 if args.quick else args.iterations
+    variants = parse_variants(getattr(args, "variants", ""))
     folder = Path(tempfile.mkdtemp(prefix="rayvr-rays-"))
     roof = _roofline(gl, caps, folder, 4096 if args.quick else args.roofline_rays,
                      64 if args.quick else args.roofline_tris, iters)
     rows = []
     for spec in specs:
-        scene = resolve_scene(spec.strip())
+        scene, method = _scene(spec.strip())
         t0 = time.perf_counter()
-        gs = GpuScene(gpu, scene, progress=False)
+        gs = GpuScene(gpu, scene, bvh_method=method, progress=False)
         build_s = time.perf_counter() - t0
-        defines = gs.defines()
-        progs = {k: _program(gl, folder, k, src, defines) for k, src in
-                 (("primary", PRIMARY), ("surfaces", SURFACES), ("diffuse", DIFFUSE))}
         pos, right, up, fwd = _camera(scene, w / h)
-        for p in progs.values():
-            for name, v in (("cam_pos", pos - gs.origin), ("cam_right", right), ("cam_up", up), ("cam_forward", fwd)):
-                if name in p:
-                    p[name] = tuple(float(x) for x in v)
-            p["size"] = (w, h)
         result = gl.buffer(reserve=w * h * 4)
         surfaces = gl.buffer(reserve=w * h * 32)
+        stats_buf = gl.buffer(reserve=w * h * 16) if getattr(args, "stats", False) else None
+        groups = ((w + 7) // 8, (h + 7) // 8)
+
+        def programs(defines):
+            progs = {k: _program(gl, folder, k, src, defines) for k, src in
+                     (("primary", PRIMARY), ("surfaces", SURFACES), ("diffuse", DIFFUSE))}
+            for p in progs.values():
+                for name, v in (("cam_pos", pos - gs.origin), ("cam_right", right), ("cam_up", up), ("cam_forward", fwd)):
+                    if name in p:
+                        p[name] = tuple(float(x) for x in v)
+                p["size"] = (w, h)
+            return progs
+
         gs.bind()
         result.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"])
         surfaces.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_1"])
-        groups = ((w + 7) // 8, (h + 7) // 8)
-        primary_ms = _time(gl, caps.timer_queries, lambda: progs["primary"].run(*groups), iters)
-        hits = int((np.frombuffer(result.read(), np.float32) > 0).sum())
-        progs["surfaces"].run(*groups)
-        gl.memory_barrier()
-        diffuse_ms = _time(gl, caps.timer_queries, lambda: progs["diffuse"].run(*groups), iters)
-        d = np.frombuffer(result.read(), np.float32)
-        bounce_hits = int((d > 0).sum())
-        primary_rate = w * h / (primary_ms / 1e3)
-        diffuse_rate = hits / (diffuse_ms / 1e3) if hits else 0.0
-        rep = gs.report()
-        rows.append({
-            "scene": spec, "triangles": gs.triangle_count, "size": f"{w}x{h}",
-            "primary_ms": primary_ms, "primary_Grays_s": primary_rate / 1e9,
-            "diffuse_ms": diffuse_ms, "diffuse_Grays_s": diffuse_rate / 1e9,
-            "primary_hit_frac": hits / (w * h), "diffuse_hit_frac": bounce_hits / max(hits, 1),
-            "roofline_Gtests_s": roof / 1e9, "primary_ratio": primary_rate / roof, "diffuse_ratio": diffuse_rate / roof,
-            "gpu_bytes_per_tri": rep["geometry_bytes_per_triangle"], "scene_build_s": build_s,
-        })
+        if stats_buf is not None:
+            stats_buf.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_2"])
+        counts = None
+        compiled = [(vname, vdefs, programs({**gs.defines(), **vdefs})) for vname, vdefs in variants]
+        best: dict[str, dict] = {}
+        for _ in range(1 if args.quick else max(1, getattr(args, "rounds", 1))):   # interleaved rounds; the fastest counts
+            for vname, vdefs, progs in compiled:
+                primary_ms = _time(gl, caps.timer_queries, lambda: progs["primary"].run(*groups), iters)
+                hits = int((np.frombuffer(result.read(), np.float32) > 0).sum())
+                progs["surfaces"].run(*groups)
+                gl.memory_barrier()
+                diffuse_ms = _time(gl, caps.timer_queries, lambda: progs["diffuse"].run(*groups), iters)
+                d = np.frombuffer(result.read(), np.float32)
+                if stats_buf is not None and counts is None:
+                    counts = _stats(gl, programs({**gs.defines(), **vdefs, "RQ_STATS": 1}), groups, stats_buf, d > -1.5)
+                b = best.setdefault(vname, {"primary_ms": primary_ms, "diffuse_ms": diffuse_ms})
+                b["primary_ms"], b["diffuse_ms"] = min(b["primary_ms"], primary_ms), min(b["diffuse_ms"], diffuse_ms)
+                b["hits"], b["bounce_hits"] = hits, int((d > 0).sum())
+        for vname, _, _ in compiled:
+            b = best[vname]
+            primary_ms, diffuse_ms, hits, bounce_hits = b["primary_ms"], b["diffuse_ms"], b["hits"], b["bounce_hits"]
+            primary_rate = w * h / (primary_ms / 1e3)
+            diffuse_rate = hits / (diffuse_ms / 1e3) if hits else 0.0
+            rep = gs.report()
+            rows.append({
+                "scene": spec, "variant": vname, "triangles": gs.triangle_count, "size": f"{w}x{h}",
+                "primary_ms": primary_ms, "primary_Grays_s": primary_rate / 1e9,
+                "diffuse_ms": diffuse_ms, "diffuse_Grays_s": diffuse_rate / 1e9,
+                "primary_hit_frac": hits / (w * h), "diffuse_hit_frac": bounce_hits / max(hits, 1),
+                "roofline_Gtests_s": roof / 1e9, "primary_ratio": primary_rate / roof, "diffuse_ratio": diffuse_rate / roof,
+                "gpu_bytes_per_tri": rep["geometry_bytes_per_triangle"], "scene_build_s": build_s,
+                **(counts or {}),
+            })
         result.release(), surfaces.release(), gs.release()
-    cols = ["scene", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_ms", "diffuse_Grays_s",
+        if stats_buf is not None:
+            stats_buf.release()
+    cols = ["scene", "variant", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_ms", "diffuse_Grays_s",
             "primary_hit_frac", "diffuse_hit_frac", "roofline_Gtests_s", "primary_ratio", "diffuse_ratio",
             "gpu_bytes_per_tri", "scene_build_s"]
-    notes = [f"timing: {'GPU timer queries' if caps.timer_queries else 'finish + wall clock'}, median of {iters}",
+    if getattr(args, "stats", False):
+        cols += [f"{k}_{c}" for k in ("primary", "diffuse") for c in ("nodes", "tris", "instances")]
+    rounds = 1 if args.quick else max(1, args.rounds)
+    notes = [f"timing: {'GPU timer queries' if caps.timer_queries else 'finish + wall clock'}, median of {iters}, "
+             f"best of {rounds} interleaved rounds",
              "diffuse rays are cast from primary hits only; rays/s counts those rays",
-             "roofline: brute-force watertight ray-triangle tests/s (same test as the traversal, no BVH)"]
+             "roofline: brute-force ray-triangle tests/s (same test as the traversal, no BVH)"]
+    if getattr(args, "stats", False):
+        notes.append("stats (first variant): mean internal nodes visited / triangle tests / BLAS entries per ray")
     return {"columns": cols, "rows": rows, "notes": notes}

@@ -16,13 +16,19 @@
 #define RQ_STACK_SIZE 64
 #endif
 #ifndef RQ_TRAVERSAL
-#define RQ_TRAVERSAL 1       // 0: nested TLAS/BLAS loops (old), 1: one loop over both levels
+#define RQ_TRAVERSAL 1       // 0: nested TLAS/BLAS loops (old), 1: one loop over both levels, 2: nested, one BLAS call site
 #endif
 #ifndef RQ_TRIANGLE
-#define RQ_TRIANGLE 0        // 0: watertight (Woop et al. 2013), 1: Moeller-Trumbore, 2: watertight without the fp64 edge fallback
+#define RQ_TRIANGLE 1        // 1: Moeller-Trumbore with widened edges, 0: watertight (Woop et al. 2013), 2: 0 without its fp64 edge fallback
+#endif
+#ifndef RQ_EDGE_EPS
+#define RQ_EDGE_EPS 1e-7     // RQ_TRIANGLE 1: barycentric tolerance at the edges
 #endif
 #ifndef RQ_STATS
 #define RQ_STATS 0
+#endif
+#ifndef RQ_SHARED_STACK
+#define RQ_SHARED_STACK 0    // > 0 (compute, RQ_TRAVERSAL 1): stacks in shared memory for this many invocations per workgroup
 #endif
 #ifndef RQ_TLAS_STACK_SIZE
 #define RQ_TLAS_STACK_SIZE 24
@@ -135,8 +141,9 @@ bool rq_triangle(RqRay r, vec3 v0, vec3 v1, vec3 v2, float tmax, out float t, ou
 }
 
 #else
-// Moeller-Trumbore ray/triangle test, same contract as the watertight one. Edges are inclusive,
-// so a ray through a shared edge hits one of its triangles except in rare rounding cases.
+// Moeller-Trumbore ray/triangle test, same contract as the watertight one. The edges are
+// widened by RQ_EDGE_EPS in barycentric units, so a ray through a shared edge hits at least one of
+// its triangles despite rounding (no cracks; an edge ray may report either neighbour).
 bool rq_triangle(RqRay r, vec3 v0, vec3 v1, vec3 v2, float tmax, out float t, out vec2 bary) {
     vec3 e1 = v1 - v0, e2 = v2 - v0;
     vec3 p = cross(r.d, e2);
@@ -147,7 +154,7 @@ bool rq_triangle(RqRay r, vec3 v0, vec3 v1, vec3 v2, float tmax, out float t, ou
     float v = dot(r.d, q) * rcp;
     t = dot(e2, q) * rcp;
     bary = vec2(u, v);
-    return u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < tmax;
+    return min(u, v) >= -RQ_EDGE_EPS && u + v <= 1.0 + RQ_EDGE_EPS && t > 0.0 && t < tmax;
 }
 
 #endif
@@ -187,7 +194,7 @@ bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, i
     return found;
 }
 
-#if RQ_TRAVERSAL == 0
+#if RQ_TRAVERSAL != 1
 // Traverse one instance's BLAS in its object space; updates hit/tmax.
 bool rq_trace_blas(vec3 o_render, vec3 d_render, uint instance, bool any_hit, inout float tmax, inout Hit hit) {
     vec3 o = vec3(dot(scene_instances[instance].to_object[0], vec4(o_render, 1.0)),
@@ -202,6 +209,7 @@ bool rq_trace_blas(vec3 o_render, vec3 d_render, uint instance, bool any_hit, in
     int sp = 0;
     bool found = false;
     while (true) {
+        RQ_COUNT(rq_stat_nodes);
         uint base = node * 4u;
         vec4 n0 = rq_blas_nodes[base], n1 = rq_blas_nodes[base + 1u];
         vec4 n2 = rq_blas_nodes[base + 2u], n3 = rq_blas_nodes[base + 3u];
@@ -235,6 +243,7 @@ bool rq_trace_blas(vec3 o_render, vec3 d_render, uint instance, bool any_hit, in
     return found;
 }
 
+#if RQ_TRAVERSAL == 0
 // Traverse the TLAS (leaves: one instance each, link = instance index).
 bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
     hit.t = tmax_in;
@@ -249,6 +258,7 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
     int sp = 0;
     uint node = 0u;
     while (true) {
+        RQ_COUNT(rq_stat_nodes);
         uint base = node * 4u;
         vec4 n0 = rq_tlas_nodes[base], n1 = rq_tlas_nodes[base + 1u];
         vec4 n2 = rq_tlas_nodes[base + 2u], n3 = rq_tlas_nodes[base + 3u];
@@ -289,6 +299,53 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
 }
 
 #else
+// Traverse the TLAS; instances (leaves) are taken one per iteration from one call site of the
+// BLAS loop, so that loop is compiled once.
+bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
+    hit.t = tmax_in;
+    hit.barycentrics = vec2(0.0);
+    hit.instance = 0xFFFFFFFFu;
+    hit.primitive = 0xFFFFFFFFu;
+    bool found = false;
+    if (instance_count() == 0u) return false;
+    float tmax = min(tmax_in, 1e29);
+    vec3 inv = rq_safe_inverse(d), oi = o * inv;
+    uint stack[RQ_TLAS_STACK_SIZE];
+    int sp = 0;
+    uint item = 0u;   // a node index, or 0x80000000 | instance
+    while (true) {
+        if (item < 0x80000000u) {
+            RQ_COUNT(rq_stat_nodes);
+            uint base = item * 4u;
+            vec4 n0 = rq_tlas_nodes[base], n1 = rq_tlas_nodes[base + 1u];
+            vec4 n2 = rq_tlas_nodes[base + 2u], n3 = rq_tlas_nodes[base + 3u];
+            float t0 = rq_box(n0.xyz, n1.xyz, inv, oi, tmax);
+            float t1 = rq_box(n2.xyz, n3.xyz, inv, oi, tmax);
+            uint c0 = floatBitsToUint(n0.w) | (floatBitsToUint(n1.w) > 0u ? 0x80000000u : 0u);
+            uint c1 = floatBitsToUint(n2.w) | (floatBitsToUint(n3.w) > 0u ? 0x80000000u : 0u);
+            bool go0 = t0 >= 0.0, go1 = t1 >= 0.0;
+            if (go0 && go1) {
+                bool near0 = t0 <= t1;
+                if (sp < RQ_TLAS_STACK_SIZE) stack[sp++] = near0 ? c1 : c0;
+                item = near0 ? c0 : c1;
+                continue;
+            }
+            if (go0 || go1) {
+                item = go0 ? c0 : c1;
+                continue;
+            }
+        } else {
+            RQ_COUNT(rq_stat_instances);
+            found = rq_trace_blas(o, d, item & 0x7FFFFFFFu, any_hit, tmax, hit) || found;
+            if (any_hit && found) break;
+        }
+        if (sp == 0) break;
+        item = stack[--sp];
+    }
+    return found;
+}
+#endif
+#else
 RqRay rq_object_ray(vec3 o_render, vec3 d_render, uint instance) {
     vec4 m0 = scene_instances[instance].to_object[0], m1 = scene_instances[instance].to_object[1],
          m2 = scene_instances[instance].to_object[2];
@@ -300,6 +357,18 @@ RqRay rq_object_ray(vec3 o_render, vec3 d_render, uint instance) {
 // A traversal work item: an internal node index, or (RQ_LEAF_BIT) a leaf: first slot in bits
 // 0..27, count - 1 in bits 28..30 (leaves hold 1..8 triangles; a TLAS leaf is one instance).
 #define RQ_LEAF_BIT 0x80000000u
+#if RQ_SHARED_STACK
+// Compute shaders only: the stacks of a workgroup of RQ_SHARED_STACK invocations in shared
+// memory, entry-major so that neighbouring invocations use neighbouring banks.
+shared uint rq_shared_stack[RQ_SHARED_STACK * RQ_STACK_SIZE];
+#define RQ_STACK_DECL uint rq_lane = gl_LocalInvocationIndex
+#define RQ_PUSH(v) rq_shared_stack[uint(sp++) * uint(RQ_SHARED_STACK) + rq_lane] = (v)
+#define RQ_POP() rq_shared_stack[uint(--sp) * uint(RQ_SHARED_STACK) + rq_lane]
+#else
+#define RQ_STACK_DECL uint stack[RQ_STACK_SIZE]
+#define RQ_PUSH(v) stack[sp++] = (v)
+#define RQ_POP() stack[--sp]
+#endif
 #define RQ_NO_INSTANCE 0xFFFFFFFFu
 
 uint rq_item(uint link, uint count) {
@@ -321,7 +390,7 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
     RqRay r = world;
     uint instance = RQ_NO_INSTANCE;
     int blas_base = -1;          // stack depth when the current BLAS was entered
-    uint stack[RQ_STACK_SIZE];
+    RQ_STACK_DECL;
     int sp = 0;
     uint item = 0u;
     while (true) {
@@ -343,7 +412,7 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
             bool go0 = t0 >= 0.0, go1 = t1 >= 0.0;
             if (go0 && go1) {
                 bool near0 = t0 <= t1;
-                if (sp < RQ_STACK_SIZE) stack[sp++] = near0 ? c1 : c0;
+                if (sp < RQ_STACK_SIZE) RQ_PUSH(near0 ? c1 : c0);
                 item = near0 ? c0 : c1;
                 continue;
             }
@@ -368,7 +437,7 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
             blas_base = -1;
         }
         if (sp == 0) break;
-        item = stack[--sp];
+        item = RQ_POP();
     }
     return found;
 }
