@@ -182,7 +182,8 @@ def run(args) -> dict:
 
     notes.append(f"build_ms: triangle boxes + build + GPU node layout (fastest of --repeat); numpy, LBVH above "
                  f"200k triangles on {args.threads or os.cpu_count()} threads")
-    notes.append("gpu_build_ms: GPU LBVH (compute shaders, 30-bit Morton codes, radix sort, leaves <= 4): triangle "
+    notes.append("gpu_build_ms: GPU LBVH (compute shaders, 30-bit Morton codes, radix sort, 3 rounds of tree rotations, "
+                 "leaves <= 4): triangle "
                  "upload + all kernels + glFinish, fastest of --repeat; gpu_first_build_ms: the first build "
                  "(kernel compile + scratch allocation); gpu_readback_ms: copying nodes and order back to a "
                  "CPU Bvh (not needed to trace)")

@@ -122,6 +122,7 @@ def test_rays_through_gpu_bvh_match_embree(gl, tmp_path):
 def test_gpu_scene_uses_the_gpu_builder(gpu):
     s = GpuScene(gpu, _scene(soup(600)), bvh_method="gpu")
     assert s.blas[0].method == "gpu"
+    assert all(not b._bufs for b in bvh_gpu._builders.values()), "GpuScene frees the builder's scratch"
     s.release()
     with pytest.raises(SceneError, match="bvh_method"):
         GpuScene(gpu, _scene(soup(50)), bvh_method="fast")
@@ -132,6 +133,10 @@ def test_bad_leaf_size_is_refused(gpu):
         bvh_gpu.GpuBvhBuilder(gpu, leaf_size=9)
     with pytest.raises(SceneError, match="at least"):
         bvh_gpu.builder_for(gpu).build(soup(3))
+    bad = soup(20)
+    bad[3, 1, 2] = np.nan
+    with pytest.raises(SceneError, match="NaN"):
+        bvh_gpu.build_gpu(gpu, bad)
 
 
 def _scene(tris):

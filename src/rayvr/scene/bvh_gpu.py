@@ -145,8 +145,8 @@ class GpuBvhBuilder:
 
     # ---- build ----------------------------------------------------------------------------------
     def build(self, triangles: np.ndarray, node_base: int = 0, tri_base: int = 0) -> GpuBvh:
-        """Build over (N, 3, 3) float32 triangles. node_base / tri_base are added to node and
-        leaf links (to place this BLAS in a buffer shared with others)."""
+        """Build over (N, 3, 3) float32 triangles (finite: not checked here). node_base / tri_base
+        are added to node and leaf links (to place this BLAS in a buffer shared with others)."""
         tris = np.ascontiguousarray(triangles, dtype=np.float32).reshape(-1, 9)
         n = len(tris)
         if n < MIN_TRIANGLES:
@@ -219,9 +219,20 @@ def builder_for(gpu, leaf_size: int = 4, rotations: int = 3) -> GpuBvhBuilder:
     return _builders[key]
 
 
+def release_scratch(gpu) -> None:
+    """Free the scratch buffers (~270 B per triangle) of this context's builders; the kernels stay."""
+    gl = gpu.gl if hasattr(gpu, "gl") else gpu
+    for (ctx_id, *_), builder in _builders.items():
+        if ctx_id == id(gl):
+            builder.release()
+
+
 def build_gpu(gpu, triangles: np.ndarray, leaf_size: int = 4, rotations: int = 3) -> Bvh:
-    """GPU LBVH of (N, 3, 3) triangles, read back as a CPU `Bvh` (tiny meshes use the CPU LBVH)."""
+    """GPU LBVH of (N, 3, 3) triangles, read back as a CPU `Bvh` (tiny meshes use the CPU LBVH).
+    The builder keeps its scratch for the next build: `release_scratch(gpu)` when done."""
     tris = np.asarray(triangles, dtype=np.float32).reshape(-1, 3, 3)
+    if not np.isfinite(tris).all():
+        raise SceneError("bvh (gpu): NaN or Inf triangle vertices; remove non-finite vertices first")
     if len(tris) < MIN_TRIANGLES:
         from .bvh import build, triangle_bounds
 

@@ -176,6 +176,8 @@ class GpuScene:
                   for m in self.scene.meshes]
         gpu_built = {k: bvh_gpu.build_gpu(self.gpu, m.triangles())   # GL calls: this thread only
                      for k, (m, g) in enumerate(zip(self.scene.meshes, on_gpu)) if g}
+        if gpu_built:
+            bvh_gpu.release_scratch(self.gpu)
         cpu_method = "auto" if method == "gpu" else method
 
         def one(mesh, threads=None):
