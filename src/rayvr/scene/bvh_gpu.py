@@ -5,9 +5,11 @@ codes on a cubic grid -> a stable 4 x 8-bit radix sort of (code, triangle) pairs
 histograms, one exclusive scan, a stable scatter) -> Karras' parallel hierarchy (one thread per
 internal node, parents, ranges) -> the bottom-up box pass with atomic arrival counters, which
 also gathers the BVH-ordered triangles and applies Kensler's tree rotations where they shrink
-the SAH cost (`rotations` rounds of that pass; 0: the plain Karras tree of the CPU LBVH) -> a scan of the nodes that stay internal (more than
-`leaf_size` triangles; smaller subtrees become leaves, as the CPU LBVH cuts them) -> the
-64-byte nodes at their compacted indices. Everything stays on the GPU: `GpuBvh` holds the
+the SAH cost (`rotations` rounds of that pass; 0: the plain Karras tree of the CPU LBVH) -> a
+scan of the nodes that stay internal (more than `leaf_size` triangles; smaller subtrees become
+leaves, as the CPU LBVH cuts them) -> the 64-byte nodes at their compacted indices.
+Measured on the H100 (upload + kernels + glFinish): 1.04M triangles 16.5 ms, 2.7M 40.6 ms, SAH
+cost ~4-8% below the CPU LBVH (1.16x the binned-SAH reference on MetalRoughSpheres). Everything stays on the GPU: `GpuBvh` holds the
 node and triangle buffers; `to_bvh()` reads them back into a `bvh.Bvh`.
 """
 from __future__ import annotations
@@ -70,7 +72,10 @@ class GpuBvhBuilder:
         self.leaf_size, self.rotations = leaf_size, int(rotations)
         defines = {"TILE": f"{TILE}u", "SCAN_BLOCK": f"{SCAN_BLOCK}u", "LEAF_SIZE": leaf_size,
                    "ROTATIONS": int(self.rotations > 0)}
-        prog = lambda name, **extra: compute_program(self.gl, SHADERS / name, {**defines, **extra})  # noqa: E731
+
+        def prog(name, **extra):
+            return compute_program(self.gl, SHADERS / name, {**defines, **extra})
+
         self.k_bounds = prog("lbvh_bounds.comp")
         self.k_morton = prog("lbvh_morton.comp")
         self.k_hist = prog("radix_histogram.comp")
