@@ -95,6 +95,19 @@ def test_ordered_triangles_and_link_offsets(gpu):
         np.testing.assert_array_equal(bits[:, c + 3], ref[:, c + 3] + np.where(leaf, 7000, 100))
 
 
+def test_copy_into_shared_buffers(gpu, gl):
+    tris = soup(800, seed=4)
+    g = bvh_gpu.builder_for(gpu).build(tris, node_base=5, tri_base=10)
+    expect_nodes, expect_tris = g.to_bvh().nodes, g.read_triangles()
+    nodes = gl.buffer(reserve=(5 + g.node_count + 2) * 64)
+    slots = gl.buffer(reserve=(10 + len(tris)) * 48)
+    g.copy_into(nodes, 5, slots, 10)
+    got = np.frombuffer(nodes.read(), np.float32).reshape(-1, 16)
+    np.testing.assert_array_equal(got[5:5 + g.node_count].view(np.uint32), expect_nodes.view(np.uint32))
+    np.testing.assert_array_equal(np.frombuffer(slots.read(), np.float32).reshape(-1, 3, 4)[10:], expect_tris)
+    nodes.release(), slots.release()
+
+
 def test_scan_over_many_groups(gpu):
     """The exclusive scan the sort and the compaction share, past one group of block sums."""
     builder = bvh_gpu.GpuBvhBuilder(gpu)

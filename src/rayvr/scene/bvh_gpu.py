@@ -55,6 +55,14 @@ class GpuBvh:
         order = np.frombuffer(self.order.read(size=self.triangle_count * 4), np.uint32).astype(np.int64)
         return Bvh(nodes.reshape(-1, NODE_FLOATS).copy(), order, "gpu")
 
+    def copy_into(self, nodes, node_offset: int, triangles, triangle_offset: int) -> None:
+        """Copy nodes and ordered triangles GPU-side into larger buffers at the given node and
+        triangle indices (build with node_base / tri_base equal to those indices), e.g. a
+        scene's shared BLAS and triangle buffers: no read-back, no CPU packing."""
+        ctx = self.nodes.ctx
+        ctx.copy_buffer(nodes, self.nodes, self.node_count * NODE_BYTES, 0, node_offset * NODE_BYTES)
+        ctx.copy_buffer(triangles, self.triangles, self.triangle_count * 48, 0, triangle_offset * 48)
+
     def read_triangles(self) -> np.ndarray:
         """The BVH-ordered triangles (N, 3, 4) float32, as GpuScene's triangle buffer holds them."""
         return np.frombuffer(self.triangles.read(size=self.triangle_count * 48), np.float32).reshape(-1, 3, 4).copy()
