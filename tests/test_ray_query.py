@@ -29,10 +29,10 @@ void main() {
 """
 
 
-def gpu_trace(gl, gpu_scene, origins, dirs, tmp_path, tmax=1e30):
+def gpu_trace(gl, gpu_scene, origins, dirs, tmp_path, tmax=1e30, defines=None):
     src = tmp_path / "trace.comp"
     src.write_text(KERNEL)
-    prog = compute_program(gl, src, gpu_scene.defines())
+    prog = compute_program(gl, src, {**gpu_scene.defines(), **(defines or {})})
     n = len(origins)
     rays = np.zeros((n, 2, 4), np.float32)
     rays[:, 0, :3], rays[:, 0, 3], rays[:, 1, :3] = origins, tmax, dirs
@@ -101,13 +101,13 @@ def world_triangles(scene, origin=np.zeros(3)):
     return np.concatenate(tris), np.concatenate(inst), np.concatenate(prim)
 
 
-def compare(gl, scene, tmp_path, n=4000, origin=np.zeros(3), method="auto", seed=0):
+def compare(gl, scene, tmp_path, n=4000, origin=np.zeros(3), method="auto", seed=0, defines=None):
     gs = GpuScene(gl_ctx(gl), scene, bvh_method=method)
     gs.update(origin)
     tris, inst_of, prim_of = world_triangles(scene, origin)
     lo, hi = tris.reshape(-1, 3).min(0), tris.reshape(-1, 3).max(0)
     o, d = random_rays(np.random.default_rng(seed), lo, hi, n)
-    t, inst, prim, occ, _ = gpu_trace(gl, gs, o, d, tmp_path)
+    t, inst, prim, occ, _ = gpu_trace(gl, gs, o, d, tmp_path, defines=defines)
     eprim, et = embree_trace(tris, o, d)
     ehit = eprim >= 0
     ghit = inst != 0xFFFFFFFF
@@ -177,3 +177,54 @@ def test_moving_an_instance_moves_its_hits(gl, tmp_path):
     t, inst, *_ = gpu_trace(gl, gs, o - [1.0, 0.0, 0.0], d, tmp_path)
     np.testing.assert_allclose(t, [-1, 8.75], rtol=1e-6)
     assert inst[1] == 1
+
+
+def test_watertight_triangle_test_matches_embree(gl, tmp_path):
+    """RQ_TRIANGLE 0 (Woop et al. watertight) stays selectable and correct with instances."""
+    v, f = next((v, f) for n, v, f in meshes() if n == "torus")
+    t = np.eye(4)
+    t[:3, 3] = (2.0, 0.5, 0.0)
+    compare(gl, scene_of(v, f, [np.eye(4), t]), tmp_path, n=2000, defines={"RQ_TRIANGLE": 0})
+
+
+STATS_KERNEL = """
+#include "ray_query.glsl"
+layout(local_size_x = 64) in;
+layout(std430, binding = RAYVR_PASS_SSBO_0) readonly buffer Rays { vec4 rays[]; };
+layout(std430, binding = RAYVR_PASS_SSBO_1) writeonly buffer Stats { uvec4 stats[]; };
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= uint(rays.length() / 2)) return;
+    Hit h;
+    bool hit = trace_closest(rays[2u * i].xyz, rays[2u * i + 1u].xyz, 1e29, h);
+    stats[i] = uvec4(rq_stat_nodes, rq_stat_triangles, rq_stat_instances, hit ? 1u : 0u);
+}
+"""
+
+
+def test_stats_count_nodes_triangles_and_instances(gl, tmp_path):
+    """RQ_STATS: a ray missing every instance box visits only the TLAS root; a ray through one
+    box instance enters one BLAS and tests at least the triangle it hits, walking the 12-triangle
+    BLAS (leaves of <= 4, so >= 2 internal nodes) from its root."""
+    v, f = next((v, f) for n, v, f in meshes() if n == "box")
+    t = np.eye(4)
+    t[:3, 3] = (5.0, 0.0, 0.0)
+    gs = GpuScene(gl_ctx(gl), scene_of(v, f, [np.eye(4), t]))
+    src = tmp_path / "stats.comp"
+    src.write_text(STATS_KERNEL)
+    prog = compute_program(gl, src, {**gs.defines(), "RQ_STATS": 1})
+    rays = np.zeros((2, 2, 4), np.float32)
+    rays[0, 0, :3], rays[0, 1, :3] = (0.0, 10.0, 10.0), (0.0, 0.0, -1.0)   # above both boxes
+    rays[1, 0, :3], rays[1, 1, :3] = (5.0, 0.0, 10.0), (0.0, 0.0, -1.0)    # straight into box 1
+    rbuf, sbuf = gl.buffer(rays.tobytes()), gl.buffer(reserve=2 * 16)
+    gs.bind()
+    rbuf.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"])
+    sbuf.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_1"])
+    prog.run(1)
+    st = np.frombuffer(sbuf.read(), np.uint32).reshape(2, 4)
+    rbuf.release(), sbuf.release(), gs.release()
+    assert tuple(st[0]) == (1, 0, 0, 0)
+    nodes, tris, instances, hit = st[1]
+    assert hit == 1 and instances == 1
+    assert 1 <= tris <= 12
+    assert nodes >= 1 + 2   # the TLAS root, then the BLAS root and a child on the way to the hit
