@@ -29,6 +29,9 @@ def available() -> list[str]:
 
 
 def commit() -> str:
+    """HEAD's short hash; RAYVR_COMMIT names it where the tree has no git (the GPU machine's copy)."""
+    if os.environ.get("RAYVR_COMMIT"):
+        return os.environ["RAYVR_COMMIT"]
     try:
         out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE, capture_output=True,
                              text=True, timeout=10)
