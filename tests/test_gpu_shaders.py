@@ -54,3 +54,10 @@ def test_shared_glsl_is_found_without_a_path(tmp_path):
     src = preprocess(main)
     assert any(f.name == "views.glsl" for f in src.files)
     assert "#define RAYVR_VIEWS_SSBO 0" in src.text
+
+
+def test_include_with_a_trailing_comment_is_expanded(tmp_path):
+    write(tmp_path, "lib.glsl", "float from_lib() { return 2.0; }\n")
+    main = write(tmp_path, "m.comp", '#include "lib.glsl"   // the library\nlayout(local_size_x=1) in;\nvoid main() {}\n')
+    src = preprocess(main)
+    assert "from_lib" in src.text and "#include" not in src.text

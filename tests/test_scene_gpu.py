@@ -8,7 +8,7 @@ import pytest
 import rayvr as rv
 from rayvr.gpu import compute_program, get_context, raster_program
 from rayvr.gpu.bindings import BINDINGS
-from rayvr.scene import GpuScene, Material, Mesh, Scene, TextureRef, Texture
+from rayvr.scene import FEATURES, GpuScene, Material, Mesh, Scene, TextureRef, Texture
 from rayvr.scene import builtin
 
 OUT = BINDINGS["RAYVR_PASS_SSBO_1"]
@@ -47,7 +47,7 @@ def test_absent_features_allocate_nothing_and_compile_no_code(gl, tmp_path):
     gs = GpuScene(get_context(), s)
     d = gs.defines()
     assert d["SCENE_HAS_PUNCTUAL_LIGHTS"] == 1
-    assert all(d[f] == 0 for f in d if f != "SCENE_HAS_PUNCTUAL_LIGHTS")
+    assert all(d[f] == 0 for f in FEATURES if f != "SCENE_HAS_PUNCTUAL_LIGHTS")
     assert "punctual_lights" in gs.buffers
     assert not {"emissive_triangles", "tangents"} & set(gs.buffers) and gs.texture_array is None
     rep = gs.report()

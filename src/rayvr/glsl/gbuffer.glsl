@@ -2,6 +2,8 @@
 // sampler units, decoded into one GSurface. A pass sets the units it needs with #defines
 // GBUF_POS_UNIT etc. (see rayvr/passes/gbuffer.py for the formats) before including this file.
 #pragma once
+// hdr.glsl is included here, outside any #if, because include guards are textual
+#include "hdr.glsl"
 
 // effect texture (r32ui): low byte effect id (rayvr.Effect), upper 24 bits material index;
 // GBUF_NO_GEOMETRY where no surface was drawn (sky).
@@ -35,7 +37,7 @@ GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, MaterialParams m, ui
     t.face_normal = vec4(ng, 0.0);
     t.base_color = vec4(m.base_color, m.alpha);
     t.metal_rough = vec2(m.metallic, m.roughness);
-    t.emissive = vec4(m.emissive, 0.0);
+    t.emissive = vec4(to_half_range(m.emissive), 0.0);   // the emissive target is rgba16f
     t.effect = gbuf_pack_effect(m.effect, material);
     vec4 now_clip = views[v].view_proj * vec4(pos, 1.0);
     vec4 before_clip = views[v].prev_view_proj * vec4(pos, 1.0);

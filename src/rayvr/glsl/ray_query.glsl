@@ -46,12 +46,18 @@ layout(std430, binding = RAYVR_TLAS_NODE_SSBO) readonly buffer RqTlasNodes { vec
 // three vec4 per BVH slot: vertices in object space; w of the first: mesh-local triangle index
 layout(std430, binding = RAYVR_TRIANGLE_SSBO) readonly buffer RqTriangles { vec4 rq_triangles[]; };
 
+#ifndef SCENE_SCALE
+#define SCENE_SCALE 1.0
+#endif
+
 // Wächter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection" (Ray Tracing Gems
 // ch. 6): move p along the geometric normal by a few ULPs of its own magnitude (an integer step
-// on the float bits), or by a fixed tiny distance near the origin where ULPs vanish.
+// on the float bits), or by a fixed tiny distance near the origin where ULPs vanish. The paper's
+// constants are for scenes of about a metre; here they scale with the scene's extent
+// (SCENE_SCALE, from GpuScene.defines()), so a millimetre scene is not offset by 3% of its size.
 vec3 offset_ray_origin(vec3 p, vec3 ng) {
-    const float near_origin = 1.0 / 32.0;
-    const float float_step = 1.0 / 65536.0;
+    const float near_origin = SCENE_SCALE / 32.0;
+    const float float_step = SCENE_SCALE / 65536.0;
     const float int_step = 256.0;
     ivec3 di = ivec3(int_step * ng);
     vec3 pi = intBitsToFloat(floatBitsToInt(p) + ivec3(p.x < 0.0 ? -di.x : di.x,

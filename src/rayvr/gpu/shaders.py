@@ -19,7 +19,7 @@ PACKAGE_ROOT = Path(__file__).resolve().parent.parent
 SHARED_GLSL = PACKAGE_ROOT / "glsl"
 GLSL_VERSION = "#version 450 core"
 
-_INCLUDE = re.compile(r'^\s*#\s*include\s+[<"]([^>"]+)[>"]\s*$')
+_INCLUDE = re.compile(r'^\s*#\s*include\s+[<"]([^>"]+)[>"]\s*(?://.*)?$')
 _PRAGMA_ONCE = re.compile(r"^\s*#\s*pragma\s+once\s*$")
 # Mesa: "0:12(3): error: ..."; NVIDIA: "0(12) : error C1008: ..."
 _ERR_LOC = re.compile(r"(?m)^\s*(?:ERROR:\s*)?(\d+)(?::(\d+)\(\d+\)|\((\d+)\))")

@@ -365,9 +365,19 @@ class GpuScene:
         if self.texture_array is not None:
             self.texture_array.use(BINDINGS["RAYVR_SCENE_TEXTURE_UNIT"])
 
-    def defines(self) -> dict[str, int]:
-        """The feature #defines every shader that includes the scene library is built with."""
-        return {f: int(f in self.features) for f in FEATURES}
+    def defines(self) -> dict[str, int | str]:
+        """The #defines every shader that includes the scene library is built with: the feature
+        flags (0 or 1) and SCENE_SCALE, the scene's extent in metres (ray offsets scale with it)."""
+        return {**{f: int(f in self.features) for f in FEATURES}, "SCENE_SCALE": repr(self.scale)}
+
+    @property
+    def scale(self) -> float:
+        """The diagonal of the scene's bounds (1.0 for an empty scene), clamped to a sane range."""
+        if not self.scene.instances:
+            return 1.0
+        lo, hi = np.asarray(self.scene.bounds(), dtype=np.float64)
+        extent = float(np.linalg.norm(hi - lo))
+        return float(np.clip(extent, 1e-6, 1e12)) if np.isfinite(extent) and extent > 0 else 1.0
 
     def draw(self, program, instances_per_draw: int = 1, mode=None) -> None:
         """Draw every instance in one glMultiDrawArraysIndirect (see scene.glsl): the program's

@@ -3,6 +3,7 @@
 // the reflected radiance (already weighted by the specular BSDF); PATH_TRACED pixels take the
 // path tracer's (accumulated) radiance when the graph has one.
 #include "gbuffer.glsl"
+#include "hdr.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -35,5 +36,5 @@ void main() {
         if (effect == EFFECT_PATH_TRACED) c = texelFetch(path_tex, p, 0).rgb;
 #endif
     }
-    imageStore(dst, p, vec4(c, 1.0));
+    imageStore(dst, p, vec4(to_half_range(c), 1.0));
 }
