@@ -299,3 +299,10 @@ def test_normal_maps_tilt_the_shading_normal(gl, tmp_path):
     assert out[0, 0, 3] == 1
     expect = t[:3, :3] @ n_ts                                 # tangent +X -> world -Z, normal +Z -> +X
     np.testing.assert_allclose(out[0, 0, :3], expect, atol=1e-2)
+
+
+def test_a_scene_too_large_for_the_gpu_is_refused_naming_the_buffer(gl, monkeypatch):
+    # pretend the driver's SSBO limit is 1 KiB: the spheres' vertex buffer is larger
+    monkeypatch.setitem(gl.info, "GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 1024)
+    with pytest.raises(rv.SceneError, match=r"scene 'spheres': the \w+ buffer needs .* shader storage block limit"):
+        GpuScene(get_context(), builtin.spheres())
