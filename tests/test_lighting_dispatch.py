@@ -1,0 +1,66 @@
+"""RTShadows / RTReflections work either on the compaction's pixel list (indirect dispatch) or on
+the whole image in 8x8 tiles, where the pixels whose effect needs no such rays leave at once. Both
+must light the very same pixels the very same way (the random numbers are seeded per pixel)."""
+import numpy as np
+import pytest
+
+import rayvr as rv
+from rayvr.passes import lighting
+from rayvr.renderer import Renderer, default_views
+from rayvr.scene import builtin
+from rayvr.scene.model import Light
+
+OUTPUTS = ("Shadows.shadowed", "Reflections.reflection", "Composite.color")
+
+
+def scene_with_every_light_kind():
+    s = builtin.cornell_box()
+    s.lights += [Light("directional", direction=(0.3, -1.0, -0.4), intensity=2.0),
+                 Light("point", position=(0.0, 1.0, 0.5), intensity=0.5),
+                 Light("spot", position=(0.2, 1.5, 0.2), direction=(0.0, -1.0, 0.0), intensity=3.0,
+                       outer_cone_angle=0.5, inner_cone_angle=0.3)]
+    for m in s.materials:
+        m.effect = rv.Effect.SHADOWS
+    s.materials["BackWall"].effect = rv.Effect.RASTER
+    floor, box = s.materials["Floor"], s.materials["TallBox"]
+    floor.effect = box.effect = rv.Effect.REFLECTIONS
+    floor.metallic, floor.roughness = 1.0, 0.0          # mirror
+    box.metallic, box.roughness = 1.0, 0.35            # glossy
+    return s
+
+
+def render(gpu, scene, monkeypatch, pixels_2d, max_bounces, tile=(8, 4)):
+    for cls in (lighting.RTShadows, lighting.RTReflections):
+        monkeypatch.setattr(cls, "PIXELS_2D", pixels_2d)
+        monkeypatch.setattr(cls, "TILE", tile)
+    g = rv.graphs.hybrid(light_samples=2, max_bounces=max_bounces)
+    for name in OUTPUTS[:2]:
+        g.mark_output(name)
+    views = default_views(scene, 2, (40, 36))   # not a multiple of the tiles
+    with Renderer(scene, g, views=views, gpu=gpu) as r:
+        r.render()
+        for name in ("Shadows", "Reflections"):
+            assert r.compiled.passes[name].defines()["PIXELS_2D"] == int(pixels_2d)
+        return {name: r.read_output(name).copy() for name in OUTPUTS}
+
+
+@pytest.mark.parametrize("max_bounces,tile", [(1, (8, 4)), (2, (8, 4)), (1, (16, 8))])
+def test_whole_image_dispatch_lights_the_same_pixels_as_the_list(gpu, monkeypatch, max_bounces, tile):
+    scene = scene_with_every_light_kind()
+    listed = render(gpu, scene, monkeypatch, False, max_bounces)
+    tiled = render(gpu, scene, monkeypatch, True, max_bounces, tile)
+    for name, lit in zip(OUTPUTS, (0.3, 0.02, 0.5)):
+        a, b = listed[name], tiled[name]
+        assert np.isfinite(a).all()
+        assert (a[..., :3].max(axis=-1) > 0).mean() > lit, f"{name}: too few lit pixels to compare"
+        np.testing.assert_array_equal(a, b, err_msg=name)
+
+
+@pytest.mark.parametrize("path_traced", [False, True])
+def test_reflections_run_on_the_image_unless_a_material_is_path_traced(gpu, path_traced):
+    scene = scene_with_every_light_kind()
+    if path_traced:
+        scene.materials["ShortBox"].effect = rv.Effect.PATH_TRACED
+    with Renderer(scene, rv.graphs.hybrid(), views=default_views(scene, 1, (8, 8)), gpu=gpu) as r:
+        assert r.compiled.passes["Reflections"].defines()["PIXELS_2D"] == int(not path_traced)
+        assert r.compiled.passes["Shadows"].defines()["PIXELS_2D"] == 0
