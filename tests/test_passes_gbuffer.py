@@ -8,7 +8,6 @@ from rayvr.materials.material import Material
 from rayvr.renderer import Renderer, default_views
 from rayvr.scene import builtin
 from rayvr.scene.model import Camera, Scene
-from rayvr.xr.views import ViewSet
 
 PINS = ("posW", "normW", "faceNormalW", "baseColor", "metalRough", "emissive", "effect", "motion")
 

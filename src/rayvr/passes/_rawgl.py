@@ -5,9 +5,9 @@ and integer clears of single attachments.
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 
 from ..errors import GpuError
+from ..gpu.rawgl import ProcLoader
 
 GL_TEXTURE_2D_ARRAY = 0x8C1A
 GL_DEPTH_COMPONENT32F = 0x8CAC
@@ -38,31 +38,15 @@ GL_MAX_VIEWS_OVR = 0x9631
 
 
 class RawGL:
-    """Function pointers of the current context's GL, looked up by name through EGL."""
+    """Function pointers of the current context's GL, by name, with the signatures above."""
 
     def __init__(self):
-        name = ctypes.util.find_library("EGL") or "libEGL.so.1"
-        try:
-            egl = ctypes.CDLL(name)
-        except OSError as exc:
-            raise GpuError(f"cannot load {name} for raw GL entry points: {exc}; install libegl1") from exc
-        egl.eglGetProcAddress.restype = ctypes.c_void_p
-        egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
-        self._egl = egl
-        self._fns = {}
+        self._loader = ProcLoader()
 
     def __getattr__(self, name):
         if name.startswith("_"):
             raise AttributeError(name)
-        fn = self._fns.get(name)
-        if fn is None:
-            ptr = self._egl.eglGetProcAddress(name.encode())
-            if not ptr:
-                raise GpuError(f"OpenGL entry point {name} is missing from this driver")
-            restype, argtypes = _SIGNATURES[name]
-            fn = ctypes.CFUNCTYPE(restype, *argtypes)(ptr)
-            self._fns[name] = fn
-        return fn
+        return self._loader.proc(name, *_SIGNATURES[name])
 
 
 _raw: RawGL | None = None

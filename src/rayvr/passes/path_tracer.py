@@ -120,5 +120,3 @@ class PathTracer(RenderPass):
             prog.run(*groups_2d(data.size, data.views))
         ctx.gl.memory_barrier()
 
-
-from .accumulate import Accumulate  # noqa: E402  (rayvr.passes imports both from here)

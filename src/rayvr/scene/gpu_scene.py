@@ -16,7 +16,7 @@ from ..errors import GpuError, SceneError
 from ..gpu.bindings import BINDINGS
 from ..materials.material import Material
 from . import bvh as bvh_mod
-from .model import FEATURES, LightType, Scene
+from .model import FEATURES, Scene
 
 TEXTURE_SLOTS = ("base_color_texture", "metallic_roughness_texture", "normal_texture",
                  "occlusion_texture", "emissive_texture", "transmission_texture")

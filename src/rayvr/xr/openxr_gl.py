@@ -10,7 +10,8 @@ import ctypes
 import ctypes.util
 from pathlib import Path
 
-from ..errors import XrError
+from ..errors import GpuError, XrError
+from ..gpu.rawgl import ProcLoader
 from ..gpu.shaders import compute_program
 
 GL_TEXTURE_2D = 0x0DE1
@@ -55,54 +56,20 @@ def choose_format(runtime_formats, preference) -> int:
                   f"rayvr cannot present to it")
 
 
-def _load(names):
-    for n in names:
-        path = ctypes.util.find_library(n) or n
-        try:
-            return ctypes.CDLL(path)
-        except OSError:
-            continue
-    return None
-
-
-class GLPlatform:
+class GLPlatform(ProcLoader):
     """The window-system API owning the current GL context: 'egl' or 'glx', its handles and GL procs."""
 
     def __init__(self):
-        self.kind = None
-        self._egl = _load(["EGL", "libEGL.so.1"])
-        if self._egl is not None:
-            self._egl.eglGetCurrentContext.restype = _P
-            self._egl.eglGetCurrentDisplay.restype = _P
-            self._egl.eglGetProcAddress.restype = _P
-            self._egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
-            if self._egl.eglGetCurrentContext():
-                self.kind = "egl"
-        if self.kind is None:
-            self._glx = _load(["GL", "libGL.so.1"])
-            if self._glx is not None:
-                self._glx.glXGetCurrentContext.restype = _P
-                if self._glx.glXGetCurrentContext():
-                    self.kind = "glx"
+        super().__init__()
         if self.kind is None:
             raise XrError("OpenXRSink: no current EGL or GLX OpenGL context; open the sink with rayvr's GPU "
                           "context (rayvr.gpu.get_context()) on this thread")
-        self._procs = {}
 
     def proc(self, name: str, restype, argtypes):
-        fn = self._procs.get(name)
-        if fn is None:
-            if self.kind == "egl":
-                addr = self._egl.eglGetProcAddress(name.encode())
-            else:
-                self._glx.glXGetProcAddressARB.restype = _P
-                self._glx.glXGetProcAddressARB.argtypes = [ctypes.c_char_p]
-                addr = self._glx.glXGetProcAddressARB(name.encode())
-            if not addr:
-                raise XrError(f"OpenGL entry point {name} is missing; OpenXRSink needs OpenGL 4.3+")
-            fn = ctypes.CFUNCTYPE(restype, *argtypes)(addr)
-            self._procs[name] = fn
-        return fn
+        try:
+            return super().proc(name, restype, argtypes)
+        except GpuError:
+            raise XrError(f"OpenGL entry point {name} is missing; OpenXRSink needs OpenGL 4.3+") from None
 
     def egl_binding(self, xr):
         """XrGraphicsBindingEGLMNDX for the current EGL context (fields cast to the struct's types)."""
