@@ -56,14 +56,9 @@ class Compositor:
         self.display_latency_s = float(display_latency_s)
         self.frames: list[FrameTiming] = []
         self._next_start_vsync = 0
-        self._last_shown_vsync = 0
-
-    @property
-    def now(self) -> float:
-        """The simulated clock: when the next frame will start."""
-        return self._next_start_vsync * self.period
 
     def begin_frame(self) -> FrameTiming:
+        """Start the next frame at the first free vsync; it targets the vsync after."""
         k = self._next_start_vsync
         timing = FrameTiming(len(self.frames), k * self.period, k + 1,
                              (k + 1) * self.period + self.display_latency_s)
@@ -87,9 +82,8 @@ class Compositor:
         if timing.status != "dropped":
             timing.shown_vsync = done_vsync
             timing.motion_to_photon_s = done_vsync * self.period + self.display_latency_s - timing.start_time
-            self._last_shown_vsync = done_vsync
         # xrWaitFrame releases the next frame at the first vsync at or after this one finished
-        self._next_start_vsync = max(timing.target_vsync, math.ceil(finish / self.period - _EPS))
+        self._next_start_vsync = done_vsync
         return timing
 
     def stats(self) -> dict:
