@@ -213,6 +213,7 @@ def tune_effects(renderer_or_scene, budget_ms: float = 11.1, size=None, views=No
     rv.Renderer (its scene, views and graph; `graph` then defaults to a copy of its graph; with a
     sink, views from the scene's camera at the sink's view count and size).
     `graph`: a builder `graph(**options)` (default rayvr.tune.hybrid_graph)."""
+    from .configs import set_effects
     from .probe import probe_cost_model, render_assignment
 
     scene, view_set, builder, gpu = _target(renderer_or_scene, size, views, graph, gpu)
@@ -228,9 +229,7 @@ def tune_effects(renderer_or_scene, budget_ms: float = 11.1, size=None, views=No
             result.notes.append(f"measured {result.measured_ms:.3g} ms is over the budget (predicted "
                                 f"{result.predicted_ms:.3g} ms); leave headroom with a lower budget_ms")
     if apply:
-        for name, effect in result.assignment.items():
-            if scene.materials[name].effect != effect:
-                scene.materials[name].effect = effect
+        set_effects(scene, result.assignment)
     return result
 
 

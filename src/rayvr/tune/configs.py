@@ -2,6 +2,7 @@
 + options (spp, bounces, ...), and the standard set of configurations of the error-vs-time study."""
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 from collections.abc import Callable
 
@@ -70,9 +71,7 @@ class Config:
     def apply(self, scene) -> dict[str, Effect]:
         """Set the scene's material effects; returns the assignment."""
         assignment = self.assignment(scene)
-        for name, effect in assignment.items():
-            if scene.materials[name].effect != effect:
-                scene.materials[name].effect = effect
+        set_effects(scene, assignment)
         return assignment
 
     def build_graph(self):
@@ -98,6 +97,24 @@ class Config:
                 return pin
         raise OptionError(f"config '{self.name}': graph '{graph.name}' marks none of {', '.join(HDR_OUTPUTS)}; "
                           f"set Config.output to its linear-radiance output pin")
+
+
+def set_effects(scene, assignment: dict) -> None:
+    """Give the named materials their effects, touching only those that change (each change bumps
+    `scene.materials.version`, which restarts accumulation and re-uploads the material buffer)."""
+    for name, effect in assignment.items():
+        if scene.materials[name].effect != effect:
+            scene.materials[name].effect = effect
+
+
+@contextlib.contextmanager
+def effects_restored(scene):
+    """Put the scene's material effects back as they were when the block ends."""
+    saved = {m.name: m.effect for m in scene.materials}
+    try:
+        yield
+    finally:
+        set_effects(scene, saved)
 
 
 def reflective_material(scene, choice: str = "auto") -> str:

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import OptionError
 from . import metrics as M
-from .configs import Config
+from .configs import Config, effects_restored
 from .reference import ReferenceSettings, reference_image
 from .results import ConfigResult, Results
 
@@ -103,9 +103,8 @@ def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: in
     metrics = M.check_metrics(metrics)
     view_set = make_views(scene, views, size)
     ref, ref_source = load_reference(scene, view_set, reference, reference_settings, cache_dir, gpu, progress)
-    saved = {m.name: m.effect for m in scene.materials}
     rows = []
-    try:
+    with effects_restored(scene):
         for config in tqdm(configs, desc="configurations", unit="config", disable=not progress, leave=False):
             assignment = config.apply(scene)
             graph = config.build_graph()
@@ -118,10 +117,6 @@ def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: in
             rows.append(ConfigResult(config.name, {k: v.name for k, v in assignment.items()}, dict(config.options),
                                      timing.frame_ms, timing.pass_ms, timing.cpu_ms, errors,
                                      image if keep_images else None))
-    finally:
-        for name, effect in saved.items():
-            if scene.materials[name].effect != effect:
-                scene.materials[name].effect = effect
     info = {"scene": scene.name, "views": len(view_set), "size": list(view_set.size), "frames": frames,
             "warmup": warmup, "method": timing.method, "reference": ref_source, "ppd": ppd, "eps": eps}
     return Results(rows, info)

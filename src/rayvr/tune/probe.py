@@ -18,7 +18,7 @@ from ..errors import OptionError
 from ..materials.effect import Effect
 from . import metrics as M
 from .budget import CostModel
-from .configs import Config
+from .configs import Config, effects_restored
 from .measure import load_reference, timed_frames
 
 TUNE_METRICS = ("flip", "relmse")
@@ -74,23 +74,17 @@ def probe_cost_model(scene, view_set, builder, options: dict, metric: str = "fli
     scaled = list_driven_passes(graph)
     probe_levels = sorted({Effect.RASTER} | {Effect.parse(e, where="levels") for e in levels})
     names = scene.materials.names()
-    saved = {m.name: m.effect for m in scene.materials}
     times, errors = {}, {}
-    try:
-        with Renderer(scene, graph, views=view_set, gpu=gpu) as r:
-            for level in tqdm(probe_levels, desc="effect levels", unit="level", disable=not progress, leave=False):
-                for m in scene.materials:
-                    m.effect = level
-                timing = timed_frames(r, frames, max(1, warmup))   # >= 1: the level may recompile
-                times[level] = timing
-                image = r.read_output(pin, flip_y=True)
-                errors[level] = error_map(image, ref, metric, ppd, f"all {level.name} {pin}")
-                if level == Effect.RASTER:
-                    words = r.read_output(ids_pin, flip_y=True)[..., 0]
-    finally:
-        for name, effect in saved.items():
-            if scene.materials[name].effect != effect:
-                scene.materials[name].effect = effect
+    with effects_restored(scene), Renderer(scene, graph, views=view_set, gpu=gpu) as r:
+        for level in tqdm(probe_levels, desc="effect levels", unit="level", disable=not progress, leave=False):
+            for m in scene.materials:
+                m.effect = level
+            timing = timed_frames(r, frames, max(1, warmup))   # >= 1: the level may recompile
+            times[level] = timing
+            image = r.read_output(pin, flip_y=True)
+            errors[level] = error_map(image, ref, metric, ppd, f"all {level.name} {pin}")
+            if level == Effect.RASTER:
+                words = r.read_output(ids_pin, flip_y=True)[..., 0]
     geometry = (words & 0xFF) != NO_GEOMETRY
     material = (words >> 8)[geometry].astype(np.int64)
     total = words.size
@@ -122,16 +116,11 @@ def render_assignment(scene, view_set, builder, options: dict, assignment: dict,
     from ..renderer import Renderer
 
     config = Config("tuned", effects=dict(assignment), graph=builder, options=dict(options))
-    saved = {m.name: m.effect for m in scene.materials}
-    try:
+    with effects_restored(scene):
         config.apply(scene)
         graph = config.build_graph()
         pin = config.output_pin(graph)
         with Renderer(scene, graph, views=view_set, gpu=gpu) as r:
             timing = timed_frames(r, frames, max(1, warmup))
             image = r.read_output(pin, flip_y=True)
-    finally:
-        for name, effect in saved.items():
-            if scene.materials[name].effect != effect:
-                scene.materials[name].effect = effect
     return timing.frame_ms, float(error_map(image, ref, metric, ppd, f"tuned {pin}").mean()), timing.method
