@@ -15,8 +15,9 @@ import json
 import os
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
+
+from rayvr.fileio import write_text
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
@@ -63,13 +64,6 @@ def _cell(v) -> str:
     return str(v).replace("|", "/")
 
 
-def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    with os.fdopen(fd, "w") as f:
-        f.write(text)
-    os.replace(tmp, path)
-
-
 def record(name: str, result: dict, env: dict, options: dict, out: Path) -> tuple[Path, Path]:
     """Write OUT/NAME.json and append to OUT/NAME.md; returns both paths."""
     out.mkdir(parents=True, exist_ok=True)
@@ -77,7 +71,7 @@ def record(name: str, result: dict, env: dict, options: dict, out: Path) -> tupl
     doc = {"benchmark": name, **env, "options": options, "columns": result["columns"], "rows": rows,
            "notes": result.get("notes", [])}
     jpath, mpath = out / f"{name}.json", out / f"{name}.md"
-    _write_atomic(jpath, json.dumps(doc, indent=2, default=str) + "\n")
+    write_text(jpath, json.dumps(doc, indent=2, default=str) + "\n")
     meta_cols = ["date", "commit", "device", "driver"]
     lines = []
     if not mpath.exists():
