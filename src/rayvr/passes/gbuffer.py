@@ -36,6 +36,14 @@ DESCRIPTIONS = {
 MULTIVIEW_MODES = ("auto", "on", "off")
 
 
+def gbuffer_reflection() -> Reflection:
+    """The G-buffer's output pins (GBufferRaster, GBufferRT and GBufferAuto declare the same)."""
+    r = Reflection()
+    for pin, (fmt, _) in OUTPUTS.items():
+        r.add_output(pin, DESCRIPTIONS[pin]).format(fmt)
+    return r
+
+
 @register
 class GBufferRaster(RenderPass):
     """Rasterises the scene for all views in one draw call (see the module docstring)."""
@@ -49,10 +57,7 @@ class GBufferRaster(RenderPass):
         return value
 
     def reflect(self, cd):
-        r = Reflection()
-        for pin, (fmt, _) in OUTPUTS.items():
-            r.add_output(pin, DESCRIPTIONS[pin]).format(fmt)
-        return r
+        return gbuffer_reflection()
 
     def uses_multiview(self, caps, views: int = 2) -> bool:
         """OVR multiview when asked for (or 'auto') and the driver can draw `views` views at once."""

@@ -8,8 +8,8 @@ from __future__ import annotations
 from ..errors import OptionError
 from ..rendergraph.render_pass import RenderPass
 from ._common import register
-from .gbuffer import MULTIVIEW_MODES, GBufferRaster
-from .gbuffer_rt import GBufferRT, gbuffer_reflection
+from .gbuffer import MULTIVIEW_MODES, GBufferRaster, gbuffer_reflection
+from .gbuffer_rt import GBufferRT
 
 MODES = ("auto", "raster", "rt")
 

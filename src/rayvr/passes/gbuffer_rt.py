@@ -10,7 +10,7 @@ may land on other pixels (a ray samples the pixel centre exactly, raster follows
 from __future__ import annotations
 
 from ..errors import GraphError
-from ..rendergraph.render_pass import Reflection, RenderPass
+from ..rendergraph.render_pass import RenderPass
 from ._common import (
     bind_scene,
     build_compute,
@@ -19,15 +19,7 @@ from ._common import (
     register,
     scene_defines,
 )
-from .gbuffer import DESCRIPTIONS, OUTPUTS
-
-
-def gbuffer_reflection() -> Reflection:
-    """The G-buffer's output pins (GBufferRaster, GBufferRT and GBufferAuto declare the same)."""
-    r = Reflection()
-    for pin, (fmt, _) in OUTPUTS.items():
-        r.add_output(pin, DESCRIPTIONS[pin]).format(fmt)
-    return r
+from .gbuffer import OUTPUTS, gbuffer_reflection
 
 
 @register
