@@ -114,10 +114,7 @@ def run(args) -> int:
     results = measure(scene, configs, reference=ref, views=view_set, frames=args.frames, warmup=args.warmup,
                       ppd=args.ppd, metrics=table_metrics, progress=progress)
     row = results[tuned_name]
-    tuned.measured_ms, tuned.measured_error, tuned.method = row.frame_ms, row.errors[args.metric], results.method
-    if tuned.measured_ms > args.budget_ms:
-        tuned.notes.append(f"measured {tuned.measured_ms:.3g} ms is over the budget (predicted "
-                           f"{tuned.predicted_ms:.3g} ms); leave headroom with a lower --budget-ms")
+    tuned.record_measurement(row.frame_ms, row.errors[args.metric], results.method, "--budget-ms")
     print(results.table())
     print()
     print(f"assignment for {scene.name} within {args.budget_ms:g} ms ({len(view_set)} view(s) of {size[0]}x{size[1]}):")

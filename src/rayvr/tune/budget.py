@@ -121,6 +121,14 @@ class TuneResult:
         lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines)
 
+    def record_measurement(self, ms: float, error: float, method: str, budget_option: str = "budget_ms") -> None:
+        """Keep the measured ms and error of the assignment; a note when it ran over the budget
+        (`budget_option` names the setting to lower in it)."""
+        self.measured_ms, self.measured_error, self.method = ms, error, method
+        if ms > self.budget_ms:
+            self.notes.append(f"measured {ms:.3g} ms is over the budget (predicted {self.predicted_ms:.3g} ms); "
+                              f"leave headroom with a lower {budget_option}")
+
     def __str__(self) -> str:
         return self.table()
 
@@ -223,11 +231,8 @@ def tune_effects(renderer_or_scene, budget_ms: float = 11.1, size=None, views=No
                                        progress=progress, gpu=gpu)
     result = choose_effects(model, budget_ms, levels, fixed)
     if verify:
-        result.measured_ms, result.measured_error, result.method = render_assignment(
-            scene, view_set, builder, options or {}, result.assignment, ref, metric, frames, warmup, ppd, gpu)
-        if result.measured_ms > budget_ms:
-            result.notes.append(f"measured {result.measured_ms:.3g} ms is over the budget (predicted "
-                                f"{result.predicted_ms:.3g} ms); leave headroom with a lower budget_ms")
+        result.record_measurement(*render_assignment(scene, view_set, builder, options or {}, result.assignment,
+                                                     ref, metric, frames, warmup, ppd, gpu))
     if apply:
         set_effects(scene, result.assignment)
     return result
