@@ -4,6 +4,7 @@ Target: allocated bytes <= 30% of the unaliased total for 10 passes at 2 x 1440x
 """
 from __future__ import annotations
 
+from rayvr.cli.options import parse_size
 from rayvr.gpu import get_context
 
 from ._graphs import linear_chain
@@ -19,7 +20,7 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> dict:
-    w, h = (256, 256) if args.quick else tuple(int(v) for v in args.size.lower().split("x"))
+    w, h = (256, 256) if args.quick else parse_size(args.size)
     gpu = get_context()
     cg = linear_chain(args.passes, args.format).compile(size=(w, h), views=args.views, gpu=gpu)
     cg.execute(cg.make_context())          # it must also run, not only plan

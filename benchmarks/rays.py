@@ -253,6 +253,7 @@ def _stats(gl, progs: dict, groups, stats_buf, hits_mask) -> dict:
 
 
 def run(args) -> dict:
+    from rayvr.cli.options import parse_size
     from rayvr.gpu import get_context
     from rayvr.gpu.bindings import BINDINGS
     from rayvr.scene import GpuScene
@@ -260,7 +261,7 @@ def run(args) -> dict:
     gpu = get_context()
     gl, caps = gpu.gl, gpu.caps
     specs = (args.scenes or (QUICK_SCENES if args.quick else DEFAULT_SCENES)).split(",")
-    w, h = (96, 54) if args.quick and args.size == "1920x1080" else map(int, args.size.lower().split("x"))
+    w, h = (96, 54) if args.quick and args.size == "1920x1080" else parse_size(args.size)
     iters = 1 if args.quick else args.iterations
     variants = parse_variants(getattr(args, "variants", ""))
     folder = Path(tempfile.mkdtemp(prefix="rayvr-rays-"))

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from rayvr.cli.options import load_scene_arg
+from rayvr.cli.options import load_scene_arg, parse_size
 
 from ._timing import wall_ms_per_frame
 
@@ -46,9 +46,8 @@ def _grid(n: int) -> tuple[int, int]:
 def run(args) -> dict:
     from rayvr.materials.effect import Effect
     from rayvr.renderer import default_views
-    from rayvr.xr.quilt import parse_grid
 
-    w, h = (64, 85) if args.quick and args.size == "512x683" else parse_grid(args.size)
+    w, h = (64, 85) if args.quick and args.size == "512x683" else parse_size(args.size)
     counts = [int(v) for v in args.views.split(",")]
     if args.quick and args.views == "1,2,4,8,16,32,64":
         counts = [1, 2, 4, 8]
