@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..errors import GraphError
 from ..gpu.shaders import compute_program
 
 SHADER_DIR = Path(__file__).resolve().parent / "shaders"
@@ -43,6 +44,13 @@ def bind_scene(ctx) -> None:
         ctx.views_buffer.bind_to_storage_buffer(BINDINGS["RAYVR_VIEWS_SSBO"])
     if ctx.scene is not None:
         ctx.scene.bind()
+
+
+def require_scene(ctx, render_pass) -> None:
+    """GraphError naming the pass when the graph was compiled without a scene."""
+    if ctx.scene is None:
+        raise GraphError(f"pass {render_pass.name} ({type(render_pass).__name__}) needs a scene: compile the "
+                         f"graph with a scene (rv.Renderer(scene, graph) does)")
 
 
 def register(cls):

@@ -8,7 +8,7 @@ from __future__ import annotations
 from ..errors import GpuError, OptionError, ShaderError
 from ..rendergraph.render_pass import Reflection, RenderPass
 from ..gpu.shaders import raster_program
-from ._common import SHADER_DIR, bind_scene, effect_defines, register, scene_defines
+from ._common import SHADER_DIR, bind_scene, effect_defines, register, require_scene, scene_defines
 from ._rawgl import LayeredTarget, max_multiview_views
 
 # pin -> (format, clear value); the attachment order is this order. posW.w is the linear
@@ -71,10 +71,7 @@ class GBufferRaster(RenderPass):
         return has and views <= limit
 
     def compile(self, ctx, cd):
-        if ctx.scene is None:
-            from ..errors import GraphError
-            raise GraphError(f"pass {self.name} (GBufferRaster) needs a scene: compile the graph with "
-                             f"a scene (rv.Renderer(scene, graph) does)")
+        require_scene(ctx, self)
         self._multiview = self.uses_multiview(ctx.caps, cd.views)
         if not self._multiview and not ctx.caps.vertex_layer:
             raise GpuError(f"pass {self.name}: the driver has neither GL_OVR_multiview2 nor "

@@ -9,7 +9,6 @@ may land on other pixels (a ray samples the pixel centre exactly, raster follows
 """
 from __future__ import annotations
 
-from ..errors import GraphError
 from ..rendergraph.render_pass import RenderPass
 from ._common import (
     bind_scene,
@@ -17,6 +16,7 @@ from ._common import (
     effect_defines,
     groups_2d,
     register,
+    require_scene,
     scene_defines,
 )
 from .gbuffer import OUTPUTS, gbuffer_reflection
@@ -31,9 +31,7 @@ class GBufferRT(RenderPass):
         return gbuffer_reflection()
 
     def compile(self, ctx, cd):
-        if ctx.scene is None:
-            raise GraphError(f"pass {self.name} (GBufferRT) needs a scene: compile the graph with "
-                             f"a scene (rv.Renderer(scene, graph) does)")
+        require_scene(ctx, self)
         self._defines = {**scene_defines(ctx), **effect_defines()}
         self._prog = build_compute(ctx.gl, "gbuffer_rt.comp", self._defines)
 

@@ -14,12 +14,12 @@ progressive render. Paths are seeded by pixel, view, frame index and sample inde
 """
 from __future__ import annotations
 
-from ..errors import GraphError, OptionError
+from ..errors import OptionError
 from ..gpu.bindings import BINDINGS
 from ..materials.effect import Effect
 from ..rendergraph.render_pass import Reflection, RenderPass
 from ._common import (GBUFFER_PINS, GBUFFER_UNITS, bind_scene, build_compute, effect_defines,
-                      effects_used, groups_2d, register, scene_defines)
+                      effects_used, groups_2d, register, require_scene, scene_defines)
 from .compaction import DISPATCH_OFFSET, pixel_list_bytes
 from .lighting import GBUFFER_FORMATS
 
@@ -82,9 +82,7 @@ class PathTracer(RenderPass):
         return None
 
     def compile(self, ctx, cd):
-        if ctx.scene is None:
-            raise GraphError(f"pass {self.name} (PathTracer) needs a scene: compile the graph with a scene "
-                             f"(rv.Renderer(scene, graph) does)")
+        require_scene(ctx, self)
         listed = self.mode == "gbuffer" and self.PIXELS in cd.input_formats
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALT,
                          "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PT_PIXEL_LIST": int(listed)}
