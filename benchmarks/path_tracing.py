@@ -9,9 +9,8 @@ also gets the relMSE of one frame against an N-frame mean at the highest spp, an
 """
 from __future__ import annotations
 
-import numpy as np
-
 from rayvr.cli.options import load_scene_arg, parse_size
+from rayvr.tune.metrics import rel_mse
 
 from ._timing import wall_ms_per_frame
 
@@ -38,10 +37,6 @@ def _renderer(scene, spp: int, views: int, size, max_bounces: int):
     return rv.Renderer(scene, graph, views=default_views(scene, views=views, size=size))
 
 
-def _relmse(image: np.ndarray, reference: np.ndarray) -> float:
-    return float(np.mean((image - reference) ** 2 / (reference ** 2 + 1e-2)))
-
-
 def run(args) -> dict:
     size = (32, 32) if args.quick and args.size == "512x512" else parse_size(args.size)
     frames, warmup = (2, 1) if args.quick else (args.frames, args.warmup)
@@ -56,7 +51,7 @@ def run(args) -> dict:
                 r.frame_index = 1 << 20   # seeds apart from the measured frames: an independent reference
                 for _ in range(ref_frames):
                     r.render()
-                references[n] = r.read_output("Accumulate.dst")[..., :3].astype(np.float64)
+                references[n] = r.read_output("Accumulate.dst")
     rows = []
     for n in view_counts:
         for spp in spps:
@@ -72,8 +67,7 @@ def run(args) -> dict:
                     # one frame's estimate: the PathTracer output after a fresh frame
                     r.compiled.passes["Accumulate"].reset()
                     r.render()
-                    one = r.read_output("Accumulate.dst")[..., :3].astype(np.float64)
-                    err = _relmse(one, references[n])
+                    err = rel_mse(r.read_output("Accumulate.dst"), references[n])
                     row += [round(err, 5), round(err * pt_ms, 5)]
                 rows.append(row)
     columns = ["views", "view_size", "spp", "max_bounces", "frames", "frame_ms", "pathtracer_ms",
