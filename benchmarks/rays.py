@@ -21,11 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ._timing import WARM_UP_S
 from .bvh import resolve_scene, world_triangles
 
 DEFAULT_SCENES = "tauray/test.glb,khronos/MetalRoughSpheresNoTextures,khronos/ToyCar,generated:2700000"
 QUICK_SCENES = "cornell_box"
-WARM_UP_S = 0.5   # an idle H100 sits at ~350 MHz and takes a while to reach full clocks
 
 _HEADER = """
 #include "ray_query.glsl"
