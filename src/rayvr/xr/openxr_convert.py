@@ -1,11 +1,9 @@
-"""Values across the pyopenxr boundary: XrPosef/XrFovf <-> rayvr Pose/Fov, located views ->
+"""Values across the pyopenxr boundary: XrPosef/XrFovf -> rayvr Pose/Fov, located views ->
 ViewSet, and the typed XrCompositionLayerProjectionView array of a projection layer.
 
 `xr` is the pyopenxr module, passed in so this file imports without it.
 """
 from __future__ import annotations
-
-import numpy as np
 
 from .views import Fov, Pose, View, ViewSet
 
@@ -18,17 +16,8 @@ def pose_from_xr(posef, world_from_space: Pose | None = None) -> Pose:
 
 
 def fov_from_xr(fovf) -> Fov:
+    """rayvr Fov of an XrFovf."""
     return Fov(float(fovf.angle_left), float(fovf.angle_right), float(fovf.angle_up), float(fovf.angle_down))
-
-
-def pose_to_xr(xr, pose: Pose):
-    x, y, z, w = (float(c) for c in pose.orientation)
-    return xr.Posef(orientation=xr.Quaternionf(x, y, z, w), position=xr.Vector3f(*(float(c) for c in pose.position)))
-
-
-def fov_to_xr(xr, fov: Fov):
-    return xr.Fovf(angle_left=fov.angle_left, angle_right=fov.angle_right,
-                   angle_up=fov.angle_up, angle_down=fov.angle_down)
 
 
 def views_from_located(located, size, near: float, far: float, reversed_z: bool = False,
@@ -56,9 +45,5 @@ def xr_version(major: int, minor: int, patch: int = 0) -> int:
 
 
 def version_tuple(v: int) -> tuple[int, int, int]:
+    """(major, minor, patch) of an XrVersion."""
     return (int(v) >> 48) & 0xFFFF, (int(v) >> 32) & 0xFFFF, int(v) & 0xFFFFFFFF
-
-
-def eye_distance(view_set: ViewSet) -> float:
-    """Distance between the first two views' positions (the IPD the runtime applies)."""
-    return float(np.linalg.norm(view_set[1].pose.position - view_set[0].pose.position))

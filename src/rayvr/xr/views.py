@@ -54,11 +54,6 @@ class Fov:
         """(left, right, up, down) in degrees, XrFovf's order."""
         return tuple(math.degrees(a) for a in (self.angle_left, self.angle_right, self.angle_up, self.angle_down))
 
-    def focal_px(self, width: int, height: int) -> tuple[float, float]:
-        """Focal lengths in pixels (fx, fy): pixels per unit of tangent across the image."""
-        l, r, d, u = self.tangents()
-        return width / (r - l), height / (u - d)
-
     def sheared(self, dx: float, dy: float) -> "Fov":
         """This frustum with its tangents shifted by (dx, dy): an off-axis (lens-shifted) copy."""
         l, r, d, u = self.tangents()
@@ -137,9 +132,7 @@ class View:
 
     def view_matrix(self, origin=(0.0, 0.0, 0.0)) -> np.ndarray:
         """Render-space to eye-space, float64."""
-        m = self.pose.matrix()
-        m[:3, 3] -= np.asarray(origin, dtype=np.float64)
-        return np.linalg.inv(m)
+        return np.linalg.inv(self.inverse_view_matrix(origin))
 
     def inverse_view_matrix(self, origin=(0.0, 0.0, 0.0)) -> np.ndarray:
         """Eye-space to render-space, float64."""
@@ -148,10 +141,8 @@ class View:
         return m
 
     def projection_matrix(self) -> np.ndarray:
+        """This view's OpenGL projection (see `projection`)."""
         return projection(self.fov, self.near, self.far, self.reversed_z)
-
-    def inverse_projection_matrix(self) -> np.ndarray:
-        return np.linalg.inv(self.projection_matrix())
 
     def project(self, points, origin=(0.0, 0.0, 0.0)) -> np.ndarray:
         """Pixel coordinates (x, y) and NDC depth of world (or render-space, with `origin`) points.
