@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rayvr.tune.measure import timed_frames
+
 from ._timing import warm_up
 
 DEFAULT_SCENE = str(Path(__file__).resolve().parents[2] / "shared" / "scenes" / "tauray" / "test.glb")
@@ -45,20 +47,13 @@ def _reflective_material(scene, renderer, choice: str) -> str:
     return names[int(np.bincount(ids).argmax())] if ids.size else names[0]
 
 
-def _time(renderer, frames: int, warmup: int) -> dict:
+def _time(renderer, frames: int, warmup: int) -> tuple[dict, str]:
+    """Per-pass mean GPU ms over `frames` timed frames (after the clock warm-up and `warmup`
+    untimed frames), and the timing method."""
     if frames > 5:          # not for smoke runs
         warm_up(renderer)
-    for _ in range(warmup):
-        renderer.render()
-    renderer.gl.finish()
-    renderer.compiled.profile()  # resolve warm-up queries
-    first = renderer.compiled.frames
-    for _ in range(frames):
-        renderer.render()
-    renderer.gl.finish()
-    prof = renderer.profile()
-    assert renderer.compiled.frames - first == frames
-    return {name: s.mean_ms for name, s in prof.passes.items()}, prof.method
+    timing = timed_frames(renderer, frames, warmup)
+    return timing.pass_ms, timing.method
 
 
 def run(args) -> dict:
@@ -76,11 +71,10 @@ def run(args) -> dict:
 
     rows, notes = [], []
     passes = ["GBuffer", "Direct", "Compaction", "Shadows", "Reflections", "Composite", "ToneMap"]
-    configs = [("all RASTER", None), ("all SHADOWS", None), ("SHADOWS + REFLECTIONS", None)]
     reflect_name = None
     method = "?"
     gbuffer_choice = "?"
-    for label, _ in configs:
+    for label in ("all RASTER", "all SHADOWS", "SHADOWS + REFLECTIONS"):
         for m in scene.materials:
             m.effect = rv.Effect.RASTER if label == "all RASTER" else rv.Effect.SHADOWS
         g = rv.graphs.hybrid(light_samples=args.light_samples, gbuffer=args.gbuffer)
