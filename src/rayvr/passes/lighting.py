@@ -9,10 +9,22 @@ from ..rendergraph.render_pass import Reflection, RenderPass
 from ._common import (GBUFFER_PINS, GBUFFER_UNITS, bind_scene, build_compute, effect_defines,
                       effects_used, groups_2d, register, scene_defines)
 from .compaction import DISPATCH_OFFSET, pixel_list_bytes
+from .gbuffer import OUTPUTS
 
-GBUFFER_FORMATS = {"posW": "rgba32f", "normW": "rgba16f", "faceNormalW": "rgba16f", "baseColor": "rgba8",
-                   "metalRough": "rg16f", "effect": "r32ui", "emissive": "rgba16f"}
+GBUFFER_FORMATS = {pin: OUTPUTS[pin][0] for pin in GBUFFER_PINS}
 PASS_SSBO_0 = BINDINGS["RAYVR_PASS_SSBO_0"]
+
+
+def add_gbuffer_inputs(r: Reflection) -> None:
+    """Declare the G-buffer pins a lighting pass reads (GBUFFER_PINS, in the writers' formats)."""
+    for pin in GBUFFER_PINS:
+        r.add_input(pin, f"G-buffer {pin}").format(GBUFFER_FORMATS[pin])
+
+
+def use_gbuffer(data) -> None:
+    """Bind the G-buffer inputs to the sampler units glsl/gbuffer.glsl reads (GBUFFER_UNITS)."""
+    for pin, unit in zip(GBUFFER_PINS, GBUFFER_UNITS.values()):
+        data[pin].use(location=unit)
 
 
 class _GBufferLightingPass(RenderPass):
@@ -33,8 +45,7 @@ class _GBufferLightingPass(RenderPass):
 
     def reflect(self, cd):
         r = Reflection()
-        for pin in GBUFFER_PINS:
-            r.add_input(pin, f"G-buffer {pin}").format(GBUFFER_FORMATS[pin])
+        add_gbuffer_inputs(r)
         if self.PIXEL_LIST:
             r.add_input(self.PIXEL_LIST, "pixels to work on (EffectCompaction)").buffer(
                 pixel_list_bytes(cd.size, cd.views))
@@ -68,8 +79,7 @@ class _GBufferLightingPass(RenderPass):
 
     def execute(self, ctx, data):
         bind_scene(ctx)
-        for pin, unit in zip(GBUFFER_PINS, GBUFFER_UNITS.values()):
-            data[pin].use(location=unit)
+        use_gbuffer(data)
         data[self.OUTPUT].bind_to_image(0, read=False, write=True)
         if not self.PIXEL_LIST:
             self._prog.run(*groups_2d(data.size, data.views))

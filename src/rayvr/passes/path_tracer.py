@@ -15,16 +15,14 @@ progressive render. Paths are seeded by pixel, view, frame index and sample inde
 from __future__ import annotations
 
 from ..errors import OptionError
-from ..gpu.bindings import BINDINGS
 from ..materials.effect import Effect
 from ..rendergraph.render_pass import Reflection, RenderPass
-from ._common import (GBUFFER_PINS, GBUFFER_UNITS, bind_scene, build_compute, effect_defines,
+from ._common import (GBUFFER_UNITS, bind_scene, build_compute, effect_defines,
                       effects_used, groups_2d, register, require_scene, scene_defines)
 from .compaction import DISPATCH_OFFSET, pixel_list_bytes
-from .lighting import GBUFFER_FORMATS
+from .lighting import PASS_SSBO_0, add_gbuffer_inputs, use_gbuffer
 
 MODES = ("full", "gbuffer")
-PASS_SSBO_0 = BINDINGS["RAYVR_PASS_SSBO_0"]
 RNG_SALT = 7
 
 
@@ -66,8 +64,7 @@ class PathTracer(RenderPass):
     def reflect(self, cd):
         r = Reflection()
         if self.mode == "gbuffer":
-            for pin in GBUFFER_PINS:
-                r.add_input(pin, f"G-buffer {pin}").format(GBUFFER_FORMATS[pin])
+            add_gbuffer_inputs(r)
             r.add_input(self.PIXELS, "PATH_TRACED pixels (EffectCompaction); absent: whole screen").buffer(
                 pixel_list_bytes(cd.size, cd.views)).optional()
         r.add_output(self.COLOR, "path-traced radiance, mean of samples_per_pixel paths").format("rgba32f")
@@ -108,8 +105,7 @@ class PathTracer(RenderPass):
         prog = self._prog
         self._set_uniforms(prog)
         if self.mode == "gbuffer":
-            for pin, unit in zip(GBUFFER_PINS, GBUFFER_UNITS.values()):
-                data[pin].use(location=unit)
+            use_gbuffer(data)
         data[self.COLOR].bind_to_image(0, read=False, write=True)
         if pixels is not None:
             pixels.bind_to_storage_buffer(PASS_SSBO_0)
