@@ -6,6 +6,11 @@ import time
 import moderngl
 
 
+def timing_method(use_queries: bool) -> str:
+    """The name profiles and compile reports give GpuTimer's way of measuring."""
+    return "timer-query" if use_queries else "finish+wall"
+
+
 class GpuTimer:
     """Times one span of GPU work per frame.
 
@@ -16,7 +21,7 @@ class GpuTimer:
     def __init__(self, gl: moderngl.Context, use_queries: bool):
         self.gl = gl
         self.use_queries = use_queries
-        self.method = "timer-query" if use_queries else "finish+wall"
+        self.method = timing_method(use_queries)
         self._queries = [gl.query(time=True) for _ in range(2)] if use_queries else []
         self._pending = [False, False]
         self._slot = 0

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import GraphError, did_you_mean
 from ..gpu import GpuTimer
+from ..gpu.timer import timing_method
 from .compiler import Plan
 from .formats import get_format
 from .profile import Profile, RollingTimes
@@ -143,8 +144,7 @@ class CompiledGraph:
             infos.append(ResourceInfo(name, [name, *r.readers], r.fmt, r.size, r.layers, r.bytes, sharing,
                                       r.kind.value, (r.first, r.last), r.marked, r.internal))
         defines = {p: dict(self.passes[p].defines() or {}) for p in self.order}
-        timing = (("timer-query" if self.caps.timer_queries else "finish+wall")
-                  + f" on {self.caps.renderer}")
+        timing = f"{timing_method(self.caps.timer_queries)} on {self.caps.renderer}"
         return CompileReport(self.graph_name, plan.size, plan.views, list(plan.order), dict(plan.pruned),
                              infos, plan.total_bytes, plan.unaliased_bytes, defines, list(plan.outputs),
                              dict(plan.unavailable), [], extra, timing)
