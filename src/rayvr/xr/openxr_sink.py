@@ -175,8 +175,7 @@ class OpenXRSink(Sink):
             raise XrError(f"OpenXRSink.submit(): frame {request.index} was not begun by this sink's wait_frame() "
                           f"or was already submitted; submit each request once")
         request.sink_data["ended"] = True
-        layers = []
-        keep_alive = []
+        layers = []   # the structs it points to are locals, alive until xrEndFrame returns
         if request.should_render and texture_array is not None:
             check_texture_array(texture_array, self, "OpenXRSink")
             source_srgb = self.source_srgb if self.source_srgb is not None else texture_array.dtype == "f1"
@@ -187,16 +186,9 @@ class OpenXRSink(Sink):
             if self.depth_swapchains and depth_array is not None:
                 self.copier.copy_depth(depth_array, self._acquire(self.depth_swapchains))
                 self._release(self.depth_swapchains)
-                # nearZ/farZ are the distances of minDepth/maxDepth: reversed-Z swaps them (0 = infinity)
-                near_z, far_z = (float("inf"), self.near) if self.reversed_z else (self.near, self.far)
-                depth_infos = [xr.CompositionLayerDepthInfoKHR(
-                    sub_image=self._sub_image(self.depth_swapchains, i), min_depth=0.0, max_depth=1.0,
-                    near_z=near_z, far_z=far_z) for i in range(self.view_count)]
-                keep_alive.append(depth_infos)
-            sub_images = [self._sub_image(self.swapchains, i) for i in range(self.view_count)]
-            views = projection_views(xr, located, sub_images, depth_infos)
+                depth_infos = self._depth_infos
+            views = projection_views(xr, located, self._sub_images, depth_infos)
             layer = xr.CompositionLayerProjection(space=self.space, views=views)
-            keep_alive += [views, layer]
             layers = [ctypes.byref(layer)]
         xr.end_frame(self.session, xr.FrameEndInfo(display_time=request.sink_data["display_time"],
                                                    environment_blend_mode=self.blend_mode, layers=layers))
@@ -306,6 +298,15 @@ class OpenXRSink(Sink):
             usage = xr.SwapchainUsageFlags.DEPTH_STENCIL_ATTACHMENT_BIT | xr.SwapchainUsageFlags.TRANSFER_DST_BIT
             self.depth_swapchains = self._make_swapchains(self.depth_format, usage)
         self.copier = SwapchainCopier(self.gl, self.platform, self.color_format)
+        # What each frame's projection layer points at is fixed for the session: built once here.
+        self._sub_images = [self._sub_image(self.swapchains, i) for i in range(self._view_count)]
+        self._depth_infos = None
+        if self.depth_swapchains:
+            # nearZ/farZ are the distances of minDepth/maxDepth: reversed-Z swaps them (0 = infinity)
+            near_z, far_z = (float("inf"), self.near) if self.reversed_z else (self.near, self.far)
+            self._depth_infos = [xr.CompositionLayerDepthInfoKHR(
+                sub_image=self._sub_image(self.depth_swapchains, i), min_depth=0.0, max_depth=1.0,
+                near_z=near_z, far_z=far_z) for i in range(self._view_count)]
 
     def _make_swapchains(self, fmt: int, usage) -> list[_Swapchain]:
         xr = self.xr
