@@ -90,71 +90,69 @@ class GpuScene:
                              f"render fewer triangles (split or decimate the meshes) or use a larger GPU")
         old = self.buffers.get(name)
         if old is not None and old.size == data.nbytes:
-            old.write(data.tobytes())
+            old.write(data)
             return
         if old is not None:
             old.release()
-        self.buffers[name] = self.gl.buffer(data.tobytes())
+        self.buffers[name] = self.gl.buffer(data)
 
     def _build_meshes(self, method: str, progress, blas: list | None = None) -> None:
+        """Pack every mesh into the shared vertex, index, triangle-slot and BLAS-node buffers
+        (preallocated, each mesh written into its slice); `blas` reuses built BVHs (refit)."""
         t0 = time.perf_counter()
         s = self.scene
-        verts, idx, tri_mats, tri_slots, nodes, mesh_rows, tangents = [], [], [], [], [], [], []
-        self.blas: list[bvh_mod.Bvh] = []
-        v_base = t_base = n_base = 0
-        if blas is None:
-            blas = self._build_blas(method, progress)
-        for k, mesh in enumerate(s.meshes):
-            b = blas[k]
-            self.blas.append(b)
-            uv = mesh.uvs if mesh.uvs is not None else np.zeros((len(mesh.positions), 2), np.float32)
-            v = np.empty((len(mesh.positions), 8), np.float32)
-            v[:, 0:3], v[:, 3], v[:, 4:7], v[:, 7] = mesh.positions, uv[:, 0], mesh.normals, uv[:, 1]
-            verts.append(v)
-            if "SCENE_HAS_NORMAL_MAPS" in self.features:
-                tangents.append(mesh.tangents if mesh.tangents is not None
-                                else np.tile(np.array([1, 0, 0, 1], np.float32), (len(mesh.positions), 1)))
-            idx.append(mesh.indices + np.uint32(v_base))
-            tri_mats.append(mesh.material_ids)
-            root = n_base
-            if b is not None:
-                tri = mesh.triangles()[b.order]
-                slot = np.zeros((len(tri), 3, 4), np.float32)
-                slot[:, :, :3] = tri
-                slot.view(np.uint32)[:, 0, 3] = b.order.astype(np.uint32)
-                tri_slots.append(slot)
-                gn = b.nodes.copy()
-                bits = gn.view(np.uint32)
-                for c in (0, 8):
-                    leaf = bits[:, c + 7] > 0
-                    bits[:, c + 3] += np.where(leaf, np.uint32(t_base), np.uint32(n_base))
-                nodes.append(gn)
-                n_base += len(gn)
-            mesh_rows.append((root, t_base, t_base, mesh.triangle_count))
-            v_base += len(mesh.positions)
-            t_base += mesh.triangle_count
-        self.triangle_count = t_base
-        if t_base >= bvh_mod.MAX_LEAF_LINK or len(s.instances) >= bvh_mod.MAX_LEAF_LINK:
-            raise SceneError(f"scene '{s.name}': {t_base} triangles / {len(s.instances)} instances; "
+        self.blas: list[bvh_mod.Bvh] = self._build_blas(method, progress) if blas is None else blas
+        first_v = np.cumsum([0] + [len(m.positions) for m in s.meshes])
+        first_t = np.cumsum([0] + [m.triangle_count for m in s.meshes])
+        first_n = np.cumsum([0] + [0 if b is None else b.node_count for b in self.blas])
+        self.triangle_count = t_total = int(first_t[-1])
+        if t_total >= bvh_mod.MAX_LEAF_LINK or len(s.instances) >= bvh_mod.MAX_LEAF_LINK:
+            raise SceneError(f"scene '{s.name}': {t_total} triangles / {len(s.instances)} instances; "
                              f"ray_query.glsl addresses at most {bvh_mod.MAX_LEAF_LINK - 1}; split the scene")
+        normal_maps = "SCENE_HAS_NORMAL_MAPS" in self.features
+        verts = np.zeros((first_v[-1], 8), np.float32)
+        tangents = np.tile(np.array([1, 0, 0, 1], np.float32), (first_v[-1], 1)) if normal_maps else None
+        idx = np.empty((t_total, 3), np.uint32)
+        tri_mats = np.empty(t_total, np.uint32)
+        slots = np.zeros((t_total, 3, 4), np.float32)   # a BVH slot per triangle (empty meshes have none)
+        nodes = np.empty((first_n[-1], bvh_mod.NODE_FLOATS), np.float32)
         corners = np.zeros((max(len(s.meshes), 1), 8, 4))
-        for k, mesh in enumerate(s.meshes):
-            if mesh.triangle_count:
-                p = mesh.positions[mesh.indices.reshape(-1)]
-                lo, hi = p.min(axis=0).astype(np.float64), p.max(axis=0).astype(np.float64)
-                corners[k] = [[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+        for k, (mesh, b) in enumerate(zip(s.meshes, self.blas)):
+            v = verts[first_v[k]:first_v[k + 1]]
+            v[:, 0:3], v[:, 4:7] = mesh.positions, mesh.normals
+            if mesh.uvs is not None:
+                v[:, 3], v[:, 7] = mesh.uvs[:, 0], mesh.uvs[:, 1]
+            if normal_maps and mesh.tangents is not None:
+                tangents[first_v[k]:first_v[k + 1]] = mesh.tangents
+            t_base, n_base = first_t[k], first_n[k]
+            idx[t_base:first_t[k + 1]] = mesh.indices + np.uint32(first_v[k])
+            tri_mats[t_base:first_t[k + 1]] = mesh.material_ids
+            if b is None:
+                continue
+            slot = slots[t_base:first_t[k + 1]]
+            slot[:, :, :3] = mesh.positions[mesh.indices[b.order]]
+            slot.view(np.uint32)[:, 0, 3] = b.order
+            gn = nodes[n_base:first_n[k + 1]]
+            gn[:] = b.nodes
+            bits = gn.view(np.uint32)
+            for c in (0, 8):   # links into the shared buffers: leaves by t_base, nodes by n_base
+                bits[:, c + 3] += np.where(bits[:, c + 7] > 0, np.uint32(t_base), np.uint32(n_base))
+            lo, hi = b.bounds()
+            corners[k] = [[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
         self._mesh_corners = corners
         self._mesh_live = np.array([b is not None for b in self.blas] or [False])
         self._last_instances = None
-        self._buffer("vertices", np.concatenate(verts) if verts else np.zeros((1, 8), np.float32))
-        self._buffer("indices", np.concatenate(idx) if idx else np.zeros(3, np.uint32))
-        self._buffer("triangle_materials", np.concatenate(tri_mats) if tri_mats else np.zeros(1, np.uint32))
-        self._buffer("triangles", np.concatenate(tri_slots) if tri_slots else np.zeros((1, 3, 4), np.float32))
-        self._buffer("blas_nodes", np.concatenate(nodes) if nodes else np.zeros((1, 16), np.float32))
-        self._buffer("meshes", np.array(mesh_rows, np.uint32).reshape(-1, 4))
-        if tangents:
-            self._buffer("tangents", np.concatenate(tangents))
-        self.mesh_index_offsets = np.cumsum([0] + [m.triangle_count * 3 for m in s.meshes])
+        any_mesh, any_bvh = bool(s.meshes), len(nodes) > 0
+        self._buffer("vertices", verts if any_mesh else np.zeros((1, 8), np.float32))
+        self._buffer("indices", idx if any_mesh else np.zeros(3, np.uint32))
+        self._buffer("triangle_materials", tri_mats if any_mesh else np.zeros(1, np.uint32))
+        self._buffer("triangles", slots if any_bvh else np.zeros((1, 3, 4), np.float32))
+        self._buffer("blas_nodes", nodes if any_bvh else np.zeros((1, 16), np.float32))
+        self._buffer("meshes", np.stack([first_n[:-1], first_t[:-1], first_t[:-1], np.diff(first_t)],
+                                        axis=1).astype(np.uint32).reshape(-1, 4))
+        if normal_maps:
+            self._buffer("tangents", tangents)
+        self.mesh_index_offsets = 3 * first_t
         self.timings["blas_build_ms"] = (time.perf_counter() - t0) * 1e3
 
     def _build_blas(self, method: str, progress) -> list:
