@@ -9,24 +9,21 @@ import sys
 from ..errors import RayvrError
 
 # Subcommand modules, in the order `rayvr --help` lists them.
-COMMAND_MODULES = ["info", "render", "graph", "tune", "bench"]
+COMMAND_MODULES = ["info", "render", "graph", "tune"]
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The `rayvr` parser with every subcommand of COMMAND_MODULES."""
     parser = argparse.ArgumentParser(prog="rayvr", description="Hybrid raster/ray-traced rendering for VR headsets.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
-        try:
-            mod = importlib.import_module(f"rayvr.cli.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"rayvr.cli.{name}":
-                continue
-            raise
-        mod.register(sub)
+        importlib.import_module(f"rayvr.cli.{name}").register(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the `rayvr` command; a RayvrError is printed to stderr (on one line unless it has
+    several, as shader compile logs do) and gives exit code 2."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
