@@ -145,7 +145,3 @@ def raster_program(gl: moderngl.Context, vertex: str | Path, fragment: str | Pat
     if geometry is not None:
         stages["geometry_shader"] = preprocess(geometry, defines, search, header)
     return _compile(gl, "raster", stages, lambda: gl.program(**{k: v.text for k, v in stages.items()}))
-
-
-def clear_cache() -> None:
-    _cache.clear()
