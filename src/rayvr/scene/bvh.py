@@ -56,6 +56,13 @@ class Bvh:
         bits = v.view(np.uint32)
         return v, bits[:, :, 0, 3], bits[:, :, 1, 3]     # boxes, link, count
 
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) float32 box of every primitive: the root's child boxes, empty slots skipped
+        (node boxes are exact min/max of the primitive boxes, so this is bit-exact)."""
+        root = self.nodes[0].reshape(2, 2, 4)
+        valid = root[:, 0, :1] < 1e29
+        return np.where(valid, root[:, 0, :3], np.inf).min(axis=0), np.where(valid, root[:, 1, :3], -np.inf).max(axis=0)
+
     def levels(self) -> list[np.ndarray]:
         """GPU node indices by depth, root first (children always lie deeper than parents)."""
         if self._levels is None:
@@ -76,9 +83,7 @@ class Bvh:
         v, link, count = self._children()
         valid = v[:, :, 0, 0] < 1e29
         area = _half_area(v[:, :, 0, :3], v[:, :, 1, :3])
-        root_lo = np.where(valid[0, :, None], v[0, :, 0, :3], np.inf).min(axis=0)
-        root_hi = np.where(valid[0, :, None], v[0, :, 1, :3], -np.inf).max(axis=0)
-        root = max(float(_half_area(root_lo, root_hi)), 1e-30)
+        root = max(float(_half_area(*self.bounds())), 1e-30)
         inner = valid & (count == 0)
         return float((c_trav * (root + area[inner].sum()) + c_tri * (area * count)[valid & (count > 0)].sum()) / root)
 
