@@ -20,7 +20,8 @@ def srgb(x):
 
 def run_pass(gpu, p, inputs, outputs, size, views, scene=None):
     gl = gpu.gl
-    cd = CompileData(size=size, views=views, scene=scene, caps=gpu.caps)
+    # input_formats names the bound inputs, as the compiler fills it (formats are not checked here)
+    cd = CompileData(size=size, views=views, scene=scene, caps=gpu.caps, input_formats=dict.fromkeys(inputs))
     ctx = RenderContext(gl, gpu.caps)
     p.compile(ctx, cd)
     p.execute(ctx, RenderData({**inputs, **outputs}, size, views))

@@ -27,17 +27,13 @@ class HybridComposite(RenderPass):
         return r
 
     def compile(self, ctx, cd):
-        self._programs = {}
-        for s in (0, 1):
-            for refl in (0, 1):
-                for path in (0, 1):
-                    self._programs[(s, refl, path)] = build_compute(
-                        ctx.gl, "composite.comp",
-                        {**effect_defines(), "HAS_SHADOWS": s, "HAS_REFLECTIONS": refl, "HAS_PATHS": path})
+        # cd.input_formats holds only the inputs that will be bound: one variant is all it needs.
+        has = {"HAS_SHADOWS": self.SHADOWED, "HAS_REFLECTIONS": self.REFLECTION, "HAS_PATHS": self.PATH_TRACED}
+        self._prog = build_compute(ctx.gl, "composite.comp",
+                                   {**effect_defines(), **{d: int(pin in cd.input_formats) for d, pin in has.items()}})
 
     def execute(self, ctx, data):
         shadowed, reflection, path = data.get(self.SHADOWED), data.get(self.REFLECTION), data.get(self.PATH_TRACED)
-        prog = self._programs[(int(shadowed is not None), int(reflection is not None), int(path is not None))]
         data[self.EFFECT].use(location=0)
         data[self.DIRECT].use(location=1)
         if shadowed is not None:
@@ -47,5 +43,5 @@ class HybridComposite(RenderPass):
         if path is not None:
             path.use(location=4)
         data[self.COLOR].bind_to_image(0, read=False, write=True)
-        prog.run(*groups_2d(data.size, data.views))
+        self._prog.run(*groups_2d(data.size, data.views))
         ctx.gl.memory_barrier()
