@@ -34,11 +34,11 @@ def graph_to_dot(graph) -> str:
 
 
 def save_picture(graph, path) -> Path:
+    """Draw `graph` to a .png, .svg or .pdf file: graphviz `dot` when on PATH, else matplotlib."""
     path = Path(path)
     fmt = path.suffix.lower().lstrip(".")
     if fmt not in ("png", "svg", "pdf"):
         raise GraphError(f"save_picture('{path}'): use a .png, .svg or .pdf file name")
-    path.parent.mkdir(parents=True, exist_ok=True)
     dot = shutil.which("dot")
     if dot:
         dot_text = graph_to_dot(graph).encode()
