@@ -37,13 +37,13 @@ class CompiledGraph:
         self.size, self.views = plan.size, plan.views
         self.objects = [self._allocate(s.key, s.resources[0]) for s in plan.slots]
         self.resources = {name: self.objects[r.slot] for name, r in plan.resources.items()}
-        self._data = [RenderData({pin: (None if res is None else self.resources[res])
-                                  for pin, res in plan.bindings[p].items()}, plan.size, plan.views)
-                      for p in self.order]
         ctx = RenderContext(self.gl, self.caps, scene=gpu_scene)
         for p in self.order:
             self.passes[p].compile(ctx, plan.compile_data[p])
-        self._steps = [(self.passes[p].execute, data) for p, data in zip(self.order, self._data)]
+        self._steps = [(self.passes[p].execute,
+                        RenderData({pin: (None if res is None else self.resources[res])
+                                    for pin, res in plan.bindings[p].items()}, plan.size, plan.views))
+                       for p in self.order]
         self.frames = 0
         self._window = window
         self._timers = [GpuTimer(self.gl, self.caps.timer_queries) for _ in self.order]
