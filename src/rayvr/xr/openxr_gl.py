@@ -13,6 +13,7 @@ from pathlib import Path
 from ..errors import GpuError, XrError
 from ..gpu.rawgl import ProcLoader
 from ..gpu.shaders import compute_program
+from .quilt import RGBA_IMAGE_FORMATS
 
 GL_TEXTURE_2D = 0x0DE1
 GL_TEXTURE_2D_ARRAY = 0x8C1A
@@ -146,7 +147,10 @@ class SwapchainCopier:
         self.gl = gl
         self.platform = platform
         self.format = swapchain_format
+        # The staging array holds what the swapchain format means: 8-bit sRGB/linear, or half/full float.
+        self._staging_dtype = {GL_RGBA16F: "f2", GL_RGBA32F: "f4"}.get(swapchain_format, "f1")
         self._staging = None
+        self._program = None   # built on the first re-encode; compute_program re-reads its file per call
         self._copy = platform.proc("glCopyImageSubData", None, [_U, _U, _I, _I, _I, _I, _U, _U, _I, _I, _I, _I, _I, _I, _I])
         self._flush = platform.proc("glFlush", None, [])
 
@@ -161,11 +165,12 @@ class SwapchainCopier:
 
     def _restage(self, texture_array, decode: bool, encode: bool):
         w, h, n = texture_array.width, texture_array.height, texture_array.layers
-        dtype = "f2" if self.format == GL_RGBA16F else "f4" if self.format == GL_RGBA32F else "f1"
-        if self._staging is None or self._staging.size != (w, h, n) or self._staging.dtype != dtype:
-            self._staging = self.gl.texture_array((w, h, n), 4, dtype=dtype)
-        fmt = {"f1": "rgba8", "f2": "rgba16f", "f4": "rgba32f"}[dtype]
-        prog = compute_program(self.gl, self._SHADER, {"STAGING_FORMAT": fmt})
+        if self._staging is None or self._staging.size != (w, h, n):
+            self._staging = self.gl.texture_array((w, h, n), 4, dtype=self._staging_dtype)
+        if self._program is None:
+            self._program = compute_program(self.gl, self._SHADER,
+                                            {"STAGING_FORMAT": RGBA_IMAGE_FORMATS[self._staging_dtype]})
+        prog = self._program
         prog["decode_srgb"] = int(decode)
         prog["encode_srgb"] = int(encode)
         texture_array.use(0)
@@ -177,15 +182,14 @@ class SwapchainCopier:
     def copy(self, texture_array, source_srgb: bool, targets) -> None:
         """`targets`: [(gl image name, GL target, first layer in the image, view index, count)]."""
         raw, decode, encode = self.plan(texture_array, source_srgb)
-        src = texture_array if raw else self._restage(texture_array, decode, encode)
-        w, h = texture_array.width, texture_array.height
-        for image, target, dst_layer, view, count in targets:
-            self._copy(src.glo, GL_TEXTURE_2D_ARRAY, 0, 0, 0, view, image, target, 0, 0, 0, dst_layer, w, h, count)
-        self._flush()
+        self._copy_layers(texture_array if raw else self._restage(texture_array, decode, encode), targets)
 
     def copy_depth(self, depth_array, targets) -> None:
         """Raw copy of a depth texture array whose internal format equals the swapchain's."""
-        w, h = depth_array.width, depth_array.height
+        self._copy_layers(depth_array, targets)
+
+    def _copy_layers(self, src, targets) -> None:
+        w, h = src.width, src.height
         for image, target, dst_layer, view, count in targets:
-            self._copy(depth_array.glo, GL_TEXTURE_2D_ARRAY, 0, 0, 0, view, image, target, 0, 0, 0, dst_layer, w, h, count)
+            self._copy(src.glo, GL_TEXTURE_2D_ARRAY, 0, 0, 0, view, image, target, 0, 0, 0, dst_layer, w, h, count)
         self._flush()

@@ -16,7 +16,7 @@ from ..errors import OptionError, XrError
 from ..gpu.shaders import compute_program
 
 _SHADER = Path(__file__).with_name("quilt.comp")
-_IMAGE_FORMATS = {"f1": "rgba8", "f2": "rgba16f", "f4": "rgba32f"}
+RGBA_IMAGE_FORMATS = {"f1": "rgba8", "f2": "rgba16f", "f4": "rgba32f"}   # moderngl dtype -> GLSL image format
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,7 +79,7 @@ def compose_quilt(gl: moderngl.Context, texture_array, cols: int, rows: int, out
     if n > cols * rows:
         raise OptionError(f"compose_quilt: {n} views do not fit a {cols}x{rows} quilt; "
                           f"use a grid with at least {n} tiles")
-    fmt = _IMAGE_FORMATS.get(texture_array.dtype)
+    fmt = RGBA_IMAGE_FORMATS.get(texture_array.dtype)
     if fmt is None:
         raise XrError(f"compose_quilt: views of dtype '{texture_array.dtype}' cannot be tiled; use f1, f2 or f4")
     w, h = texture_array.width, texture_array.height
