@@ -10,6 +10,7 @@ Passes that no material needs are pruned at compile time (see the compile report
 """
 from __future__ import annotations
 
+from .graphs_pt import hybrid_taa, path_traced  # noqa: F401  (rv.graphs.path_traced, rv.graphs.hybrid_taa)
 from .rendergraph.graph import RenderGraph
 
 OUTPUT = "ToneMap.dst"        # display-referred rgba8, sRGB encoded
@@ -34,27 +35,23 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_pass(P.GBufferAuto(mode=gbuffer, multiview=multiview), "GBuffer")
     g.add_pass(P.DirectLighting(light_samples=light_samples, background=list(background), raster_only=True),
                "Direct")
-    path_tracing = hasattr(P, "PathTracer") and hasattr(P, "Accumulate")
-    g.add_pass(P.EffectCompaction(path_list=path_tracing), "Compaction")
+    g.add_pass(P.EffectCompaction(path_list=True), "Compaction")
     g.add_pass(P.RTShadows(light_samples=light_samples), "Shadows")
     g.add_pass(P.RTReflections(max_bounces=max_bounces, light_samples=light_samples,
                                background=list(background)), "Reflections")
-    if path_tracing:
-        g.add_pass(P.PathTracer(mode="gbuffer", max_bounces=path_bounces, background=list(background)),
-                   "PathTracer")
-        g.add_pass(P.Accumulate(), "Accumulate")
+    g.add_pass(P.PathTracer(mode="gbuffer", max_bounces=path_bounces, background=list(background)), "PathTracer")
+    g.add_pass(P.Accumulate(), "Accumulate")
     g.add_pass(P.HybridComposite(), "Composite")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
-    for lighting in ("Direct", "Shadows", "Reflections", *(("PathTracer",) if path_tracing else ())):
+    for lighting in ("Direct", "Shadows", "Reflections", "PathTracer"):
         for pin in GBUFFER_PINS:
             g.add_edge(f"GBuffer.{pin}", f"{lighting}.{pin}")
     g.add_edge("GBuffer.effect", "Compaction.effect")
     g.add_edge("Compaction.shadowPixels", "Shadows.pixels")
     g.add_edge("Compaction.reflectionPixels", "Reflections.pixels")
-    if path_tracing:
-        g.add_edge("Compaction.pathPixels", "PathTracer.pixels")
-        g.add_edge("PathTracer.color", "Accumulate.src")
-        g.add_edge("Accumulate.dst", "Composite.pathTraced")
+    g.add_edge("Compaction.pathPixels", "PathTracer.pixels")
+    g.add_edge("PathTracer.color", "Accumulate.src")
+    g.add_edge("Accumulate.dst", "Composite.pathTraced")
     g.add_edge("GBuffer.effect", "Composite.effect")
     g.add_edge("Direct.direct", "Composite.direct")
     g.add_edge("Shadows.shadowed", "Composite.shadowed")
@@ -64,11 +61,3 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.mark_output(HDR_OUTPUT)
     return g
 
-
-def __getattr__(name: str):
-    """The path-tracing graph builders (rayvr.graphs_pt: path_traced, hybrid_taa) under rv.graphs."""
-    if name in ("path_traced", "hybrid_taa"):
-        from . import graphs_pt
-
-        return getattr(graphs_pt, name)
-    raise AttributeError(f"module 'rayvr.graphs' has no attribute '{name}'")
