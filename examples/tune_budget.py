@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 
 import rayvr as rv
-from rayvr.cli.render import load, parse_size
+from rayvr.cli.options import load_scene_arg, parse_size
 
 
 def main() -> None:
@@ -26,7 +26,7 @@ def main() -> None:
     ap.add_argument("--report", help="also measure the standard configurations and write a report here")
     args = ap.parse_args()
 
-    scene = load(args.scene)
+    scene = load_scene_arg(args.scene)
     size = parse_size(args.size)
     settings = rv.tune.ReferenceSettings(frames=args.reference_frames)
     with rv.Renderer(scene, rv.graphs.hybrid(), views=2, size=size) as r:
