@@ -52,9 +52,11 @@ def generated_mesh(n_triangles: int):
 
 
 def resolve_scene(spec: str):
-    """A Scene from a path, folder, built-in name or generated:N."""
-    from rayvr.errors import OptionError
-    from rayvr.scene import Material, Scene, builtin, load_scene
+    """A Scene from generated:N, or from a path, folder or built-in name as
+    `rayvr.cli.options.load_scene_arg` takes them, a relative path also found under the shared
+    scenes."""
+    from rayvr.cli.options import load_scene_arg
+    from rayvr.scene import Material, Scene
 
     if spec.startswith("generated:"):
         pos, idx = generated_mesh(int(float(spec.split(":", 1)[1])))
@@ -64,17 +66,9 @@ def resolve_scene(spec: str):
         return s
     for base in (Path.cwd(), REPO, REPO.parent / "shared" / "scenes", REPO / "shared" / "scenes",
                  REPO.parent / "shared"):
-        p = (base / spec)
-        if p.is_dir():
-            found = sorted(p.glob("glTF-Binary/*.glb")) + sorted(p.glob("glTF/*.gltf")) + sorted(p.glob("*.gl[tb]*"))
-            if found:
-                return load_scene(found[0])
-        elif p.is_file():
-            return load_scene(p)
-    fn = getattr(builtin, spec, None)
-    if callable(fn):
-        return fn()
-    raise OptionError(f"--scenes: {spec!r} is not a file, a scene folder, a built-in scene or generated:N")
+        if (base / spec).exists():
+            return load_scene_arg(str(base / spec), option="--scenes")
+    return load_scene_arg(spec, option="--scenes")
 
 
 def world_triangles(scene) -> np.ndarray:
