@@ -5,6 +5,7 @@ from pathlib import Path
 
 from ..errors import GraphError
 from ..gpu.shaders import compute_program
+from ..rendergraph.registry import register_pass as register  # noqa: F401  (the passes' class decorator)
 
 SHADER_DIR = Path(__file__).resolve().parent / "shaders"
 
@@ -53,13 +54,6 @@ def require_scene(ctx, render_pass) -> None:
                          f"graph with a scene (rv.Renderer(scene, graph) does)")
 
 
-def register(cls):
-    """Register a pass class for JSON graph loading (no-op until the registry exists)."""
-    try:
-        from ..rendergraph.registry import register_pass
-    except ImportError:  # the registry lands with the graph compiler
-        return cls
-    return register_pass(cls)
 
 
 def effect_defines() -> dict:
