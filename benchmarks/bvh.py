@@ -14,6 +14,7 @@ displaced-grid terrain of about N triangles).
 """
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 
@@ -80,6 +81,7 @@ def world_triangles(scene) -> np.ndarray:
 
 
 def _blank(v):
+    """A table cell: '' for a value not measured."""
     return v if v is not None else ""
 
 
@@ -162,18 +164,16 @@ def run(args) -> dict:
                 notes.append(f"{spec}: no GpuScene ({exc})")
         rows.append({
             "scene": spec, "triangles": n, "method": b.method, "build_ms": build_ms + bounds_ms,
-            "target_ms": target if target is not None else "",
+            "target_ms": _blank(target),
             "meets_target": ("yes" if build_ms + bounds_ms <= target else "no") if target else "",
-            "sah_cost": cost, "ref_sah_cost": ref_cost if ref_cost is not None else "",
-            "sah_vs_ref": cost / ref_cost if ref_cost else "", "ref_build_ms": ref_ms if ref_ms is not None else "",
+            "sah_cost": cost, "ref_sah_cost": _blank(ref_cost),
+            "sah_vs_ref": cost / ref_cost if ref_cost else "", "ref_build_ms": _blank(ref_ms),
             "bvh_bytes_per_tri": (b.node_count * NODE_BYTES + n * 48) / max(n, 1),
-            "gpu_bytes_per_tri": gpu_bpt if gpu_bpt is not None else "", "load_s": load_s,
-            "meshes": len(scene.meshes), "gpu_scene_blas_ms": blas_ms if blas_ms is not None else "",
+            "gpu_bytes_per_tri": _blank(gpu_bpt), "load_s": load_s,
+            "meshes": len(scene.meshes), "gpu_scene_blas_ms": _blank(blas_ms),
             "gpu_build_ms": _blank(gpu_ms), "gpu_first_build_ms": _blank(gpu_first_ms),
             "gpu_readback_ms": _blank(gpu_read_ms), "gpu_sah_vs_ref": gpu_cost / ref_cost if gpu_cost and ref_cost else "",
         })
-    import os
-
     notes.append(f"build_ms: triangle boxes + build + GPU node layout (fastest of --repeat); numpy, LBVH above "
                  f"200k triangles on {args.threads or os.cpu_count()} threads")
     notes.append("gpu_build_ms: GPU LBVH (compute shaders, 30-bit Morton codes, radix sort, 3 rounds of tree rotations, "
