@@ -16,7 +16,7 @@ GBUFFER_UNITS = {"GBUF_POS_UNIT": 0, "GBUF_NORMAL_UNIT": 1, "GBUF_FACE_NORMAL_UN
 # The G-buffer pins in the order of their units above.
 GBUFFER_PINS = ("posW", "normW", "faceNormalW", "baseColor", "metalRough", "effect", "emissive")
 
-COMPUTE_GROUP = (8, 8, 1)
+COMPUTE_GROUP = (8, 8)   # the local size of the passes' 2D compute shaders
 
 
 def scene_defines(ctx) -> dict:
@@ -32,8 +32,9 @@ def build_compute(gl, name: str, defines: dict | None = None):
     return compute_program(gl, SHADER_DIR / name, defines)
 
 
-def groups_2d(size: tuple[int, int], views: int) -> tuple[int, int, int]:
-    gx, gy, _ = COMPUTE_GROUP
+def groups_2d(size: tuple[int, int], views: int, group: tuple[int, int] = COMPUTE_GROUP) -> tuple[int, int, int]:
+    """Workgroups covering `size` pixels of every view with `group`-sized workgroups (z = view)."""
+    gx, gy = group
     return (size[0] + gx - 1) // gx, (size[1] + gy - 1) // gy, views
 
 

@@ -59,8 +59,7 @@ class _GBufferLightingPass(RenderPass):
         self._defines = {**scene_defines(ctx), **effect_defines(), **GBUFFER_UNITS,
                          "PIXEL_LIST_SSBO": PASS_SSBO_0, "RNG_SALT": self.SALT, **self.shader_defines()}
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
-        self._tile = tuple(self.TILE)
-        self._defines.update(PIXELS_2D=int(self._pixels_2d), TILE_X=self._tile[0], TILE_Y=self._tile[1])
+        self._defines.update(PIXELS_2D=int(self._pixels_2d), TILE_X=self.TILE[0], TILE_Y=self.TILE[1])
         self._prog = build_compute(ctx.gl, self.SHADER, self._defines)
         self.set_uniforms(self._prog)
 
@@ -88,8 +87,7 @@ class _GBufferLightingPass(RenderPass):
             pixels = data[self.PIXEL_LIST]
             pixels.bind_to_storage_buffer(PASS_SSBO_0)
             if self._pixels_2d:
-                tx, ty = self._tile
-                self._prog.run((data.size[0] + tx - 1) // tx, (data.size[1] + ty - 1) // ty, data.views)
+                self._prog.run(*groups_2d(data.size, data.views, self.TILE))
             else:
                 self._prog.run_indirect(pixels, DISPATCH_OFFSET)
         ctx.gl.memory_barrier()

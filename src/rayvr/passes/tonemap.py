@@ -50,9 +50,8 @@ class ToneMapper(RenderPass):
         self._prog["exposure_stops"] = float(self.exposure)
         self._auto = None
         if self.auto_exposure:
-            gx, gy = (cd.size[0] + 15) // 16, (cd.size[1] + 15) // 16
-            self._lum_groups = (gx, gy, cd.views)
-            count = gx * gy * cd.views
+            self._lum_groups = groups_2d(cd.size, cd.views, (16, 16))   # luminance.comp's local size
+            count = self._lum_groups[0] * self._lum_groups[1] * cd.views
             self._partials = gl.buffer(reserve=8 * count)
             self._exposure = gl.buffer(struct.pack("f", 0.0))
             self._lum = build_compute(gl, "luminance.comp")
