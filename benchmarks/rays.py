@@ -263,7 +263,8 @@ def run(args) -> dict:
     specs = (args.scenes or (QUICK_SCENES if args.quick else DEFAULT_SCENES)).split(",")
     w, h = (96, 54) if args.quick and args.size == "1920x1080" else parse_size(args.size)
     iters = 1 if args.quick else args.iterations
-    variants = parse_variants(getattr(args, "variants", ""))
+    rounds = 1 if args.quick else max(1, args.rounds)
+    variants = parse_variants(args.variants)
     folder = Path(tempfile.mkdtemp(prefix="rayvr-rays-"))
     roof = _roofline(gl, caps, folder, 4096 if args.quick else args.roofline_rays,
                      64 if args.quick else args.roofline_tris, iters)
@@ -276,7 +277,7 @@ def run(args) -> dict:
         pos, right, up, fwd = _camera(scene, w / h)
         result = gl.buffer(reserve=w * h * 4)
         surfaces = gl.buffer(reserve=w * h * 32)
-        stats_buf = gl.buffer(reserve=w * h * 16) if getattr(args, "stats", False) else None
+        stats_buf = gl.buffer(reserve=w * h * 16) if args.stats else None
         groups = ((w + 7) // 8, (h + 7) // 8)
 
         def programs(defines):
@@ -301,7 +302,7 @@ def run(args) -> dict:
         while time.perf_counter() < warm_until:   # let the GPU clock up before timing
             compiled[0][2]["primary"].run(*groups)
             gl.finish()
-        for _ in range(1 if args.quick else max(1, getattr(args, "rounds", 1))):   # interleaved rounds; the fastest counts
+        for _ in range(rounds):   # interleaved rounds; the fastest counts
             for vname, vdefs, progs in compiled:
                 primary_ms = _time(gl, caps.timer_queries, lambda: progs["primary"].run(*groups), iters)
                 hits = int((np.frombuffer(result.read(), np.float32) > 0).sum())
@@ -314,12 +315,12 @@ def run(args) -> dict:
                 b = best.setdefault(vname, {"primary_ms": primary_ms, "diffuse_ms": diffuse_ms})
                 b["primary_ms"], b["diffuse_ms"] = min(b["primary_ms"], primary_ms), min(b["diffuse_ms"], diffuse_ms)
                 b["hits"], b["bounce_hits"] = hits, int((d > 0).sum())
+        rep = gs.report()
         for vname, _, _ in compiled:
             b = best[vname]
             primary_ms, diffuse_ms, hits, bounce_hits = b["primary_ms"], b["diffuse_ms"], b["hits"], b["bounce_hits"]
             primary_rate = w * h / (primary_ms / 1e3)
             diffuse_rate = hits / (diffuse_ms / 1e3) if hits else 0.0
-            rep = gs.report()
             rows.append({
                 "scene": spec, "variant": vname, "triangles": gs.triangle_count, "size": f"{w}x{h}",
                 "primary_ms": primary_ms, "primary_Grays_s": primary_rate / 1e9,
@@ -335,13 +336,12 @@ def run(args) -> dict:
     cols = ["scene", "variant", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_ms", "diffuse_Grays_s",
             "primary_hit_frac", "diffuse_hit_frac", "roofline_Gtests_s", "primary_ratio", "diffuse_ratio",
             "gpu_bytes_per_tri", "scene_build_s"]
-    if getattr(args, "stats", False):
+    if args.stats:
         cols += [f"{k}_{c}" for k in ("primary", "diffuse") for c in ("nodes", "tris", "instances")]
-    rounds = 1 if args.quick else max(1, args.rounds)
     notes = [f"timing: {'GPU timer queries' if caps.timer_queries else 'finish + wall clock'}, median of {iters}, "
              f"best of {rounds} interleaved rounds",
              "diffuse rays are cast from primary hits only; rays/s counts those rays",
              "roofline: brute-force ray-triangle tests/s (same test as the traversal, no BVH)"]
-    if getattr(args, "stats", False):
+    if args.stats:
         notes.append("stats (first variant): mean internal nodes visited / triangle tests / BLAS entries per ray")
     return {"columns": cols, "rows": rows, "notes": notes}
