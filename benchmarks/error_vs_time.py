@@ -30,12 +30,11 @@ def add_arguments(parser) -> None:
 
 def run(args) -> dict:
     import rayvr as rv
-    from rayvr.cli.options import load_scene_arg as load
-    from rayvr.cli.options import parse_size
+    from rayvr.cli.options import load_scene_arg, parse_size
     from rayvr.cli.tune import parse_list, parse_spp
 
     quick = args.quick
-    scene = load("cornell_box" if quick and args.scene == DEFAULT_SCENE else args.scene)
+    scene = load_scene_arg("cornell_box" if quick and args.scene == DEFAULT_SCENE else args.scene)
     size = (32, 32) if quick else parse_size(args.size)
     frames, warmup = (2, 1) if quick else (args.frames, args.warmup)
     settings = rv.tune.ReferenceSettings(16 if quick else args.reference_frames, args.reference_spp)
@@ -47,7 +46,7 @@ def run(args) -> dict:
                               metrics=metrics)
     notes = [(f"timing: {results.method}; error of one frame against {settings.frames} x {settings.spp} spp "
               f"path-traced reference ({results.info['reference']})")]
-    if not getattr(args, "no_save", False):
+    if not args.no_save:
         for metric in results.metrics():
             path = results.plot(metric, Path(args.out) / f"error_vs_time_{metric}.png")
             notes.append(f"plot: {path}")
