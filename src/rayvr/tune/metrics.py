@@ -171,9 +171,10 @@ def flip(test, reference, dynamic_range: str = "auto", ppd: float | None = None,
 
 # -- display encoding (for PSNR of display-referred images) -----------------------------------
 def srgb_encode(linear) -> np.ndarray:
-    """Linear radiance clamped to [0, 1] and sRGB-encoded (float): what a display shows at exposure 0."""
-    x = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
+    """Linear radiance clamped to [0, 1] and sRGB-encoded (float64): what a display shows at exposure 0."""
+    from ..xr.readback import srgb_encode as encode   # here: importing rayvr.xr loads moderngl
+
+    return encode(np.asarray(linear, dtype=np.float64))
 
 
 METRICS = {"flip": "FLIP (mean, HDR)", "relmse": "relMSE", "psnr": "PSNR dB (sRGB, clamped)"}

@@ -6,13 +6,18 @@ import numpy as np
 _DTYPES = {"f1": np.uint8, "f2": np.float16, "f4": np.float32}
 
 
+def srgb_encode(x: np.ndarray) -> np.ndarray:
+    """Linear values clipped to [0, 1] and sRGB-encoded, in `x`'s float dtype."""
+    x = np.clip(x, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
 def to_uint8(pixels: np.ndarray, encode_srgb: bool = False) -> np.ndarray:
     """8-bit pixels from uint8 or float data (floats clipped to [0, 1]; optionally sRGB-encoded)."""
     if pixels.dtype == np.uint8:
         return pixels
-    x = np.clip(pixels.astype(np.float32), 0.0, 1.0)
-    if encode_srgb:
-        x = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+    x = pixels.astype(np.float32)
+    x = srgb_encode(x) if encode_srgb else np.clip(x, 0.0, 1.0)
     return (x * 255.0 + 0.5).astype(np.uint8)
 
 
