@@ -14,13 +14,10 @@ from ..errors import GraphError, did_you_mean
 from ..gpu import GpuTimer
 from ..gpu.timer import timing_method
 from .compiler import Plan
-from .formats import get_format
+from .formats import NUMPY_DTYPES, get_format
 from .profile import Profile, RollingTimes
 from .render_pass import PinKind, RenderContext, RenderData
 from .report import CompileReport, ResourceInfo
-
-_NUMPY_DTYPE = {"f1": np.uint8, "f2": np.float16, "f4": np.float32, "u4": np.uint32, "i4": np.int32}
-
 
 class CompiledGraph:
     """A graph ready to execute at one size and view count. Build it with `RenderGraph.compile()`."""
@@ -131,7 +128,7 @@ class CompiledGraph:
         if res.kind is PinKind.BUFFER:
             return np.frombuffer(obj.read(), np.uint8).copy()
         f = get_format(res.fmt)
-        a = np.frombuffer(obj.read(), _NUMPY_DTYPE[f.dtype]).reshape(
+        a = np.frombuffer(obj.read(), NUMPY_DTYPES[f.dtype]).reshape(
             res.layers, res.size[1], res.size[0], f.components).copy()
         return a[:, ::-1] if flip_y else a
 

@@ -3,11 +3,15 @@ from __future__ import annotations
 
 import dataclasses
 
-from ..errors import OptionError
+import numpy as np
+
+from ..errors import OptionError, did_you_mean
 
 
 @dataclasses.dataclass(frozen=True)
 class Format:
+    """A texture format a pin may declare, by its GLSL name."""
+
     name: str
     components: int
     dtype: str          # moderngl dtype
@@ -30,11 +34,14 @@ FORMATS = {f.name: f for f in [
     Format("depth32f", 1, "f4", 4, ""),
 ]}
 
+# moderngl dtype -> numpy dtype, for reading textures back
+NUMPY_DTYPES = {"f1": np.uint8, "f2": np.float16, "f4": np.float32, "u4": np.uint32, "i4": np.int32}
+
 
 def get_format(name: str, where: str = "format") -> Format:
+    """The Format called `name`; OptionError naming `where` and the known formats otherwise."""
     try:
         return FORMATS[name]
     except KeyError:
-        from ..errors import did_you_mean
         raise OptionError(f"{where}: unknown format {name!r}{did_you_mean(name, FORMATS)}; "
                           f"known: {', '.join(FORMATS)}") from None
