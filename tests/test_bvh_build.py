@@ -126,3 +126,21 @@ def test_threaded_lbvh_makes_the_same_tree(gl, tmp_path, monkeypatch):
     threaded.refit(lo, hi)
     np.testing.assert_array_equal(threaded.nodes, before)
     rq.compare(gl, rq.scene_of(m.vertices, m.faces, [np.eye(4)]), tmp_path, n=2000, method="lbvh")
+
+
+def test_refit_rewrites_one_mesh_as_a_full_repack_would(monkeypatch):
+    """refit() writes only the mesh's slices; the buffers equal a fresh pack of the refit BLASes."""
+    s = Scene("three")
+    s.add_material(Material("M"))
+    for k, m in enumerate((trimesh.creation.icosphere(subdivisions=2), trimesh.creation.box(),
+                           trimesh.creation.icosphere(subdivisions=1))):
+        s.add_object(f"O{k}", m.vertices + [3.0 * k, 0, 0], m.faces, 0)
+    gs = GpuScene(get_context(), s)
+    moved = s.meshes[1].positions * 1.5 + 0.2
+    gs.refit(1, moved)
+    monkeypatch.setattr(GpuScene, "_build_blas", lambda self, method, progress: gs.blas)
+    fresh = GpuScene(get_context(), s)
+    for name in ("vertices", "triangles", "blas_nodes", "meshes", "indices"):
+        assert gs.buffers[name].read() == fresh.buffers[name].read(), name
+    np.testing.assert_array_equal(gs._mesh_corners, fresh._mesh_corners)
+    gs.release(), fresh.release()

@@ -96,15 +96,15 @@ class GpuScene:
             old.release()
         self.buffers[name] = self.gl.buffer(data)
 
-    def _build_meshes(self, method: str, progress, blas: list | None = None) -> None:
-        """Pack every mesh into the shared vertex, index, triangle-slot and BLAS-node buffers
-        (preallocated, each mesh written into its slice); `blas` reuses built BVHs (refit)."""
+    def _build_meshes(self, method: str, progress) -> None:
+        """Build the BLASes and pack every mesh into the shared vertex, index, triangle-slot and
+        BLAS-node buffers: each buffer allocated once at its total size, each mesh its slice."""
         t0 = time.perf_counter()
         s = self.scene
-        self.blas: list[bvh_mod.Bvh] = self._build_blas(method, progress) if blas is None else blas
-        first_v = np.cumsum([0] + [len(m.positions) for m in s.meshes])
-        first_t = np.cumsum([0] + [m.triangle_count for m in s.meshes])
-        first_n = np.cumsum([0] + [0 if b is None else b.node_count for b in self.blas])
+        self.blas: list[bvh_mod.Bvh] = self._build_blas(method, progress)
+        first_v = self._first_v = np.cumsum([0] + [len(m.positions) for m in s.meshes])
+        first_t = self._first_t = np.cumsum([0] + [m.triangle_count for m in s.meshes])
+        first_n = self._first_n = np.cumsum([0] + [0 if b is None else b.node_count for b in self.blas])
         self.triangle_count = t_total = int(first_t[-1])
         if t_total >= bvh_mod.MAX_LEAF_LINK or len(s.instances) >= bvh_mod.MAX_LEAF_LINK:
             raise SceneError(f"scene '{s.name}': {t_total} triangles / {len(s.instances)} instances; "
@@ -116,30 +116,14 @@ class GpuScene:
         tri_mats = np.empty(t_total, np.uint32)
         slots = np.zeros((t_total, 3, 4), np.float32)   # a BVH slot per triangle (empty meshes have none)
         nodes = np.empty((first_n[-1], bvh_mod.NODE_FLOATS), np.float32)
-        corners = np.zeros((max(len(s.meshes), 1), 8, 4))
-        for k, (mesh, b) in enumerate(zip(s.meshes, self.blas)):
-            v = verts[first_v[k]:first_v[k + 1]]
-            v[:, 0:3], v[:, 4:7] = mesh.positions, mesh.normals
-            if mesh.uvs is not None:
-                v[:, 3], v[:, 7] = mesh.uvs[:, 0], mesh.uvs[:, 1]
+        self._mesh_corners = np.zeros((max(len(s.meshes), 1), 8, 4))
+        for k, mesh in enumerate(s.meshes):
+            v, t, n = (slice(f[k], f[k + 1]) for f in (first_v, first_t, first_n))
+            self._pack_mesh(k, verts[v], slots[t], nodes[n])
             if normal_maps and mesh.tangents is not None:
-                tangents[first_v[k]:first_v[k + 1]] = mesh.tangents
-            t_base, n_base = first_t[k], first_n[k]
-            idx[t_base:first_t[k + 1]] = mesh.indices + np.uint32(first_v[k])
-            tri_mats[t_base:first_t[k + 1]] = mesh.material_ids
-            if b is None:
-                continue
-            slot = slots[t_base:first_t[k + 1]]
-            slot[:, :, :3] = mesh.positions[mesh.indices[b.order]]
-            slot.view(np.uint32)[:, 0, 3] = b.order
-            gn = nodes[n_base:first_n[k + 1]]
-            gn[:] = b.nodes
-            bits = gn.view(np.uint32)
-            for c in (0, 8):   # links into the shared buffers: leaves by t_base, nodes by n_base
-                bits[:, c + 3] += np.where(bits[:, c + 7] > 0, np.uint32(t_base), np.uint32(n_base))
-            lo, hi = b.bounds()
-            corners[k] = [[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
-        self._mesh_corners = corners
+                tangents[v] = mesh.tangents
+            idx[t] = mesh.indices + np.uint32(first_v[k])
+            tri_mats[t] = mesh.material_ids
         self._mesh_live = np.array([b is not None for b in self.blas] or [False])
         self._last_instances = None
         any_mesh, any_bvh = bool(s.meshes), len(nodes) > 0
@@ -154,6 +138,25 @@ class GpuScene:
             self._buffer("tangents", tangents)
         self.mesh_index_offsets = 3 * first_t
         self.timings["blas_build_ms"] = (time.perf_counter() - t0) * 1e3
+
+    def _pack_mesh(self, k: int, verts: np.ndarray, slots: np.ndarray, nodes: np.ndarray) -> None:
+        """Mesh k's zeroed vertex rows, zeroed BVH slots and BLAS nodes (links offset to its place
+        in the shared buffers) into the given arrays; its object-space box into _mesh_corners."""
+        mesh, b = self.scene.meshes[k], self.blas[k]
+        verts[:, 0:3], verts[:, 4:7] = mesh.positions, mesh.normals
+        if mesh.uvs is not None:
+            verts[:, 3], verts[:, 7] = mesh.uvs[:, 0], mesh.uvs[:, 1]
+        if b is None:
+            return
+        slots[:, :, :3] = mesh.positions[mesh.indices[b.order]]
+        slots.view(np.uint32)[:, 0, 3] = b.order
+        nodes[:] = b.nodes
+        bits = nodes.view(np.uint32)
+        t_base, n_base = np.uint32(self._first_t[k]), np.uint32(self._first_n[k])
+        for c in (0, 8):   # count > 0: a leaf, its link a triangle slot; else a node index
+            bits[:, c + 3] += np.where(bits[:, c + 7] > 0, t_base, n_base)
+        lo, hi = b.bounds()
+        self._mesh_corners[k] = [[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
 
     def _build_blas(self, method: str, progress) -> list:
         """One BLAS per mesh; several meshes build at once on a thread pool (numpy releases the
@@ -411,22 +414,27 @@ class GpuScene:
             entry[0].render_indirect(entry[1], mode=self.gl.TRIANGLES if mode is None else mode, count=entry[2])
 
     def refit(self, mesh: int, positions) -> None:
-        """New vertex positions for mesh `mesh` (animation): vertex buffer, BVH triangles and the
-        BLAS boxes are updated in place (same topology); the TLAS follows on the next update()."""
+        """New vertex positions for mesh `mesh` (animation): its vertex rows, BVH triangles and
+        BLAS boxes are rewritten in place (same topology; other meshes are not touched); the TLAS
+        follows on the next update()."""
         m = self.scene.meshes[mesh]
         pos = np.ascontiguousarray(positions, dtype=np.float32).reshape(m.positions.shape)
         if not np.isfinite(pos).all():
             raise SceneError(f"mesh '{m.name}': refit positions contain NaN or Inf")
         m.positions = pos
-        self._build_meshes_refit(mesh)
-
-    def _build_meshes_refit(self, mesh: int) -> None:
-        # refit the one BLAS, then re-pack the static buffers around it (no other BLAS is rebuilt)
         b = self.blas[mesh]
         if b is not None:
-            lo, hi = bvh_mod.triangle_bounds(self.scene.meshes[mesh].triangles())
-            b.refit(lo, hi)
-        self._build_meshes("auto", False, blas=list(self.blas))
+            b.refit(*bvh_mod.triangle_bounds(m.triangles()))
+        v_base, t_base, n_base = (int(f[mesh]) for f in (self._first_v, self._first_t, self._first_n))
+        verts = np.zeros((len(pos), 8), np.float32)
+        slots = np.zeros((m.triangle_count, 3, 4), np.float32)
+        nodes = np.empty((0 if b is None else b.node_count, bvh_mod.NODE_FLOATS), np.float32)
+        self._pack_mesh(mesh, verts, slots, nodes)
+        for name, data, offset in (("vertices", verts, v_base * 32), ("triangles", slots, t_base * 48),
+                                   ("blas_nodes", nodes, n_base * bvh_mod.NODE_BYTES)):
+            if len(data):
+                self.buffers[name].write(data, offset=offset)
+        self._last_instances = None
 
     # ---- report -----------------------------------------------------------------------------
     @property
