@@ -1,6 +1,6 @@
 // Random numbers and importance sampling shared by the ray passes.
 // PCG hash RNG (Jarzynski & Olano 2020), cosine hemisphere, GGX visible-normal sampling (Heitz 2018),
-// an orthonormal basis (Duff et al. 2017) and MIS weights.
+// an orthonormal basis (Duff et al. 2017) and the MIS power heuristic.
 #pragma once
 
 #ifndef RAYVR_PI
@@ -21,11 +21,10 @@ Rng rng_init(uvec2 pixel, uint view, uint frame, uint salt) {
     return Rng(s);
 }
 
-// Uniform float in [0, 1).
+// Uniform float in [0, 1): one PCG step; pcg_hash(state) is the output of the state after it.
 float rng_next(inout Rng r) {
+    uint word = pcg_hash(r.state);
     r.state = r.state * 747796405u + 2891336453u;
-    uint word = ((r.state >> ((r.state >> 28u) + 4u)) ^ r.state) * 277803737u;
-    word = (word >> 22u) ^ word;
     return float(word >> 8u) * (1.0 / 16777216.0);
 }
 
@@ -70,8 +69,4 @@ float power_heuristic(float pdf_a, float pdf_b) {
     float a = pdf_a * pdf_a;
     float b = pdf_b * pdf_b;
     return a + b > 0.0 ? a / (a + b) : 0.0;
-}
-
-float balance_heuristic(float pdf_a, float pdf_b) {
-    return pdf_a + pdf_b > 0.0 ? pdf_a / (pdf_a + pdf_b) : 0.0;
 }
