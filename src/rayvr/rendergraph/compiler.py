@@ -90,14 +90,10 @@ class Plan:
         return sum(r.bytes for r in self.resources.values())
 
 
-def _pin_list(refl: Reflection, direction: PinDirection) -> list[str]:
-    return [p.name for p in refl.pins.values() if p.direction is direction]
-
-
 def _check_pin(refl: Reflection, pass_name: str, type_name: str, pin: str, want: PinDirection,
                where: str) -> Pin:
     """The pin `pin` of a pass, which must have direction `want`; GraphError naming it otherwise."""
-    wanted = _pin_list(refl, want)
+    wanted = [p.name for p in refl.pins_of(want)]
     p = refl.pins.get(pin)
     if p is None:
         raise GraphError(f"{where}: pass '{pass_name}' ({type_name}) has no {want.value} '{pin}'"

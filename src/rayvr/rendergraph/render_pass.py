@@ -109,14 +109,18 @@ class Reflection:
 
     addInput, addOutput, addInternal = add_input, add_output, add_internal
 
+    def pins_of(self, direction: PinDirection) -> list[Pin]:
+        """The pins of one direction, in declaration order."""
+        return [p for p in self.pins.values() if p.direction is direction]
+
     def inputs(self) -> list[Pin]:
-        return [p for p in self.pins.values() if p.direction is PinDirection.INPUT]
+        return self.pins_of(PinDirection.INPUT)
 
     def outputs(self) -> list[Pin]:
-        return [p for p in self.pins.values() if p.direction is PinDirection.OUTPUT]
+        return self.pins_of(PinDirection.OUTPUT)
 
     def internals(self) -> list[Pin]:
-        return [p for p in self.pins.values() if p.direction is PinDirection.INTERNAL]
+        return self.pins_of(PinDirection.INTERNAL)
 
 
 @dataclasses.dataclass
