@@ -146,6 +146,9 @@ def plan_graph(graph, scene=None, size=(64, 64), views: int = 1, caps=None) -> P
             raise GraphError(f"input '{e.dst}' has two sources '{other.src}' and '{e.src}': "
                              f"remove one with remove_edge('{e.src}', '{e.dst}')")
         into[(e.dst_pass, e.dst_pin)] = e
+    edges_into: dict[str, list[Edge]] = {p: [] for p in passes}
+    for e in into.values():
+        edges_into[e.dst_pass].append(e)
 
     # Reflect in topological order so each pass sees its sources' formats.
     reflections: dict[str, Reflection] = {}
@@ -155,13 +158,10 @@ def plan_graph(graph, scene=None, size=(64, 64), views: int = 1, caps=None) -> P
         rp = passes[p]
         type_name = type(rp).__name__
         input_formats = {}
-        for (dp, dpin), e in into.items():
-            if dp != p:
-                continue
-            src_refl = reflections[e.src_pass]
-            _check_pin(src_refl, e.src_pass, type(passes[e.src_pass]).__name__, e.src_pin,
+        for e in edges_into[p]:
+            _check_pin(reflections[e.src_pass], e.src_pass, type(passes[e.src_pass]).__name__, e.src_pin,
                        PinDirection.OUTPUT, f"edge {e}")
-            input_formats[dpin] = shapes[(e.src_pass, e.src_pin)][0]
+            input_formats[e.dst_pin] = shapes[(e.src_pass, e.src_pin)][0]
         cd = CompileData(size=size, views=int(views), scene=scene, caps=caps, input_formats=input_formats)
         refl = rp.reflect(cd)
         if not isinstance(refl, Reflection):
@@ -171,11 +171,10 @@ def plan_graph(graph, scene=None, size=(64, 64), views: int = 1, caps=None) -> P
         for pin in refl.pins.values():
             if pin.direction is not PinDirection.INPUT:
                 shapes[(p, pin.name)] = _output_shape(pin, size, int(views))
-        for (dp, dpin), e in into.items():
-            if dp == p:
-                inp = _check_pin(refl, p, type_name, dpin, PinDirection.INPUT, f"edge {e}")
-                _check_compatible(e, reflections[e.src_pass].pins[e.src_pin], inp,
-                                  shapes[(e.src_pass, e.src_pin)], size)
+        for e in edges_into[p]:
+            inp = _check_pin(refl, p, type_name, e.dst_pin, PinDirection.INPUT, f"edge {e}")
+            _check_compatible(e, reflections[e.src_pass].pins[e.src_pin], inp,
+                              shapes[(e.src_pass, e.src_pin)], size)
 
     outputs = graph.outputs
     for ref in outputs:
