@@ -43,7 +43,8 @@ float smith_g2(float n_v, float n_l, float alpha) {
     return 1.0 / (1.0 + smith_lambda(n_v, alpha) + smith_lambda(n_l, alpha));
 }
 
-// Diffuse part of eval (Lambert, weighted by 1 - F so energy is not counted twice).
+// Diffuse part of eval: Lambert with the diffuse albedo (base colour times 1 - metallic; no
+// Fresnel weighting).
 vec3 bsdf_eval_diffuse(BsdfParams p, vec3 n, vec3 v, vec3 l) {
     float n_l = dot(n, l);
     if (n_l <= 0.0) return vec3(0.0);

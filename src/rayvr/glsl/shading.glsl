@@ -1,6 +1,7 @@
 // Direct lighting of a surface point with the one BSDF, optionally with ray-traced visibility,
 // shared by DirectLighting (no rays), RTShadows and the hits of RTReflections.
-// Needs views.glsl-free inputs only; define SHADE_SHADOWS 1 to trace shadow rays.
+// Takes render-space points and directions (it does not need views.glsl); define SHADE_SHADOWS 1
+// to trace shadow rays.
 #pragma once
 #include "scene.glsl"
 #include "lights.glsl"

@@ -33,7 +33,8 @@ vec3 view_ray_dir_eye(uint v, vec2 uv) {
     return normalize(vec3(mix(t.x, t.y, uv.x), mix(t.z, t.w, uv.y), -1.0));
 }
 
-// Render-space primary ray through pixel centre `pixel` (+ `offset` in [0,1)^2) of view v.
+// Render-space primary ray of view v through the point `pixel` in pixels (pixel (x, y)'s centre is
+// (x + 0.5, y + 0.5); callers add their sub-pixel offset or jitter).
 void view_primary_ray(uint v, vec2 pixel, out vec3 origin, out vec3 dir) {
     vec2 uv = pixel / views[v].clip.zw;
     origin = views[v].eye.xyz;

@@ -1,4 +1,5 @@
-// Mirror / glossy reflections for the pixels on the reflection list (indirect dispatch): sample the
+// Mirror / glossy reflections for the pixels whose effect is REFLECTIONS or above (those on the
+// reflection list, dispatched indirectly, or with PIXELS_2D the whole image in tiles): sample the
 // specular lobe (GGX VNDF; exact mirror at roughness 0), trace, shade the hit with emission and
 // shadowed direct light, continue up to MAX_BOUNCES. Output: reflected radiance weighted by the
 // specular BSDF, so the composite adds it to the direct light.

@@ -1,4 +1,5 @@
-// Emission + ray-traced shadowed direct light for the pixels on the shadow list (indirect dispatch).
+// Emission + ray-traced shadowed direct light for the pixels whose effect is SHADOWS or above: those
+// on the shadow list (indirect dispatch), or with PIXELS_2D every pixel of the image in tiles.
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "pixel_list.glsl"
