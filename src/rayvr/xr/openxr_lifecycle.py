@@ -57,9 +57,9 @@ ALLOWED = {
 class SessionLifecycle:
     """Tracks the session state and whether the frame loop may run.
 
-    `running` is true between xrBeginSession and xrEndSession: only then may xrWaitFrame,
-    xrBeginFrame and xrEndFrame be called. `history` keeps every state seen, for tests and logs.
-    Unexpected transitions are recorded in `anomalies` (the runtime is the authority: we follow it).
+    `running` is true between xrBeginSession and xrEndSession (or the session's end: EXITING,
+    LOSS_PENDING): only then may xrWaitFrame, xrBeginFrame and xrEndFrame be called.
+    `history` keeps every state seen, for tests and logs. Unexpected transitions are recorded in `anomalies` (the runtime is the authority: we follow it).
     """
 
     def __init__(self):
@@ -86,6 +86,8 @@ class SessionLifecycle:
             self.anomalies.append((self.state, new))
         self.state = new
         self.history.append(new)
+        if self.ended:
+            self.running = False   # no frame calls on a session that is exiting or lost
         if new == SessionState.READY:
             return Action.BEGIN
         if new == SessionState.STOPPING:

@@ -359,9 +359,7 @@ class OpenXRSink(Sink):
                 self._get_system()
                 self._create_session()
                 return True
-            except XrError:
-                time.sleep(0.1)
-            except xr.exception.ErrorResult:
+            except (XrError, xr.exception.ErrorResult):
                 time.sleep(0.1)
         return False
 
@@ -392,8 +390,6 @@ class OpenXRSink(Sink):
         elif action is Action.END:
             xr.end_session(self.session)
             self.lifecycle.ended_session()
-        elif action in (Action.EXIT, Action.RECOVER):
-            self.lifecycle.running = False
 
     def _begin_frame(self) -> FrameRequest:
         xr = self.xr
