@@ -59,7 +59,8 @@ class SessionLifecycle:
 
     `running` is true between xrBeginSession and xrEndSession (or the session's end: EXITING,
     LOSS_PENDING): only then may xrWaitFrame, xrBeginFrame and xrEndFrame be called.
-    `history` keeps every state seen, for tests and logs. Unexpected transitions are recorded in `anomalies` (the runtime is the authority: we follow it).
+    `history` keeps every state seen, for tests and logs. Unexpected transitions are recorded
+    in `anomalies` (the runtime is the authority: we follow it).
     """
 
     def __init__(self):
