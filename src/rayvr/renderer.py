@@ -215,19 +215,13 @@ class Renderer:
             self._opened = True
 
     def _last_frame_ms(self) -> float:
-        prof = self.compiled.profile()
-        passes = getattr(prof, "passes", {}) or {}
-        total = 0.0
-        for stats in passes.values():
-            last = getattr(stats, "last", None)
-            total += float(last if last is not None else getattr(stats, "mean", 0.0) or 0.0)
-        return total
+        return sum(stats.last_ms for stats in self.compiled.profile().passes.values())
 
     # -- outputs -----------------------------------------------------------------------------
     @property
     def output_name(self) -> str:
         """The primary output: the graph's first marked output that is still produced."""
-        outs = [o for o in self.compiled.plan.outputs]
+        outs = self.compiled.plan.outputs
         if not outs:
             raise RayvrError(f"graph '{self.graph.name}' produces no output for this scene; "
                              f"compile report:\n{self.compiled.report()}")
