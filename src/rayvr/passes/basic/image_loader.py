@@ -20,11 +20,15 @@ from .compute import program, run_over, storable_format
 FLOAT_SUFFIXES = {".exr", ".hdr", ".pfm"}
 
 
+def _require_file(path: Path, where: str) -> None:
+    if not path.is_file():
+        raise OptionError(f"{where}: file '{path}' not found; give an existing PNG, JPEG or EXR path")
+
+
 def _read_image(path: Path, where: str) -> np.ndarray:
     """(h, w, 4) uint8 for 8-bit files, float32 for HDR files; rows top-down as in the file.
     Decoded once per file version (reflect and compile both ask); do not modify the result."""
-    if not path.is_file():
-        raise OptionError(f"{where}: file '{path}' not found; give an existing PNG, JPEG or EXR path")
+    _require_file(path, where)
     st = path.stat()
     return _decode(path.resolve(), st.st_mtime_ns, st.st_size, where)
 
@@ -78,8 +82,7 @@ def _image_size(path: Path, where: str) -> tuple[int, int]:
     if path.suffix.lower() in FLOAT_SUFFIXES:
         h, w = _read_image(path, where).shape[:2]
         return w, h
-    if not path.is_file():
-        raise OptionError(f"{where}: file '{path}' not found; give an existing PNG, JPEG or EXR path")
+    _require_file(path, where)
     from PIL import Image
 
     try:
@@ -112,18 +115,22 @@ class ImageLoader(RenderPass):
         return super().validate_property(key, value)
 
     def files(self) -> list[Path]:
+        """The image files: `paths`, else [`path`]; OptionError when neither is set."""
         files = [Path(p) for p in self.paths] or ([Path(self.path)] if self.path else [])
         if not files:
             raise OptionError(f"pass {self.name}: set property 'path' (one image for all views) "
                               f"or 'paths' (one per view)")
         return files
 
+    def _where(self) -> str:
+        return f"pass {self.name}: property 'path{'s' if self.paths else ''}'"
+
     def _natural_format(self) -> str:
         return "rgba32f" if self.files()[0].suffix.lower() in FLOAT_SUFFIXES else "rgba8"
 
     def reflect(self, cd):
         files = self.files()
-        sizes = [_image_size(f, f"pass {self.name}: property 'path{'s' if self.paths else ''}'") for f in files]
+        sizes = [_image_size(f, self._where()) for f in files]
         if len(set(sizes)) > 1:
             listing = ", ".join(f"{f.name} {w}x{h}" for f, (w, h) in zip(files, sizes))
             raise OptionError(f"pass {self.name}: property 'paths': images differ in size ({listing}); "
@@ -136,7 +143,7 @@ class ImageLoader(RenderPass):
         return r
 
     def compile(self, ctx, cd):
-        where = f"pass {self.name}: property 'path{'s' if self.paths else ''}'"
+        where = self._where()
         kinds = {f.suffix.lower() in FLOAT_SUFFIXES for f in self.files()}
         if len(kinds) > 1:
             raise OptionError(f"{where}: mix of 8-bit and HDR files; give files of one kind")
