@@ -194,12 +194,15 @@ class Scene:
     def bounds(self) -> np.ndarray:
         """World-space AABB over all instances: [[min xyz], [max xyz]] float64."""
         lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        mesh_boxes = {}   # once per mesh, not per instance
         for inst in self.instances:
-            p = self.meshes[inst.mesh].positions.astype(np.float64)
-            if not len(p):
+            if inst.mesh not in mesh_boxes:
+                p = self.meshes[inst.mesh].positions
+                mesh_boxes[inst.mesh] = np.stack([p.min(axis=0), p.max(axis=0)]).astype(np.float64) if len(p) else None
+            box = mesh_boxes[inst.mesh]
+            if box is None:
                 continue
-            corners = np.array([[x, y, z] for x in (p[:, 0].min(), p[:, 0].max())
-                                for y in (p[:, 1].min(), p[:, 1].max()) for z in (p[:, 2].min(), p[:, 2].max())])
+            corners = np.array([[x, y, z] for x in box[:, 0] for y in box[:, 1] for z in box[:, 2]])
             w = corners @ inst.transform[:3, :3].T + inst.transform[:3, 3]
             lo, hi = np.minimum(lo, w.min(0)), np.maximum(hi, w.max(0))
         if not np.isfinite(lo).all():
