@@ -91,7 +91,6 @@ def run(args) -> int:
     from ..graphs import HDR_OUTPUT, OUTPUT, hybrid
     from ..passes.tonemap import OPERATORS
     from ..renderer import Renderer, default_views
-    from ..rendergraph.render_pass import RenderPass  # noqa: F401  (import errors surface early)
 
     size = parse_size(args.size)
     if args.views < 1:
