@@ -5,15 +5,18 @@ import dataclasses
 
 
 def human_bytes(n: int) -> str:
-    for unit in ("B", "KiB", "MiB", "GiB"):
-        if abs(n) < 1024 or unit == "GiB":
+    """`n` bytes in B, KiB, MiB or GiB, e.g. '1.5 MiB'."""
+    for unit in ("B", "KiB", "MiB"):
+        if abs(n) < 1024:
             return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
         n /= 1024
-    return f"{n} B"
+    return f"{n:.1f} GiB"
 
 
 @dataclasses.dataclass
 class ResourceInfo:
+    """One logical resource in the report: its pins, shape, bytes, lifetime and what it shares."""
+
     name: str                   # 'Pass.pin' of the writer
     pins: list[str]             # writer then readers
     format: str | None          # None for buffers
