@@ -14,6 +14,7 @@ DISPATCH_OFFSET = 4
 
 
 def pixel_list_bytes(size: tuple[int, int], views: int) -> int:
+    """Bytes of a pixel list that can hold every pixel of every view."""
     return HEADER_BYTES + 4 * size[0] * size[1] * views
 
 
@@ -43,7 +44,7 @@ class EffectCompaction(RenderPass):
         n = pixel_list_bytes(cd.size, cd.views)
         r.add_output(self.SHADOW_PIXELS, "pixels needing shadow rays").buffer(n)
         r.add_output(self.REFLECTION_PIXELS, "pixels needing reflection rays").buffer(n)
-        r.add_output(self.PATH_PIXELS, "PATH_TRACED pixels (with path_list)").buffer(n if self.path_list else 16)
+        r.add_output(self.PATH_PIXELS, "PATH_TRACED pixels (with path_list)").buffer(n if self.path_list else HEADER_BYTES)
         return r
 
     def skip_reason(self, cd):
@@ -53,10 +54,7 @@ class EffectCompaction(RenderPass):
         return None
 
     def defines(self) -> dict:
-        return self._defines
-
-    def on_properties_changed(self):
-        self._defines = {"COMPACT_REFLECTIONS": 1, "COMPACT_PATHS": int(self.path_list)}
+        return dict(getattr(self, "_defines", {}))
 
     def compile(self, ctx, cd):
         used = effects_used(cd)
