@@ -40,6 +40,10 @@ class TextureRef:
         return (tr @ rot @ sc)[:2]
 
 
+# The texture fields of a Material, in the order of MaterialData.tex in scene.glsl (TEX_* ids).
+TEXTURE_SLOTS = ("base_color_texture", "metallic_roughness_texture", "normal_texture",
+                 "occlusion_texture", "emissive_texture", "transmission_texture")
+
 _VERSIONED = {"effect", "base_color", "metallic", "roughness", "emissive", "emissive_strength",
               "transmission", "ior", "alpha_mode", "alpha_cutoff", "double_sided"}
 
@@ -92,9 +96,7 @@ class Material:
 
     def textures(self) -> dict[str, TextureRef]:
         """The texture slots in use, by field name."""
-        names = ("base_color_texture", "metallic_roughness_texture", "normal_texture",
-                 "occlusion_texture", "emissive_texture", "transmission_texture")
-        return {n: getattr(self, n) for n in names if getattr(self, n) is not None}
+        return {n: getattr(self, n) for n in TEXTURE_SLOTS if getattr(self, n) is not None}
 
 
 class MaterialTable:

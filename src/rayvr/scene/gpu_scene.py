@@ -14,12 +14,10 @@ import numpy as np
 
 from ..errors import GpuError, SceneError
 from ..gpu.bindings import BINDINGS
-from ..materials.material import Material
+from ..materials.material import TEXTURE_SLOTS, Material
 from . import bvh as bvh_mod
 from .model import FEATURES, Scene
 
-TEXTURE_SLOTS = ("base_color_texture", "metallic_roughness_texture", "normal_texture",
-                 "occlusion_texture", "emissive_texture", "transmission_texture")
 MATERIAL_FLOATS = 64          # 256 B, see MaterialData
 INSTANCE_FLOATS = 28          # 6 vec4 + uvec4
 MAX_TEXTURE_SIZE = 2048
