@@ -30,6 +30,7 @@ def atomic_write(path, write) -> Path:
 
 
 def write_text(path, text: str) -> Path:
+    """Write `text` to `path` atomically."""
     return atomic_write(path, lambda tmp: tmp.write_text(text))
 
 

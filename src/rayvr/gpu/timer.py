@@ -29,6 +29,7 @@ class GpuTimer:
         self.last_ms: float | None = None
 
     def begin(self) -> None:
+        """Start the span (with queries: first collect the result of the query this slot held)."""
         if self.use_queries:
             q = self._queries[self._slot]
             if self._pending[self._slot]:
@@ -39,6 +40,8 @@ class GpuTimer:
             self._t0 = time.perf_counter()
 
     def end(self) -> None:
+        """End the span: `last_ms` gets its time now (finish+wall), or when this query slot is
+        begun again two spans later (queries)."""
         if self.use_queries:
             self._queries[self._slot].mglo.end()
             self._pending[self._slot] = True

@@ -99,6 +99,7 @@ class RenderGraph:
         return new
 
     def get_pass(self, name: str) -> RenderPass:
+        """The pass called `name`; GraphError with a did-you-mean when there is none."""
         return self._require_pass(name, "get_pass")
 
     @property
@@ -126,6 +127,7 @@ class RenderGraph:
         return edge
 
     def remove_edge(self, src: str, dst: str) -> None:
+        """Remove the edge `src` -> `dst`, spelled as it was added."""
         edge = Edge(*split_pin(src, "remove_edge source"), *split_pin(dst, "remove_edge destination"))
         if edge not in self._edges:
             known = [f"{e.src} -> {e.dst}" for e in self._edges]
@@ -135,6 +137,7 @@ class RenderGraph:
 
     @property
     def edges(self) -> list[Edge]:
+        """Edges in the order they were added (a copy)."""
         return list(self._edges)
 
     # -- outputs ---------------------------------------------------------------------------
@@ -148,6 +151,7 @@ class RenderGraph:
             self._outputs.append(ref)
 
     def unmark_output(self, ref: str) -> None:
+        """Stop marking 'Pass.pin' as a graph output."""
         if ref not in self._outputs:
             raise GraphError(f"unmark_output({ref!r}): not a marked output{did_you_mean(ref, self._outputs)}; "
                              f"marked: {', '.join(self._outputs) or '(none)'}")
@@ -155,6 +159,7 @@ class RenderGraph:
 
     @property
     def outputs(self) -> list[str]:
+        """Marked outputs as 'Pass.pin', in marking order (a copy)."""
         return list(self._outputs)
 
     # -- compile ---------------------------------------------------------------------------
@@ -194,22 +199,26 @@ class RenderGraph:
         return load_graph(path)
 
     def to_dict(self) -> dict:
+        """The JSON form `save(".json")` writes."""
         from .serialize import graph_to_dict
 
         return graph_to_dict(self)
 
     @staticmethod
     def from_dict(data: dict, where: str = "graph") -> "RenderGraph":
+        """A graph from `to_dict()` data; errors name `where` and the field."""
         from .serialize import graph_from_dict
 
         return graph_from_dict(data, where)
 
     def to_script(self) -> str:
+        """The Falcor-style Python script `save(".py")` writes."""
         from .serialize import graph_to_script
 
         return graph_to_script(self)
 
     def to_dot(self) -> str:
+        """The graph as Graphviz DOT text."""
         from .picture import graph_to_dot
 
         return graph_to_dot(self)

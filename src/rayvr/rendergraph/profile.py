@@ -9,6 +9,8 @@ import numpy as np
 
 @dataclasses.dataclass
 class PassStats:
+    """Rolling statistics of one pass's time (ms) over the last `samples` frames."""
+
     last_ms: float
     mean_ms: float
     min_ms: float

@@ -52,31 +52,38 @@ class Pin:
     mip_levels: int = 1
 
     def format(self, name: str) -> "Pin":
+        """Declare the texture format (a name of `formats.FORMATS`)."""
         get_format(name, where=f"pin '{self.name}'")
         self.fmt = name
         return self
 
     def optional(self, flag: bool = True) -> "Pin":
+        """An optional input: the pass still runs when it is unconnected or its source is pruned."""
         self.is_optional = flag
         return self
 
     def texture_size(self, width: int, height: int) -> "Pin":
+        """A fixed size in pixels instead of the graph's output size."""
         self.size_rule, self.size_value = "fixed", (int(width), int(height))
         return self
 
     def scaled(self, sx: float, sy: float | None = None) -> "Pin":
+        """The graph's output size times (sx, sy), rounded, at least 1."""
         self.size_rule, self.size_value = "scaled", (float(sx), float(sy if sy is not None else sx))
         return self
 
     def views(self, layers: int) -> "Pin":
+        """A fixed layer count instead of one layer per view."""
         self.layers = int(layers)
         return self
 
     def buffer(self, byte_size: int) -> "Pin":
+        """Make the pin an SSBO of `byte_size` bytes."""
         self.kind, self.byte_size = PinKind.BUFFER, int(byte_size)
         return self
 
     def resolved_size(self, output_size: tuple[int, int]) -> tuple[int, int]:
+        """The pin's (w, h) in pixels at the graph's per-view output size."""
         if self.size_rule == "fixed":
             return int(self.size_value[0]), int(self.size_value[1])
         if self.size_rule == "scaled":
