@@ -68,6 +68,22 @@ def test_tonemap_auto_exposure_maps_mean_log_luminance_to_key(gpu):
     assert np.abs(got[..., :3].astype(int) - round(0.18 * 255)).max() <= 1
 
 
+def test_tonemappers_sharing_a_program_keep_their_own_exposure(gpu):
+    # Programs are cached per source and defines: a second ToneMapper compiled later must not
+    # change the first one's uniforms.
+    gl = gpu.gl
+    src = hdr_texture(gl, np.full((1, 1, 1, 4), 0.25, "f4"))
+    first, second = ToneMapper(operator="linear", srgb=False), ToneMapper(operator="linear", srgb=False, exposure=1.0)
+    cd = CompileData(size=(1, 1), views=1, scene=None, caps=gpu.caps, input_formats={"src": "rgba32f"})
+    ctx = RenderContext(gl, gpu.caps)
+    first.compile(ctx, cd)
+    second.compile(ctx, cd)
+    dst = gl.texture_array((1, 1, 1), 4, dtype="f1")
+    first.execute(ctx, RenderData({"src": src, "dst": dst}, (1, 1), 1))
+    gl.finish()
+    assert np.frombuffer(dst.read(), np.uint8)[0] == round(0.25 * 255)
+
+
 def test_tonemap_rejects_unknown_operator():
     with pytest.raises(OptionError, match="operator.*aces"):
         ToneMapper(operator="filmic")

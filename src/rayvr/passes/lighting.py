@@ -61,7 +61,6 @@ class _GBufferLightingPass(RenderPass):
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
         self._defines.update(PIXELS_2D=int(self._pixels_2d), TILE_X=self.TILE[0], TILE_Y=self.TILE[1])
         self._prog = build_compute(ctx.gl, self.SHADER, self._defines)
-        self.set_uniforms(self._prog)
 
     def _dispatch_2d(self, cd) -> bool:
         if self.PIXELS_2D is not None:
@@ -71,13 +70,15 @@ class _GBufferLightingPass(RenderPass):
         return used is not None and Effect.PATH_TRACED not in used
 
     def set_uniforms(self, prog) -> None:
-        """Properties that are uniforms (set once per compile, not per frame)."""
+        """Properties that are uniforms; set in execute() because programs are cached and shared
+        between passes with the same defines."""
 
     def defines(self) -> dict:
         return dict(getattr(self, "_defines", {}) or self.shader_defines())
 
     def execute(self, ctx, data):
         bind_scene(ctx)
+        self.set_uniforms(self._prog)
         use_gbuffer(data)
         data[self.OUTPUT].bind_to_image(0, read=False, write=True)
         if not self.PIXEL_LIST:

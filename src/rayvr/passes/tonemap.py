@@ -47,8 +47,6 @@ class ToneMapper(RenderPass):
         gl = ctx.gl
         self._size, self._views = cd.size, cd.views
         self._prog = build_compute(gl, "tonemap.comp", self.defines())
-        self._prog["exposure_stops"] = float(self.exposure)
-        self._auto = None
         if self.auto_exposure:
             self._lum_groups = groups_2d(cd.size, cd.views, (16, 16))   # luminance.comp's local size
             count = self._lum_groups[0] * self._lum_groups[1] * cd.views
@@ -56,14 +54,17 @@ class ToneMapper(RenderPass):
             self._exposure = gl.buffer(struct.pack("f", 0.0))
             self._lum = build_compute(gl, "luminance.comp")
             self._reduce = build_compute(gl, "exposure.comp")
-            self._reduce["partial_count"] = count
-            self._reduce["key"] = float(self.key)
-            self._reduce["adaptation"] = float(self.adaptation)
+            self._partial_count = count
 
     def execute(self, ctx, data):
         src, dst = data[self.SRC], data[self.DST]
         src.use(location=0)
+        # Uniforms here, not in compile(): programs are cached and shared with other ToneMappers.
+        self._prog["exposure_stops"] = float(self.exposure)
         if self.auto_exposure:
+            self._reduce["partial_count"] = self._partial_count
+            self._reduce["key"] = float(self.key)
+            self._reduce["adaptation"] = float(self.adaptation)
             self._exposure.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"])
             self._partials.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_1"])
             self._lum.run(*self._lum_groups)
