@@ -66,13 +66,11 @@ class GpuScene:
         self.features = scene.features
         self.timings: dict[str, float] = {}
         self.buffers: dict[str, object] = {}
-        self._instance_meshes = [i.mesh for i in scene.instances]
         self._build_meshes(bvh_method, progress)
         self._build_textures()
         self._material_version = None
         self._upload_materials()
         self._build_emissive_table()
-        self.origin = np.zeros(3)
         self._draws: dict[tuple, tuple] = {}
         self.update(np.zeros(3))
 
@@ -295,25 +293,21 @@ class GpuScene:
         n = len(mats)
         m = mats.copy()
         m[:, :3, 3] -= self.origin
-        det = np.linalg.det(m[:, :3, :3]) if n else np.zeros(0)
-        bad = np.flatnonzero(~(np.abs(det) > 1e-300) | ~np.isfinite(m).all(axis=(1, 2)))
+        bad = np.flatnonzero(~(np.abs(np.linalg.det(m[:, :3, :3])) > 1e-300) | ~np.isfinite(m).all(axis=(1, 2)))
         if len(bad):
             name = self.scene.instances[bad[0]].name
             raise SceneError(f"instance '{name}'.transform: singular or non-finite matrix; give it a non-zero scale")
-        rows = np.zeros((max(n, 1), INSTANCE_FLOATS), np.float32)
-        if n:
-            rows[:n, 0:12] = m[:, :3].reshape(n, 12)
-            rows[:n, 12:24] = np.linalg.inv(m)[:, :3].reshape(n, 12)
-            rows[:n].view(np.uint32)[:, 24] = mesh_ids
-        corners = self._mesh_corners[mesh_ids] if n else np.zeros((0, 8, 4))
-        w = np.einsum("nij,nkj->nki", m[:, :3], corners) if n else np.zeros((0, 8, 3))
-        lo, hi = w.min(axis=1) if n else np.zeros((0, 3)), w.max(axis=1) if n else np.zeros((0, 3))
-        live = np.flatnonzero(self._mesh_live[mesh_ids]) if n else np.zeros(0, np.int64)
+        rows = np.zeros((max(n, 1), INSTANCE_FLOATS), np.float32)   # one placeholder row when empty
+        rows[:n, 0:12] = m[:, :3].reshape(n, 12)
+        rows[:n, 12:24] = np.linalg.inv(m)[:, :3].reshape(n, 12)
+        rows[:n].view(np.uint32)[:, 24] = mesh_ids
+        w = np.einsum("nij,nkj->nki", m[:, :3], self._mesh_corners[mesh_ids])   # each mesh box's corners
+        live = np.flatnonzero(self._mesh_live[mesh_ids])
         header = np.zeros(4, np.uint32)
         header[0] = n if len(live) else 0     # 0: no geometry, traversal returns at once
         header[1] = len(self.scene.materials)
         self._buffer("instances", np.concatenate([header.view(np.float32), rows.reshape(-1)]))
-        self._build_tlas(live, lo, hi)
+        self._build_tlas(live, w.min(axis=1), w.max(axis=1))
 
     def _build_tlas(self, live: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
         if not len(live):
@@ -327,7 +321,6 @@ class GpuScene:
         for c in (0, 8):
             leaf = bits[:, c + 7] > 0
             bits[leaf, c + 3] = live[t.order[bits[leaf, c + 3]]].astype(np.uint32)
-        self.tlas = t
         self._buffer("tlas_nodes", nodes)
 
     def _upload_lights(self) -> None:
