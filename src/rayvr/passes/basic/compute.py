@@ -6,9 +6,9 @@ from pathlib import Path
 from ...errors import OptionError
 from ...gpu import compute_program
 from ...rendergraph.formats import get_format
+from .._common import groups_2d
 
 HERE = Path(__file__).resolve().parent
-GROUP = 8   # local_size_x/y in dst_image.glsl
 
 
 def storable_format(pass_name: str, prop: str, fmt: str) -> str:
@@ -28,10 +28,11 @@ def program(gl, shader: str, fmt: str):
 
 def run_over(gl, prog, dst) -> None:
     """Dispatch `prog` over every texel of every layer of texture array `dst`, then make the
-    image stores visible to whatever reads `dst` next."""
+    image stores visible to whatever reads `dst` next. dst_image.glsl's local size is the
+    passes' COMPUTE_GROUP."""
     w, h, layers = dst.size
     dst.bind_to_image(0, read=False, write=True)
-    prog.run((w + GROUP - 1) // GROUP, (h + GROUP - 1) // GROUP, layers)
+    prog.run(*groups_2d((w, h), layers))
     gl.memory_barrier()
 
 

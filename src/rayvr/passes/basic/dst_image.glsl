@@ -1,7 +1,7 @@
 // The output image of a basic pass: a 2D array (one layer per view) bound to image unit 0.
 // DST_FORMAT is the GLSL format qualifier, DST_UINT 1 for unsigned-integer formats.
 #pragma once
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;   // COMPUTE_GROUP of passes/_common.py
 #if DST_UINT
 layout(DST_FORMAT, binding = 0) uniform writeonly uimage2DArray dst;
 void store_dst(ivec3 p, vec4 c) { imageStore(dst, p, uvec4(c)); }
