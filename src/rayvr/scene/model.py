@@ -58,9 +58,8 @@ def vertex_normals(positions: np.ndarray, indices: np.ndarray) -> np.ndarray:
     """Area-weighted vertex normals; vertices of degenerate triangles only get +Y (never NaN)."""
     tri = positions[indices].astype(np.float64)
     fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    n = np.zeros((len(positions), 3))
-    for k in range(3):
-        np.add.at(n, indices[:, k], fn)
+    corner = indices.T.reshape(-1)   # all vertex-0 corners, then 1, then 2 (np.add.at's summation order)
+    n = np.stack([np.bincount(corner, np.tile(fn[:, c], 3), minlength=len(positions)) for c in range(3)], axis=1)
     length = np.linalg.norm(n, axis=1, keepdims=True)
     out = np.where(length > 1e-30, n / np.maximum(length, 1e-30), [0.0, 1.0, 0.0])
     return out.astype(np.float32)
