@@ -16,4 +16,21 @@ layout(std430, binding = PIXEL_LIST_SSBO) readonly buffer PixelList {
     uint pixel_dispatch[3];
     uint pixel_items[];
 };
+
+// The pixel a ray pass's invocation works on; false when it has none. From the list (dispatched
+// indirectly, PIXEL_LIST_GROUP threads a group), or with PIXELS_2D the invocation's own pixel of
+// the image when its effect is min_effect or above (then gbuffer.glsl must come first).
+bool ray_pass_pixel(uint min_effect, ivec3 image_size, out ivec3 p) {
+#if PIXELS_2D
+    p = ivec3(gl_GlobalInvocationID);
+    if (any(greaterThanEqual(p, image_size))) return false;
+    uint effect = gbuf_effect_of(texelFetch(gbuf_effect, p, 0).x);
+    return effect != GBUF_NO_GEOMETRY && effect >= min_effect;
+#else
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pixel_count) return false;
+    p = pixel_list_unpack(pixel_items[i]);
+    return true;
+#endif
+}
 #endif

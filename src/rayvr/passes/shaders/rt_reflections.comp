@@ -17,16 +17,8 @@ layout(rgba16f, binding = 0) writeonly uniform image2DArray dst;
 uniform vec3 background;
 
 void main() {
-#if PIXELS_2D
-    ivec3 p = ivec3(gl_GlobalInvocationID);
-    if (any(greaterThanEqual(p, imageSize(dst)))) return;
-    uint effect = gbuf_effect_of(texelFetch(gbuf_effect, p, 0).x);
-    if (effect == GBUF_NO_GEOMETRY || effect < EFFECT_REFLECTIONS) return;
-#else
-    uint i = gl_GlobalInvocationID.x;
-    if (i >= pixel_count) return;
-    ivec3 p = pixel_list_unpack(pixel_items[i]);
-#endif
+    ivec3 p;
+    if (!ray_pass_pixel(EFFECT_REFLECTIONS, imageSize(dst), p)) return;
     GSurface s = gbuf_load(p);
     Rng rng = rng_init(uvec2(p.xy), uint(p.z), frame_index(), RNG_SALT);
 

@@ -13,16 +13,8 @@ layout(local_size_x = PIXEL_LIST_GROUP) in;
 layout(rgba16f, binding = 0) writeonly uniform image2DArray dst;
 
 void main() {
-#if PIXELS_2D
-    ivec3 p = ivec3(gl_GlobalInvocationID);
-    if (any(greaterThanEqual(p, imageSize(dst)))) return;
-    uint effect = gbuf_effect_of(texelFetch(gbuf_effect, p, 0).x);
-    if (effect == GBUF_NO_GEOMETRY || effect < EFFECT_SHADOWS) return;
-#else
-    uint i = gl_GlobalInvocationID.x;
-    if (i >= pixel_count) return;
-    ivec3 p = pixel_list_unpack(pixel_items[i]);
-#endif
+    ivec3 p;
+    if (!ray_pass_pixel(EFFECT_SHADOWS, imageSize(dst), p)) return;
     GSurface s = gbuf_load(p);
     vec3 v = normalize(views[p.z].eye.xyz - s.pos);
     Rng rng = rng_init(uvec2(p.xy), uint(p.z), frame_index(), RNG_SALT);
