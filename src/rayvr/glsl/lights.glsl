@@ -70,7 +70,8 @@ LightSample eval_punctual_light(uint i, vec3 p) {
     float range = L.direction_range.w;
     if (range > 0.0) {   // glTF's recommended smooth window
         float r = s.distance / range;
-        att *= clamp(1.0 - r * r * r * r, 0.0, 1.0) * clamp(1.0 - r * r * r * r, 0.0, 1.0);
+        float window = clamp(1.0 - r * r * r * r, 0.0, 1.0);
+        att *= window * window;
     }
     if (type == LIGHT_SPOT) {
         float cd = dot(L.direction_range.xyz, -s.direction);
@@ -106,6 +107,13 @@ float emissive_strategy_probability() {
 #endif
 }
 
+// Render-space vertices of scene triangle tri placed by instance inst.
+void emissive_vertices(uint inst, uint tri, out vec3 a, out vec3 b, out vec3 c) {
+    a = instance_point_to_render(inst, scene_vertices[scene_indices[3u * tri]].position_u.xyz);
+    b = instance_point_to_render(inst, scene_vertices[scene_indices[3u * tri + 1u]].position_u.xyz);
+    c = instance_point_to_render(inst, scene_vertices[scene_indices[3u * tri + 2u]].position_u.xyz);
+}
+
 uint emissive_find(float u) {   // first entry whose CDF exceeds u
     uint lo = 0u, hi = emissive_triangle_count() - 1u;
     while (lo < hi) {
@@ -121,9 +129,8 @@ LightSample sample_emissive(vec3 p, vec3 u, float p_strategy) {
     EmissiveTriangle e = emissive_triangles[k];
     uint inst = e.ids.x;
     uint tri = scene_triangle(inst, e.ids.y);
-    vec3 a = instance_point_to_render(inst, scene_vertices[scene_indices[3u * tri]].position_u.xyz);
-    vec3 b = instance_point_to_render(inst, scene_vertices[scene_indices[3u * tri + 1u]].position_u.xyz);
-    vec3 c = instance_point_to_render(inst, scene_vertices[scene_indices[3u * tri + 2u]].position_u.xyz);
+    vec3 a, b, c;
+    emissive_vertices(inst, tri, a, b, c);
     float su = sqrt(u.y);
     vec2 bary = vec2(1.0 - su, u.z * su);   // weights of b and c: uniform over the triangle
     vec3 q = a + bary.x * (b - a) + bary.y * (c - a);
@@ -147,10 +154,8 @@ LightSample sample_emissive(vec3 p, vec3 u, float p_strategy) {
 }
 
 float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p) {
-    uint tri = q.triangle;
-    vec3 a = instance_point_to_render(instance, scene_vertices[scene_indices[3u * tri]].position_u.xyz);
-    vec3 b = instance_point_to_render(instance, scene_vertices[scene_indices[3u * tri + 1u]].position_u.xyz);
-    vec3 c = instance_point_to_render(instance, scene_vertices[scene_indices[3u * tri + 2u]].position_u.xyz);
+    vec3 a, b, c;
+    emissive_vertices(instance, q.triangle, a, b, c);
     float area = 0.5 * length(cross(b - a, c - a));
     float total = emissive_info.y;
     if (area <= 0.0 || total <= 0.0) return 0.0;
