@@ -67,14 +67,12 @@ class Accumulate(RenderPass):
     def _change_key(self, ctx, data) -> tuple:
         """What invalidates the mean: views and scene state (small, per view / per instance)."""
         parts: list = [data.size, data.views]
-        view_set = getattr(ctx, "view_set", None)
-        if view_set is not None:
+        if ctx.view_set is not None:
             parts += [np.round(v.pose.matrix(), 9).tobytes() + np.asarray(v.fov.tangents()).tobytes()
-                      for v in view_set]
-        gpu_scene = getattr(ctx, "scene", None)
-        scene = getattr(gpu_scene, "scene", None)
-        if scene is not None:
-            parts.append(getattr(scene.materials, "version", None))
+                      for v in ctx.view_set]
+        if ctx.scene is not None:
+            scene = ctx.scene.scene
+            parts.append(scene.materials.version)
             parts.append(b"".join(i.transform.tobytes() for i in scene.instances))
             parts.append(tuple((tuple(l.position), tuple(l.direction), tuple(l.color), l.intensity)
                                for l in scene.lights))
@@ -85,16 +83,15 @@ class Accumulate(RenderPass):
             return True
         if not self.auto_reset:
             return False
-        sample_index = int(getattr(ctx, "sample_index", 0) or 0)
-        fell_back = sample_index < self._last_sample_index
-        self._last_sample_index = sample_index
+        fell_back = ctx.sample_index < self._last_sample_index
+        self._last_sample_index = ctx.sample_index
         return fell_back or self._change_key(ctx, data) != self._key
 
     def execute(self, ctx, data):
         if self._needs_reset(ctx, data):
             self._count = 0
             self._pending_reset = False
-            self._last_sample_index = int(getattr(ctx, "sample_index", 0) or 0)
+            self._last_sample_index = ctx.sample_index
             if self.auto_reset:
                 self._key = self._change_key(ctx, data)
         add = self.max_frames == 0 or self._count < self.max_frames
