@@ -71,7 +71,7 @@ class GpuScene:
         self._material_version = None
         self._upload_materials()
         self._build_emissive_table()
-        self._draws: dict[tuple, tuple] = {}
+        self._draws: dict[tuple, tuple | None] = {}   # (program id, instances per draw) -> (vao, commands, count, ids)
         self.update(np.zeros(3))
 
     # ---- static data ------------------------------------------------------------------------
@@ -386,7 +386,7 @@ class GpuScene:
                 cmds.append((mesh.triangle_count * 3, instances_per_draw,
                              int(self.mesh_index_offsets[inst.mesh]), i * instances_per_draw))
             if not cmds:
-                self._draws[key] = (None, None, 0)
+                self._draws[key] = None
             else:
                 # 5 uints per command: moderngl's render_indirect steps by the 20-byte stride of
                 # DrawElementsIndirectCommand, also for array draws; the 5th word is padding.
@@ -401,7 +401,7 @@ class GpuScene:
                                    f"vertex input ({exc}); declare it in the vertex shader") from exc
                 self._draws[key] = (vao, ibuf, len(cmds), abuf)
         entry = self._draws[key]
-        if entry[0] is not None:
+        if entry is not None:
             entry[0].render_indirect(entry[1], mode=self.gl.TRIANGLES if mode is None else mode, count=entry[2])
 
     def refit(self, mesh: int, positions) -> None:
@@ -430,6 +430,7 @@ class GpuScene:
     # ---- report -----------------------------------------------------------------------------
     @property
     def nbytes(self) -> int:
+        """GPU bytes of the scene buffers and the texture array (with its mipmaps)."""
         n = sum(b.size for b in self.buffers.values())
         if self.texture_array is not None:
             w, h, layers = self.texture_array.size
@@ -462,8 +463,15 @@ class GpuScene:
         }
 
     def release(self) -> None:
+        """Free the scene's GPU buffers, texture array and the draw() vertex arrays."""
         for b in self.buffers.values():
             b.release()
         self.buffers.clear()
+        for entry in self._draws.values():
+            if entry is not None:
+                vao, commands, _, ids = entry
+                vao.release(), commands.release(), ids.release()
+        self._draws.clear()
         if self.texture_array is not None:
             self.texture_array.release()
+            self.texture_array = None
