@@ -92,6 +92,7 @@ class Material:
 
     @property
     def is_emissive(self) -> bool:
+        """Whether any channel of `emission` is positive."""
         return bool(np.any(self.emission > 0))
 
     def textures(self) -> dict[str, TextureRef]:
@@ -123,6 +124,7 @@ class MaterialTable:
         return len(self._items) - 1
 
     def index(self, name: str) -> int:
+        """The index of the material called `name`; SceneError (with close names) if none is."""
         try:
             return self._by_name[name]
         except KeyError:
@@ -144,4 +146,5 @@ class MaterialTable:
         return name in self._by_name
 
     def names(self) -> list[str]:
+        """Material names in index order."""
         return [m.name for m in self._items]

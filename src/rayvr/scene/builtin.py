@@ -10,7 +10,7 @@ import numpy as np
 
 from ..materials.effect import Effect
 from ..materials.material import Material
-from .model import Camera, Light, Scene
+from .model import Camera, Light, Mesh, Scene
 
 
 def quad_mesh(corners, facing=None):
@@ -55,6 +55,7 @@ def prism(footprint_xz, y0, y1):
 
 
 def lambert(name, rgb, **kw) -> Material:
+    """A non-metallic, fully rough material of linear colour rgb."""
     return Material(name, base_color=(*rgb, 1.0), metallic=0.0, roughness=1.0, **kw)
 
 
@@ -169,7 +170,6 @@ def mirror_and_checker(tiles: int = 4) -> Scene:
             parts.append(quad_mesh([(x0, y0, 2), (x0, y0 + step, 2), (x0 + step, y0 + step, 2), (x0 + step, y0, 2)],
                               (0, 0, -1)))
             mats += [white if (i + j) % 2 == 0 else black] * 2
-    from .model import Mesh
     pos, idx = merge(parts)
     m = s.add_mesh(Mesh("Checker", pos, idx, np.array(mats, np.uint32)))
     s.add_instance(m, name="Checker")
@@ -182,7 +182,6 @@ def instanced_boxes(n: int = 4) -> Scene:
     """n unit-ish boxes sharing one mesh at different transforms (tests instancing and the TLAS)."""
     s = Scene("instanced_boxes")
     s.add_material(lambert("Box", (0.7, 0.7, 0.7)))
-    from .model import Mesh
     m = s.add_mesh(Mesh("Box", *box((-0.5, -0.5, -0.5), (0.5, 0.5, 0.5)), np.uint32(0)))
     for i in range(n):
         a = 2 * math.pi * i / n

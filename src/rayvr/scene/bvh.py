@@ -45,10 +45,12 @@ class Bvh:
 
     @property
     def node_count(self) -> int:
+        """Internal nodes (the GPU has no leaf nodes: leaves live in their parent's child slots)."""
         return len(self.nodes)
 
     @property
     def nbytes(self) -> int:
+        """Bytes of the GPU nodes."""
         return self.nodes.nbytes
 
     def _children(self):

@@ -145,9 +145,9 @@ class GpuBvhBuilder:
         prog.run(max(1, min(dispatch, MAX_GROUPS)))
         self.gl.memory_barrier()
 
-    def _scan(self, n: int, add: bool) -> None:
+    def _scan(self, n: int, add: bool) -> int:
         """Exclusive scan of bufs['scan'][0, n) in place (block sums in bufs['sums'], total at
-        sums[groups]); add=False leaves the block sums for the consumer to add."""
+        sums[groups]); add=False leaves the block sums for the consumer to add. Returns groups."""
         groups = -(-n // SCAN_BLOCK)
         self._bind(scan="scan", sums="sums")
         self._run(self.k_scan[0], groups, n=n, groups=groups)

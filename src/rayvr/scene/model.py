@@ -47,6 +47,7 @@ class Mesh:
 
     @property
     def triangle_count(self) -> int:
+        """Triangles of this mesh (one instance's worth)."""
         return len(self.indices)
 
     def triangles(self) -> np.ndarray:
@@ -122,6 +123,7 @@ class Camera:
 
     @property
     def position(self) -> np.ndarray:
+        """World-space eye position (a copy of the transform's translation)."""
         return self.transform[:3, 3].copy()
 
     @classmethod
@@ -162,9 +164,11 @@ class Scene:
 
     # building -------------------------------------------------------------------------------
     def add_material(self, material: Material) -> int:
+        """Append a material to `materials`; returns its index (see MaterialTable.add)."""
         return self.materials.add(material)
 
     def add_mesh(self, mesh: Mesh) -> int:
+        """Append a mesh whose material ids exist; returns its index."""
         if len(mesh.material_ids) and int(mesh.material_ids.max()) >= max(len(self.materials), 1):
             raise SceneError(f"mesh '{mesh.name}'.material_ids: material {int(mesh.material_ids.max())} "
                              f"does not exist ({len(self.materials)} materials); add materials first")
@@ -172,6 +176,7 @@ class Scene:
         return len(self.meshes) - 1
 
     def add_instance(self, mesh: int, transform=None, name: str = "") -> int:
+        """Place mesh `mesh` at `transform` (identity by default); returns the instance index."""
         if not 0 <= mesh < len(self.meshes):
             raise SceneError(f"instance '{name}'.mesh: index {mesh} out of range ({len(self.meshes)} meshes)")
         self.instances.append(Instance(mesh, np.eye(4) if transform is None else transform,
@@ -209,12 +214,14 @@ class Scene:
         return np.stack([lo, hi])
 
     def used_materials(self) -> set[int]:
+        """Indices of the materials that some instanced mesh's triangles use."""
         used = set()
         for m in {i.mesh for i in self.instances}:
             used.update(np.unique(self.meshes[m].material_ids).tolist())
         return used
 
     def effects_used(self) -> set[Effect]:
+        """The effects of the used materials (what the graph's ray passes must serve)."""
         return {self.materials[i].effect for i in self.used_materials() if i < len(self.materials)}
 
     @property
