@@ -237,3 +237,40 @@ def test_timer_query_path_reads_results_two_frames_late(gpu):
     prof = cg.profile()
     assert prof.method == "timer-query"
     assert [s.samples for s in prof.passes.values()] == [3, 3, 3]
+
+
+def test_each_timer_query_result_is_counted_once_around_profile_calls():
+    import types
+
+    from rayvr.gpu import GpuTimer
+
+    frame = [0]
+
+    class Query:   # elapsed = the number of the frame that began it, in ms
+        def __init__(self):
+            self.mglo = types.SimpleNamespace(begin=self.begin, end=lambda: None)
+
+        def begin(self):
+            self.frame = frame[0]
+
+        @property
+        def elapsed(self):
+            return self.frame * 1e6
+
+    timer = GpuTimer(types.SimpleNamespace(query=lambda time: Query()), True)
+    seen = []
+
+    def run_frames(n):
+        for _ in range(n):
+            timer.begin()
+            timer.end()
+            if (ms := timer.take()) is not None:
+                seen.append(ms)
+            frame[0] += 1
+
+    run_frames(1)
+    assert seen == [] and timer.resolve() == 0.0   # profile() waits only while a pass has no sample
+    seen.append(timer.take())
+    assert timer.take() is None
+    run_frames(10)                                  # frame N's result arrives when frame N+2 begins
+    assert seen == [float(n) for n in range(9)]     # frames 9 and 10 still in flight

@@ -14,8 +14,9 @@ def timing_method(use_queries: bool) -> str:
 class GpuTimer:
     """Times one span of GPU work per frame.
 
-    With timer queries the result of frame N is read when frame N+1 begins (no stall);
-    without them `end()` calls `ctx.finish()` and measures wall time, which the profile labels.
+    With timer queries two queries alternate, so the result of frame N is read when frame N+2
+    begins (no stall); without them `end()` calls `ctx.finish()` and measures wall time, which
+    the profile labels. `take()` hands each finished measurement over once.
     """
 
     def __init__(self, gl: moderngl.Context, use_queries: bool):
@@ -26,15 +27,15 @@ class GpuTimer:
         self._pending = [False, False]
         self._slot = 0
         self._t0 = 0.0
+        self._fresh = False
         self.last_ms: float | None = None
 
     def begin(self) -> None:
         """Start the span (with queries: first collect the result of the query this slot held)."""
         if self.use_queries:
-            q = self._queries[self._slot]
             if self._pending[self._slot]:
-                self.last_ms = q.elapsed / 1e6
-            q.mglo.begin()
+                self._collect(self._slot)
+            self._queries[self._slot].mglo.begin()
         else:
             self.gl.finish()
             self._t0 = time.perf_counter()
@@ -48,13 +49,24 @@ class GpuTimer:
             self._slot ^= 1
         else:
             self.gl.finish()
-            self.last_ms = (time.perf_counter() - self._t0) * 1e3
+            self.last_ms, self._fresh = (time.perf_counter() - self._t0) * 1e3, True
+
+    def _collect(self, slot: int) -> None:
+        self.last_ms, self._fresh = self._queries[slot].elapsed / 1e6, True
+        self._pending[slot] = False
+
+    def take(self) -> float | None:
+        """The time in ms measured since the last take(), or None when no new one finished."""
+        if not self._fresh:
+            return None
+        self._fresh = False
+        return self.last_ms
 
     def resolve(self) -> float | None:
-        """Wait for outstanding queries and return the latest time in ms."""
+        """Wait for the latest query's result (a stall), collect it for take(), and return the
+        latest time in ms."""
         if self.use_queries:
             prev = self._slot ^ 1
             if self._pending[prev]:
-                self.last_ms = self._queries[prev].elapsed / 1e6
-                self._pending[prev] = False
+                self._collect(prev)
         return self.last_ms

@@ -81,8 +81,9 @@ class CompiledGraph:
                 timer.begin()
                 run(ctx, data)
                 timer.end()
-                if timer.last_ms is not None:
-                    times.add(timer.last_ms)
+                ms = timer.take()
+                if ms is not None:
+                    times.add(ms)
         else:
             for run, data in self._steps:
                 run(ctx, data)
@@ -103,9 +104,14 @@ class CompiledGraph:
     def profile(self) -> Profile:
         """Per-pass GPU ms per frame (rolling mean/min/max/p95) and how it was measured."""
         if self.profiling and self.caps.timer_queries:
+            # Only a pass with no sample yet waits for its latest query: the others' results
+            # arrive in execute(), each once.
             for timer, times in zip(self._timers, self._times):
-                if timer.resolve() is not None and not times.values:
-                    times.add(timer.last_ms)
+                if not times.values:
+                    timer.resolve()
+                    ms = timer.take()
+                    if ms is not None:
+                        times.add(ms)
         passes = {p: s for p, t in zip(self.order, self._times) if (s := t.stats()) is not None}
         return Profile(self.timing_method, self.frames, self._window, passes, self._cpu.stats())
 
