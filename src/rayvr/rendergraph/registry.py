@@ -13,8 +13,9 @@ from ..errors import GraphError, did_you_mean
 
 _REGISTRY: dict[str, type] = {}
 
-# Packages whose import registers passes; imported on the first look-up that misses.
-PASS_PACKAGES = ["rayvr.passes.basic", "rayvr.passes"]
+# Packages whose import registers passes (rayvr.passes imports its subpackage basic); imported
+# on the first look-up that misses.
+PASS_PACKAGES = ["rayvr.passes"]
 
 
 def register_pass(cls: type) -> type:
@@ -29,11 +30,7 @@ def register_pass(cls: type) -> type:
 
 def _import_pass_packages() -> None:
     for name in PASS_PACKAGES:
-        try:
-            importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name != name:
-                raise
+        importlib.import_module(name)
 
 
 def get_pass_class(name: str, where: str = "pass type") -> type:
