@@ -20,11 +20,8 @@ COMPUTE_GROUP = (8, 8)   # the local size of the passes' 2D compute shaders
 
 
 def scene_defines(ctx) -> dict:
-    """The GpuScene's feature #defines (all 0 without a scene)."""
-    scene = getattr(ctx, "scene", None)
-    if scene is not None and hasattr(scene, "defines"):
-        return dict(scene.defines())
-    return {}
+    """The GpuScene's feature #defines (none without a scene)."""
+    return {} if ctx.scene is None else dict(ctx.scene.defines())
 
 
 def build_compute(gl, name: str, defines: dict | None = None):
@@ -66,7 +63,4 @@ def effect_defines() -> dict:
 
 def effects_used(cd) -> set | None:
     """The effects the scene's materials use, or None without a scene (then nothing is skipped)."""
-    scene = getattr(cd, "scene", None)
-    if scene is None or not hasattr(scene, "effects_used"):
-        return None
-    return set(scene.effects_used())
+    return None if cd.scene is None else set(cd.scene.effects_used())
