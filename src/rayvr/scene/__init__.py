@@ -4,11 +4,11 @@ from .model import FEATURES, Camera, Instance, Light, LightType, Mesh, Scene, Te
 from .gpu_scene import GpuScene
 
 
-def load_scene(path, **kwargs) -> Scene:
+def load_scene(path) -> Scene:
     """Load a glTF 2.0 scene (.gltf or .glb) into a `Scene`; bad input raises SceneError."""
     from .gltf import load_gltf
 
-    return load_gltf(path, **kwargs)
+    return load_gltf(path)
 
 
 __all__ = ["Scene", "Mesh", "Instance", "Light", "LightType", "Camera", "Texture", "Material",
