@@ -31,13 +31,15 @@ def from_axis_angle(axis, angle: float) -> np.ndarray:
 
 
 def to_matrix(q) -> np.ndarray:
-    """3x3 rotation matrix of a (not necessarily normalised) quaternion."""
-    x, y, z, w = normalize(q)
-    return np.array([
+    """3x3 rotation matrix of a (not necessarily normalised) quaternion; (n, 4) -> (n, 3, 3)."""
+    q = np.asarray(q, dtype=np.float64)
+    x, y, z, w = (q / np.sqrt((q * q).sum(axis=-1, keepdims=True))).T
+    m = np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
     ])
+    return m if q.ndim == 1 else m.transpose(2, 0, 1)
 
 
 def from_matrix(m) -> np.ndarray:

@@ -102,19 +102,25 @@ def projection(fov: Fov, near: float, far: float, reversed_z: bool = False) -> n
     Reversed-Z is the infinite-far form: depth 1 at `near`, 0 at infinity, for glClipControl
     (GL_LOWER_LEFT, GL_ZERO_TO_ONE) and a GL_GREATER depth test.
     """
-    l, r, d, u = fov.tangents()
-    m = np.zeros((4, 4))
-    m[0, 0] = 2 / (r - l)
-    m[0, 2] = (r + l) / (r - l)
-    m[1, 1] = 2 / (u - d)
-    m[1, 2] = (u + d) / (u - d)
-    m[3, 2] = -1
-    if reversed_z:
-        m[2, 2] = 0.0
-        m[2, 3] = near
-    else:
-        m[2, 2] = -(far + near) / (far - near)
-        m[2, 3] = -2 * far * near / (far - near)
+    return _projections(np.array([fov.tangents()]), np.array([near], np.float64), np.array([far], np.float64),
+                        np.array([reversed_z]))[0]
+
+
+def _projections(tangents: np.ndarray, near: np.ndarray, far: np.ndarray, reversed_z: np.ndarray) -> np.ndarray:
+    """`projection` of n views at once: tangents (n, 4) as Fov.tangents() orders them, the other
+    arguments (n,); returns (n, 4, 4)."""
+    l, r, d, u = tangents.T
+    m = np.zeros((len(tangents), 4, 4))
+    m[:, 0, 0] = 2 / (r - l)
+    m[:, 0, 2] = (r + l) / (r - l)
+    m[:, 1, 1] = 2 / (u - d)
+    m[:, 1, 2] = (u + d) / (u - d)
+    m[:, 3, 2] = -1
+    std = ~reversed_z   # reversed-Z ignores `far` (it may be inf)
+    n, f = near[std], far[std]
+    m[std, 2, 2] = -(f + n) / (f - n)
+    m[std, 2, 3] = -2 * f * n / (f - n)
+    m[reversed_z, 2, 3] = near[reversed_z]
     return m
 
 
@@ -200,12 +206,24 @@ class ViewSet:
         """The render-space origin: the mean eye position (float64)."""
         return np.mean([v.pose.position for v in self.views], axis=0)
 
+    def _columns(self) -> np.ndarray:
+        """(n, 16) float64, a row per view: position, orientation, tangents, near, far, width,
+        height, reversed_z: one pass over the views, so the matrices are built for all at once."""
+        return np.array([(*v.pose.position, *v.pose.orientation, *v.fov.tangents(), v.near, v.far,
+                          v.width, v.height, v.reversed_z) for v in self.views], dtype=np.float64)
+
     def matrices(self, origin=None) -> dict[str, np.ndarray]:
         """float64 (n, 4, 4) stacks: view, proj, view_proj, inv_view, in render space."""
         origin = self.origin() if origin is None else np.asarray(origin, dtype=np.float64)
-        inv_view = np.stack([v.inverse_view_matrix(origin) for v in self.views])
+        return self._matrices(origin, self._columns())
+
+    def _matrices(self, origin: np.ndarray, c: np.ndarray) -> dict[str, np.ndarray]:
+        inv_view = np.zeros((len(c), 4, 4))
+        inv_view[:, :3, :3] = quaternion.to_matrix(c[:, 3:7])
+        inv_view[:, :3, 3] = c[:, 0:3] - origin
+        inv_view[:, 3, 3] = 1.0
         view = np.linalg.inv(inv_view)
-        proj = np.stack([v.projection_matrix() for v in self.views])
+        proj = _projections(c[:, 7:11], c[:, 11], c[:, 12], c[:, 15] != 0)
         return {"view": view, "proj": proj, "view_proj": proj @ view, "inv_view": inv_view}
 
     def pack(self, origin=None, frame_index: int = 0, sample_index: int = 0, flags: int = 0,
@@ -216,7 +234,8 @@ class ViewSet:
         if self.views[0].reversed_z:
             flags |= FLAG_REVERSED_Z
         header = np.array([n, frame_index, sample_index, flags], dtype=np.uint32)
-        m = self.matrices(origin)
+        c = self._columns()
+        m = self._matrices(origin, c)
         prev = m["view_proj"]
         if self._prev_view_proj is not None and len(self._prev_view_proj[0]) == n:
             pvp, porigin = self._prev_view_proj
@@ -230,7 +249,7 @@ class ViewSet:
         body[:, :80] = np.concatenate([x.transpose(0, 2, 1).reshape(n, 16) for x in mats], axis=1)
         body[:, 80:83] = m["inv_view"][:, :3, 3]
         body[:, 83] = 1.0
-        body[:, 84:88] = [v.fov.tangents() for v in self.views]
-        body[:, 88:92] = [(v.near, v.far, v.width, v.height) for v in self.views]
+        body[:, 84:88] = c[:, 7:11]
+        body[:, 88:92] = c[:, 11:15]
         body[:, 92:94] = jitter
         return header.tobytes() + body.tobytes()
