@@ -1,6 +1,7 @@
 // The hybrid G-buffer as compute passes read it: texture arrays (one layer per view) on fixed
-// sampler units, decoded into one GSurface. A pass sets the units it needs with #defines
-// GBUF_POS_UNIT etc. (see rayvr/passes/gbuffer.py for the formats) before including this file.
+// sampler units, decoded into one GSurface. A reading pass gets the seven units as #defines
+// GBUF_POS_UNIT etc. (rayvr/passes/_common.py GBUFFER_UNITS; the formats are in
+// rayvr/passes/gbuffer.py) before including this file.
 #pragma once
 // hdr.glsl is included here, outside any #if, because include guards are textual
 #include "hdr.glsl"
@@ -83,9 +84,7 @@ layout(binding = GBUF_FACE_NORMAL_UNIT) uniform sampler2DArray gbuf_face_normal;
 layout(binding = GBUF_BASE_COLOR_UNIT) uniform sampler2DArray gbuf_base_color;
 layout(binding = GBUF_METAL_ROUGH_UNIT) uniform sampler2DArray gbuf_metal_rough;
 layout(binding = GBUF_EFFECT_UNIT) uniform usampler2DArray gbuf_effect;
-#ifdef GBUF_EMISSIVE_UNIT
 layout(binding = GBUF_EMISSIVE_UNIT) uniform sampler2DArray gbuf_emissive;
-#endif
 
 GSurface gbuf_load(ivec3 p) {
     GSurface s;
@@ -98,11 +97,7 @@ GSurface gbuf_load(ivec3 p) {
     vec2 mr = texelFetch(gbuf_metal_rough, p, 0).xy;
     s.metallic = mr.x;
     s.roughness = mr.y;
-#ifdef GBUF_EMISSIVE_UNIT
     s.emissive = texelFetch(gbuf_emissive, p, 0).rgb;
-#else
-    s.emissive = vec3(0.0);
-#endif
     uint e = texelFetch(gbuf_effect, p, 0).x;
     s.effect = gbuf_effect_of(e);
     s.material = gbuf_material_of(e);
