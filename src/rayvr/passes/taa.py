@@ -95,7 +95,7 @@ class TAA(RenderPass):
         data[self.COLOR].use(location=0)
         data[read].use(location=1)
         self._sampler.use(location=1)
-        if self._has_motion and data.get(self.MOTION) is not None:
+        if self._has_motion:   # cd.input_formats names only bound inputs
             data[self.MOTION].use(location=2)
         data[self.DST].bind_to_image(0, read=False, write=True)
         data[write].bind_to_image(1, read=False, write=True)
