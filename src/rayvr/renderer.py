@@ -228,6 +228,7 @@ class Renderer:
         return outs[0]
 
     def output_texture(self, name: str | None = None):
+        """The texture array of output `name` ('Pass.pin', default the primary): what the sink gets."""
         return self.compiled.get_output(name or self.output_name)
 
     def read_output(self, name: str | None = None, flip_y: bool = False) -> np.ndarray:
@@ -245,6 +246,8 @@ class Renderer:
 
     # -- life --------------------------------------------------------------------------------
     def close(self) -> None:
+        """Close the sink and free the compiled graph, the passes' own GPU objects, the GpuScene
+        and the views buffer."""
         if self.sink is not None and self._opened:
             self.sink.close()
             self._opened = False
