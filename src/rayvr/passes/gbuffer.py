@@ -36,6 +36,13 @@ DESCRIPTIONS = {
 MULTIVIEW_MODES = ("auto", "on", "off")
 
 
+def check_multiview(pass_name: str, value):
+    """`value` if it is a multiview mode, else OptionError naming the pass (GBufferRaster, GBufferAuto)."""
+    if value not in MULTIVIEW_MODES:
+        raise OptionError(f"pass {pass_name}: property 'multiview' is {value!r}; use auto, on or off")
+    return value
+
+
 def gbuffer_reflection() -> Reflection:
     """The G-buffer's output pins (GBufferRaster, GBufferRT and GBufferAuto declare the same)."""
     r = Reflection()
@@ -52,9 +59,7 @@ class GBufferRaster(RenderPass):
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
-        if key == "multiview" and value not in MULTIVIEW_MODES:
-            raise OptionError(f"pass {self.name}: property 'multiview' is {value!r}; use auto, on or off")
-        return value
+        return check_multiview(self.name, value) if key == "multiview" else value
 
     def reflect(self, cd):
         return gbuffer_reflection()

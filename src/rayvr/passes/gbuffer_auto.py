@@ -8,7 +8,7 @@ from __future__ import annotations
 from ..errors import OptionError
 from ..rendergraph.render_pass import RenderPass
 from ._common import register
-from .gbuffer import MULTIVIEW_MODES, GBufferRaster, gbuffer_reflection
+from .gbuffer import GBufferRaster, check_multiview, gbuffer_reflection
 from .gbuffer_rt import GBufferRT
 
 MODES = ("auto", "raster", "rt")
@@ -37,9 +37,7 @@ class GBufferAuto(RenderPass):
         value = super().validate_property(key, value)
         if key == "mode" and value not in MODES:
             raise OptionError(f"pass {self.name}: property 'mode' is {value!r}; use auto, raster or rt")
-        if key == "multiview" and value not in MULTIVIEW_MODES:
-            raise OptionError(f"pass {self.name}: property 'multiview' is {value!r}; use auto, on or off")
-        return value
+        return check_multiview(self.name, value) if key == "multiview" else value
 
     def reflect(self, cd):
         return gbuffer_reflection()
