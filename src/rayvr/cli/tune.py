@@ -42,6 +42,7 @@ def register(sub) -> None:
 
 
 def parse_list(text: str, option: str, parse) -> list:
+    """The comma-separated items of `text`, each through `parse`; an error names `option`."""
     items = [s.strip() for s in str(text).split(",") if s.strip()]
     if not items:
         raise OptionError(f"{option} {text!r}: give a comma-separated list")
@@ -49,6 +50,7 @@ def parse_list(text: str, option: str, parse) -> list:
 
 
 def parse_spp(text: str) -> int:
+    """One --spp item: an integer >= 1."""
     try:
         n = int(text)
     except ValueError:
@@ -59,6 +61,7 @@ def parse_spp(text: str) -> int:
 
 
 def check(args) -> tuple:
+    """Validate the options before any rendering: (size, levels, spp, table metrics)."""
     from ..materials.effect import Effect
     from .options import parse_size
 

@@ -51,6 +51,7 @@ class CostModel:
 
     @property
     def materials(self) -> list[str]:
+        """The material names the model covers."""
         return list(self.ms)
 
     def levels(self, material: str) -> list[Effect]:
@@ -58,11 +59,13 @@ class CostModel:
         return sorted(set(self.ms[material]) & set(self.error[material]))
 
     def predict_ms(self, assignment: dict) -> float:
+        """Predicted GPU ms per frame of {material: effect} (the module docstring's formula)."""
         used = set(assignment.values())
         overhead = max([self.overhead_ms.get(e, 0.0) for e in used] + [0.0])
         return self.base_ms + overhead + sum(self.ms[m][e] for m, e in assignment.items())
 
     def predict_error(self, assignment: dict) -> float:
+        """Predicted image error of {material: effect}: the rest plus each material's share."""
         return self.rest_error + sum(self.error[m][e] for m, e in assignment.items())
 
     def as_dict(self) -> dict:
@@ -87,6 +90,7 @@ class Upgrade:
 
     @property
     def ratio(self) -> float:
+        """Error reduction per added ms; inf when the step costs nothing."""
         return math.inf if self.added_ms <= 0 else self.error_reduction / self.added_ms
 
 

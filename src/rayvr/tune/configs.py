@@ -90,6 +90,7 @@ class Config:
         return g
 
     def output_pin(self, graph) -> str:
+        """The HDR pin whose error counts: `output`, else the first of HDR_OUTPUTS `graph` marks."""
         if self.output:
             return self.output
         for pin in HDR_OUTPUTS:

@@ -42,6 +42,7 @@ GBUFFER_PASSES = ("GBufferRaster", "GBufferRT", "GBufferAuto")   # all write the
 
 
 def effect_pin(graph) -> str:
+    """The G-buffer's effect-word pin ("Pass.effect"), which names each pixel's material."""
     for name, p in graph.passes.items():
         if type(p).__name__ in GBUFFER_PASSES:
             return f"{name}.effect"

@@ -38,6 +38,7 @@ class ReferenceSettings:
 
 
 def default_cache_dir() -> Path:
+    """$XDG_CACHE_HOME/rayvr/references, else ~/.cache/rayvr/references."""
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return Path(base) / "rayvr" / "references"
 
@@ -62,6 +63,7 @@ def scene_digest(scene) -> str:
 
 
 def views_digest(view_set) -> str:
+    """A hash of the views' origin, matrices (as float32, what the GPU sees), count and size."""
     m = view_set.matrices()
     h = hashlib.sha256(np.asarray(view_set.origin(), np.float64).tobytes())
     h.update(m["view"].astype(np.float32).tobytes() + m["proj"].astype(np.float32).tobytes())

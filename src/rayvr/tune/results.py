@@ -60,6 +60,7 @@ class Results:
 
     @property
     def method(self) -> str:
+        """How the GPU time was measured (the graph profile's method)."""
         return self.info.get("method", "?")
 
     def __getitem__(self, name: str) -> ConfigResult:
@@ -69,9 +70,11 @@ class Results:
         raise KeyError(f"no configuration '{name}'; have {', '.join(r.name for r in self.rows)}")
 
     def metrics(self) -> list[str]:
+        """The metrics any row has, in METRICS' order."""
         return [m for m in METRICS if any(m in r.errors for r in self.rows)]
 
     def passes(self) -> list[str]:
+        """Every pass any row timed, in first-seen order."""
         names = []
         for row in self.rows:
             names += [p for p in row.pass_ms if p not in names]

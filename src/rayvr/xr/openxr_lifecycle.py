@@ -33,6 +33,8 @@ class SessionState(enum.IntEnum):
 
 
 class Action(enum.Enum):
+    """The call the application owes the runtime after a state change."""
+
     NONE = "none"
     BEGIN = "begin"        # call xrBeginSession
     END = "end"            # call xrEndSession

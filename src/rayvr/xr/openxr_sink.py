@@ -31,6 +31,7 @@ VALIDATION_LAYER = "XR_APILAYER_LUNARG_core_validation"
 
 
 def import_pyopenxr():
+    """The pyopenxr module (`xr`), or an XrError saying how to install it."""
     try:
         import xr
     except ImportError as exc:

@@ -40,6 +40,7 @@ class HeadsetPreset:
 
     @property
     def right_fov(self) -> Fov:
+        """The left eye's fov mirrored about the nose."""
         f = self.left_fov
         return Fov(-f.angle_right, -f.angle_left, f.angle_up, f.angle_down)
 

@@ -7,6 +7,7 @@ IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
 def normalize(q) -> np.ndarray:
+    """`q` scaled to unit length (float64)."""
     q = np.asarray(q, dtype=np.float64)
     return q / np.linalg.norm(q)
 
@@ -24,6 +25,7 @@ def multiply(a, b) -> np.ndarray:
 
 
 def from_axis_angle(axis, angle: float) -> np.ndarray:
+    """The rotation by `angle` radians about `axis` (any length), right-handed."""
     axis = np.asarray(axis, dtype=np.float64)
     axis = axis / np.linalg.norm(axis)
     s = np.sin(angle / 2)

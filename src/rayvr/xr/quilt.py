@@ -30,10 +30,12 @@ class QuiltLayout:
 
     @property
     def views(self) -> int:
+        """Tiles in the quilt: the most views it holds."""
         return self.cols * self.rows
 
     @property
     def view_size(self) -> tuple[int, int]:
+        """(width, height) of one tile in pixels."""
         return self.quilt_size[0] // self.cols, self.quilt_size[1] // self.rows
 
 
@@ -48,6 +50,7 @@ LOOKING_GLASS = {
 
 
 def looking_glass(name: str) -> QuiltLayout:
+    """The quilt layout of a Looking Glass display by name (a key of LOOKING_GLASS)."""
     try:
         return LOOKING_GLASS[name]
     except KeyError:

@@ -78,6 +78,7 @@ class Pose:
         return cls(m[:3, 3].copy(), quaternion.from_matrix(m[:3, :3]))
 
     def rotation_matrix(self) -> np.ndarray:
+        """The orientation as a 3x3 rotation matrix (float64)."""
         return quaternion.to_matrix(self.orientation)
 
     def matrix(self) -> np.ndarray:
@@ -93,6 +94,7 @@ class Pose:
                     quaternion.normalize(quaternion.multiply(self.orientation, local.orientation)))
 
     def transform_point(self, p) -> np.ndarray:
+        """A point given in this pose's frame, in the parent frame."""
         return self.rotation_matrix() @ np.asarray(p, dtype=np.float64) + self.position
 
 
@@ -200,6 +202,7 @@ class ViewSet:
 
     @property
     def size(self) -> tuple[int, int]:
+        """(width, height) of every view in pixels."""
         return self.views[0].width, self.views[0].height
 
     def origin(self) -> np.ndarray:
