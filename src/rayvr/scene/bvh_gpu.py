@@ -9,8 +9,10 @@ the SAH cost (`rotations` rounds of that pass; 0: the plain Karras tree of the C
 scan of the nodes that stay internal (more than `leaf_size` triangles; smaller subtrees become
 leaves, as the CPU LBVH cuts them) -> the 64-byte nodes at their compacted indices.
 Measured on the H100 (upload + kernels + glFinish): 1.04M triangles 16.5 ms, 2.7M 40.6 ms, SAH
-cost ~4-8% below the CPU LBVH (1.16x the binned-SAH reference on MetalRoughSpheres). Everything stays on the GPU: `GpuBvh` holds the
-node and triangle buffers; `to_bvh()` reads them back into a `bvh.Bvh`.
+cost ~4-8% below the CPU LBVH (1.16x the binned-SAH reference on MetalRoughSpheres).
+A build's result stays in the builder's GPU buffers (`GpuBvh`): `to_bvh()` reads it back into a
+`bvh.Bvh` (what `build_gpu` returns and GpuScene keeps, for refit), `copy_into()` places it in
+larger buffers without a read-back.
 """
 from __future__ import annotations
 

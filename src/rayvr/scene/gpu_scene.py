@@ -21,8 +21,6 @@ from .model import FEATURES, Scene
 MATERIAL_FLOATS = 64          # 256 B, see MaterialData
 INSTANCE_FLOATS = 28          # 6 vec4 + uvec4
 MAX_TEXTURE_SIZE = 2048
-TRIANGLE_MATERIAL_SSBO = BINDINGS["RAYVR_TRIANGLE_MATERIAL_SSBO"]
-TANGENT_SSBO = BINDINGS["RAYVR_TANGENT_SSBO"]
 GPU_BVH_MIN = 200_000         # 'auto' builds meshes this big on the GPU (hardware drivers only)
 
 
