@@ -95,10 +95,12 @@ class CompiledGraph:
         return RenderContext(self.gl, self.caps, **kwargs)
 
     def set_profiling(self, on: bool) -> None:
+        """Time each pass in execute() (on), or run the passes bare (off)."""
         self.profiling = bool(on)
 
     @property
     def timing_method(self) -> str:
+        """'timer-query', 'finish+wall', or 'off' while profiling is off."""
         return self._timers[0].method if (self.profiling and self._timers) else "off"
 
     def profile(self) -> Profile:
