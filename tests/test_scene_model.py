@@ -112,3 +112,13 @@ def test_test_scenes_have_what_their_docstrings_promise():
 
 def test_rv_scenes_alias_is_the_builtin_module():
     assert rv.scenes.cornell_box().name == "cornell_box"
+
+
+@pytest.mark.parametrize("slot", ["metallic_roughness_texture", "occlusion_texture", "emissive_texture",
+                                  "transmission_texture", "base_color_texture", "normal_texture"])
+def test_setting_any_texture_slot_bumps_the_version(slot):
+    """GpuScene re-uploads materials on a version change; every texture slot is in the upload."""
+    s = builtin.quad()
+    v = s.materials.version
+    setattr(s.materials["Quad"], slot, rv.scene.TextureRef(0))
+    assert s.materials.version > v

@@ -44,8 +44,9 @@ class TextureRef:
 TEXTURE_SLOTS = ("base_color_texture", "metallic_roughness_texture", "normal_texture",
                  "occlusion_texture", "emissive_texture", "transmission_texture")
 
+# Fields whose change the GPU's material table must follow (every one pack_materials reads).
 _VERSIONED = {"effect", "base_color", "metallic", "roughness", "emissive", "emissive_strength",
-              "transmission", "ior", "alpha_mode", "alpha_cutoff", "double_sided"}
+              "transmission", "ior", "alpha_mode", "alpha_cutoff", "double_sided", *TEXTURE_SLOTS}
 
 
 @dataclasses.dataclass(eq=False)
@@ -82,7 +83,7 @@ class Material:
                                  f"{value!r}; use OPAQUE, MASK or BLEND") from None
         super().__setattr__(key, value)
         table = self.__dict__.get("_table")
-        if table is not None and key in _VERSIONED | {"base_color_texture", "normal_texture"}:
+        if table is not None and key in _VERSIONED:
             table.version += 1
 
     @property
