@@ -252,10 +252,7 @@ def _target(renderer_or_scene, size, views, graph, gpu):
         r = renderer_or_scene
         if size is not None or views is not None:
             raise OptionError("tune_effects: a Renderer brings its own views; pass size/views only with a Scene")
-        view_set = r.view_set
-        if view_set is None:
-            from ..renderer import default_views
-            view_set = default_views(r.scene, r.view_count, r.size)
+        view_set = r.view_set if r.view_set is not None else make_views(r.scene, r.view_count, r.size)
         if graph is None:
             data = r.graph.to_dict()
 
