@@ -134,8 +134,9 @@ class GpuScene:
         self.timings["blas_build_ms"] = (time.perf_counter() - t0) * 1e3
 
     def _pack_mesh(self, k: int, verts: np.ndarray, slots: np.ndarray, nodes: np.ndarray) -> None:
-        """Mesh k's zeroed vertex rows, zeroed BVH slots and BLAS nodes (links offset to its place
-        in the shared buffers) into the given arrays; its object-space box into _mesh_corners."""
+        """Write mesh k's vertex rows, BVH slots and BLAS nodes (links offset to its place in the
+        shared buffers) into the given arrays, which come zeroed (uvs and unused w stay 0); its
+        object-space box into _mesh_corners."""
         mesh, b = self.scene.meshes[k], self.blas[k]
         verts[:, 0:3], verts[:, 4:7] = mesh.positions, mesh.normals
         if mesh.uvs is not None:
