@@ -11,6 +11,15 @@ struct BsdfParams {
     float roughness;    // perceptual; alpha = roughness^2
 };
 
+// Material parameters as the BSDF takes them: metallic and roughness clamped to [0, 1].
+BsdfParams bsdf_params(vec3 base_color, float metallic, float roughness) {
+    BsdfParams b;
+    b.base_color = base_color;
+    b.metallic = clamp(metallic, 0.0, 1.0);
+    b.roughness = clamp(roughness, 0.0, 1.0);
+    return b;
+}
+
 // Below this alpha the lobe is treated as a perfect mirror (avoids D -> inf and NaN at roughness 0).
 const float BSDF_MIN_ALPHA = 1e-3;
 

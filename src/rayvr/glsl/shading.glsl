@@ -14,14 +14,6 @@
 #define LIGHT_SAMPLES 1
 #endif
 
-BsdfParams bsdf_params(vec3 base_color, float metallic, float roughness) {
-    BsdfParams b;
-    b.base_color = base_color;
-    b.metallic = clamp(metallic, 0.0, 1.0);
-    b.roughness = clamp(roughness, 0.0, 1.0);
-    return b;
-}
-
 // Mean over LIGHT_SAMPLES light samples of f(v, l) cos * Le / pdf, with visibility when SHADE_SHADOWS.
 // p: render-space point; n: shading normal; ng: geometric normal; both facing v.
 vec3 shade_direct(vec3 p, vec3 n, vec3 ng, vec3 v, BsdfParams m, inout Rng rng) {

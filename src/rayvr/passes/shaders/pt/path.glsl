@@ -4,11 +4,9 @@
 // emission, so max_bounces = 1 is complete direct light and 0 is emission only.
 // Uniforms: pt_max_bounces, pt_rr_start, pt_background.
 #pragma once
-#ifndef SHADE_SHADOWS
-#define SHADE_SHADOWS 1
-#endif
-// shading.glsl: bsdf_params; brings scene, lights, bsdf and (SHADE_SHADOWS) ray_query
-#include "shading.glsl"
+#include "scene.glsl"
+#include "lights.glsl"
+#include "bsdf.glsl"
 #include "ray_query.glsl"
 
 uniform int pt_max_bounces;
