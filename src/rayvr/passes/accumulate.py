@@ -1,4 +1,4 @@
-"""Accumulate pass (owned by the path-tracing engineer): the progressive running mean of its
+"""Accumulate pass: the progressive running mean of its
 input over frames (after Falcor's AccumulatePass), for converging path-traced renders.
 
 The sum lives in internal rgba32f pins (Kahan-compensated), so the mean of N frames equals the

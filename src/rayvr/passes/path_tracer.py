@@ -1,4 +1,4 @@
-"""PathTracer pass (owned by the path-tracing engineer): unidirectional path tracing with
+"""PathTracer pass: unidirectional path tracing with
 next-event estimation and MIS, every view in one dispatch.
 
 Two modes (property `mode`):

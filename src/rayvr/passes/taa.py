@@ -1,4 +1,4 @@
-"""TAA pass (owned by the path-tracing engineer): temporal anti-aliasing after Falcor's TAA.
+"""TAA pass: temporal anti-aliasing after Falcor's TAA.
 
 Each frame blends its colour with the history reprojected by the G-buffer's motion vectors
 (optional `motion` input, pixels, this frame - last frame; without it the history is read in
