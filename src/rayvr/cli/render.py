@@ -19,6 +19,7 @@ LAYOUTS = ("per-view", "side-by-side")
 
 
 def register(sub) -> None:
+    """Add the `render` subcommand to the CLI's subparsers."""
     p = sub.add_parser("render", help="render a scene with the hybrid graph and write images")
     p.add_argument("scene", nargs="?", help="glTF file or built-in scene name (default: the Cornell box)")
     p.add_argument("--views", type=int, default=2, help="view count: 1 mono, 2 stereo, N a camera grid (default 2)")
@@ -88,6 +89,7 @@ def output_paths(out: Path, views: int, layout: str) -> list[Path]:
 
 
 def run(args) -> int:
+    """`rayvr render`: validate the options, render with the hybrid graph, write the images."""
     from ..graphs import HDR_OUTPUT, OUTPUT, hybrid
     from ..passes.tonemap import OPERATORS
     from ..renderer import Renderer, default_views
