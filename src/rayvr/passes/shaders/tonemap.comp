@@ -1,6 +1,5 @@
 // HDR radiance -> display: exposure (fixed stops, or auto from the frame's mean log luminance),
 // an operator (ACES fit, Reinhard, linear clamp) and sRGB encoding into rgba8.
-#include "sampling.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
