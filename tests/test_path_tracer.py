@@ -12,6 +12,7 @@ from rayvr.passes.path_tracer import PathTracer
 from rayvr.renderer import Renderer
 from rayvr.scene import builtin
 from rayvr.scene.model import Camera, Light, Scene
+from test_pipeline_analytic import lambert_point   # the closed form the hybrid passes are held to
 
 
 def pt_graph(accumulate=True, **props):
@@ -95,23 +96,6 @@ def test_emitter_seen_directly_gives_its_radiance_front_only(gpu):
     np.testing.assert_allclose(render_pt(two_sided, frames=1)[0, 8, 8], [3.0, 1.5, 0.75], rtol=1e-6)
 
 
-def lambert_ggx_under_point_light(p, n, eye, light, intensity, albedo, roughness=1.0):
-    """Closed-form radiance of a glTF dielectric under a point light (Lambert + GGX, F0 = 0.04)."""
-    to = light - p
-    d2 = (to ** 2).sum(-1)
-    l = to / np.sqrt(d2)[..., None]
-    v = eye - p
-    v /= np.linalg.norm(v, axis=-1, keepdims=True)
-    h = v + l
-    h /= np.linalg.norm(h, axis=-1, keepdims=True)
-    nl, nv, nh, vh = ((l * n).sum(-1), (v * n).sum(-1), (h * n).sum(-1), (v * h).sum(-1))
-    a2 = roughness ** 4
-    d = a2 / (np.pi * (nh * nh * (a2 - 1) + 1) ** 2)
-    lam = lambda c: 0.5 * (np.sqrt(1 + a2 * (1 - c * c) / (c * c)) - 1)
-    spec = d / (1 + lam(nv) + lam(nl)) * (0.04 + 0.96 * (1 - vh) ** 5) / (4 * nv)
-    return (albedo / np.pi * nl + spec) * intensity / d2
-
-
 def plane_radiance_through_pixels(view, size, offset, intensity=2.0):
     """Closed-form radiance of plane_with_point_light seen through (x, y) + offset of every pixel."""
     ys, xs = np.mgrid[0:size[1], 0:size[0]]
@@ -119,8 +103,7 @@ def plane_radiance_through_pixels(view, size, offset, intensity=2.0):
     o = np.array([ro for ro, _ in rays])
     d = np.array([rd for _, rd in rays])
     p = o + (-o[:, 1] / d[:, 1])[:, None] * d
-    want = lambert_ggx_under_point_light(p, np.array([0.0, 1.0, 0.0]), view.pose.position,
-                                         np.array([0.0, 1.0, 0.0]), intensity, 0.8)
+    want = lambert_point(p, np.array([0.0, 1.0, 0.0]), intensity, 0.8, eye=view.pose.position)
     inside = (np.abs(p[:, 0]) < 1.9) & (np.abs(p[:, 2]) < 1.9)
     return want.reshape(size[1], size[0]), inside.reshape(size[1], size[0])
 
@@ -196,7 +179,7 @@ def test_gbuffer_mode_traces_only_path_traced_pixels(gpu, pixel_list):
         assert np.all(color[box] == 0.0)   # not PATH_TRACED: written as 0 (a list leaves them untouched)
     # plane points the box does not hide from the light at (0, 3, 0): the closed form
     lit = on_plane & (np.maximum(np.abs(p[..., 0]), np.abs(p[..., 2])) > 0.45)
-    want = lambert_ggx_under_point_light(p, np.array([0.0, 1.0, 0.0]), eye, np.array([0.0, 3.0, 0.0]), 10.0, 0.8)
+    want = lambert_point(p, np.array([0.0, 3.0, 0.0]), 10.0, 0.8, eye=eye)
     np.testing.assert_allclose(color[lit], want[lit], rtol=5e-3)
 
 
