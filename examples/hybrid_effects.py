@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 
 import rayvr as rv
-from rayvr.cli.render import load, parse_size
+from rayvr.cli.options import load_scene_arg, parse_size
 
 
 def main() -> None:
@@ -21,7 +21,7 @@ def main() -> None:
     ap.add_argument("--record", default=None, help="folder for the headset's eye images")
     args = ap.parse_args()
 
-    scene = load(args.scene)
+    scene = load_scene_arg(args.scene)
     name = args.material or next(iter(scene.materials)).name
     effects = [rv.Effect.RASTER, rv.Effect.SHADOWS, rv.Effect.REFLECTIONS]
     headset = rv.xr.SimulatedHeadset(preset="index", size=parse_size(args.size),

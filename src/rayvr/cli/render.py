@@ -74,11 +74,6 @@ def apply_effects(scene, specs) -> None:
         scene.materials[name].effect = effect
 
 
-def load(scene_arg):
-    """The scene named on the command line (see `options.load_scene_arg`)."""
-    return load_scene_arg(scene_arg)
-
-
 def output_paths(out: Path, views: int, layout: str) -> list[Path]:
     """Where each view goes: out itself (mono or side by side), out_L/out_R, or out_v{i}."""
     if views == 1 or layout == "side-by-side":
@@ -112,7 +107,7 @@ def run(args) -> int:
         grid = parse_grid(args.grid)
     if args.quilt and grid is None:
         raise OptionError("--quilt needs --grid COLSxROWS (e.g. --views 48 --grid 8x6 --quilt q.png)")
-    scene = load(args.scene)
+    scene = load_scene_arg(args.scene)
     apply_effects(scene, args.effect)
 
     views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
