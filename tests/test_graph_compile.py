@@ -274,3 +274,19 @@ def test_each_timer_query_result_is_counted_once_around_profile_calls():
     assert timer.take() is None
     run_frames(10)                                  # frame N's result arrives when frame N+2 begins
     assert seen == [float(n) for n in range(9)]     # frames 9 and 10 still in flight
+
+
+def test_last_frame_ms_sums_the_latest_pass_times(gpu):
+    from rayvr.passes.basic import Clear
+
+    g = RenderGraph("Last")
+    g.add_pass(Clear(format="rgba8"), "A")
+    g.add_pass(Clear(format="rgba8"), "B")
+    g.mark_output("A.dst")
+    g.mark_output("B.dst")
+    cg = g.compile(size=(4, 4), gpu=gpu)
+    assert cg.last_frame_ms() == 0.0          # nothing timed yet
+    cg.execute(cg.make_context())
+    cg.execute(cg.make_context())
+    prof = cg.profile()
+    assert cg.last_frame_ms() == pytest.approx(sum(s.last_ms for s in prof.passes.values()))

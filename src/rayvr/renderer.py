@@ -198,8 +198,8 @@ class Renderer:
             if request.should_render:
                 self.render(request.views)
                 if self.profiling and not self.gpu.caps.timer_queries:
-                    # finish+wall timing is synchronous anyway; with timer queries reading the
-                    # profile would wait for this frame, so the sink keeps its own clock.
+                    # finish+wall timing is this frame's; with timer queries the latest result is
+                    # a frame or two old, so the sink keeps its own clock.
                     request.render_time_s = self._last_frame_ms() / 1e3
                 self.sink.submit(self.output_texture(), request)
             else:
@@ -215,7 +215,7 @@ class Renderer:
             self._opened = True
 
     def _last_frame_ms(self) -> float:
-        return sum(stats.last_ms for stats in self.compiled.profile().passes.values())
+        return self.compiled.last_frame_ms()
 
     # -- outputs -----------------------------------------------------------------------------
     @property

@@ -103,6 +103,11 @@ class CompiledGraph:
         """'timer-query', 'finish+wall', or 'off' while profiling is off."""
         return self._timers[0].method if (self.profiling and self._timers) else "off"
 
+    def last_frame_ms(self) -> float:
+        """The passes' latest times summed, without statistics and without waiting on the GPU
+        (with timer queries it is a frame or two old)."""
+        return sum(times.values[-1] for times in self._times if times.values)
+
     def profile(self) -> Profile:
         """Per-pass GPU ms per frame (rolling mean/min/max/p95) and how it was measured."""
         if self.profiling and self.caps.timer_queries:
