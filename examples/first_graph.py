@@ -11,9 +11,9 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
-from PIL import Image
 
 import rayvr as rv
+from rayvr.fileio import write_png
 from rayvr.passes.basic import Blit, Checkerboard, Clear
 
 
@@ -49,7 +49,7 @@ def main() -> None:
     print(compiled.profile())
 
     views = compiled.read_output("ToLdr.dst", flip_y=True)      # (views, h, w, 4) uint8
-    Image.fromarray(np.concatenate(list(views), axis=1), "RGBA").save(args.out)
+    write_png(args.out, np.concatenate(list(views), axis=1))      # atomic: never half written
     print(f"wrote {args.out}")
 
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-_DTYPES = {"f1": np.uint8, "f2": np.float16, "f4": np.float32}
+from ..rendergraph.formats import NUMPY_DTYPES
 
 
 def srgb_encode(x: np.ndarray) -> np.ndarray:
@@ -23,11 +23,11 @@ def to_uint8(pixels: np.ndarray, encode_srgb: bool = False) -> np.ndarray:
 
 def read_raw(texture) -> np.ndarray:
     """A moderngl Texture or TextureArray as (layers, height, width, components), GL row order."""
-    dtype = _DTYPES.get(texture.dtype)
-    if dtype is None:
+    if texture.dtype not in ("f1", "f2", "f4"):
         from ..errors import XrError
 
         raise XrError(f"cannot read back a texture of dtype '{texture.dtype}'; use f1, f2 or f4")
+    dtype = NUMPY_DTYPES[texture.dtype]
     layers = getattr(texture, "layers", 1)
     data = np.frombuffer(texture.read(), dtype=dtype)
     return data.reshape(layers, texture.height, texture.width, texture.components)
