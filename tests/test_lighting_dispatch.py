@@ -53,7 +53,13 @@ def test_whole_image_dispatch_lights_the_same_pixels_as_the_list(gpu, monkeypatc
         a, b = listed[name], tiled[name]
         assert np.isfinite(a).all()
         assert (a[..., :3].max(axis=-1) > 0).mean() > lit, f"{name}: too few lit pixels to compare"
-        np.testing.assert_array_equal(a, b, err_msg=name)
+        # Same pixels, same random numbers: equal up to the float rounding in which two compiled
+        # variants of a shader may differ (bit-identical on llvmpipe; NVIDIA contracts differently,
+        # and a second glossy bounce can turn a rounding into another path on a rare pixel).
+        lit_a, lit_b = a[..., :3].max(axis=-1) > 0, b[..., :3].max(axis=-1) > 0
+        assert (lit_a == lit_b).mean() > 0.999, f"{name}: the two dispatches lit different pixels"
+        close = np.isclose(a, b, rtol=1e-3, atol=1e-5).all(axis=-1)
+        assert close.mean() > 0.999, f"{name}: {int((~close).sum())} pixels differ beyond rounding"
 
 
 @pytest.mark.parametrize("path_traced", [False, True])
