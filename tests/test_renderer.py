@@ -5,7 +5,7 @@ import pytest
 
 import rayvr as rv
 from rayvr.errors import OptionError
-from rayvr.renderer import Renderer
+from rayvr.renderer import Renderer, default_views
 from rayvr.scene import builtin
 
 
@@ -102,3 +102,23 @@ def test_swapping_effects_between_materials_moves_ray_work_without_recompiling(g
             assert n > 0 and set(listed.tolist()) == {names.index(reflective)}
             lists.append(n)
         assert r.compiles == 1
+
+
+def test_sample_index_restarts_when_the_head_only_translates(gpu):
+    import dataclasses
+
+    from rayvr.xr.views import Pose, ViewSet
+
+    scene = builtin.cornell_box()
+    views = default_views(scene, 2, (8, 8))
+    with Renderer(scene, rv.graphs.hybrid(), views=views) as r:
+        r.render(views)
+        r.render(views)
+        assert r.sample_index == 1
+        # both eyes move together: the render-space matrices are unchanged, the world is not
+        moved = ViewSet([dataclasses.replace(v, pose=Pose(v.pose.position + [0.2, 0.0, 0.0], v.pose.orientation))
+                         for v in views.views])
+        r.render(moved)
+        assert r.sample_index == 0
+        r.render(moved)
+        assert r.sample_index == 1
