@@ -28,15 +28,19 @@ def graph_to_dict(graph) -> dict:
     }
 
 
+def _names(kind) -> str:
+    return kind.__name__ if isinstance(kind, type) else "/".join(k.__name__ for k in kind)
+
+
 def _field(obj: dict, key: str, kind, where: str, default=None):
     if key not in obj:
         if default is not None:
             return default
-        raise GraphError(f"{where}: missing field '{key}'")
+        raise GraphError(f"{where}: missing field '{key}'; add it ({_names(kind)}), or write the file "
+                         f"with RenderGraph.save('g.json') to see the format")
     value = obj[key]
     if not isinstance(value, kind):
-        names = kind.__name__ if isinstance(kind, type) else "/".join(k.__name__ for k in kind)
-        raise GraphError(f"{where}.{key}: expected {names}, got {type(value).__name__} {value!r}")
+        raise GraphError(f"{where}.{key}: expected {_names(kind)}, got {type(value).__name__} {value!r}")
     return value
 
 
