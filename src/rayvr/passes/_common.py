@@ -5,6 +5,7 @@ from pathlib import Path
 
 from ..errors import GraphError
 from ..gpu.shaders import compute_program
+from ..materials.effect import Effect
 from ..rendergraph.registry import register_pass as register  # noqa: F401  (the passes' class decorator)
 
 SHADER_DIR = Path(__file__).resolve().parent / "shaders"
@@ -56,11 +57,18 @@ def require_scene(ctx, render_pass) -> None:
 
 def effect_defines() -> dict:
     """EFFECT_RASTER .. EFFECT_PATH_TRACED as #defines, so GLSL and rayvr.Effect agree."""
-    from ..materials.effect import Effect
-
     return {f"EFFECT_{e.name}": int(e) for e in Effect}
 
 
 def effects_used(cd) -> set | None:
     """The effects the scene's materials use, or None without a scene (then nothing is skipped)."""
     return None if cd.scene is None else set(cd.scene.effects_used())
+
+
+def unused_effect_reason(cd, lowest: Effect) -> str | None:
+    """The skip reason of a pass that serves effect `lowest` and above, when no material uses one
+    of them (None without a scene, or when one is used)."""
+    used = effects_used(cd)
+    if used is None or any(e >= lowest for e in used):
+        return None
+    return f"no material uses {lowest.name}" + ("" if lowest == max(Effect) else " or above")

@@ -6,7 +6,14 @@ import numpy as np
 from ..gpu.bindings import BINDINGS
 from ..materials.effect import Effect
 from ..rendergraph.render_pass import Reflection, RenderPass
-from ._common import build_compute, effect_defines, effects_used, groups_2d, register
+from ._common import (
+    build_compute,
+    effect_defines,
+    effects_used,
+    groups_2d,
+    register,
+    unused_effect_reason,
+)
 
 HEADER_BYTES = 16  # count + indirect dispatch args (glsl/pixel_list.glsl)
 PASS_SSBOS = tuple(BINDINGS[f"RAYVR_PASS_SSBO_{i}"] for i in range(3))
@@ -48,8 +55,7 @@ class EffectCompaction(RenderPass):
         return r
 
     def skip_reason(self, cd):
-        used = effects_used(cd)
-        if used is not None and not any(e >= Effect.SHADOWS for e in used):
+        if unused_effect_reason(cd, Effect.SHADOWS):
             return "every material is RASTER: no pixel needs rays"
         return None
 

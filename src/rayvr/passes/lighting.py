@@ -6,8 +6,18 @@ from __future__ import annotations
 from ..gpu.bindings import BINDINGS
 from ..materials.effect import Effect
 from ..rendergraph.render_pass import Reflection, RenderPass
-from ._common import (GBUFFER_PINS, GBUFFER_UNITS, bind_scene, build_compute, effect_defines,
-                      effects_used, groups_2d, register, scene_defines)
+from ._common import (
+    GBUFFER_PINS,
+    GBUFFER_UNITS,
+    bind_scene,
+    build_compute,
+    effect_defines,
+    effects_used,
+    groups_2d,
+    register,
+    scene_defines,
+    unused_effect_reason,
+)
 from .compaction import DISPATCH_OFFSET, pixel_list_bytes
 from .gbuffer import OUTPUTS
 
@@ -133,10 +143,7 @@ class RTShadows(_GBufferLightingPass):
     PIXELS_2D = False
 
     def skip_reason(self, cd):
-        used = effects_used(cd)
-        if used is not None and not any(e >= Effect.SHADOWS for e in used):
-            return "no material uses SHADOWS or above"
-        return None
+        return unused_effect_reason(cd, Effect.SHADOWS)
 
     def shader_defines(self):
         return {"LIGHT_SAMPLES": max(1, int(self.light_samples)), "SHADE_SHADOWS": 1}
@@ -158,10 +165,7 @@ class RTReflections(_GBufferLightingPass):
     PROPERTIES = {"max_bounces": 1, "light_samples": 1, "background": [0.0, 0.0, 0.0]}
 
     def skip_reason(self, cd):
-        used = effects_used(cd)
-        if used is not None and not any(e >= Effect.REFLECTIONS for e in used):
-            return "no material uses REFLECTIONS"
-        return None
+        return unused_effect_reason(cd, Effect.REFLECTIONS)
 
     def shader_defines(self):
         return {"MAX_BOUNCES": max(1, int(self.max_bounces)), "LIGHT_SAMPLES": max(1, int(self.light_samples)),

@@ -17,8 +17,17 @@ from __future__ import annotations
 from ..errors import OptionError
 from ..materials.effect import Effect
 from ..rendergraph.render_pass import Reflection, RenderPass
-from ._common import (GBUFFER_UNITS, bind_scene, build_compute, effect_defines,
-                      effects_used, groups_2d, register, require_scene, scene_defines)
+from ._common import (
+    GBUFFER_UNITS,
+    bind_scene,
+    build_compute,
+    effect_defines,
+    groups_2d,
+    register,
+    require_scene,
+    scene_defines,
+    unused_effect_reason,
+)
 from .compaction import DISPATCH_OFFSET, pixel_list_bytes
 from .lighting import PASS_SSBO_0, add_gbuffer_inputs, use_gbuffer
 
@@ -73,10 +82,7 @@ class PathTracer(RenderPass):
     def skip_reason(self, cd):
         if self.mode != "gbuffer":
             return None
-        used = effects_used(cd)
-        if used is not None and Effect.PATH_TRACED not in used:
-            return "no material uses PATH_TRACED"
-        return None
+        return unused_effect_reason(cd, Effect.PATH_TRACED)
 
     def compile(self, ctx, cd):
         require_scene(ctx, self)
