@@ -29,7 +29,11 @@ QUICK_SCENES = "cornell_box"
 
 _HEADER = """
 #include "ray_query.glsl"
+#if DIFFUSE_QUEUE && IS_DIFFUSE
+layout(local_size_x = 64) in;
+#else
 layout(local_size_x = 8, local_size_y = 8) in;
+#endif
 uniform vec3 cam_pos;
 uniform vec3 cam_right;    // scaled by tan(fov/2) * aspect
 uniform vec3 cam_up;       // scaled by tan(fov/2)
@@ -78,18 +82,30 @@ void main() {
 }
 """
 
-DIFFUSE = _HEADER + """
+DIFFUSE = "#define IS_DIFFUSE 1\n" + _HEADER + """
 layout(std430, binding = RAYVR_PASS_SSBO_0) writeonly buffer Result { float result[]; };
 layout(std430, binding = RAYVR_PASS_SSBO_1) readonly buffer Surfaces { vec4 surfaces[]; };
+#if DIFFUSE_QUEUE
+layout(std430, binding = RAYVR_PASS_SSBO_3) readonly buffer Queue { uint queue[]; };
+uniform uint queue_length;
+#endif
 uint hash(uint x) { x ^= x >> 16; x *= 0x7feb352du; x ^= x >> 15; x *= 0x846ca68bu; x ^= x >> 16; return x; }
 void main() {
+#if DIFFUSE_QUEUE   // 1D over the hit pixels only, in screen-tile order; y of the dispatch = sample
+    if (gl_GlobalInvocationID.x >= queue_length) return;
+    uint i = queue[gl_GlobalInvocationID.x];
+    uint k = gl_GlobalInvocationID.y;
+#else               // 2D over every pixel; z of the dispatch = sample
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (px.x >= size.x || px.y >= size.y) return;
     uint i = pixel_index(px);
+    uint k = gl_GlobalInvocationID.z;
+#endif
+    uint out_i = i + k * uint(size.x * size.y);
     vec4 p = surfaces[2u * i];
-    if (p.w == 0.0) { result[i] = -2.0; WRITE_STATS(i); return; }
+    if (p.w == 0.0) { result[out_i] = -2.0; WRITE_STATS(out_i); return; }
     vec3 n = surfaces[2u * i + 1u].xyz;
-    uint h1 = hash(i * 2u + 1u), h2 = hash(h1 ^ 0x9e3779b9u);
+    uint h1 = hash((i * 8u + k) * 2u + 1u), h2 = hash(h1 ^ 0x9e3779b9u);
     float u1 = float(h1 >> 8) / 16777216.0, u2 = float(h2 >> 8) / 16777216.0;
     float r = sqrt(u1), phi = 6.2831853 * u2;
     vec3 t = normalize(abs(n.x) > 0.5 ? cross(n, vec3(0, 1, 0)) : cross(n, vec3(1, 0, 0)));
@@ -97,8 +113,8 @@ void main() {
     vec3 d = normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(0.0, 1.0 - u1)) * n);
     Hit h;
     bool hit = trace_closest(p.xyz, d, 1e29, h);
-    result[i] = hit ? h.t : -1.0;
-    WRITE_STATS(i);
+    result[out_i] = hit ? h.t : -1.0;
+    WRITE_STATS(out_i);
 }
 """
 
@@ -139,6 +155,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--rounds", type=int, default=3,
                         help="interleaved timing rounds over the variants; the fastest round counts "
                              "(a shared GPU's timings vary between dispatches; quick: 1)")
+    parser.add_argument("--diffuse-per-hit", type=int, default=1,
+                        help="diffuse rays from each primary hit (1..8; 1: one bounce of a 1-spp path tracer)")
+    parser.add_argument("--diffuse-layout", default="pixels", choices=("pixels", "queue"),
+                        help="pixels: a 2D dispatch over every pixel, misses leave at once; queue: a 1D "
+                             "dispatch over the hit pixels only, in 8x4 screen-tile order")
     parser.add_argument("--stats", action="store_true",
                         help="also count node visits, triangle tests and instance entries per ray (RQ_STATS)")
 
@@ -230,6 +251,17 @@ def _scene(spec: str):
     return s, "sah" if kind == "flat-sah" else "auto"
 
 
+def _tile_queue(surfaces, w: int, h: int):
+    """(buffer, length): the indices of the pixels with a primary hit, ordered by 8x4 screen tile
+    (a warp's worth of neighbouring pixels), as a wavefront renderer's compacted ray queue holds them."""
+    hit = np.frombuffer(surfaces.read(), np.float32)[3::8] != 0.0
+    idx = np.flatnonzero(hit).astype(np.uint32)
+    x, y = idx % w, idx // w
+    order = np.lexsort((x % 8, y % 4, x // 8, y // 4))
+    q = idx[order]
+    return surfaces.ctx.buffer(q.tobytes() if len(q) else b"\0\0\0\0"), int(len(q))
+
+
 def parse_variants(text: str) -> list[tuple[str, dict]]:
     """'NAME:KEY=V;KEY=V|NAME2' -> [(name, {KEY: V})]; empty text: one default variant."""
     out = []
@@ -239,14 +271,14 @@ def parse_variants(text: str) -> list[tuple[str, dict]]:
     return out or [("default", {})]
 
 
-def _stats(gl, progs: dict, groups, stats_buf, hits_mask) -> dict:
+def _stats(gl, progs: dict, dispatch: dict, stats_buf, hits_mask, pixels: int) -> dict:
     """Mean node visits, triangle tests and instance entries per ray of the RQ_STATS kernels."""
     out = {}
     for kind in ("primary", "diffuse"):
-        progs[kind].run(*groups)
+        dispatch[kind](progs[kind])
         gl.finish()
         st = np.frombuffer(stats_buf.read(), np.uint32).reshape(-1, 4).astype(np.float64)
-        rays = st if kind == "primary" else st[hits_mask]
+        rays = st[:pixels] if kind == "primary" else st[hits_mask]
         for k, col in enumerate(("nodes", "tris", "instances")):
             out[f"{kind}_{col}"] = float(rays[:, k].mean()) if len(rays) else 0.0
     return out
@@ -275,12 +307,25 @@ def run(args) -> dict:
         gs = GpuScene(gpu, scene, bvh_method=method, progress=False)
         build_s = time.perf_counter() - t0
         pos, right, up, fwd = _camera(scene, w / h)
-        result = gl.buffer(reserve=w * h * 4)
+        per_hit = max(1, min(8, args.diffuse_per_hit))
+        queue_layout = args.diffuse_layout == "queue"
+        result = gl.buffer(reserve=w * h * 4 * per_hit)
         surfaces = gl.buffer(reserve=w * h * 32)
-        stats_buf = gl.buffer(reserve=w * h * 16) if args.stats else None
+        stats_buf = gl.buffer(reserve=w * h * 16 * per_hit) if args.stats else None
         groups = ((w + 7) // 8, (h + 7) // 8)
+        queue = None   # hit pixels in 8x4-tile order (queue layout), made once from the surfaces
+
+        def run_diffuse(prog):
+            if queue_layout:
+                prog["queue_length"] = queue[1]
+                prog.run((queue[1] + 63) // 64, per_hit)
+            else:
+                prog.run(*groups, per_hit)
+
+        dispatch = {"primary": lambda p: p.run(*groups), "diffuse": run_diffuse}
 
         def programs(defines):
+            defines = {**defines, "DIFFUSE_QUEUE": int(queue_layout)}
             progs = {k: _program(gl, folder, k, src, defines) for k, src in
                      (("primary", PRIMARY), ("surfaces", SURFACES), ("diffuse", DIFFUSE))}
             for p in progs.values():
@@ -305,13 +350,19 @@ def run(args) -> dict:
         for _ in range(rounds):   # interleaved rounds; the fastest counts
             for vname, vdefs, progs in compiled:
                 primary_ms = _time(gl, caps.timer_queries, lambda: progs["primary"].run(*groups), iters)
-                hits = int((np.frombuffer(result.read(), np.float32) > 0).sum())
+                hits = int((np.frombuffer(result.read(w * h * 4), np.float32) > 0).sum())
                 progs["surfaces"].run(*groups)
                 gl.memory_barrier()
-                diffuse_ms = _time(gl, caps.timer_queries, lambda: progs["diffuse"].run(*groups), iters)
+                if queue_layout and queue is None:
+                    queue = _tile_queue(surfaces, w, h)
+                    queue[0].bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_3"])
+                diffuse_ms = _time(gl, caps.timer_queries, lambda: run_diffuse(progs["diffuse"]), iters)
                 d = np.frombuffer(result.read(), np.float32)
+                if queue_layout:   # pixels off the queue were never written: mark them as no-ray
+                    d = np.where(np.tile(np.frombuffer(surfaces.read(), np.float32)[3::8] != 0.0, per_hit), d, -2.0)
                 if stats_buf is not None and counts is None:
-                    counts = _stats(gl, programs({**gs.defines(), **vdefs, "RQ_STATS": 1}), groups, stats_buf, d > -1.5)
+                    counts = _stats(gl, programs({**gs.defines(), **vdefs, "RQ_STATS": 1}), dispatch, stats_buf,
+                                    d > -1.5, w * h)
                 b = best.setdefault(vname, {"primary_ms": primary_ms, "diffuse_ms": diffuse_ms})
                 b["primary_ms"], b["diffuse_ms"] = min(b["primary_ms"], primary_ms), min(b["diffuse_ms"], diffuse_ms)
                 b["hits"], b["bounce_hits"] = hits, int((d > 0).sum())
@@ -320,20 +371,24 @@ def run(args) -> dict:
             b = best[vname]
             primary_ms, diffuse_ms, hits, bounce_hits = b["primary_ms"], b["diffuse_ms"], b["hits"], b["bounce_hits"]
             primary_rate = w * h / (primary_ms / 1e3)
-            diffuse_rate = hits / (diffuse_ms / 1e3) if hits else 0.0
+            diffuse_rate = hits * per_hit / (diffuse_ms / 1e3) if hits else 0.0
             rows.append({
                 "scene": spec, "variant": vname, "triangles": gs.triangle_count, "size": f"{w}x{h}",
                 "primary_ms": primary_ms, "primary_Grays_s": primary_rate / 1e9,
                 "diffuse_ms": diffuse_ms, "diffuse_Grays_s": diffuse_rate / 1e9,
-                "primary_hit_frac": hits / (w * h), "diffuse_hit_frac": bounce_hits / max(hits, 1),
+                "diffuse_per_hit": per_hit, "diffuse_layout": args.diffuse_layout,
+                "primary_hit_frac": hits / (w * h), "diffuse_hit_frac": bounce_hits / max(hits * per_hit, 1),
                 "roofline_Gtests_s": roof / 1e9, "primary_ratio": primary_rate / roof, "diffuse_ratio": diffuse_rate / roof,
                 "gpu_bytes_per_tri": rep["geometry_bytes_per_triangle"], "scene_build_s": build_s,
                 **(counts or {}),
             })
         result.release(), surfaces.release(), gs.release()
+        if queue is not None:
+            queue[0].release()
         if stats_buf is not None:
             stats_buf.release()
-    cols = ["scene", "variant", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_ms", "diffuse_Grays_s",
+    cols = ["scene", "variant", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_per_hit",
+            "diffuse_layout", "diffuse_ms", "diffuse_Grays_s",
             "primary_hit_frac", "diffuse_hit_frac", "roofline_Gtests_s", "primary_ratio", "diffuse_ratio",
             "gpu_bytes_per_tri", "scene_build_s"]
     if args.stats:

@@ -28,6 +28,23 @@ void main() { v[gl_GlobalInvocationID.x] = scale() * float(gl_GlobalInvocationID
     np.testing.assert_array_equal(np.frombuffer(buf.read(), "f4"), [0, 3, 6, 9])
 
 
+def test_include_under_a_false_if_leaves_the_file_to_a_later_include(gl, tmp_path):
+    write(tmp_path, "lib.glsl", "#pragma once\nfloat scale() { return 5.0; }\n")
+    write(tmp_path, "optional.glsl", "#pragma once\n#if USE_LIB\n#include \"lib.glsl\"\n#endif\n")
+    main = write(tmp_path, "main.comp", """
+#include "optional.glsl"
+#include "lib.glsl"
+layout(local_size_x = 2) in;
+layout(std430, binding = RAYVR_PASS_SSBO_0) buffer Out { float v[]; };
+void main() { v[gl_GlobalInvocationID.x] = scale(); }
+""")
+    prog = compute_program(gl, main, {"USE_LIB": 0})
+    buf = gl.buffer(reserve=8)
+    buf.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"])
+    prog.run(1)
+    np.testing.assert_array_equal(np.frombuffer(buf.read(), "f4"), [5, 5])
+
+
 def test_compile_error_names_the_included_file_and_line(gl, tmp_path):
     write(tmp_path, "bad.glsl", "float ok() { return 1.0; }\nfloat broken() { return undefined_name; }\n")
     main = write(tmp_path, "entry.comp", '#include "bad.glsl"\nlayout(local_size_x=1) in;\nvoid main() {}\n')

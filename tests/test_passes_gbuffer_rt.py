@@ -92,6 +92,16 @@ def test_rt_equals_raster_in_stereo_with_motion(gpu):
         assert not np.array_equal(out[kind]["posW"][0], out[kind]["posW"][1])
 
 
+def test_rt_equals_raster_in_a_camera_grid_whose_views_straddle_workgroups(gpu):
+    # 6 views: the ray passes' workgroups span 4 views (passes._common.ray_group), so the second
+    # workgroup along z has two views past the last one, and 40x36 pixels are no multiple either.
+    scene = builtin.spheres(n=2, subdivisions=2)
+    out = render_both(scene, 6, (40, 36))
+    assert_same_gbuffer(out)
+    pos = out["rt"]["posW"]
+    assert all(not np.array_equal(pos[i], pos[i + 1]) for i in range(5)), "a view repeated its neighbour"
+
+
 def test_alpha_masked_quad_is_seen_through_like_the_raster(gpu):
     """A veil of alpha 0.3 between the camera and a box: cut out at cutoff 0.5, drawn at 0.2."""
     scene = builtin.box_on_plane()

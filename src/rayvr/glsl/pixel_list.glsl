@@ -10,6 +10,8 @@
 uint pixel_list_pack(ivec3 p) { return uint(p.x) | (uint(p.y) << 13u) | (uint(p.z) << 26u); }
 ivec3 pixel_list_unpack(uint w) { return ivec3(w & 0x1FFFu, (w >> 13u) & 0x1FFFu, w >> 26u); }
 
+#include "ray_group.glsl"
+
 #ifdef PIXEL_LIST_SSBO
 layout(std430, binding = PIXEL_LIST_SSBO) readonly buffer PixelList {
     uint pixel_count;
@@ -22,7 +24,7 @@ layout(std430, binding = PIXEL_LIST_SSBO) readonly buffer PixelList {
 // the image when its effect is min_effect or above (then gbuffer.glsl must come first).
 bool ray_pass_pixel(uint min_effect, ivec3 image_size, out ivec3 p) {
 #if PIXELS_2D
-    p = ivec3(gl_GlobalInvocationID);
+    p = ray_group_pixel();
     if (any(greaterThanEqual(p, image_size))) return false;
     uint effect = gbuf_effect_of(texelFetch(gbuf_effect, p, 0).x);
     return effect != GBUF_NO_GEOMETRY && effect >= min_effect;

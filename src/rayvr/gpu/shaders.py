@@ -68,12 +68,14 @@ def preprocess(path: str | Path, defines: dict | None = None, search: list[Path]
     """Expand includes of the GLSL file at `path` and prepend version, extensions and defines.
 
     `header` is raw GLSL placed after `#version` (extension directives must precede code).
-    Each file is included once per stage (include guards are implicit).
+    Each file is included once per stage: include guards are implicit, and they are preprocessor
+    guards, so an #include inside a false #if leaves the file to a later #include.
     """
     path = Path(path).resolve()
     search = [Path(s) for s in (search or [])]
     files: list[Path] = []
-    seen: set[Path] = set()
+    seen: dict[Path, int] = {}   # path -> its source-string number
+    texts: dict[Path, list[str]] = {}
     out: list[str] = [GLSL_VERSION]
     if header:
         out.append(header)
@@ -84,15 +86,16 @@ def preprocess(path: str | Path, defines: dict | None = None, search: list[Path]
         if p in stack:
             chain = " -> ".join(s.name for s in (*stack, p))
             raise ShaderError(f"{p}: circular #include ({chain}); remove one of the includes")
-        if p in seen:
-            return
-        seen.add(p)
-        idx = len(files)
-        files.append(p)
-        try:
-            lines = p.read_text().splitlines()
-        except OSError as exc:
-            raise ShaderError(f"{p}: cannot read shader source: {exc}") from exc
+        if p not in seen:
+            seen[p] = len(files)
+            files.append(p)
+            try:
+                texts[p] = p.read_text().splitlines()
+            except OSError as exc:
+                raise ShaderError(f"{p}: cannot read shader source: {exc}") from exc
+        idx, lines = seen[p], texts[p]
+        if stack:   # a guard, not a skip: an #include under a false #if must not use up the file
+            out.extend((f"#ifndef RAYVR_INCLUDED_{idx}", f"#define RAYVR_INCLUDED_{idx}"))
         out.append(f"#line 1 {idx}")
         for n, line in enumerate(lines, start=1):
             m = _INCLUDE.match(line)
@@ -103,6 +106,8 @@ def preprocess(path: str | Path, defines: dict | None = None, search: list[Path]
                 out.append("")
             else:
                 out.append(line)
+        if stack:
+            out.append("#endif")
 
     emit(path, ())
     return ShaderSource("\n".join(out) + "\n", files)

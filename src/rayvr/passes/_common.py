@@ -30,10 +30,36 @@ def build_compute(gl, name: str, defines: dict | None = None):
     return compute_program(gl, SHADER_DIR / name, defines)
 
 
-def groups_2d(size: tuple[int, int], views: int, group: tuple[int, int] = COMPUTE_GROUP) -> tuple[int, int, int]:
-    """Workgroups covering `size` pixels of every view with `group`-sized workgroups (z = view)."""
-    gx, gy = group
-    return (size[0] + gx - 1) // gx, (size[1] + gy - 1) // gy, views
+# Views a ray pass's warp spans (glsl/ray_group.glsl). Neighbouring views of a camera grid see
+# almost the same scene through the same pixel, so a warp of a few pixels in several views traces
+# more alike rays than a warp of more pixels in one small view. 1 turns it off.
+VIEW_GROUP = 4
+
+
+def groups_2d(size: tuple[int, int], views: int, group: tuple[int, ...] = COMPUTE_GROUP) -> tuple[int, int, int]:
+    """Workgroups covering `size` pixels of every view with `group`-sized workgroups: (x, y) pixels,
+    or (x, y, z) pixels by views."""
+    gx, gy, gz = (*group, 1)[:3]
+    return (size[0] + gx - 1) // gx, (size[1] + gy - 1) // gy, (views + gz - 1) // gz
+
+
+def ray_group(views: int, tile: tuple[int, int] = COMPUTE_GROUP) -> tuple[int, int, int]:
+    """The (x, y, views) shape of a ray pass's workgroup of tile[0] * tile[1] invocations: the tile
+    shrunk (larger side first) to make room for up to VIEW_GROUP views, when there are that many."""
+    x, y = tile
+    z = 1
+    while z < VIEW_GROUP and z * 2 <= views and x * y > 1:
+        z *= 2
+        if x > y:
+            x //= 2
+        else:
+            y //= 2
+    return x, y, z
+
+
+def ray_group_defines(group: tuple[int, int, int]) -> dict:
+    """The #defines glsl/ray_group.glsl reads."""
+    return {"RAY_GROUP_X": group[0], "RAY_GROUP_Y": group[1], "RAY_GROUP_Z": group[2]}
 
 
 def bind_scene(ctx) -> None:

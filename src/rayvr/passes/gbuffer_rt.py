@@ -15,6 +15,8 @@ from ._common import (
     build_compute,
     effect_defines,
     groups_2d,
+    ray_group,
+    ray_group_defines,
     register,
     require_scene,
     scene_defines,
@@ -32,7 +34,8 @@ class GBufferRT(RenderPass):
 
     def compile(self, ctx, cd):
         require_scene(ctx, self)
-        self._defines = {**scene_defines(ctx), **effect_defines()}
+        self._group = ray_group(cd.views)
+        self._defines = {**scene_defines(ctx), **effect_defines(), **ray_group_defines(self._group)}
         self._prog = build_compute(ctx.gl, "gbuffer_rt.comp", self._defines)
 
     def defines(self) -> dict:
@@ -42,5 +45,5 @@ class GBufferRT(RenderPass):
         bind_scene(ctx)
         for unit, pin in enumerate(OUTPUTS):
             data[pin].bind_to_image(unit, read=False, write=True)
-        self._prog.run(*groups_2d(data.size, data.views))
+        self._prog.run(*groups_2d(data.size, data.views, self._group))
         ctx.gl.memory_barrier()

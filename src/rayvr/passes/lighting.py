@@ -14,6 +14,8 @@ from ._common import (
     effect_defines,
     effects_used,
     groups_2d,
+    ray_group,
+    ray_group_defines,
     register,
     scene_defines,
     unused_effect_reason,
@@ -51,7 +53,7 @@ class _GBufferLightingPass(RenderPass):
     # Neighbouring pixels in one warp trace alike rays; the list's tiles come in random order and
     # a warp often straddles two of them.
     PIXELS_2D: bool | None = None
-    TILE = (8, 4)   # one warp
+    TILE = (8, 4)   # one warp (ray_group spreads it over views)
 
     def reflect(self, cd):
         r = Reflection()
@@ -69,7 +71,8 @@ class _GBufferLightingPass(RenderPass):
         self._defines = {**scene_defines(ctx), **effect_defines(), **GBUFFER_UNITS,
                          "PIXEL_LIST_SSBO": PASS_SSBO_0, "RNG_SALT": self.SALT, **self.shader_defines()}
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
-        self._defines.update(PIXELS_2D=int(self._pixels_2d), TILE_X=self.TILE[0], TILE_Y=self.TILE[1])
+        self._group = ray_group(cd.views, self.TILE)
+        self._defines.update(PIXELS_2D=int(self._pixels_2d), **ray_group_defines(self._group))
         self._prog = build_compute(ctx.gl, self.SHADER, self._defines)
 
     def _dispatch_2d(self, cd) -> bool:
@@ -98,7 +101,7 @@ class _GBufferLightingPass(RenderPass):
             pixels = data[self.PIXEL_LIST]
             pixels.bind_to_storage_buffer(PASS_SSBO_0)
             if self._pixels_2d:
-                self._prog.run(*groups_2d(data.size, data.views, self.TILE))
+                self._prog.run(*groups_2d(data.size, data.views, self._group))
             else:
                 self._prog.run_indirect(pixels, DISPATCH_OFFSET)
         ctx.gl.memory_barrier()

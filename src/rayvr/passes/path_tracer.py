@@ -23,6 +23,8 @@ from ._common import (
     build_compute,
     effect_defines,
     groups_2d,
+    ray_group,
+    ray_group_defines,
     register,
     require_scene,
     scene_defines,
@@ -92,6 +94,8 @@ class PathTracer(RenderPass):
         if self.mode == "gbuffer":
             self._defines.update(GBUFFER_UNITS, PIXEL_LIST_SSBO=PASS_SSBO_0)
         self._listed = listed
+        self._group = ray_group(cd.views)
+        self._defines.update(ray_group_defines(self._group))
         self._prog = build_compute(ctx.gl, "pt/path_tracer.comp", self._defines)
 
     def defines(self) -> dict:
@@ -117,6 +121,6 @@ class PathTracer(RenderPass):
             pixels.bind_to_storage_buffer(PASS_SSBO_0)
             prog.run_indirect(pixels, DISPATCH_OFFSET)
         else:
-            prog.run(*groups_2d(data.size, data.views))
+            prog.run(*groups_2d(data.size, data.views, self._group))
         ctx.gl.memory_barrier()
 

@@ -1,4 +1,4 @@
-// Ray-traced G-buffer: one primary ray per pixel of every view (z of the dispatch = view), through
+// Ray-traced G-buffer: one primary ray per pixel of every view (ray_group.glsl: a warp spans views), through
 // the pixel centre + the view's TAA jitter like GBufferRaster samples; the same encoding
 // (gbuf_encode) and the same targets. Alpha-masked materials are cut in the ray query's any-hit step.
 #define GBUF_WRITER 1
@@ -6,8 +6,9 @@
 #include "scene.glsl"
 #include "ray_query.glsl"
 #include "gbuffer.glsl"
+#include "ray_group.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = RAY_GROUP_SIZE) in;
 layout(rgba32f, binding = 0) writeonly uniform image2DArray o_pos;
 layout(rgba16f, binding = 1) writeonly uniform image2DArray o_normal;
 layout(rgba16f, binding = 2) writeonly uniform image2DArray o_face_normal;
@@ -33,8 +34,8 @@ GBufferTexel primary_surface(uint v, ivec2 pixel) {
 }
 
 void main() {
-    ivec3 p = ivec3(gl_GlobalInvocationID);
-    if (any(greaterThanEqual(p.xy, ivec2(views[p.z].clip.zw)))) return;
+    ivec3 p = ray_group_pixel();
+    if (uint(p.z) >= view_count() || any(greaterThanEqual(p.xy, ivec2(views[p.z].clip.zw)))) return;
     GBufferTexel t = primary_surface(uint(p.z), p.xy);
     imageStore(o_pos, p, t.pos);
     imageStore(o_normal, p, t.normal);

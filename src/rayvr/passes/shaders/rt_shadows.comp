@@ -6,7 +6,7 @@
 #include "shading.glsl"
 
 #if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
-layout(local_size_x = TILE_X, local_size_y = TILE_Y, local_size_z = 1) in;
+layout(local_size_x = RAY_GROUP_SIZE) in;
 #else           // the pixels on the list
 layout(local_size_x = PIXEL_LIST_GROUP) in;
 #endif

@@ -10,11 +10,12 @@
 #include "pixel_list.glsl"
 #endif
 #include "path.glsl"
+#include "ray_group.glsl"
 
 #if PT_PIXEL_LIST
 layout(local_size_x = PIXEL_LIST_GROUP) in;
 #else
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+layout(local_size_x = RAY_GROUP_SIZE) in;
 #endif
 layout(rgba32f, binding = 0) writeonly uniform image2DArray dst;
 uniform int pt_samples;
@@ -78,7 +79,7 @@ void main() {
     if (i >= pixel_count) return;
     ivec3 p = pixel_list_unpack(pixel_items[i]);
 #else
-    ivec3 p = ivec3(gl_GlobalInvocationID);
+    ivec3 p = ray_group_pixel();
     if (any(greaterThanEqual(p, imageSize(dst)))) return;
 #if PT_FROM_GBUFFER
     if (gbuf_effect_of(texelFetch(gbuf_effect, p, 0).x) != EFFECT_PATH_TRACED) {

@@ -1,0 +1,20 @@
+// The workgroup shape of the ray passes' image-wide dispatches: RAY_GROUP_X x RAY_GROUP_Y pixels
+// in each of RAY_GROUP_Z consecutive views (rayvr.passes._common.ray_group), views innermost, so a
+// warp holds the same few pixels of several neighbouring views: in a camera grid those rays are
+// nearly parallel and hit nearly the same surfaces. The dispatch is (pixels / X, pixels / Y,
+// views / Z) workgroups of RAY_GROUP_SIZE invocations (the shader declares its local size: an
+// #include is expanded even inside a false #if, so this file declares no layout). With
+// RAY_GROUP_Z 1 this is the usual X x Y tile of one view.
+#pragma once
+#ifdef RAY_GROUP_Z
+
+#define RAY_GROUP_SIZE (RAY_GROUP_X * RAY_GROUP_Y * RAY_GROUP_Z)
+
+// This invocation's (x, y, view); may lie past the image or the last view: callers bound it.
+ivec3 ray_group_pixel() {
+    uint lane = gl_LocalInvocationIndex;
+    uint tile = lane / uint(RAY_GROUP_Z);
+    uvec3 local = uvec3(tile % uint(RAY_GROUP_X), tile / uint(RAY_GROUP_X), lane % uint(RAY_GROUP_Z));
+    return ivec3(gl_WorkGroupID * uvec3(RAY_GROUP_X, RAY_GROUP_Y, RAY_GROUP_Z) + local);
+}
+#endif
