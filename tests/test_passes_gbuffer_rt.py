@@ -201,3 +201,27 @@ def test_hybrid_with_rt_gbuffer_saves_and_loads(tmp_path, suffix):
     loaded = rv.RenderGraph.load(g.save(tmp_path / f"hybrid{suffix}"))
     gb = loaded.passes["GBuffer"]
     assert type(gb).__name__ == "GBufferAuto" and gb.mode == "rt"
+
+
+def test_rt_reads_textures_at_the_level_the_raster_chooses(gpu):
+    # A checkerboard of single texels seen from afar: each pixel covers many texels, so the
+    # raster's derivatives pick a coarse mip level (flat grey), and so must GBufferRT's ray cones;
+    # reading level 0 would alias into black and white pixels.
+    from rayvr.materials.material import TextureRef
+    from rayvr.scene.model import Texture
+
+    n = 256
+    checks = (np.indices((n, n)).sum(axis=0) % 2 * 255).astype(np.uint8)
+    img = np.stack([checks, checks, checks, np.full((n, n), 255, np.uint8)], axis=-1)
+    scene = builtin.quad(material=Material("Checker", metallic=0.0, base_color_texture=TextureRef(0)))
+    scene.textures.append(Texture(img))
+    out = render_both(scene, 1, (24, 24))
+    grey = {}
+    for kind in out:
+        mask = interior(out[kind]["effect"])[0] & (out[kind]["effect"][0, ..., 0] != 0xFF)
+        assert mask.sum() > 50, f"{kind}: the quad covers too few pixels"
+        base = out[kind]["baseColor"][0][mask][:, :3].astype(np.float64) / 255.0   # rgba8
+        assert base.std() < 0.02, f"{kind}: aliased texture (std {base.std():.3f})"
+        grey[kind] = base.mean()
+    assert 0.1 < grey["raster"] < 0.9
+    assert abs(grey["rt"] - grey["raster"]) < 0.02

@@ -16,7 +16,9 @@
 // Feature #defines (GpuScene.defines(), 0 or 1): SCENE_HAS_TEXTURES, SCENE_HAS_NORMAL_MAPS,
 // SCENE_HAS_ALPHA_MASK, SCENE_HAS_TRANSMISSION, SCENE_HAS_PUNCTUAL_LIGHTS,
 // SCENE_HAS_EMISSIVE_TRIANGLES, SCENE_HAS_INSTANCING. Define SCENE_MATERIAL_IMPLICIT_LOD 1 in a
-// fragment shader to sample material textures with mip selection (elsewhere level 0 is read).
+// fragment shader to sample material textures with mip selection; ray passes pass a ray cone's
+// footprint instead (surface_at_cone, material_params_at: Akenine-Moeller et al., "Texture Level of
+// Detail Strategies for Real-Time Ray Tracing", Ray Tracing Gems ch. 20), or read level 0.
 #pragma once
 
 #ifndef SCENE_HAS_TEXTURES
@@ -137,21 +139,28 @@ struct MaterialParams {
     bool double_sided;
 };
 
+// uv_lod: log2 of a ray's footprint in (untransformed) uv units; UV_LOD_FINEST reads level 0.
+#define UV_LOD_FINEST -64.0
+
 #if SCENE_HAS_TEXTURES
 bool material_has_texture(uint m, int slot) { return scene_materials[m].tex[2 * slot].w >= 0.0; }
 
-vec4 material_texture(uint m, int slot, vec2 uv) {
+vec4 material_texture(uint m, int slot, vec2 uv, float uv_lod) {
     vec4 r0 = scene_materials[m].tex[2 * slot], r1 = scene_materials[m].tex[2 * slot + 1];
     vec3 st = vec3(dot(r0.xy, uv) + r0.z, dot(r1.xy, uv) + r1.z, r0.w);
 #if SCENE_MATERIAL_IMPLICIT_LOD
     return texture(scene_textures, st);
 #else
-    return textureLod(scene_textures, st, 0.0);
+    // footprint in texels: the slot's KHR_texture_transform scales uv areas by |det|
+    ivec2 size = textureSize(scene_textures, 0).xy;
+    float texel_lod = uv_lod + 0.5 * log2(float(size.x) * float(size.y) * max(abs(r0.x * r1.y - r0.y * r1.x), 1e-30));
+    return textureLod(scene_textures, st, max(texel_lod, 0.0));
 #endif
 }
 #endif
 
-MaterialParams material_params(uint m, vec2 uv) {
+// The material's parameters at uv, textures read for a footprint of 2^uv_lod uv units.
+MaterialParams material_params_at(uint m, vec2 uv, float uv_lod) {
     MaterialData d = scene_materials[m];
     MaterialParams p;
     p.base_color = d.base_color.rgb;
@@ -170,26 +179,28 @@ MaterialParams material_params(uint m, vec2 uv) {
 #endif
 #if SCENE_HAS_TEXTURES
     if (d.tex[2 * TEX_BASE_COLOR].w >= 0.0) {
-        vec4 t = material_texture(m, TEX_BASE_COLOR, uv);
+        vec4 t = material_texture(m, TEX_BASE_COLOR, uv, uv_lod);
         p.base_color *= srgb_to_linear(t.rgb);
         p.alpha *= t.a;
     }
     if (d.tex[2 * TEX_METALLIC_ROUGHNESS].w >= 0.0) {
-        vec4 t = material_texture(m, TEX_METALLIC_ROUGHNESS, uv);
+        vec4 t = material_texture(m, TEX_METALLIC_ROUGHNESS, uv, uv_lod);
         p.roughness *= t.g;
         p.metallic *= t.b;
     }
     if (d.tex[2 * TEX_EMISSIVE].w >= 0.0)
-        p.emissive *= srgb_to_linear(material_texture(m, TEX_EMISSIVE, uv).rgb);
+        p.emissive *= srgb_to_linear(material_texture(m, TEX_EMISSIVE, uv, uv_lod).rgb);
     if (d.tex[2 * TEX_OCCLUSION].w >= 0.0)
-        p.occlusion = mix(1.0, material_texture(m, TEX_OCCLUSION, uv).r, d.tex[2 * TEX_OCCLUSION + 1].w);
+        p.occlusion = mix(1.0, material_texture(m, TEX_OCCLUSION, uv, uv_lod).r, d.tex[2 * TEX_OCCLUSION + 1].w);
 #if SCENE_HAS_TRANSMISSION
     if (d.tex[2 * TEX_TRANSMISSION].w >= 0.0)
-        p.transmission *= material_texture(m, TEX_TRANSMISSION, uv).r;
+        p.transmission *= material_texture(m, TEX_TRANSMISSION, uv, uv_lod).r;
 #endif
 #endif
     return p;
 }
+
+MaterialParams material_params(uint m, vec2 uv) { return material_params_at(m, uv, UV_LOD_FINEST); }
 
 // Alpha of material m at uv against its cutoff (MASK); other modes always pass.
 bool material_alpha_passes(uint m, vec2 uv) {
@@ -197,7 +208,7 @@ bool material_alpha_passes(uint m, vec2 uv) {
     if (scene_materials[m].flags.y != ALPHA_MODE_MASK) return true;
     float a = scene_materials[m].base_color.a;
 #if SCENE_HAS_TEXTURES
-    if (scene_materials[m].tex[2 * TEX_BASE_COLOR].w >= 0.0) a *= material_texture(m, TEX_BASE_COLOR, uv).a;
+    if (scene_materials[m].tex[2 * TEX_BASE_COLOR].w >= 0.0) a *= material_texture(m, TEX_BASE_COLOR, uv, UV_LOD_FINEST).a;
 #endif
     return a >= scene_materials[m].emission_cutoff.a;
 #else
@@ -263,6 +274,7 @@ struct SurfacePoint {
     uint material;
     bool front_face;         // the ray hit the side the winding makes the front
     uint triangle;           // scene triangle
+    float uv_lod;            // log2 of the ray cone's footprint in uv units (UV_LOD_FINEST: none)
 };
 
 vec3 apply_normal_map(SurfacePoint s, uint tri, vec3 w, uint instance) {
@@ -276,7 +288,7 @@ vec3 apply_normal_map(SurfacePoint s, uint tri, vec3 w, uint instance) {
     if (dot(tw, tw) < 1e-20) return s.normal;
     tw = normalize(tw);
     vec3 bw = cross(s.normal, tw) * (t.w < 0.0 ? -1.0 : 1.0);
-    vec3 tn = material_texture(m, TEX_NORMAL, s.uv).xyz * 2.0 - 1.0;
+    vec3 tn = material_texture(m, TEX_NORMAL, s.uv, s.uv_lod).xyz * 2.0 - 1.0;
     tn.xy *= scene_materials[m].tex[2 * TEX_NORMAL + 1].w;
     return safe_normalize(tn.x * tw + tn.y * bw + tn.z * s.normal, s.normal);
 #else
@@ -284,7 +296,9 @@ vec3 apply_normal_map(SurfacePoint s, uint tri, vec3 w, uint instance) {
 #endif
 }
 
-SurfacePoint surface_at(Hit h, vec3 dir) {
+// The hit surface; `cone_width` is the ray cone's width at the hit (render-space units, 0: no
+// cone), from which uv_lod follows: log2(width / |cos|) + log2 of uv units per render-space unit.
+SurfacePoint surface_at_cone(Hit h, vec3 dir, float cone_width) {
     SurfacePoint s;
     uint tri = scene_triangle(h.instance, h.primitive);
     vec3 w = vec3(1.0 - h.barycentrics.x - h.barycentrics.y, h.barycentrics);
@@ -307,8 +321,29 @@ SurfacePoint surface_at(Hit h, vec3 dir) {
          + w.z * vec2(c.position_u.w, c.normal_v.w);
     s.material = scene_triangle_materials[tri];
     s.triangle = tri;
+    s.uv_lod = UV_LOD_FINEST;
+#if SCENE_HAS_TEXTURES
+    if (cone_width > 0.0) {
+        vec2 duv1 = vec2(b.position_u.w, b.normal_v.w) - vec2(a.position_u.w, a.normal_v.w);
+        vec2 duv2 = vec2(c.position_u.w, c.normal_v.w) - vec2(a.position_u.w, a.normal_v.w);
+        float uv_area = abs(duv1.x * duv2.y - duv1.y * duv2.x);
+        float area = length(cross(instance_vector_to_render(h.instance, b.position_u.xyz - a.position_u.xyz),
+                                  instance_vector_to_render(h.instance, c.position_u.xyz - a.position_u.xyz)));
+        float cos_theta = abs(dot(s.geometric_normal, dir)) * inversesqrt(max(dot(dir, dir), 1e-30));
+        if (uv_area > 0.0 && area > 0.0)
+            s.uv_lod = log2(cone_width / max(cos_theta, 1e-3)) + 0.5 * log2(uv_area / area);
+    }
+#endif
 #if SCENE_HAS_NORMAL_MAPS
     s.normal = apply_normal_map(s, tri, w, h.instance);
 #endif
     return s;
+}
+
+SurfacePoint surface_at(Hit h, vec3 dir) { return surface_at_cone(h, dir, 0.0); }
+
+// A ray cone's spread angle after a bounce that sampled its direction with solid-angle `pdf`:
+// the lobe adds ~1/sqrt(pdf) radians (a mirror, delta, adds nothing).
+float cone_spread_after_bounce(float spread, float pdf, bool delta) {
+    return delta ? spread : spread + inversesqrt(max(pdf, 1e-4));
 }

@@ -33,6 +33,10 @@ vec3 view_ray_dir_eye(uint v, vec2 uv) {
     return normalize(vec3(mix(t.x, t.y, uv.x), mix(t.z, t.w, uv.y), -1.0));
 }
 
+// Angle in radians between neighbouring pixels' rays at the centre of view v: the spread of its
+// primary rays' cones (scene.glsl surface_at_cone).
+float view_pixel_spread(uint v) { return (views[v].fov_tan.w - views[v].fov_tan.z) / views[v].clip.w; }
+
 // Render-space primary ray of view v through the point `pixel` in pixels (pixel (x, y)'s centre is
 // (x + 0.5, y + 0.5); callers add their sub-pixel offset or jitter).
 void view_primary_ray(uint v, vec2 pixel, out vec3 origin, out vec3 dir) {

@@ -37,7 +37,7 @@ void main() {
     if (scene_materials[v_material].tex[2 * TEX_NORMAL].w >= 0.0 && dot(v_tangent.xyz, v_tangent.xyz) > 0.0) {
         vec3 t = safe_normalize(v_tangent.xyz - n * dot(n, v_tangent.xyz), vec3(1, 0, 0));
         vec3 b = cross(n, t) * (v_tangent.w < 0.0 ? -1.0 : 1.0);
-        vec3 tn = material_texture(v_material, TEX_NORMAL, v_uv).xyz * 2.0 - 1.0;
+        vec3 tn = material_texture(v_material, TEX_NORMAL, v_uv, UV_LOD_FINEST).xyz * 2.0 - 1.0;
         tn.xy *= scene_materials[v_material].tex[2 * TEX_NORMAL + 1].w;
         n = safe_normalize(tn.x * t + tn.y * b + tn.z * n, n);
     }

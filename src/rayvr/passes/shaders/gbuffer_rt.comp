@@ -1,6 +1,7 @@
 // Ray-traced G-buffer: one primary ray per pixel of every view (ray_group.glsl: a warp spans views), through
 // the pixel centre + the view's TAA jitter like GBufferRaster samples; the same encoding
 // (gbuf_encode) and the same targets. Alpha-masked materials are cut in the ray query's any-hit step.
+// Textures are read at the level of the pixel's ray cone, as the raster's derivatives choose it.
 #define GBUF_WRITER 1
 #include "views.glsl"
 #include "scene.glsl"
@@ -27,10 +28,10 @@ GBufferTexel primary_surface(uint v, ivec2 pixel) {
     float t_far = views_reversed_z() ? 1e30 : views[v].clip.y / depth_per_t;
     Hit hit;
     if (!trace_closest(o + d * t_near, d, t_far - t_near, hit)) return gbuf_no_geometry();
-    SurfacePoint s = surface_at(hit, d);
+    SurfacePoint s = surface_at_cone(hit, d, (t_near + hit.t) * view_pixel_spread(v));
     // as the raster path: the shading normal turned to the side of the (viewer-facing) face normal
     vec3 n = dot(s.normal, s.geometric_normal) < 0.0 ? -s.normal : s.normal;
-    return gbuf_encode(v, s.position, n, s.geometric_normal, material_params(s.material, s.uv), s.material);
+    return gbuf_encode(v, s.position, n, s.geometric_normal, material_params_at(s.material, s.uv, s.uv_lod), s.material);
 }
 
 void main() {

@@ -27,6 +27,8 @@ void main() {
     BsdfParams m = bsdf_params(s.base_color, s.metallic, s.roughness);
     vec3 throughput = vec3(1.0);
     vec3 radiance = vec3(0.0);
+    float cone_spread = view_pixel_spread(uint(p.z));   // the pixel's ray cone, for texture LOD
+    float cone_width = distance(views[p.z].eye.xyz, s.pos) * cone_spread;
     for (int bounce = 0; bounce < MAX_BOUNCES; ++bounce) {
         vec3 l;
         bool valid;
@@ -40,8 +42,10 @@ void main() {
             radiance += throughput * background;
             break;
         }
-        SurfacePoint sp = surface_at(hit, l);
-        MaterialParams mp = material_params(sp.material, sp.uv);
+        cone_spread = cone_spread_after_bounce(cone_spread, mirror ? 0.0 : bsdf_pdf_specular(m, n, v, l), mirror);
+        cone_width += hit.t * cone_spread;
+        SurfacePoint sp = surface_at_cone(hit, l, cone_width);
+        MaterialParams mp = material_params_at(sp.material, sp.uv, sp.uv_lod);
         BsdfParams hm = bsdf_params(mp.base_color, mp.metallic, mp.roughness);
         radiance += throughput * ((mirror ? mp.emissive : vec3(0.0)) + shade_direct(sp.position, sp.normal, sp.geometric_normal, -l, hm, rng));
         // Only surfaces that are themselves reflective carry the path further.

@@ -19,6 +19,8 @@ struct PathVertex {
     vec3 ng;         // geometric normal facing v
     vec3 v;          // towards the previous vertex
     BsdfParams m;
+    float cone_width;    // the path's ray cone at pos (texture level of detail)
+    float cone_spread;   // and its spread angle
 };
 
 float pt_max3(vec3 c) { return max(c.x, max(c.y, c.z)); }
@@ -99,8 +101,10 @@ vec3 pt_trace_from(PathVertex s, inout Rng rng) {
             radiance += beta * pt_background;
             break;
         }
-        SurfacePoint sp = surface_at(hit, l);
-        MaterialParams mp = material_params(sp.material, sp.uv);
+        s.cone_spread = cone_spread_after_bounce(s.cone_spread, pdf, delta);
+        s.cone_width += hit.t * s.cone_spread;
+        SurfacePoint sp = surface_at_cone(hit, l, s.cone_width);
+        MaterialParams mp = material_params_at(sp.material, sp.uv, sp.uv_lod);
 #if SCENE_HAS_EMISSIVE_TRIANGLES
         if (pt_max3(mp.emissive) > 0.0 && (sp.front_face || mp.double_sided)) {
             float w = delta ? 1.0 : power_heuristic(pdf, emissive_light_pdf(sp, hit.instance, s.pos));

@@ -35,6 +35,8 @@ vec3 pt_pixel(ivec3 p) {
     s.ng = g.ng;
     s.v = normalize(views[p.z].eye.xyz - g.pos);
     s.m = bsdf_params(g.base_color, g.metallic, g.roughness);
+    s.cone_spread = view_pixel_spread(uint(p.z));
+    s.cone_width = distance(views[p.z].eye.xyz, g.pos) * s.cone_spread;
     vec3 sum = vec3(0.0);
     for (int k = 0; k < pt_samples; ++k) {
         Rng rng = pt_rng(p, k);
@@ -51,8 +53,9 @@ vec3 pt_sample(ivec3 p, inout Rng rng) {
     view_primary_ray(uint(p.z), vec2(p.xy) + offset, o, d);
     Hit hit;
     if (!trace_closest(o, d, 1e30, hit)) return pt_background;
-    SurfacePoint sp = surface_at(hit, d);
-    MaterialParams mp = material_params(sp.material, sp.uv);
+    float spread = view_pixel_spread(uint(p.z));
+    SurfacePoint sp = surface_at_cone(hit, d, hit.t * spread);
+    MaterialParams mp = material_params_at(sp.material, sp.uv, sp.uv_lod);
     vec3 radiance = (sp.front_face || mp.double_sided) ? mp.emissive : vec3(0.0);
     PathVertex s;
     s.pos = sp.position;
@@ -60,6 +63,8 @@ vec3 pt_sample(ivec3 p, inout Rng rng) {
     s.ng = sp.geometric_normal;
     s.v = -d;
     s.m = bsdf_params(mp.base_color, mp.metallic, mp.roughness);
+    s.cone_spread = spread;
+    s.cone_width = hit.t * spread;
     return radiance + pt_trace_from(s, rng);
 }
 
