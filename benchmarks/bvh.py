@@ -123,6 +123,7 @@ def _timed_gpu_build(tris, repeat):
 def run(args) -> dict:
     from rayvr.gpu import get_context
     from rayvr.scene import GpuScene
+    from rayvr.scene import bvh_wide
     from rayvr.scene.bvh import NODE_BYTES, triangle_bounds
     from rayvr.scene.bvh_gpu import MIN_TRIANGLES
 
@@ -147,6 +148,9 @@ def run(args) -> dict:
         else:
             b, build_ms = _timed_build(lo, hi, args.method, repeat, args.threads)
         cost = b.sah_cost(lo, hi)
+        t0 = time.perf_counter()
+        wide = bvh_wide.collapse(b)
+        collapse_ms = (time.perf_counter() - t0) * 1e3
         ref_ms = ref_cost = None
         if n <= args.ref_max:
             ref, ref_ms = _timed_build(lo, hi, "sah", 1)
@@ -169,6 +173,8 @@ def run(args) -> dict:
             "sah_cost": cost, "ref_sah_cost": _blank(ref_cost),
             "sah_vs_ref": cost / ref_cost if ref_cost else "", "ref_build_ms": _blank(ref_ms),
             "bvh_bytes_per_tri": (b.node_count * NODE_BYTES + n * 48) / max(n, 1),
+            "bvh4_nodes": wide.node_count, "bvh4_collapse_ms": collapse_ms,
+            "bvh4_bytes_per_tri": (wide.nbytes + n * 48) / max(n, 1),
             "gpu_bytes_per_tri": _blank(gpu_bpt), "load_s": load_s,
             "meshes": len(scene.meshes), "gpu_scene_blas_ms": _blank(blas_ms),
             "gpu_build_ms": _blank(gpu_ms), "gpu_first_build_ms": _blank(gpu_first_ms),
@@ -183,10 +189,11 @@ def run(args) -> dict:
                  "CPU Bvh (not needed to trace)")
     notes.append("gpu_scene_blas_ms: what GpuScene spends on its per-mesh BLAS builds and uploads (meshes in "
                  "parallel; SAH for meshes up to 100k triangles)")
-    notes.append("bvh_bytes_per_tri: 64-byte nodes + 48-byte BVH-ordered triangles; gpu_bytes_per_tri adds "
-                 "vertices, indices, materials, instances (all scene buffers)")
+    notes.append("bvh_bytes_per_tri: 64-byte BVH2 nodes + 48-byte BVH-ordered triangles; bvh4_*: the same BVH "
+                 "collapsed to 112-byte BVH4 nodes (bvh_wide.collapse, timed apart); gpu_bytes_per_tri adds "
+                 "vertices, indices, materials, instances (all scene buffers, GpuScene's default width)")
     cols = ["scene", "triangles", "method", "build_ms", "target_ms", "meets_target", "sah_cost", "ref_sah_cost",
             "sah_vs_ref", "ref_build_ms", "gpu_build_ms", "gpu_first_build_ms", "gpu_readback_ms", "gpu_sah_vs_ref",
-            "bvh_bytes_per_tri", "gpu_bytes_per_tri", "meshes", "gpu_scene_blas_ms",
+            "bvh_bytes_per_tri", "bvh4_nodes", "bvh4_bytes_per_tri", "bvh4_collapse_ms", "gpu_bytes_per_tri", "meshes", "gpu_scene_blas_ms",
             "load_s"]
     return {"columns": cols, "rows": rows, "notes": notes}

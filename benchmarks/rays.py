@@ -1,6 +1,8 @@
 """Ray throughput of the GLSL ray-query library: primary and diffuse-bounce rays per second at
 1920x1080, and their ratio to a brute-force ray-triangle roofline on the same GPU.
 
+`--bvh-widths 2,4` times the BVH2 and BVH4 node layouts (GpuScene bvh_width) side by side.
+
 Primary: one camera ray per pixel (trace_closest), from the scene's first camera or one framing
 its bounds. Diffuse: from every primary hit, a cosine-distributed direction about the geometric
 normal, origin moved by offset_ray_origin (trace_closest; incoherent rays). Roofline: every ray
@@ -162,6 +164,10 @@ def add_arguments(parser) -> None:
                              "dispatch over the hit pixels only, in 8x4 screen-tile order")
     parser.add_argument("--stats", action="store_true",
                         help="also count node visits, triangle tests and instance entries per ray (RQ_STATS)")
+    parser.add_argument("--bvh-widths", default="",
+                        help="comma-separated BVH node widths to compare (2: BVH2, 4: BVH4), one GpuScene and "
+                             "one row per width and variant, timed in the same interleaved rounds "
+                             "(default: GpuScene's default width)")
 
 
 def _camera(scene, aspect: float):
@@ -297,15 +303,20 @@ def run(args) -> dict:
     iters = 1 if args.quick else args.iterations
     rounds = 1 if args.quick else max(1, args.rounds)
     variants = parse_variants(args.variants)
+    widths = [int(x) for x in args.bvh_widths.split(",") if x.strip()] or [None]
     folder = Path(tempfile.mkdtemp(prefix="rayvr-rays-"))
     roof = _roofline(gl, caps, folder, 4096 if args.quick else args.roofline_rays,
                      64 if args.quick else args.roofline_tris, iters)
     rows = []
     for spec in specs:
         scene, method = _scene(spec.strip())
-        t0 = time.perf_counter()
-        gs = GpuScene(gpu, scene, bvh_method=method, progress=False)
-        build_s = time.perf_counter() - t0
+        scenes, build_s = {}, {}   # per BVH width
+        for width in widths:
+            t0 = time.perf_counter()
+            scenes[width] = GpuScene(gpu, scene, bvh_method=method, progress=False,
+                                     **({} if width is None else {"bvh_width": width}))
+            build_s[width] = time.perf_counter() - t0
+        gs = scenes[widths[0]]
         pos, right, up, fwd = _camera(scene, w / h)
         per_hit = max(1, min(8, args.diffuse_per_hit))
         queue_layout = args.diffuse_layout == "queue"
@@ -335,20 +346,22 @@ def run(args) -> dict:
                 p["size"] = (w, h)
             return progs
 
-        gs.bind()
         result.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"])
         surfaces.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_1"])
         if stats_buf is not None:
             stats_buf.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_2"])
-        counts = None
-        compiled = [(vname, vdefs, programs({**gs.defines(), **vdefs})) for vname, vdefs in variants]
-        best: dict[str, dict] = {}
+        counts: dict[tuple, dict] = {}
+        compiled = [((width, vname), vdefs, programs({**scenes[width].defines(), **vdefs}))
+                    for width in widths for vname, vdefs in variants]
+        best: dict[tuple, dict] = {}
         warm_until = time.perf_counter() + (0.0 if args.quick else WARM_UP_S)
+        gs.bind()
         while time.perf_counter() < warm_until:   # let the GPU clock up before timing
             compiled[0][2]["primary"].run(*groups)
             gl.finish()
         for _ in range(rounds):   # interleaved rounds; the fastest counts
-            for vname, vdefs, progs in compiled:
+            for key, vdefs, progs in compiled:
+                scenes[key[0]].bind()
                 primary_ms = _time(gl, caps.timer_queries, lambda: progs["primary"].run(*groups), iters)
                 hits = int((np.frombuffer(result.read(w * h * 4), np.float32) > 0).sum())
                 progs["surfaces"].run(*groups)
@@ -360,34 +373,38 @@ def run(args) -> dict:
                 d = np.frombuffer(result.read(), np.float32)
                 if queue_layout:   # pixels off the queue were never written: mark them as no-ray
                     d = np.where(np.tile(np.frombuffer(surfaces.read(), np.float32)[3::8] != 0.0, per_hit), d, -2.0)
-                if stats_buf is not None and counts is None:
-                    counts = _stats(gl, programs({**gs.defines(), **vdefs, "RQ_STATS": 1}), dispatch, stats_buf,
-                                    d > -1.5, w * h)
-                b = best.setdefault(vname, {"primary_ms": primary_ms, "diffuse_ms": diffuse_ms})
+                if stats_buf is not None and key not in counts:
+                    counts[key] = _stats(gl, programs({**scenes[key[0]].defines(), **vdefs, "RQ_STATS": 1}),
+                                         dispatch, stats_buf, d > -1.5, w * h)
+                b = best.setdefault(key, {"primary_ms": primary_ms, "diffuse_ms": diffuse_ms})
                 b["primary_ms"], b["diffuse_ms"] = min(b["primary_ms"], primary_ms), min(b["diffuse_ms"], diffuse_ms)
                 b["hits"], b["bounce_hits"] = hits, int((d > 0).sum())
-        rep = gs.report()
-        for vname, _, _ in compiled:
-            b = best[vname]
+        for key, _, _ in compiled:
+            width, vname = key
+            rep = scenes[width].report()
+            b = best[key]
             primary_ms, diffuse_ms, hits, bounce_hits = b["primary_ms"], b["diffuse_ms"], b["hits"], b["bounce_hits"]
             primary_rate = w * h / (primary_ms / 1e3)
             diffuse_rate = hits * per_hit / (diffuse_ms / 1e3) if hits else 0.0
             rows.append({
-                "scene": spec, "variant": vname, "triangles": gs.triangle_count, "size": f"{w}x{h}",
+                "scene": spec, "variant": vname, "bvh_width": rep["bvh_width"], "triangles": gs.triangle_count,
+                "size": f"{w}x{h}",
                 "primary_ms": primary_ms, "primary_Grays_s": primary_rate / 1e9,
                 "diffuse_ms": diffuse_ms, "diffuse_Grays_s": diffuse_rate / 1e9,
                 "diffuse_per_hit": per_hit, "diffuse_layout": args.diffuse_layout,
                 "primary_hit_frac": hits / (w * h), "diffuse_hit_frac": bounce_hits / max(hits * per_hit, 1),
                 "roofline_Gtests_s": roof / 1e9, "primary_ratio": primary_rate / roof, "diffuse_ratio": diffuse_rate / roof,
-                "gpu_bytes_per_tri": rep["geometry_bytes_per_triangle"], "scene_build_s": build_s,
-                **(counts or {}),
+                "gpu_bytes_per_tri": rep["geometry_bytes_per_triangle"], "scene_build_s": build_s[width],
+                **counts.get(key, {}),
             })
-        result.release(), surfaces.release(), gs.release()
+        result.release(), surfaces.release()
+        for g in scenes.values():
+            g.release()
         if queue is not None:
             queue[0].release()
         if stats_buf is not None:
             stats_buf.release()
-    cols = ["scene", "variant", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_per_hit",
+    cols = ["scene", "variant", "bvh_width", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_per_hit",
             "diffuse_layout", "diffuse_ms", "diffuse_Grays_s",
             "primary_hit_frac", "diffuse_hit_frac", "roofline_Gtests_s", "primary_ratio", "diffuse_ratio",
             "gpu_bytes_per_tri", "scene_build_s"]
@@ -398,5 +415,6 @@ def run(args) -> dict:
              "diffuse rays are cast from primary hits only; rays/s counts those rays",
              "roofline: brute-force ray-triangle tests/s (same test as the traversal, no BVH)"]
     if args.stats:
-        notes.append("stats (first variant): mean internal nodes visited / triangle tests / BLAS entries per ray")
+        notes.append("stats: mean internal nodes visited (BVH2 or BVH4 nodes, by bvh_width) / triangle tests / "
+                     "BLAS entries per ray")
     return {"columns": cols, "rows": rows, "notes": notes}

@@ -1,4 +1,4 @@
-// Ray queries against the two-level BVH of rayvr.scene.GpuScene (see rayvr/scene/bvh.py).
+// Ray queries against the two-level BVH of rayvr.scene.GpuScene (see rayvr/scene/bvh.py, bvh_wide.py).
 //
 //   bool trace_closest(vec3 o, vec3 d, float tmax, out Hit hit)   closest hit in (0, tmax)
 //   bool trace_occluded(vec3 o, vec3 d, float tmax)               any hit in (0, tmax), exits early
@@ -8,23 +8,30 @@
 // tmax <= 1e29. `Hit` is declared in scene.glsl. Both faces are hit; alpha-masked materials
 // are tested in the any-hit step (SCENE_HAS_ALPHA_MASK).
 //
-// Layout (unchanged, the interface of every BVH builder): TLAS and BLAS nodes are BVH2 with both
-// children's boxes in the parent, 64 B = vec4(min0, link0) vec4(max0, count0) vec4(min1, link1)
-// vec4(max1, count1), link/count as uint bits; count 0: link is a node index, count 1..8: a leaf
-// of that many BVH slots from link (< 2**28); a TLAS leaf (count 1) links an instance. Triangle
-// slots are three vec4 (object-space vertices; w of the first: the mesh-local triangle index).
+// Layout (the interface of every BVH builder; RQ_BVH_WIDTH, from GpuScene.defines(), says which
+// one GpuScene uploaded, for both levels). Children's boxes live in the parent, links as uint bits.
+//   RQ_BVH_WIDTH 2 (rayvr/scene/bvh.py): 64 B = vec4(min0, link0) vec4(max0, count0)
+//     vec4(min1, link1) vec4(max1, count1); count 0: link is a node index, count 1..8: a leaf of
+//     that many BVH slots from link (< 2**28). 4 vec4 loads, two rq_box tests per node.
+//   RQ_BVH_WIDTH 4 (rayvr/scene/bvh_wide.py, collapsed from the BVH2): 112 B = the 4 children's
+//     min.x, max.x, min.y, max.y, min.z, max.z (one vec4 each) and uvec4 of their work items (see
+//     rq_item); 7 vec4 loads, one rq_box4 per node; an empty child's box is at 1e30.
+// A TLAS leaf (count 1) links an instance. Triangle slots are three vec4 (object-space vertices;
+// w of the first: the mesh-local triangle index).
 //
 // Traversal: ONE loop over both levels (a TLAS leaf moves the ray into the instance's object
 // space and the loop continues in its BLAS; popping back to the entry depth moves it back), near
-// child first, far child on a per-invocation stack. One node fetch or one leaf per iteration from
-// one call site keeps a warp's lanes in step: 2.5-4x faster on an H100 than nested TLAS/BLAS
-// loops with the BLAS loop inlined at three call sites.
+// child first, the other hit children on a per-invocation stack (BVH4: sorted by entry distance
+// with a 5-comparator network and pushed far to near). One node fetch or one leaf per iteration
+// from one call site keeps a warp's lanes in step: 2.5-4x faster on an H100 than nested
+// TLAS/BLAS loops with the BLAS loop inlined at three call sites.
 //
 // #defines: RQ_TRIANGLE 1 (default) Moeller-Trumbore with edges widened by RQ_EDGE_EPS
 // (barycentric) so shared edges have no cracks; 0 the watertight test of Woop, Benthin & Wald 2013
 // (exact at edges, ~1.5x slower primary rays); 2 the same without its fp64 edge fallback.
-// RQ_STACK_SIZE (64). RQ_STATS 1: count per invocation rq_stat_nodes (internal nodes visited),
-// rq_stat_triangles (triangle tests) and rq_stat_instances (BLAS entries) for the kernel to store.
+// RQ_STACK_SIZE (64). RQ_BVH_WIDTH 2 or 4 (the uploaded layout). RQ_STATS 1: count per invocation
+// rq_stat_nodes (internal nodes visited, of RQ_BVH_WIDTH), rq_stat_triangles (triangle tests) and
+// rq_stat_instances (BLAS entries) for the kernel to store.
 #pragma once
 #include "scene.glsl"
 
@@ -39,6 +46,9 @@
 #endif
 #ifndef RQ_STATS
 #define RQ_STATS 0
+#endif
+#ifndef RQ_BVH_WIDTH
+#define RQ_BVH_WIDTH 4       // the node layout GpuScene uploaded: 2 (BVH2) or 4 (BVH4); GpuScene.defines() sets it
 #endif
 
 layout(std430, binding = RAYVR_BLAS_NODE_SSBO) readonly buffer RqBlasNodes { vec4 rq_blas_nodes[]; };
@@ -84,6 +94,25 @@ float rq_box(vec3 lo, vec3 hi, vec3 inv, vec3 oi, float tmax) {
     float leave = min(min(tf.x, tf.y), min(tf.z, tmax)) * 1.00000024;
     return enter <= leave ? enter : -1.0;
 }
+
+#if RQ_BVH_WIDTH == 4
+#define RQ_MISS 3.0e38   // rq_box4's distance of a box the ray misses
+
+// rq_box of the 4 child boxes of a BVH4 node at once (struct of arrays: lox holds min.x of
+// children 0..3, ...): entry distances, RQ_MISS where missed. The same float operations per
+// box as rq_box, so both widths enter exactly the same boxes.
+vec4 rq_box4(vec4 lox, vec4 hix, vec4 loy, vec4 hiy, vec4 loz, vec4 hiz, vec3 inv, vec3 oi, float tmax) {
+    vec4 x0 = lox * inv.x - oi.x, x1 = hix * inv.x - oi.x;
+    vec4 y0 = loy * inv.y - oi.y, y1 = hiy * inv.y - oi.y;
+    vec4 z0 = loz * inv.z - oi.z, z1 = hiz * inv.z - oi.z;
+    vec4 enter = max(max(min(x0, x1), min(y0, y1)), max(min(z0, z1), vec4(0.0)));
+    vec4 leave = min(min(max(x0, x1), max(y0, y1)), min(max(z0, z1), vec4(tmax))) * 1.00000024;
+    return mix(vec4(RQ_MISS), enter, lessThanEqual(enter, leave));
+}
+
+// One comparator of the sorting network: (ta, ca) gets the nearer of the two children.
+#define RQ_ORDER(ta, ca, tb, cb) if (tb < ta) { float t_ = ta; ta = tb; tb = t_; uint c_ = ca; ca = cb; cb = c_; }
+#endif
 
 // The per-ray constants of the watertight test in one instance's object space. Coordinates are
 // permuted so that z is the dominant axis of d (swizzles, no dynamic indexing).
@@ -176,7 +205,7 @@ bool rq_triangle(RqRay r, vec3 v0, vec3 v1, vec3 v2, float tmax, out float t, ou
 
 #if RQ_STATS
 // Per-invocation counters (RQ_STATS 1): the calling kernel reads and stores them.
-uint rq_stat_nodes = 0u;       // internal nodes visited (TLAS and BLAS; two box tests each)
+uint rq_stat_nodes = 0u;       // internal nodes visited (TLAS and BLAS; RQ_BVH_WIDTH box tests each)
 uint rq_stat_triangles = 0u;   // ray/triangle tests
 uint rq_stat_instances = 0u;   // BLAS entries (instance transforms)
 #define RQ_COUNT(c) ++c
@@ -247,6 +276,32 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
     while (true) {
         if ((item & RQ_LEAF_BIT) == 0u) {
             RQ_COUNT(rq_stat_nodes);
+#if RQ_BVH_WIDTH == 4
+            uint base = item * 7u;
+            vec4 lox, hix, loy, hiy, loz, hiz, items;
+            if (instance == RQ_NO_INSTANCE) {
+                lox = rq_tlas_nodes[base]; hix = rq_tlas_nodes[base + 1u]; loy = rq_tlas_nodes[base + 2u];
+                hiy = rq_tlas_nodes[base + 3u]; loz = rq_tlas_nodes[base + 4u]; hiz = rq_tlas_nodes[base + 5u];
+                items = rq_tlas_nodes[base + 6u];
+            } else {
+                lox = rq_blas_nodes[base]; hix = rq_blas_nodes[base + 1u]; loy = rq_blas_nodes[base + 2u];
+                hiy = rq_blas_nodes[base + 3u]; loz = rq_blas_nodes[base + 4u]; hiz = rq_blas_nodes[base + 5u];
+                items = rq_blas_nodes[base + 6u];
+            }
+            vec4 t = rq_box4(lox, hix, loy, hiy, loz, hiz, r.inv, r.oi, tmax);
+            uvec4 c = floatBitsToUint(items);
+            // sort the children near to far (misses are RQ_MISS, last): a 5-comparator network
+            RQ_ORDER(t.x, c.x, t.y, c.y); RQ_ORDER(t.z, c.z, t.w, c.w);
+            RQ_ORDER(t.x, c.x, t.z, c.z); RQ_ORDER(t.y, c.y, t.w, c.w);
+            RQ_ORDER(t.y, c.y, t.z, c.z);
+            if (t.x < RQ_MISS) {
+                if (t.w < RQ_MISS && sp < RQ_STACK_SIZE) stack[sp++] = c.w;   // far first: popped last
+                if (t.z < RQ_MISS && sp < RQ_STACK_SIZE) stack[sp++] = c.z;
+                if (t.y < RQ_MISS && sp < RQ_STACK_SIZE) stack[sp++] = c.y;
+                item = c.x;
+                continue;
+            }
+#else
             uint base = item * 4u;
             vec4 n0, n1, n2, n3;
             if (instance == RQ_NO_INSTANCE) {
@@ -271,6 +326,7 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
                 item = go0 ? c0 : c1;
                 continue;
             }
+#endif
         } else if (instance == RQ_NO_INSTANCE) {   // a TLAS leaf: enter the instance's BLAS
             RQ_COUNT(rq_stat_instances);
             instance = item & 0x0FFFFFFFu;

@@ -58,6 +58,17 @@ class Bvh:
         bits = v.view(np.uint32)
         return v, bits[:, :, 0, 3], bits[:, :, 1, 3]     # boxes, link, count
 
+    def relinked(self, leaf_map, node_base: int = 0) -> np.ndarray:
+        """A copy of the GPU nodes placed in a larger buffer: node links + node_base, leaf links
+        (uint32 slots) through leaf_map (e.g. an offset, or the TLAS's slot -> instance)."""
+        nodes = self.nodes.copy()
+        bits = nodes.view(np.uint32)
+        for c in (0, 8):
+            leaf = bits[:, c + 7] > 0
+            bits[leaf, c + 3] = leaf_map(bits[leaf, c + 3])
+            bits[~leaf, c + 3] += np.uint32(node_base)
+        return nodes
+
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) float32 box of every primitive: the root's child boxes, empty slots skipped
         (node boxes are exact min/max of the primitive boxes, so this is bit-exact)."""

@@ -4,7 +4,9 @@ material/light tables and scene textures, and the one-call raster draw of every 
 Layouts are declared in `glsl/scene.glsl`, `glsl/ray_query.glsl` and `glsl/lights.glsl`.
 Per frame, `update(origin)` rewrites only what depends on the origin or on edits: instance
 transforms (render space), the TLAS over instances, punctual lights, and materials when
-`scene.materials.version` moved.
+`scene.materials.version` moved. `bvh_width` picks the node layout of both BVH levels: 2 (bvh.py's
+BVH2) or 4 (bvh_wide.py's BVH4, collapsed from the same BVH2 builds); ray_query.glsl follows
+the RQ_BVH_WIDTH of `defines()`.
 """
 from __future__ import annotations
 
@@ -16,12 +18,15 @@ from ..errors import GpuError, SceneError
 from ..gpu.bindings import BINDINGS
 from ..materials.material import TEXTURE_SLOTS, Material
 from . import bvh as bvh_mod
+from . import bvh_wide
 from .model import FEATURES, Scene
 
 MATERIAL_FLOATS = 64          # 256 B, see MaterialData
 INSTANCE_FLOATS = 28          # 6 vec4 + uvec4
 MAX_TEXTURE_SIZE = 2048
 GPU_BVH_MIN = 200_000         # 'auto' builds meshes this big on the GPU (hardware drivers only)
+BVH_WIDTHS = (2, 4)
+_NODE_FLOATS = {2: bvh_mod.NODE_FLOATS, 4: bvh_wide.NODE_FLOATS}
 
 
 def _luminance(rgb) -> np.ndarray:
@@ -57,7 +62,11 @@ def pack_materials(materials, texture_layers: dict[int, int] | None = None) -> n
 class GpuScene:
     """GPU buffers, BVH and textures of one `Scene`. Build once; `update(origin)` per frame."""
 
-    def __init__(self, gpu, scene: Scene, bvh_method: str = "auto", progress: bool | None = None):
+    def __init__(self, gpu, scene: Scene, bvh_method: str = "auto", progress: bool | None = None,
+                 bvh_width: int = 4):
+        if bvh_width not in BVH_WIDTHS:
+            raise SceneError(f"GpuScene bvh_width: {bvh_width!r}; use one of {BVH_WIDTHS}")
+        self.bvh_width = bvh_width
         self.gpu = gpu
         self.gl = gpu.gl if hasattr(gpu, "gl") else gpu
         self.scene = scene
@@ -96,9 +105,10 @@ class GpuScene:
         t0 = time.perf_counter()
         s = self.scene
         self.blas: list[bvh_mod.Bvh] = self._build_blas(method, progress)
+        self._blas_gpu = [None if b is None else bvh_wide.for_width(b, self.bvh_width) for b in self.blas]
         first_v = self._first_v = np.cumsum([0] + [len(m.positions) for m in s.meshes])
         first_t = self._first_t = np.cumsum([0] + [m.triangle_count for m in s.meshes])
-        first_n = self._first_n = np.cumsum([0] + [0 if b is None else b.node_count for b in self.blas])
+        first_n = self._first_n = np.cumsum([0] + [0 if b is None else b.node_count for b in self._blas_gpu])
         self.triangle_count = t_total = int(first_t[-1])
         if t_total >= bvh_mod.MAX_LEAF_LINK or len(s.instances) >= bvh_mod.MAX_LEAF_LINK:
             raise SceneError(f"scene '{s.name}': {t_total} triangles / {len(s.instances)} instances; "
@@ -109,7 +119,7 @@ class GpuScene:
         idx = np.empty((t_total, 3), np.uint32)
         tri_mats = np.empty(t_total, np.uint32)
         slots = np.zeros((t_total, 3, 4), np.float32)   # a BVH slot per triangle (empty meshes have none)
-        nodes = np.empty((first_n[-1], bvh_mod.NODE_FLOATS), np.float32)
+        nodes = np.empty((first_n[-1], self._node_floats), np.float32)
         self._mesh_corners = np.zeros((max(len(s.meshes), 1), 8, 4))
         for k, mesh in enumerate(s.meshes):
             v, t, n = (slice(f[k], f[k + 1]) for f in (first_v, first_t, first_n))
@@ -125,7 +135,7 @@ class GpuScene:
         self._buffer("indices", idx if any_mesh else np.zeros(3, np.uint32))
         self._buffer("triangle_materials", tri_mats if any_mesh else np.zeros(1, np.uint32))
         self._buffer("triangles", slots if any_bvh else np.zeros((1, 3, 4), np.float32))
-        self._buffer("blas_nodes", nodes if any_bvh else np.zeros((1, 16), np.float32))
+        self._buffer("blas_nodes", nodes if any_bvh else np.zeros((1, self._node_floats), np.float32))
         self._buffer("meshes", np.stack([first_n[:-1], first_t[:-1], first_t[:-1], np.diff(first_t)],
                                         axis=1).astype(np.uint32).reshape(-1, 4))
         if normal_maps:
@@ -145,11 +155,8 @@ class GpuScene:
             return
         slots[:, :, :3] = mesh.positions[mesh.indices[b.order]]
         slots.view(np.uint32)[:, 0, 3] = b.order
-        nodes[:] = b.nodes
-        bits = nodes.view(np.uint32)
-        t_base, n_base = np.uint32(self._first_t[k]), np.uint32(self._first_n[k])
-        for c in (0, 8):   # count > 0: a leaf, its link a triangle slot; else a node index
-            bits[:, c + 3] += np.where(bits[:, c + 7] > 0, t_base, n_base)
+        t_base = np.uint32(self._first_t[k])
+        nodes[:] = self._blas_gpu[k].relinked(lambda slot: slot + t_base, int(self._first_n[k]))
         lo, hi = b.bounds()
         self._mesh_corners[k] = [[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
 
@@ -308,18 +315,18 @@ class GpuScene:
         self._buffer("instances", np.concatenate([header.view(np.float32), rows.reshape(-1)]))
         self._build_tlas(live, w.min(axis=1), w.max(axis=1))
 
+    @property
+    def _node_floats(self) -> int:
+        return _NODE_FLOATS[self.bvh_width]
+
     def _build_tlas(self, live: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
         if not len(live):
-            self._buffer("tlas_nodes", np.zeros((1, 16), np.float32))
+            self._buffer("tlas_nodes", np.zeros((1, self._node_floats), np.float32))
             return
         pad = 1e-6 * np.maximum(np.abs(lo[live]), np.abs(hi[live])).max(axis=1, keepdims=True)
         t = bvh_mod.build(lo[live] - pad, hi[live] + pad, method="sah" if len(live) < 4096 else "lbvh",
                           leaf_size=1, progress=False)
-        nodes = t.nodes.copy()
-        bits = nodes.view(np.uint32)
-        for c in (0, 8):
-            leaf = bits[:, c + 7] > 0
-            bits[leaf, c + 3] = live[t.order[bits[leaf, c + 3]]].astype(np.uint32)
+        nodes = bvh_wide.for_width(t, self.bvh_width).relinked(lambda slot: live[t.order[slot]])
         self._buffer("tlas_nodes", nodes)
 
     def _upload_lights(self) -> None:
@@ -358,8 +365,10 @@ class GpuScene:
 
     def defines(self) -> dict[str, int | str]:
         """The #defines every shader that includes the scene library is built with: the feature
-        flags (0 or 1) and SCENE_SCALE, the scene's extent in metres (ray offsets scale with it)."""
-        return {**{f: int(f in self.features) for f in FEATURES}, "SCENE_SCALE": repr(self.scale)}
+        flags (0 or 1), SCENE_SCALE, the scene's extent in metres (ray offsets scale with it), and
+        RQ_BVH_WIDTH, the node layout of the uploaded BVHs."""
+        return {**{f: int(f in self.features) for f in FEATURES}, "SCENE_SCALE": repr(self.scale),
+                "RQ_BVH_WIDTH": self.bvh_width}
 
     @property
     def scale(self) -> float:
@@ -418,10 +427,10 @@ class GpuScene:
         v_base, t_base, n_base = (int(f[mesh]) for f in (self._first_v, self._first_t, self._first_n))
         verts = np.zeros((len(pos), 8), np.float32)
         slots = np.zeros((m.triangle_count, 3, 4), np.float32)
-        nodes = np.empty((0 if b is None else b.node_count, bvh_mod.NODE_FLOATS), np.float32)
+        nodes = np.empty((0 if b is None else self._blas_gpu[mesh].node_count, self._node_floats), np.float32)
         self._pack_mesh(mesh, verts, slots, nodes)
         for name, data, offset in (("vertices", verts, v_base * 32), ("triangles", slots, t_base * 48),
-                                   ("blas_nodes", nodes, n_base * bvh_mod.NODE_BYTES)):
+                                   ("blas_nodes", nodes, n_base * nodes.itemsize * self._node_floats)):
             if len(data):
                 self.buffers[name].write(data, offset=offset)
         self._last_instances = None
@@ -455,7 +464,8 @@ class GpuScene:
             "texture_bytes": self.nbytes - sum(b.size for b in self.buffers.values()),
             "bytes_per_triangle": self.nbytes / max(self.triangle_count, 1),
             "geometry_bytes_per_triangle": sum(b.size for b in self.buffers.values()) / max(self.triangle_count, 1),
-            "blas_nodes": sum(b.node_count for b in self.blas if b is not None),
+            "bvh_width": self.bvh_width,
+            "blas_nodes": sum(b.node_count for b in self._blas_gpu if b is not None),
             "emissive_triangles": self.emissive_count,
             "punctual_light_kinds": sorted({("point", "spot", "directional")[L.type] for L in self.scene.lights}),
             "timings_ms": dict(self.timings),
