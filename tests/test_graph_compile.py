@@ -13,11 +13,13 @@ from rayvr.rendergraph.profile import RollingTimes
 class Maybe(RenderPass):
     """Clear-like pass the scene may not need (skip_reason), with an optional input."""
 
-    PROPERTIES = {"skip": "", "value": 128 / 255}   # no .5 tie in unorm8
+    PROPERTIES = {"skip": "", "value": 128 / 255, "ignore_src": ""}   # no .5 tie in unorm8
 
     def reflect(self, cd):
         r = Reflection()
-        r.add_input("src").optional()
+        src = r.add_input("src").optional()
+        if self.ignore_src:
+            src.unused(self.ignore_src)
         r.add_output("dst").format("rgba8")
         return r
 
@@ -89,6 +91,27 @@ def test_different_formats_and_internal_pins_do_not_alias(gpu):
     assert plan.resources["H.prev"].internal
 
 
+def test_a_source_read_only_by_unused_inputs_is_pruned_and_not_allocated(gpu):
+    g = RenderGraph("Unused")
+    g.add_pass(Clear(format="rgba16f"), "Lists")         # read by nobody who needs it
+    g.add_pass(Clear(format="rgba16f"), "Shared")        # read by a used and an unused input
+    g.add_pass(Maybe({"ignore_src": "runs over the whole image"}), "Ignores")
+    g.add_pass(Maybe({"ignore_src": "not this time"}), "AlsoIgnores")
+    g.add_pass(Blit(), "Reads")
+    g.add_edge("Lists.dst", "Ignores.src")
+    g.add_edge("Shared.dst", "AlsoIgnores.src")
+    g.add_edge("Shared.dst", "Reads.src")
+    for out in ("Ignores.dst", "AlsoIgnores.dst", "Reads.dst"):
+        g.mark_output(out)
+    cg = g.compile(size=(4, 4), views=1, gpu=gpu)
+    assert cg.report().pruned == {"Lists": "feeds only inputs their passes leave unused: Ignores.src "
+                                           "(runs over the whole image)"}
+    assert "Lists.dst" not in cg.plan.resources
+    assert cg.plan.bindings["AlsoIgnores"]["src"] is None and cg.plan.bindings["Reads"]["src"] == "Shared.dst"
+    cg.execute(cg.make_context())
+    assert g.get_pass("Ignores").saw_input is False
+
+
 def test_prune_unused_skipped_and_chains_with_reasons(gpu):
     g = RenderGraph("Prune")
     g.add_pass(Clear(format="rgba8"), "Base")
@@ -113,7 +136,7 @@ def test_prune_unused_skipped_and_chains_with_reasons(gpu):
     assert p["NeedsRefl"] == ("required input 'src' comes from 'Refl', which was pruned "
                               "(Refl: no material uses REFLECTIONS)")
     assert p["Dangling"] == "feeds no marked output"
-    assert p["FeedsOnlyPruned"] == "feeds only pruned passes"
+    assert p["FeedsOnlyPruned"] == "feeds only pruned passes (Refl)"
     cg.execute(cg.make_context())
     assert g.get_pass("UsesReflOptionally").saw_input is False
     assert cg.plan.compile_data["UsesReflOptionally"].input_formats == {}

@@ -70,3 +70,7 @@ def test_ray_passes_run_on_the_image_unless_a_material_is_path_traced(gpu, path_
     with Renderer(scene, rv.graphs.hybrid(), views=default_views(scene, 1, (8, 8)), gpu=gpu) as r:
         assert r.compiled.passes["Reflections"].defines()["PIXELS_2D"] == int(not path_traced)
         assert r.compiled.passes["Shadows"].defines()["PIXELS_2D"] == int(not path_traced)
+        # the pixel lists are made only when a pass reads them; the report says why not
+        assert ("Compaction" in r.compiled.plan.order) == path_traced
+        assert ("leave unused: Shadows.pixels (runs over the whole image" in str(r.report())) == (not path_traced)
+        assert ("PIXEL_LIST_SSBO" in r.compiled.passes["Shadows"].defines()) == path_traced

@@ -25,11 +25,14 @@ def test_frames_drive_the_headset_and_effects_switch_at_run_time(gpu):
             orders.append((frame.index, r.compiles))
             assert frame.views is not None and len(frame.views) == 2
         final_order = list(r.compiled.plan.order)
+        final_pruned = dict(r.compiled.plan.pruned)
         out = r.read_output()
         prof = r.profile()
     assert [i for i, _ in orders] == [0, 1, 2, 3]
     assert r.compiles == 2                      # the RASTER -> REFLECTIONS switch only
-    assert {"Shadows", "Reflections", "Compaction"} <= set(final_order)
+    assert {"Shadows", "Reflections"} <= set(final_order)
+    # both ray passes run over the whole image (nothing is PATH_TRACED): nobody reads the lists
+    assert "inputs their passes leave unused: Shadows.pixels" in final_pruned["Compaction"]
     assert headset.stats()["frames"] == 4
     assert out.shape == (2, 20, 24, 4) and out.dtype == np.uint8
     assert set(prof.passes) >= {"GBuffer", "Reflections", "ToneMap"}

@@ -18,10 +18,13 @@ layout(std430, binding = PIXEL_LIST_SSBO) readonly buffer PixelList {
     uint pixel_dispatch[3];
     uint pixel_items[];
 };
+#endif
 
+#if defined(PIXEL_LIST_SSBO) || PIXELS_2D
 // The pixel a ray pass's invocation works on; false when it has none. From the list (dispatched
 // indirectly, PIXEL_LIST_GROUP threads a group), or with PIXELS_2D the invocation's own pixel of
-// the image when its effect is min_effect or above (then gbuffer.glsl must come first).
+// the image when its effect is min_effect or above (then gbuffer.glsl must come first, and no
+// list is declared).
 bool ray_pass_pixel(uint min_effect, ivec3 image_size, out ivec3 p) {
 #if PIXELS_2D
     p = ray_group_pixel();

@@ -59,8 +59,10 @@ class _GBufferLightingPass(RenderPass):
         r = Reflection()
         add_gbuffer_inputs(r)
         if self.PIXEL_LIST:
-            r.add_input(self.PIXEL_LIST, "pixels to work on (EffectCompaction)").buffer(
+            pin = r.add_input(self.PIXEL_LIST, "pixels to work on (EffectCompaction)").buffer(
                 pixel_list_bytes(cd.size, cd.views))
+            if self._dispatch_2d(cd):
+                pin.unused("runs over the whole image: no material is PATH_TRACED")
         r.add_output(self.OUTPUT, self.OUTPUT_DESC).format("rgba16f")
         return r
 
@@ -69,10 +71,12 @@ class _GBufferLightingPass(RenderPass):
 
     def compile(self, ctx, cd):
         self._defines = {**scene_defines(ctx), **effect_defines(), **GBUFFER_UNITS,
-                         "PIXEL_LIST_SSBO": PASS_SSBO_0, "RNG_SALT": self.SALT, **self.shader_defines()}
+                         "RNG_SALT": self.SALT, **self.shader_defines()}
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
         self._group = ray_group(cd.views, self.TILE)
         self._defines.update(PIXELS_2D=int(self._pixels_2d), **ray_group_defines(self._group))
+        if self.PIXEL_LIST and not self._pixels_2d:
+            self._defines["PIXEL_LIST_SSBO"] = PASS_SSBO_0
         self._prog = build_compute(ctx.gl, self.SHADER, self._defines)
 
     def _dispatch_2d(self, cd) -> bool:
@@ -96,14 +100,12 @@ class _GBufferLightingPass(RenderPass):
         data[self.OUTPUT].bind_to_image(0, read=False, write=True)
         if not self.PIXEL_LIST:
             self._prog.run(*groups_2d(data.size, data.views))
+        elif self._pixels_2d:   # the shader declares no list (the compaction pass was pruned)
+            self._prog.run(*groups_2d(data.size, data.views, self._group))
         else:
-            # Bound also when unused: without it the H100's driver stalls ~60 ms a frame (measured).
             pixels = data[self.PIXEL_LIST]
             pixels.bind_to_storage_buffer(PASS_SSBO_0)
-            if self._pixels_2d:
-                self._prog.run(*groups_2d(data.size, data.views, self._group))
-            else:
-                self._prog.run_indirect(pixels, DISPATCH_OFFSET)
+            self._prog.run_indirect(pixels, DISPATCH_OFFSET)
         ctx.gl.memory_barrier()
 
 

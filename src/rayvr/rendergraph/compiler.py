@@ -182,12 +182,19 @@ def plan_graph(graph, scene=None, size=(64, 64), views: int = 1, caps=None) -> P
         _check_pin(reflections[p], p, type(passes[p]).__name__, pin, PinDirection.OUTPUT,
                    f"mark_output('{ref}')")
 
-    # Prune: feeds no marked output; skip_reason; required input from a pruned pass.
+    # Prune: feeds no marked output (edges into unused inputs keep nothing alive); skip_reason;
+    # required input from a pruned pass.
+    unused = {(e.dst_pass, e.dst_pin): reflections[e.dst_pass].pins[e.dst_pin].unused_reason
+              for e in into.values() if reflections[e.dst_pass].pins[e.dst_pin].unused_reason}
+    live = nx.DiGraph()
+    live.add_nodes_from(passes)
+    live.add_edges_from((e.src_pass, e.dst_pass) for e in edges
+                        if not (e.is_data and (e.dst_pass, e.dst_pin) in unused))
     out_passes = {split_pin(r)[0] for r in outputs}
     reach = set(out_passes)
     for p in out_passes:
-        reach |= nx.ancestors(g, p)
-    pruned: dict[str, str] = {p: "feeds no marked output" for p in full_order if p not in reach}
+        reach |= nx.ancestors(live, p)
+    pruned: dict[str, str] = {p: _unreached_reason(p, edges, unused, {}) for p in full_order if p not in reach}
     for p in full_order:
         if p in pruned:
             continue
@@ -202,13 +209,13 @@ def plan_graph(graph, scene=None, size=(64, 64), views: int = 1, caps=None) -> P
                              f"({e.src_pass}: {pruned[e.src_pass]})")
                 break
     kept_outputs = [r for r in outputs if split_pin(r)[0] not in pruned]
-    kept = g.subgraph([p for p in full_order if p not in pruned])
+    kept = live.subgraph([p for p in full_order if p not in pruned])
     reach = {split_pin(r)[0] for r in kept_outputs}
     for p in list(reach):
         reach |= nx.ancestors(kept, p)
     for p in full_order:
         if p not in pruned and p not in reach:
-            pruned[p] = "feeds only pruned passes"
+            pruned[p] = _unreached_reason(p, edges, unused, pruned)
     order = [p for p in full_order if p not in pruned]
     unavailable = {r: pruned[split_pin(r)[0]] for r in outputs if r not in kept_outputs}
 
@@ -230,7 +237,7 @@ def plan_graph(graph, scene=None, size=(64, 64), views: int = 1, caps=None) -> P
             ref = f"{p}.{pin.name}"
             if pin.direction is PinDirection.INPUT:
                 e = into.get((p, pin.name))
-                if e is None or e.src_pass in pruned:
+                if e is None or e.src_pass in pruned or pin.unused_reason:
                     bind[pin.name] = None
                     continue
                 res = resources[e.src]
@@ -251,6 +258,17 @@ def plan_graph(graph, scene=None, size=(64, 64), views: int = 1, caps=None) -> P
         pin: f for pin, f in cds[p].input_formats.items() if bindings[p].get(pin) is not None}) for p in order}
     return Plan(name, size, int(views), order, pruned, reflections, compile_data,
                 resources, bindings, slots, kept_outputs, unavailable)
+
+
+def _unreached_reason(p: str, edges, unused: dict, pruned: dict) -> str:
+    """Why pass `p` reaches no marked output: the pruned passes and the unused inputs it feeds."""
+    out = [e for e in edges if e.src_pass == p]
+    dead = sorted({e.dst_pass for e in out if e.dst_pass in pruned})
+    idle = [f"{e.dst} ({unused[(e.dst_pass, e.dst_pin)]})" for e in out
+            if e.is_data and (e.dst_pass, e.dst_pin) in unused and e.dst_pass not in pruned]
+    parts = ([f"pruned passes ({', '.join(dead)})"] if dead else []) + \
+        ([f"inputs their passes leave unused: {', '.join(idle)}"] if idle else [])
+    return f"feeds only {' and '.join(parts)}" if parts else "feeds no marked output"
 
 
 def _check_compatible(e: Edge, out: Pin, inp: Pin, shape: tuple, size) -> None:

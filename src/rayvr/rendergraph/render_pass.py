@@ -49,6 +49,7 @@ class Pin:
     layers: int | None = None        # None: one layer per view
     byte_size: int = 0               # buffers
     is_optional: bool = False
+    unused_reason: str | None = None  # an input this configuration does not read (see unused())
     mip_levels: int = 1
 
     def format(self, name: str) -> "Pin":
@@ -60,6 +61,13 @@ class Pin:
     def optional(self, flag: bool = True) -> "Pin":
         """An optional input: the pass still runs when it is unconnected or its source is pruned."""
         self.is_optional = flag
+        return self
+
+    def unused(self, reason: str) -> "Pin":
+        """An input the pass, as compiled for this scene and graph, does not read (`reason` says
+        why): its edge keeps nothing alive, so a source that feeds only unused inputs is pruned."""
+        self.unused_reason = reason
+        self.is_optional = True
         return self
 
     def texture_size(self, width: int, height: int) -> "Pin":
