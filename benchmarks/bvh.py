@@ -14,6 +14,7 @@ displaced-grid terrain of about N triangles).
 """
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 from pathlib import Path
@@ -151,6 +152,10 @@ def run(args) -> dict:
         t0 = time.perf_counter()
         wide = bvh_wide.collapse(b)
         collapse_ms = (time.perf_counter() - t0) * 1e3
+        quantized = dataclasses.replace(wide, quantized=True)
+        t0 = time.perf_counter()
+        quantized.nodes
+        quantize_ms = (time.perf_counter() - t0) * 1e3
         ref_ms = ref_cost = None
         if n <= args.ref_max:
             ref, ref_ms = _timed_build(lo, hi, "sah", 1)
@@ -175,6 +180,8 @@ def run(args) -> dict:
             "bvh_bytes_per_tri": (b.node_count * NODE_BYTES + n * 48) / max(n, 1),
             "bvh4_nodes": wide.node_count, "bvh4_collapse_ms": collapse_ms,
             "bvh4_bytes_per_tri": (wide.nbytes + n * 48) / max(n, 1),
+            "bvh4q_bytes_per_tri": (wide.node_count * bvh_wide.QUANTIZED_NODE_BYTES + n * 48) / max(n, 1),
+            "bvh4q_pack_ms": quantize_ms,
             "gpu_bytes_per_tri": _blank(gpu_bpt), "load_s": load_s,
             "meshes": len(scene.meshes), "gpu_scene_blas_ms": _blank(blas_ms),
             "gpu_build_ms": _blank(gpu_ms), "gpu_first_build_ms": _blank(gpu_first_ms),
@@ -190,10 +197,12 @@ def run(args) -> dict:
     notes.append("gpu_scene_blas_ms: what GpuScene spends on its per-mesh BLAS builds and uploads (meshes in "
                  "parallel; SAH for meshes up to 100k triangles)")
     notes.append("bvh_bytes_per_tri: 64-byte BVH2 nodes + 48-byte BVH-ordered triangles; bvh4_*: the same BVH "
-                 "collapsed to 112-byte BVH4 nodes (bvh_wide.collapse, timed apart); gpu_bytes_per_tri adds "
-                 "vertices, indices, materials, instances (all scene buffers, GpuScene's default width)")
+                 "collapsed to 112-byte BVH4 nodes (bvh_wide.collapse, timed apart); bvh4q_*: the same collapse "
+                 "quantised to 64-byte nodes (bvh4q_pack_ms: packing without the collapse); gpu_bytes_per_tri adds "
+                 "vertices, indices, materials, instances (all scene buffers, GpuScene's default layout)")
     cols = ["scene", "triangles", "method", "build_ms", "target_ms", "meets_target", "sah_cost", "ref_sah_cost",
             "sah_vs_ref", "ref_build_ms", "gpu_build_ms", "gpu_first_build_ms", "gpu_readback_ms", "gpu_sah_vs_ref",
-            "bvh_bytes_per_tri", "bvh4_nodes", "bvh4_bytes_per_tri", "bvh4_collapse_ms", "gpu_bytes_per_tri", "meshes", "gpu_scene_blas_ms",
+            "bvh_bytes_per_tri", "bvh4_nodes", "bvh4_bytes_per_tri", "bvh4_collapse_ms",
+            "bvh4q_bytes_per_tri", "bvh4q_pack_ms", "gpu_bytes_per_tri", "meshes", "gpu_scene_blas_ms",
             "load_s"]
     return {"columns": cols, "rows": rows, "notes": notes}

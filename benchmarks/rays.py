@@ -1,7 +1,8 @@
 """Ray throughput of the GLSL ray-query library: primary and diffuse-bounce rays per second at
 1920x1080, and their ratio to a brute-force ray-triangle roofline on the same GPU.
 
-`--bvh-widths 2,4` times the BVH2 and BVH4 node layouts (GpuScene bvh_width) side by side.
+`--bvh-layouts bvh2,bvh4,bvh4q` times the GPU node layouts (GpuScene bvh_layout: 64 B BVH2, 112 B
+BVH4, 64 B quantised BVH4) side by side.
 
 Primary: one camera ray per pixel (trace_closest), from the scene's first camera or one framing
 its bounds. Diffuse: from every primary hit, a cosine-distributed direction about the geometric
@@ -164,10 +165,10 @@ def add_arguments(parser) -> None:
                              "dispatch over the hit pixels only, in 8x4 screen-tile order")
     parser.add_argument("--stats", action="store_true",
                         help="also count node visits, triangle tests and instance entries per ray (RQ_STATS)")
-    parser.add_argument("--bvh-widths", default="",
-                        help="comma-separated BVH node widths to compare (2: BVH2, 4: BVH4), one GpuScene and "
-                             "one row per width and variant, timed in the same interleaved rounds "
-                             "(default: GpuScene's default width)")
+    parser.add_argument("--bvh-layouts", default="",
+                        help="comma-separated BVH node layouts to compare (bvh2: 64 B BVH2, bvh4: 112 B BVH4, "
+                             "bvh4q: 64 B quantised BVH4), one GpuScene and one row per layout and variant, "
+                             "timed in the same interleaved rounds (default: GpuScene's default layout)")
 
 
 def _camera(scene, aspect: float):
@@ -303,20 +304,20 @@ def run(args) -> dict:
     iters = 1 if args.quick else args.iterations
     rounds = 1 if args.quick else max(1, args.rounds)
     variants = parse_variants(args.variants)
-    widths = [int(x) for x in args.bvh_widths.split(",") if x.strip()] or [None]
+    layouts = [x.strip() for x in args.bvh_layouts.split(",") if x.strip()] or [None]
     folder = Path(tempfile.mkdtemp(prefix="rayvr-rays-"))
     roof = _roofline(gl, caps, folder, 4096 if args.quick else args.roofline_rays,
                      64 if args.quick else args.roofline_tris, iters)
     rows = []
     for spec in specs:
         scene, method = _scene(spec.strip())
-        scenes, build_s = {}, {}   # per BVH width
-        for width in widths:
+        scenes, build_s = {}, {}   # per BVH layout
+        for layout in layouts:
             t0 = time.perf_counter()
-            scenes[width] = GpuScene(gpu, scene, bvh_method=method, progress=False,
-                                     **({} if width is None else {"bvh_width": width}))
-            build_s[width] = time.perf_counter() - t0
-        gs = scenes[widths[0]]
+            scenes[layout] = GpuScene(gpu, scene, bvh_method=method, progress=False,
+                                      **({} if layout is None else {"bvh_layout": layout}))
+            build_s[layout] = time.perf_counter() - t0
+        gs = scenes[layouts[0]]
         pos, right, up, fwd = _camera(scene, w / h)
         per_hit = max(1, min(8, args.diffuse_per_hit))
         queue_layout = args.diffuse_layout == "queue"
@@ -351,8 +352,8 @@ def run(args) -> dict:
         if stats_buf is not None:
             stats_buf.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_2"])
         counts: dict[tuple, dict] = {}
-        compiled = [((width, vname), vdefs, programs({**scenes[width].defines(), **vdefs}))
-                    for width in widths for vname, vdefs in variants]
+        compiled = [((layout, vname), vdefs, programs({**scenes[layout].defines(), **vdefs}))
+                    for layout in layouts for vname, vdefs in variants]
         best: dict[tuple, dict] = {}
         warm_until = time.perf_counter() + (0.0 if args.quick else WARM_UP_S)
         gs.bind()
@@ -380,21 +381,22 @@ def run(args) -> dict:
                 b["primary_ms"], b["diffuse_ms"] = min(b["primary_ms"], primary_ms), min(b["diffuse_ms"], diffuse_ms)
                 b["hits"], b["bounce_hits"] = hits, int((d > 0).sum())
         for key, _, _ in compiled:
-            width, vname = key
-            rep = scenes[width].report()
+            layout, vname = key
+            rep = scenes[layout].report()
             b = best[key]
             primary_ms, diffuse_ms, hits, bounce_hits = b["primary_ms"], b["diffuse_ms"], b["hits"], b["bounce_hits"]
             primary_rate = w * h / (primary_ms / 1e3)
             diffuse_rate = hits * per_hit / (diffuse_ms / 1e3) if hits else 0.0
             rows.append({
-                "scene": spec, "variant": vname, "bvh_width": rep["bvh_width"], "triangles": gs.triangle_count,
+                "scene": spec, "variant": vname, "bvh_layout": rep["bvh_layout"], "triangles": gs.triangle_count,
                 "size": f"{w}x{h}",
                 "primary_ms": primary_ms, "primary_Grays_s": primary_rate / 1e9,
                 "diffuse_ms": diffuse_ms, "diffuse_Grays_s": diffuse_rate / 1e9,
                 "diffuse_per_hit": per_hit, "diffuse_layout": args.diffuse_layout,
                 "primary_hit_frac": hits / (w * h), "diffuse_hit_frac": bounce_hits / max(hits * per_hit, 1),
                 "roofline_Gtests_s": roof / 1e9, "primary_ratio": primary_rate / roof, "diffuse_ratio": diffuse_rate / roof,
-                "gpu_bytes_per_tri": rep["geometry_bytes_per_triangle"], "scene_build_s": build_s[width],
+                "gpu_bytes_per_tri": rep["geometry_bytes_per_triangle"],
+                "blas_node_bytes_per_tri": rep["blas_node_bytes_per_triangle"], "scene_build_s": build_s[layout],
                 **counts.get(key, {}),
             })
         result.release(), surfaces.release()
@@ -404,10 +406,10 @@ def run(args) -> dict:
             queue[0].release()
         if stats_buf is not None:
             stats_buf.release()
-    cols = ["scene", "variant", "bvh_width", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_per_hit",
+    cols = ["scene", "variant", "bvh_layout", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_per_hit",
             "diffuse_layout", "diffuse_ms", "diffuse_Grays_s",
             "primary_hit_frac", "diffuse_hit_frac", "roofline_Gtests_s", "primary_ratio", "diffuse_ratio",
-            "gpu_bytes_per_tri", "scene_build_s"]
+            "gpu_bytes_per_tri", "blas_node_bytes_per_tri", "scene_build_s"]
     if args.stats:
         cols += [f"{k}_{c}" for k in ("primary", "diffuse") for c in ("nodes", "tris", "instances")]
     notes = [f"timing: {'GPU timer queries' if caps.timer_queries else 'finish + wall clock'}, median of {iters}, "
@@ -415,6 +417,6 @@ def run(args) -> dict:
              "diffuse rays are cast from primary hits only; rays/s counts those rays",
              "roofline: brute-force ray-triangle tests/s (same test as the traversal, no BVH)"]
     if args.stats:
-        notes.append("stats: mean internal nodes visited (BVH2 or BVH4 nodes, by bvh_width) / triangle tests / "
+        notes.append("stats: mean internal nodes visited (BVH2 or BVH4 nodes, by bvh_layout) / triangle tests / "
                      "BLAS entries per ray")
     return {"columns": cols, "rows": rows, "notes": notes}

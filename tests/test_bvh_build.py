@@ -73,15 +73,15 @@ def test_bad_input_is_refused():
         build(lo, lo, "octree")
 
 
-@pytest.mark.parametrize("bvh_width", [2, 4])
-def test_refit_keeps_hits_right(gl, tmp_path, bvh_width):
+@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q"])
+def test_refit_keeps_hits_right(gl, tmp_path, bvh_layout):
     import test_ray_query as rq   # the embree comparison lives there
 
     m = trimesh.creation.icosphere(subdivisions=2)
     s = Scene("refit")
     s.add_material(Material("M"))
     s.add_object("S", m.vertices, m.faces, 0)
-    gs = GpuScene(get_context(), s, bvh_width=bvh_width)
+    gs = GpuScene(get_context(), s, bvh_layout=bvh_layout)
     moved = m.vertices * [1.0, 1.5, 0.7] + [0.3, -0.2, 0.1] + 0.05 * np.sin(5 * m.vertices)
     gs.refit(0, moved)
     gs.update(np.zeros(3))
@@ -95,14 +95,14 @@ def test_refit_keeps_hits_right(gl, tmp_path, bvh_width):
     np.testing.assert_allclose(t[hit], et[hit], rtol=1e-5, atol=1e-6)
 
 
-@pytest.mark.parametrize("bvh_width", [2, 4])
-def test_single_triangle_mesh_traces(gl, tmp_path, bvh_width):
+@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q"])
+def test_single_triangle_mesh_traces(gl, tmp_path, bvh_layout):
     import test_ray_query as rq
 
     s = Scene("one")
     s.add_material(Material("M"))
     s.add_object("T", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], 0)
-    gs = GpuScene(get_context(), s, bvh_width=bvh_width)
+    gs = GpuScene(get_context(), s, bvh_layout=bvh_layout)
     o = np.array([[0.2, 0.2, 1.0], [0.8, 0.8, 1.0], [0.2, 0.2, -1.0]])
     d = np.array([[0, 0, -1.0], [0, 0, -1.0], [0, 0, 1.0]])
     t, inst, prim, occ, bary = rq.gpu_trace(gl, gs, o, d, tmp_path)
@@ -130,19 +130,19 @@ def test_threaded_lbvh_makes_the_same_tree(gl, tmp_path, monkeypatch):
     rq.compare(gl, rq.scene_of(m.vertices, m.faces, [np.eye(4)]), tmp_path, n=2000, method="lbvh")
 
 
-@pytest.mark.parametrize("bvh_width", [2, 4])
-def test_refit_rewrites_one_mesh_as_a_full_repack_would(monkeypatch, bvh_width):
+@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q"])
+def test_refit_rewrites_one_mesh_as_a_full_repack_would(monkeypatch, bvh_layout):
     """refit() writes only the mesh's slices; the buffers equal a fresh pack of the refit BLASes."""
     s = Scene("three")
     s.add_material(Material("M"))
     for k, m in enumerate((trimesh.creation.icosphere(subdivisions=2), trimesh.creation.box(),
                            trimesh.creation.icosphere(subdivisions=1))):
         s.add_object(f"O{k}", m.vertices + [3.0 * k, 0, 0], m.faces, 0)
-    gs = GpuScene(get_context(), s, bvh_width=bvh_width)
+    gs = GpuScene(get_context(), s, bvh_layout=bvh_layout)
     moved = s.meshes[1].positions * 1.5 + 0.2
     gs.refit(1, moved)
     monkeypatch.setattr(GpuScene, "_build_blas", lambda self, method, progress: gs.blas)
-    fresh = GpuScene(get_context(), s, bvh_width=bvh_width)
+    fresh = GpuScene(get_context(), s, bvh_layout=bvh_layout)
     for name in ("vertices", "triangles", "blas_nodes", "meshes", "indices"):
         assert gs.buffers[name].read() == fresh.buffers[name].read(), name
     np.testing.assert_array_equal(gs._mesh_corners, fresh._mesh_corners)

@@ -7,6 +7,7 @@ from rayvr.gpu import compute_program
 from rayvr.gpu.bindings import BINDINGS
 from rayvr.scene import GpuScene, Mesh, Scene
 from rayvr.scene.builtin import lambert
+from rayvr.scene.gpu_scene import BVH_LAYOUTS
 
 embree_scene = pytest.importorskip("embreex.rtcore_scene")
 from embreex.mesh_construction import TriangleMesh  # noqa: E402
@@ -101,8 +102,8 @@ def world_triangles(scene, origin=np.zeros(3)):
     return np.concatenate(tris), np.concatenate(inst), np.concatenate(prim)
 
 
-def compare(gl, scene, tmp_path, n=4000, origin=np.zeros(3), method="auto", seed=0, defines=None, bvh_width=4):
-    gs = GpuScene(gl_ctx(gl), scene, bvh_method=method, bvh_width=bvh_width)
+def compare(gl, scene, tmp_path, n=4000, origin=np.zeros(3), method="auto", seed=0, defines=None, bvh_layout="bvh4q"):
+    gs = GpuScene(gl_ctx(gl), scene, bvh_method=method, bvh_layout=bvh_layout)
     gs.update(origin)
     tris, inst_of, prim_of = world_triangles(scene, origin)
     lo, hi = tris.reshape(-1, 3).min(0), tris.reshape(-1, 3).max(0)
@@ -129,19 +130,19 @@ def gl_ctx(gl):
     return get_context()
 
 
-WIDTHS = pytest.mark.parametrize("bvh_width", [2, 4], ids=["bvh2", "bvh4"])
+LAYOUTS = pytest.mark.parametrize("bvh_layout", BVH_LAYOUTS)
 
 
-@WIDTHS
+@LAYOUTS
 @pytest.mark.parametrize("name", ["icosphere", "torus", "soup", "box"])
 @pytest.mark.parametrize("method", ["sah", "lbvh"])
-def test_closest_hits_match_embree(gl, tmp_path, name, method, bvh_width):
+def test_closest_hits_match_embree(gl, tmp_path, name, method, bvh_layout):
     v, f = next((v, f) for n, v, f in meshes() if n == name)
-    compare(gl, scene_of(v, f, [np.eye(4)]), tmp_path, method=method, bvh_width=bvh_width)
+    compare(gl, scene_of(v, f, [np.eye(4)]), tmp_path, method=method, bvh_layout=bvh_layout)
 
 
-@WIDTHS
-def test_instances_match_embree(gl, tmp_path, bvh_width):
+@LAYOUTS
+def test_instances_match_embree(gl, tmp_path, bvh_layout):
     v, f = next((v, f) for n, v, f in meshes() if n == "torus")
     rng = np.random.default_rng(3)
     transforms = []
@@ -151,11 +152,11 @@ def test_instances_match_embree(gl, tmp_path, bvh_width):
         t[:3, :3] = q * rng.uniform(0.3, 1.5)
         t[:3, 3] = rng.uniform(-3, 3, size=3)
         transforms.append(t)
-    compare(gl, scene_of(v, f, transforms), tmp_path, n=3000, bvh_width=bvh_width)
+    compare(gl, scene_of(v, f, transforms), tmp_path, n=3000, bvh_layout=bvh_layout)
 
 
-@WIDTHS
-def test_far_from_origin_is_as_precise_as_near(gl, tmp_path, bvh_width):
+@LAYOUTS
+def test_far_from_origin_is_as_precise_as_near(gl, tmp_path, bvh_layout):
     """Instances 1e5..1e6 m away, rendered with the frame origin beside them: hits agree with
     embree on the same geometry near the origin (render space keeps float32 precise)."""
     v, f = next((v, f) for n, v, f in meshes() if n == "icosphere")
@@ -165,15 +166,15 @@ def test_far_from_origin_is_as_precise_as_near(gl, tmp_path, bvh_width):
     far_t = [t.copy() for t in near_t]
     for t in far_t:
         t[:3, 3] += far
-    compare(gl, scene_of(v, f, far_t), tmp_path, n=3000, origin=far, bvh_width=bvh_width)
+    compare(gl, scene_of(v, f, far_t), tmp_path, n=3000, origin=far, bvh_layout=bvh_layout)
 
 
-@WIDTHS
-def test_moving_an_instance_moves_its_hits(gl, tmp_path, bvh_width):
+@LAYOUTS
+def test_moving_an_instance_moves_its_hits(gl, tmp_path, bvh_layout):
     v, f = next((v, f) for n, v, f in meshes() if n == "box")
     scene = scene_of(v, f, [np.eye(4), np.eye(4)])
     scene.instances[1].transform[:3, 3] = (5.0, 0.0, 0.0)
-    gs = GpuScene(gl_ctx(gl), scene, bvh_width=bvh_width)
+    gs = GpuScene(gl_ctx(gl), scene, bvh_layout=bvh_layout)
     o = np.array([[5.0, 0.0, 10.0], [9.0, 0.0, 10.0]])
     d = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, -1.0]])
     t, inst, *_ = gpu_trace(gl, gs, o, d, tmp_path)
@@ -186,13 +187,13 @@ def test_moving_an_instance_moves_its_hits(gl, tmp_path, bvh_width):
     assert inst[1] == 1
 
 
-@WIDTHS
-def test_watertight_triangle_test_matches_embree(gl, tmp_path, bvh_width):
+@LAYOUTS
+def test_watertight_triangle_test_matches_embree(gl, tmp_path, bvh_layout):
     """RQ_TRIANGLE 0 (Woop et al. watertight) stays selectable and correct with instances."""
     v, f = next((v, f) for n, v, f in meshes() if n == "torus")
     t = np.eye(4)
     t[:3, 3] = (2.0, 0.5, 0.0)
-    compare(gl, scene_of(v, f, [np.eye(4), t]), tmp_path, n=2000, defines={"RQ_TRIANGLE": 0}, bvh_width=bvh_width)
+    compare(gl, scene_of(v, f, [np.eye(4), t]), tmp_path, n=2000, defines={"RQ_TRIANGLE": 0}, bvh_layout=bvh_layout)
 
 
 STATS_KERNEL = """
@@ -210,15 +211,15 @@ void main() {
 """
 
 
-@WIDTHS
-def test_stats_count_nodes_triangles_and_instances(gl, tmp_path, bvh_width):
+@LAYOUTS
+def test_stats_count_nodes_triangles_and_instances(gl, tmp_path, bvh_layout):
     """RQ_STATS: a ray missing every instance box visits only the TLAS root; a ray through one
     box instance enters one BLAS and tests at least the triangle it hits, walking the 12-triangle
     BLAS from its root (leaves of <= 4: >= 2 BVH2 nodes; a BVH4 root can hold every leaf)."""
     v, f = next((v, f) for n, v, f in meshes() if n == "box")
     t = np.eye(4)
     t[:3, 3] = (5.0, 0.0, 0.0)
-    gs = GpuScene(gl_ctx(gl), scene_of(v, f, [np.eye(4), t]), bvh_width=bvh_width)
+    gs = GpuScene(gl_ctx(gl), scene_of(v, f, [np.eye(4), t]), bvh_layout=bvh_layout)
     src = tmp_path / "stats.comp"
     src.write_text(STATS_KERNEL)
     prog = compute_program(gl, src, {**gs.defines(), "RQ_STATS": 1})
@@ -236,5 +237,5 @@ def test_stats_count_nodes_triangles_and_instances(gl, tmp_path, bvh_width):
     nodes, tris, instances, hit = st[1]
     assert hit == 1 and instances == 1
     assert 1 <= tris <= 12
-    assert nodes >= 1 + (2 if bvh_width == 2 else 1)   # the TLAS root, then the BLAS nodes on the way to the hit
+    assert nodes >= 1 + (2 if bvh_layout == "bvh2" else 1)   # the TLAS root, then the BLAS nodes on the way to the hit
     assert nodes <= 1 + gs.report()["blas_nodes"]

@@ -259,8 +259,8 @@ def test_offset_ray_origin_prevents_self_intersection(gl, tmp_path, scale):
     assert out[:, 0, 1].sum() == 0
 
 
-@pytest.mark.parametrize("bvh_width", [2, 4])
-def test_alpha_masked_materials_are_skipped_by_rays(gl, tmp_path, bvh_width):
+@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q"])
+def test_alpha_masked_materials_are_skipped_by_rays(gl, tmp_path, bvh_layout):
     img = np.full((2, 2, 4), 200, np.uint8)
     img[..., 3] = [[255, 0], [0, 255]]                        # texel (row, col): opaque on the diagonal
     rays = [[-0.25, -0.25, 1, 0], [0.25, -0.25, 1, 0], [-0.25, 0.25, 1, 0], [0.25, 0.25, 1, 0]]
@@ -271,9 +271,10 @@ def test_alpha_masked_materials_are_skipped_by_rays(gl, tmp_path, bvh_width):
         mat = Material("Leaf", alpha_mode=mode, alpha_cutoff=0.5, base_color_texture=TextureRef(0))
         s = builtin.quad(material=mat)
         s.textures.append(Texture(img))
-        gs = GpuScene(get_context(), s, bvh_width=bvh_width)
+        gs = GpuScene(get_context(), s, bvh_layout=bvh_layout)
         assert gs.defines()["SCENE_HAS_ALPHA_MASK"] == (mode == "MASK")
-        assert gs.defines()["RQ_BVH_WIDTH"] == bvh_width
+        assert gs.defines()["RQ_BVH_WIDTH"] == (2 if bvh_layout == "bvh2" else 4)
+        assert gs.defines()["RQ_BVH_QUANTIZED"] == (bvh_layout == "bvh4q")
         out, _ = run_kernel(gl, tmp_path, gs, body, rays, 1)
         np.testing.assert_array_equal(out[:, 0, 0], expect)
         np.testing.assert_array_equal(out[:, 0, 1], expect)

@@ -8,14 +8,19 @@
 // tmax <= 1e29. `Hit` is declared in scene.glsl. Both faces are hit; alpha-masked materials
 // are tested in the any-hit step (SCENE_HAS_ALPHA_MASK).
 //
-// Layout (the interface of every BVH builder; RQ_BVH_WIDTH, from GpuScene.defines(), says which
-// one GpuScene uploaded, for both levels). Children's boxes live in the parent, links as uint bits.
-//   RQ_BVH_WIDTH 2 (rayvr/scene/bvh.py): 64 B = vec4(min0, link0) vec4(max0, count0)
+// Layout (the interface of every BVH builder; RQ_BVH_WIDTH and RQ_BVH_QUANTIZED, from
+// GpuScene.defines(), say which one GpuScene uploaded, for both levels). Children's boxes live in
+// the parent, links as uint bits.
+//   "bvh2", RQ_BVH_WIDTH 2 (rayvr/scene/bvh.py): 64 B = vec4(min0, link0) vec4(max0, count0)
 //     vec4(min1, link1) vec4(max1, count1); count 0: link is a node index, count 1..8: a leaf of
 //     that many BVH slots from link (< 2**28). 4 vec4 loads, two rq_box tests per node.
-//   RQ_BVH_WIDTH 4 (rayvr/scene/bvh_wide.py, collapsed from the BVH2): 112 B = the 4 children's
-//     min.x, max.x, min.y, max.y, min.z, max.z (one vec4 each) and uvec4 of their work items (see
-//     rq_item); 7 vec4 loads, one rq_box4 per node; an empty child's box is at 1e30.
+//   "bvh4", RQ_BVH_WIDTH 4 (rayvr/scene/bvh_wide.py, collapsed from the BVH2): 112 B = the 4
+//     children's min.x, max.x, min.y, max.y, min.z, max.z (one vec4 each) and uvec4 of their work
+//     items (see rq_item); 7 vec4 loads, one rq_box4 per node; an empty child's box is at 1e30.
+//   "bvh4q", RQ_BVH_WIDTH 4 + RQ_BVH_QUANTIZED 1 (the same collapse, boxes on an 8-bit grid per
+//     node): 64 B = vec4(origin, exponent bytes) uvec4(lo.x, hi.x, lo.y, hi.y) uvec4(lo.z, hi.z, -, -)
+//     uvec4 items, each lo/hi word one byte per child; child plane = origin + float(q) * 2^e, a
+//     box that holds the exact one. 4 vec4 loads, one rq_box4q per node; an empty child has item 0.
 // A TLAS leaf (count 1) links an instance. Triangle slots are three vec4 (object-space vertices;
 // w of the first: the mesh-local triangle index).
 //
@@ -24,14 +29,17 @@
 // child first, the other hit children on a per-invocation stack (BVH4: sorted by entry distance
 // with a 5-comparator network and pushed far to near). One node fetch or one leaf per iteration
 // from one call site keeps a warp's lanes in step: 2.5-4x faster on an H100 than nested
-// TLAS/BLAS loops with the BLAS loop inlined at three call sites.
+// TLAS/BLAS loops with the BLAS loop inlined at three call sites. bvh4q decodes a node's 4 boxes
+// (one fma per plane whose only rounding is the add's: the float box bvh_wide.decode computes,
+// which holds the exact one) and slab-tests them with bvh4's float operations, near and far
+// planes picked by the ray's signs: it enters every box bvh4 enters, and a few more.
 //
 // #defines: RQ_TRIANGLE 1 (default) Moeller-Trumbore with edges widened by RQ_EDGE_EPS
 // (barycentric) so shared edges have no cracks; 0 the watertight test of Woop, Benthin & Wald 2013
 // (exact at edges, ~1.5x slower primary rays); 2 the same without its fp64 edge fallback.
-// RQ_STACK_SIZE (64). RQ_BVH_WIDTH 2 or 4 (the uploaded layout). RQ_STATS 1: count per invocation
-// rq_stat_nodes (internal nodes visited, of RQ_BVH_WIDTH), rq_stat_triangles (triangle tests) and
-// rq_stat_instances (BLAS entries) for the kernel to store.
+// RQ_STACK_SIZE (64). RQ_BVH_WIDTH 2 or 4, RQ_BVH_QUANTIZED 0 or 1 (the uploaded layout).
+// RQ_STATS 1: count per invocation rq_stat_nodes (internal nodes visited, of RQ_BVH_WIDTH),
+// rq_stat_triangles (triangle tests) and rq_stat_instances (BLAS entries) for the kernel to store.
 #pragma once
 #include "scene.glsl"
 
@@ -49,6 +57,9 @@
 #endif
 #ifndef RQ_BVH_WIDTH
 #define RQ_BVH_WIDTH 4       // the node layout GpuScene uploaded: 2 (BVH2) or 4 (BVH4); GpuScene.defines() sets it
+#endif
+#ifndef RQ_BVH_QUANTIZED
+#define RQ_BVH_QUANTIZED 1   // RQ_BVH_WIDTH 4: 64 B nodes of 8-bit child boxes (1) or 112 B float boxes (0)
 #endif
 
 layout(std430, binding = RAYVR_BLAS_NODE_SSBO) readonly buffer RqBlasNodes { vec4 rq_blas_nodes[]; };
@@ -109,6 +120,32 @@ vec4 rq_box4(vec4 lox, vec4 hix, vec4 loy, vec4 hiy, vec4 loz, vec4 hiz, vec3 in
     vec4 leave = min(min(max(x0, x1), max(y0, y1)), min(max(z0, z1), vec4(tmax))) * 1.00000024;
     return mix(vec4(RQ_MISS), enter, lessThanEqual(enter, leave));
 }
+
+#if RQ_BVH_QUANTIZED
+// The 4 bytes of a word, one per child, as floats.
+vec4 rq_bytes(uint w) { return vec4((uvec4(w) >> uvec4(0u, 8u, 16u, 24u)) & 0xFFu); }
+
+// rq_box4 of a bvh4q node (header: origin, exponent bytes; q: lo.x, hi.x, lo.y, hi.y bytes; qz: lo.z,
+// hi.z). Each plane decodes as origin + q * scale (exact product: one rounding, fused or not), then
+// the same float operations as rq_box4; taking the near plane from lo or hi by the ray's sign
+// gives rq_box4's min/max for every box that is not inverted. Empty slots (item 0) are missed.
+vec4 rq_box4q(vec4 header, uvec4 q, uvec2 qz, uvec4 items, vec3 inv, vec3 oi, float tmax) {
+    uint e = floatBitsToUint(header.w);
+    vec3 scale = uintBitsToFloat((uvec3(e, e >> 8, e >> 16) & 0xFFu) << 23);
+    bvec3 neg = lessThan(inv, vec3(0.0));
+    vec4 nx = (header.x + rq_bytes(neg.x ? q.y : q.x) * scale.x) * inv.x - oi.x;
+    vec4 fx = (header.x + rq_bytes(neg.x ? q.x : q.y) * scale.x) * inv.x - oi.x;
+    vec4 ny = (header.y + rq_bytes(neg.y ? q.w : q.z) * scale.y) * inv.y - oi.y;
+    vec4 fy = (header.y + rq_bytes(neg.y ? q.z : q.w) * scale.y) * inv.y - oi.y;
+    vec4 nz = (header.z + rq_bytes(neg.z ? qz.y : qz.x) * scale.z) * inv.z - oi.z;
+    vec4 fz = (header.z + rq_bytes(neg.z ? qz.x : qz.y) * scale.z) * inv.z - oi.z;
+    vec4 enter = max(max(nx, ny), max(nz, vec4(0.0)));
+    vec4 leave = min(min(fx, fy), min(fz, vec4(tmax))) * 1.00000024;
+    vec4 t = mix(vec4(RQ_MISS), enter, lessThanEqual(enter, leave));
+    // an inverted box fails the slab test only by more than the 2 ulp widening: item 0 never passes
+    return mix(t, vec4(RQ_MISS), equal(items, uvec4(0u)));
+}
+#endif
 
 // One comparator of the sorting network: (ta, ca) gets the nearer of the two children.
 #define RQ_ORDER(ta, ca, tb, cb) if (tb < ta) { float t_ = ta; ta = tb; tb = t_; uint c_ = ca; ca = cb; cb = c_; }
@@ -276,7 +313,19 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
     while (true) {
         if ((item & RQ_LEAF_BIT) == 0u) {
             RQ_COUNT(rq_stat_nodes);
-#if RQ_BVH_WIDTH == 4
+#if RQ_BVH_WIDTH == 4 && RQ_BVH_QUANTIZED
+            uint base = item * 4u;
+            vec4 header, q, qz, items;
+            if (instance == RQ_NO_INSTANCE) {
+                header = rq_tlas_nodes[base]; q = rq_tlas_nodes[base + 1u];
+                qz = rq_tlas_nodes[base + 2u]; items = rq_tlas_nodes[base + 3u];
+            } else {
+                header = rq_blas_nodes[base]; q = rq_blas_nodes[base + 1u];
+                qz = rq_blas_nodes[base + 2u]; items = rq_blas_nodes[base + 3u];
+            }
+            uvec4 c = floatBitsToUint(items);
+            vec4 t = rq_box4q(header, floatBitsToUint(q), floatBitsToUint(qz.xy), c, r.inv, r.oi, tmax);
+#elif RQ_BVH_WIDTH == 4
             uint base = item * 7u;
             vec4 lox, hix, loy, hiy, loz, hiz, items;
             if (instance == RQ_NO_INSTANCE) {
@@ -290,6 +339,8 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
             }
             vec4 t = rq_box4(lox, hix, loy, hiy, loz, hiz, r.inv, r.oi, tmax);
             uvec4 c = floatBitsToUint(items);
+#endif
+#if RQ_BVH_WIDTH == 4
             // sort the children near to far (misses are RQ_MISS, last): a 5-comparator network
             RQ_ORDER(t.x, c.x, t.y, c.y); RQ_ORDER(t.z, c.z, t.w, c.w);
             RQ_ORDER(t.x, c.x, t.z, c.z); RQ_ORDER(t.y, c.y, t.w, c.w);

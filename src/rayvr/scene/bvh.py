@@ -3,7 +3,7 @@
 Two builders make the same tree shape: `lbvh` (Karras 2012: Morton-code sort, split at the
 highest differing bit; fast) and `sah` (binned SAH after Wald 2007, 16 bins on 3 axes; the
 quality reference). `Bvh.nodes` is the GPU layout `ray_query.glsl` traverses with RQ_BVH_WIDTH 2
-(`bvh_wide.collapse` turns it into the BVH4 of RQ_BVH_WIDTH 4): a BVH2 whose node holds both
+(`bvh_wide.collapse` turns it into the BVH4 layouts "bvh4" and "bvh4q"): a BVH2 whose node holds both
 children's boxes, 64 bytes:
 
     vec4(child0.min, link0)  vec4(child0.max, count0)  vec4(child1.min, link1)  vec4(child1.max, count1)

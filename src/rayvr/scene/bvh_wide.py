@@ -7,15 +7,30 @@ unchanged, the internal children left become BVH4 nodes. The choice is optimal f
 fixed, it minimises the summed area of the BVH4 nodes, i.e. the expected node visits. Nodes are
 numbered one BVH4 level at a time from the root (siblings adjacent). 1M triangles: ~0.3 s.
 
-GPU layout (what `ray_query.glsl` traverses with RQ_BVH_WIDTH 4), 112 bytes = 7 vec4, the
-children's boxes as struct of arrays so one vec4 per box plane covers all 4 children:
+Two GPU layouts of the same collapse (`ray_query.glsl` traverses both with RQ_BVH_WIDTH 4), the
+children's boxes as struct of arrays so one vec4 (or one uint of bytes) covers all 4 children:
+
+"bvh4", 112 bytes = 7 vec4:
 
     vec4 min.x  vec4 max.x  vec4 min.y  vec4 max.y  vec4 min.z  vec4 max.z  uvec4 item
 
-item: a BVH4 node index, or a leaf as the traversal stacks it: bit 31 set, count - 1 in bits
-28..30, first slot in bits 0..27 (leaves hold 1..8 slots; a TLAS leaf is one instance). An
-empty child slot has its box at 1e30 (like bvh.py's empty slots: no ray with tmax <= 1e29
-enters it) and item 0.
+"bvh4q" (RQ_BVH_QUANTIZED 1), 64 bytes = 4 vec4, child boxes on an 8-bit grid per node after
+Ylitie, Karras & Laine 2017:
+
+    vec4(origin.xyz, exponents)  uvec4(lo.x, hi.x, lo.y, hi.y)  uvec4(lo.z, hi.z, 0, 0)  uvec4 item
+
+origin is the node's box min (float32); `exponents` holds per axis in bits 0..7, 8..15, 16..23 the
+float32 exponent field of the power-of-two scale 2**e (the shader shifts it into place: exact, no
+exp2). Each lo/hi word holds one byte q per child (child k in bits 8k..8k+7), and child k's plane
+is origin + float(q) * scale: q * scale is exact, so one rounding of the add, fused or not, and
+`decode` reproduces the GPU's box bit for bit. lo is floored and hi ceiled on the grid, then
+checked in float32 and stepped until the decoded box holds the exact child box.
+
+item (both layouts): a BVH4 node index, or a leaf as the traversal stacks it: bit 31 set, count - 1
+in bits 28..30, first slot in bits 0..27 (leaves hold 1..8 slots; a TLAS leaf is one instance).
+An empty child slot has item 0 (the root, never a child) and a box no ray enters: at 1e30 in
+"bvh4" (like bvh.py's empty slots), inverted (lo 255, hi 0 on every axis) in "bvh4q", where the
+traversal also skips item 0 (an inverted box is rejected by the slab test only up to rounding).
 
 `WideBvh` keeps its source BVH2 and reads the boxes from it, so a refit of the source (same
 topology) shows in `nodes`.
@@ -29,8 +44,11 @@ import numpy as np
 from .bvh import _EMPTY_LO, Bvh, _half_area
 
 WIDTH = 4
-NODE_FLOATS = 28
+NODE_FLOATS = 28                 # "bvh4"
 NODE_BYTES = NODE_FLOATS * 4
+QUANTIZED_NODE_FLOATS = 16       # "bvh4q"
+QUANTIZED_NODE_BYTES = QUANTIZED_NODE_FLOATS * 4
+LAYOUTS = ("bvh2", "bvh4", "bvh4q")
 LEAF_BIT = np.uint32(0x80000000)
 LINK_MASK = np.uint32(0x0FFFFFFF)
 
@@ -42,6 +60,7 @@ class WideBvh:
     source: Bvh
     slots: np.ndarray    # (K, 4) int64: the source's child slot (2 * node + side) of each child; -1 empty
     items: np.ndarray    # (K, 4) uint32: each child's item (node index or packed leaf); 0 when empty
+    quantized: bool = False   # GPU layout: "bvh4q" (64 B nodes) or "bvh4" (112 B)
 
     @property
     def method(self) -> str:
@@ -56,28 +75,41 @@ class WideBvh:
         return len(self.slots)
 
     @property
+    def node_floats(self) -> int:
+        return QUANTIZED_NODE_FLOATS if self.quantized else NODE_FLOATS
+
+    @property
     def nbytes(self) -> int:
-        return self.node_count * NODE_BYTES
+        return self.node_count * self.node_floats * 4
+
+    def exact_child_boxes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(lo, hi) float32 (K, 4, 3) of every child from the source's current boxes, and the
+        (K, 4) mask of empty slots (their boxes are 1e30)."""
+        v = self.source.nodes.reshape(-1, 2, 4)          # child slot, (min|max row), xyzw
+        s = np.maximum(self.slots, 0)
+        empty = self.slots < 0
+        lo = np.where(empty[..., None], np.float32(_EMPTY_LO), v[s, 0, :3])
+        hi = np.where(empty[..., None], np.float32(_EMPTY_LO), v[s, 1, :3])
+        return lo, hi, empty
 
     @property
     def nodes(self) -> np.ndarray:
-        """(K, 28) float32 GPU nodes, boxes from the source's current child boxes."""
-        v = self.source.nodes.reshape(-1, 2, 4)          # child slot, (min|max row), xyzw
-        s = np.maximum(self.slots, 0)
-        empty = (self.slots < 0)[..., None]
-        lo = np.where(empty, np.float32(_EMPTY_LO), v[s, 0, :3])   # (K, 4, 3)
-        hi = np.where(empty, np.float32(_EMPTY_LO), v[s, 1, :3])
-        out = np.empty((len(s), 7, 4), np.float32)
-        out[:, 0:6:2] = lo.transpose(0, 2, 1)
-        out[:, 1:6:2] = hi.transpose(0, 2, 1)
-        out[:, 6] = self.items.view(np.float32)
-        return out.reshape(-1, NODE_FLOATS)
+        """(K, node_floats) float32 GPU nodes of this layout; uint fields hold their bits."""
+        lo, hi, empty = self.exact_child_boxes()
+        if self.quantized:
+            out = quantize(lo, hi, empty)
+        else:
+            out = np.empty((len(lo), NODE_FLOATS), np.float32)
+            boxes = out[:, :24].reshape(-1, 6, 4)
+            boxes[:, 0::2], boxes[:, 1::2] = lo.transpose(0, 2, 1), hi.transpose(0, 2, 1)
+        out[:, -4:] = self.items.view(np.float32)
+        return out
 
     def relinked(self, leaf_map, node_base: int = 0) -> np.ndarray:
         """GPU nodes placed in a larger buffer: node items + node_base, leaf slots (uint32)
         through leaf_map; the same contract as `Bvh.relinked`."""
         nodes = self.nodes
-        items = nodes.view(np.uint32)[:, 24:28]
+        items = nodes.view(np.uint32)[:, -4:]
         leaf = (items & LEAF_BIT) != 0
         inner = ~leaf & (self.slots >= 0)
         items[leaf] = (items[leaf] & ~LINK_MASK) | np.asarray(leaf_map(items[leaf] & LINK_MASK), np.uint32)
@@ -85,13 +117,80 @@ class WideBvh:
         return nodes
 
     def child_boxes(self) -> tuple[np.ndarray, np.ndarray]:
-        """(lo, hi) of every child, (K, 4, 3) each (empty slots at 1e30)."""
-        n = self.nodes.reshape(-1, 7, 4)
-        return n[:, 0:6:2].transpose(0, 2, 1), n[:, 1:6:2].transpose(0, 2, 1)
+        """(lo, hi) of every child as the GPU reads it, (K, 4, 3) each: exact boxes ("bvh4", empty
+        slots at 1e30) or the decoded quantised ones ("bvh4q", empty slots inverted)."""
+        if self.quantized:
+            return decode(self.nodes)
+        lo, hi, _ = self.exact_child_boxes()
+        return lo, hi
 
 
-def collapse(b: Bvh) -> WideBvh:
-    """The BVH4 of a BVH2 (see the module docstring)."""
+def quantize(lo: np.ndarray, hi: np.ndarray, empty: np.ndarray) -> np.ndarray:
+    """(K, 16) float32 "bvh4q" nodes (item words left 0) whose decoded child boxes hold the
+    float32 boxes (lo, hi) (K, 4, 3); empty slots (K, 4) get the inverted box lo 255, hi 0."""
+    e3 = empty[..., None]
+    origin = np.where(e3, np.inf, lo).min(axis=1)                     # (K, 3) float32, the node's box
+    top = np.where(e3, -np.inf, hi).max(axis=1)
+    exponent = _grid_exponents(origin, top)
+    scale = _pow2(exponent)
+    o, sc = origin[:, None, :], scale[:, None, :]
+    q_lo = np.clip(np.floor((lo.astype(np.float64) - o) / sc), 0, 255).astype(np.int64)
+    q_hi = np.clip(np.ceil((hi.astype(np.float64) - o) / sc), 0, 255).astype(np.int64)
+    live = ~e3
+    while True:   # float64 rounding can leave a plane one step inside the box: step it out
+        low = live & (_decode_planes(o, sc, q_lo) > lo)
+        high = live & (_decode_planes(o, sc, q_hi) < hi)
+        if not (low.any() or high.any()):
+            break
+        q_lo, q_hi = q_lo - low, q_hi + high    # q_lo 0 is origin and q_hi 255 >= top: both stop in range
+    q_lo, q_hi = np.where(e3, 255, q_lo), np.where(e3, 0, q_hi)
+    planes = np.stack([q_lo, q_hi], axis=-1).transpose(0, 2, 3, 1)   # (K, axis, lo|hi, child)
+    words = (planes.astype(np.uint32) << (np.arange(WIDTH, dtype=np.uint32) * 8)).sum(axis=-1, dtype=np.uint32)
+    out = np.zeros((len(lo), QUANTIZED_NODE_FLOATS), np.float32)
+    bits = out.view(np.uint32)
+    out[:, 0:3] = origin
+    bits[:, 3] = ((exponent + 127).astype(np.uint32) << (np.arange(3, dtype=np.uint32) * 8)).sum(axis=1, dtype=np.uint32)
+    bits[:, 4:10] = words.reshape(-1, 6)
+    return out
+
+
+def decode(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) float32 (K, 4, 3) child boxes of "bvh4q" nodes, computed as ray_query.glsl does."""
+    bits = nodes.view(np.uint32)
+    origin = nodes[:, None, 0:3]
+    scale = ((bits[:, 3:4] >> (np.arange(3, dtype=np.uint32) * 8)) & 0xFF) << 23
+    scale = scale.view(np.float32)[:, None, :]
+    q = (bits[:, 4:10, None] >> (np.arange(WIDTH, dtype=np.uint32) * 8)) & 0xFF   # (K, axis * 2 + side, child)
+    q = q.reshape(-1, 3, 2, WIDTH).transpose(0, 3, 2, 1)                          # (K, child, side, axis)
+    return _decode_planes(origin, scale, q[:, :, 0]), _decode_planes(origin, scale, q[:, :, 1])
+
+
+def _decode_planes(origin, scale, q) -> np.ndarray:
+    """origin + float(q) * scale in float32, as the shader computes it (q * scale is exact, so
+    only the add rounds, whether or not the GPU fuses it)."""
+    return np.asarray(origin, np.float32) + q.astype(np.float32) * np.asarray(scale, np.float32)
+
+
+def _pow2(exponent: np.ndarray) -> np.ndarray:
+    return np.ldexp(np.float32(1.0), exponent.astype(np.int32)).astype(np.float32)
+
+
+def _grid_exponents(origin: np.ndarray, top: np.ndarray) -> np.ndarray:
+    """Per node and axis the least e in [-126, 127] with origin + 255 * 2**e >= top in float32:
+    255 steps of the grid span the node's box."""
+    extent = top.astype(np.float64) - origin
+    mant, exp = np.frexp(extent / 255.0)                 # extent / 255 = mant * 2**exp, mant in [0.5, 1)
+    e = np.where(extent > 0, exp - (mant == 0.5), -126)
+    e = np.clip(e, -126, 127).astype(np.int64)
+    while True:
+        short = _decode_planes(origin, _pow2(e), np.full(e.shape, 255)) < top
+        if not short.any():
+            return e
+        e = e + short
+
+
+def collapse(b: Bvh, quantized: bool = False) -> WideBvh:
+    """The BVH4 of a BVH2 (see the module docstring), packed as "bvh4q" if quantized."""
     v, link, count = b._children()
     link = link.reshape(-1).astype(np.int64)           # per child slot 2 * node + side
     count = count.reshape(-1)
@@ -130,7 +229,7 @@ def collapse(b: Bvh) -> WideBvh:
     leaf_item = LEAF_BIT | ((count[s].astype(np.uint32) - 1) << np.uint32(28)) | link[s].astype(np.uint32)
     items = np.where(leaf, leaf_item, wide_index[np.where(leaf, 0, link[s])].astype(np.uint32))
     items = np.where(slots >= 0, items, 0).astype(np.uint32)
-    return WideBvh(b, slots, items)
+    return WideBvh(b, slots, items, quantized)
 
 
 def _optimal_splits(b: Bvh, link, internal, area):
@@ -160,6 +259,6 @@ def _best_pair(cost, first, k: int):
     return c.min(axis=1), c.argmin(axis=1) + 1
 
 
-def for_width(b: Bvh, width: int):
-    """The GPU layout of b for RQ_BVH_WIDTH `width`: b itself (2) or its collapse (4)."""
-    return b if width == 2 else collapse(b)
+def collapse_to(b: Bvh, layout: str):
+    """b in GPU layout `layout` (one of LAYOUTS): b itself ("bvh2") or its collapse."""
+    return b if layout == "bvh2" else collapse(b, quantized=layout == "bvh4q")

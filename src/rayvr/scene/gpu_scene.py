@@ -4,9 +4,10 @@ material/light tables and scene textures, and the one-call raster draw of every 
 Layouts are declared in `glsl/scene.glsl`, `glsl/ray_query.glsl` and `glsl/lights.glsl`.
 Per frame, `update(origin)` rewrites only what depends on the origin or on edits: instance
 transforms (render space), the TLAS over instances, punctual lights, and materials when
-`scene.materials.version` moved. `bvh_width` picks the node layout of both BVH levels: 2 (bvh.py's
-BVH2) or 4 (bvh_wide.py's BVH4, collapsed from the same BVH2 builds); ray_query.glsl follows
-the RQ_BVH_WIDTH of `defines()`.
+`scene.materials.version` moved. `bvh_layout` picks the node layout of both BVH levels: "bvh2"
+(bvh.py's 64 B BVH2 nodes), "bvh4" (bvh_wide.py's 112 B BVH4 nodes, collapsed from the same BVH2
+builds) or "bvh4q" (the same BVH4 with 8-bit quantised child boxes, 64 B); ray_query.glsl follows
+the RQ_BVH_WIDTH and RQ_BVH_QUANTIZED of `defines()`.
 """
 from __future__ import annotations
 
@@ -25,8 +26,11 @@ MATERIAL_FLOATS = 64          # 256 B, see MaterialData
 INSTANCE_FLOATS = 28          # 6 vec4 + uvec4
 MAX_TEXTURE_SIZE = 2048
 GPU_BVH_MIN = 200_000         # 'auto' builds meshes this big on the GPU (hardware drivers only)
-BVH_WIDTHS = (2, 4)
-_NODE_FLOATS = {2: bvh_mod.NODE_FLOATS, 4: bvh_wide.NODE_FLOATS}
+BVH_LAYOUTS = bvh_wide.LAYOUTS
+_NODE_FLOATS = {"bvh2": bvh_mod.NODE_FLOATS, "bvh4": bvh_wide.NODE_FLOATS, "bvh4q": bvh_wide.QUANTIZED_NODE_FLOATS}
+_LAYOUT_DEFINES = {"bvh2": {"RQ_BVH_WIDTH": 2, "RQ_BVH_QUANTIZED": 0},
+                   "bvh4": {"RQ_BVH_WIDTH": 4, "RQ_BVH_QUANTIZED": 0},
+                   "bvh4q": {"RQ_BVH_WIDTH": 4, "RQ_BVH_QUANTIZED": 1}}
 
 
 def _luminance(rgb) -> np.ndarray:
@@ -63,10 +67,10 @@ class GpuScene:
     """GPU buffers, BVH and textures of one `Scene`. Build once; `update(origin)` per frame."""
 
     def __init__(self, gpu, scene: Scene, bvh_method: str = "auto", progress: bool | None = None,
-                 bvh_width: int = 4):
-        if bvh_width not in BVH_WIDTHS:
-            raise SceneError(f"GpuScene bvh_width: {bvh_width!r}; use one of {BVH_WIDTHS}")
-        self.bvh_width = bvh_width
+                 bvh_layout: str = "bvh4q"):
+        if bvh_layout not in BVH_LAYOUTS:
+            raise SceneError(f"GpuScene bvh_layout: {bvh_layout!r}; use one of {BVH_LAYOUTS}")
+        self.bvh_layout = bvh_layout
         self.gpu = gpu
         self.gl = gpu.gl if hasattr(gpu, "gl") else gpu
         self.scene = scene
@@ -105,7 +109,7 @@ class GpuScene:
         t0 = time.perf_counter()
         s = self.scene
         self.blas: list[bvh_mod.Bvh] = self._build_blas(method, progress)
-        self._blas_gpu = [None if b is None else bvh_wide.for_width(b, self.bvh_width) for b in self.blas]
+        self._blas_gpu = [None if b is None else bvh_wide.collapse_to(b, self.bvh_layout) for b in self.blas]
         first_v = self._first_v = np.cumsum([0] + [len(m.positions) for m in s.meshes])
         first_t = self._first_t = np.cumsum([0] + [m.triangle_count for m in s.meshes])
         first_n = self._first_n = np.cumsum([0] + [0 if b is None else b.node_count for b in self._blas_gpu])
@@ -317,7 +321,7 @@ class GpuScene:
 
     @property
     def _node_floats(self) -> int:
-        return _NODE_FLOATS[self.bvh_width]
+        return _NODE_FLOATS[self.bvh_layout]
 
     def _build_tlas(self, live: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
         if not len(live):
@@ -326,7 +330,7 @@ class GpuScene:
         pad = 1e-6 * np.maximum(np.abs(lo[live]), np.abs(hi[live])).max(axis=1, keepdims=True)
         t = bvh_mod.build(lo[live] - pad, hi[live] + pad, method="sah" if len(live) < 4096 else "lbvh",
                           leaf_size=1, progress=False)
-        nodes = bvh_wide.for_width(t, self.bvh_width).relinked(lambda slot: live[t.order[slot]])
+        nodes = bvh_wide.collapse_to(t, self.bvh_layout).relinked(lambda slot: live[t.order[slot]])
         self._buffer("tlas_nodes", nodes)
 
     def _upload_lights(self) -> None:
@@ -366,9 +370,9 @@ class GpuScene:
     def defines(self) -> dict[str, int | str]:
         """The #defines every shader that includes the scene library is built with: the feature
         flags (0 or 1), SCENE_SCALE, the scene's extent in metres (ray offsets scale with it), and
-        RQ_BVH_WIDTH, the node layout of the uploaded BVHs."""
+        RQ_BVH_WIDTH and RQ_BVH_QUANTIZED, the node layout of the uploaded BVHs."""
         return {**{f: int(f in self.features) for f in FEATURES}, "SCENE_SCALE": repr(self.scale),
-                "RQ_BVH_WIDTH": self.bvh_width}
+                **_LAYOUT_DEFINES[self.bvh_layout]}
 
     @property
     def scale(self) -> float:
@@ -464,8 +468,10 @@ class GpuScene:
             "texture_bytes": self.nbytes - sum(b.size for b in self.buffers.values()),
             "bytes_per_triangle": self.nbytes / max(self.triangle_count, 1),
             "geometry_bytes_per_triangle": sum(b.size for b in self.buffers.values()) / max(self.triangle_count, 1),
-            "bvh_width": self.bvh_width,
+            "bvh_layout": self.bvh_layout,
             "blas_nodes": sum(b.node_count for b in self._blas_gpu if b is not None),
+            "blas_node_bytes_per_triangle": sum(b.nbytes for b in self._blas_gpu if b is not None)
+                                            / max(self.triangle_count, 1),
             "emissive_triangles": self.emissive_count,
             "punctual_light_kinds": sorted({("point", "spot", "directional")[L.type] for L in self.scene.lights}),
             "timings_ms": dict(self.timings),
