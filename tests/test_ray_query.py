@@ -102,7 +102,7 @@ def world_triangles(scene, origin=np.zeros(3)):
     return np.concatenate(tris), np.concatenate(inst), np.concatenate(prim)
 
 
-def compare(gl, scene, tmp_path, n=4000, origin=np.zeros(3), method="auto", seed=0, defines=None, bvh_layout="bvh4q"):
+def compare(gl, scene, tmp_path, n=4000, origin=np.zeros(3), method="auto", seed=0, defines=None, bvh_layout="bvh4"):
     gs = GpuScene(gl_ctx(gl), scene, bvh_method=method, bvh_layout=bvh_layout)
     gs.update(origin)
     tris, inst_of, prim_of = world_triangles(scene, origin)

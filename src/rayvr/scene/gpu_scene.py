@@ -6,8 +6,9 @@ Per frame, `update(origin)` rewrites only what depends on the origin or on edits
 transforms (render space), the TLAS over instances, punctual lights, and materials when
 `scene.materials.version` moved. `bvh_layout` picks the node layout of both BVH levels: "bvh2"
 (bvh.py's 64 B BVH2 nodes), "bvh4" (bvh_wide.py's 112 B BVH4 nodes, collapsed from the same BVH2
-builds) or "bvh4q" (the same BVH4 with 8-bit quantised child boxes, 64 B); ray_query.glsl follows
-the RQ_BVH_WIDTH and RQ_BVH_QUANTIZED of `defines()`.
+builds; the default: fastest on the H100) or "bvh4q" (the same BVH4 with 8-bit quantised child
+boxes, 64 B: 6 B/triangle less, but 10-20% slower to trace there, its decode costing more than its
+bytes save); ray_query.glsl follows the RQ_BVH_WIDTH and RQ_BVH_QUANTIZED of `defines()`.
 """
 from __future__ import annotations
 
@@ -67,7 +68,7 @@ class GpuScene:
     """GPU buffers, BVH and textures of one `Scene`. Build once; `update(origin)` per frame."""
 
     def __init__(self, gpu, scene: Scene, bvh_method: str = "auto", progress: bool | None = None,
-                 bvh_layout: str = "bvh4q"):
+                 bvh_layout: str = "bvh4"):
         if bvh_layout not in BVH_LAYOUTS:
             raise SceneError(f"GpuScene bvh_layout: {bvh_layout!r}; use one of {BVH_LAYOUTS}")
         self.bvh_layout = bvh_layout
