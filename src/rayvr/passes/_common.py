@@ -45,10 +45,11 @@ def groups_2d(size: tuple[int, int], views: int, group: tuple[int, ...] = COMPUT
 
 def ray_group(views: int, tile: tuple[int, int] = COMPUTE_GROUP) -> tuple[int, int, int]:
     """The (x, y, views) shape of a ray pass's workgroup of tile[0] * tile[1] invocations: the tile
-    shrunk (larger side first) to make room for up to VIEW_GROUP views, when there are that many."""
+    shrunk (larger side first) to make room for VIEW_GROUP views when a frame has that many. Not
+    for stereo, whose two eyes see the same pixel's surface far apart."""
     x, y = tile
     z = 1
-    while z < VIEW_GROUP and z * 2 <= views and x * y > 1:
+    while z < VIEW_GROUP <= views and x * y > 1:
         z *= 2
         if x > y:
             x //= 2
