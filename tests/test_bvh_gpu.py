@@ -1,10 +1,11 @@
 """The GPU LBVH builder (rayvr.scene.bvh_gpu): a valid tree over every triangle, CPU-LBVH quality,
-the BVH-ordered triangle array, and closest hits that agree with embree through GpuScene."""
+the BVH-ordered triangle array, its GPU collapse to "bvh4" (a valid BVH4 in bvh_wide's layout,
+near the CPU's optimal collapse), and closest hits that agree with embree through GpuScene."""
 import numpy as np
 import pytest
 
 from rayvr.errors import SceneError
-from rayvr.scene import GpuScene, bvh, bvh_gpu
+from rayvr.scene import GpuScene, bvh, bvh_gpu, bvh_wide
 
 
 def soup(n, seed=0, spread=0.03):
@@ -123,20 +124,91 @@ def test_scan_over_many_groups(gpu):
     builder.release()
 
 
+def sphere(subdivisions=5):
+    import trimesh
+
+    m = trimesh.creation.icosphere(subdivisions=subdivisions)
+    return m.vertices[m.faces].astype(np.float32)
+
+
+def flat_grid(n=100):
+    """A flat square of 2 (n - 1)^2 triangles in the plane y = 0 (boxes of zero height)."""
+    x, z = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
+    pos = np.stack([x, np.zeros_like(x), z], axis=-1).reshape(-1, 3)
+    a = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)).reshape(-1)
+    quads = np.stack([a, a + n, a + 1, a + 1, a + n, a + n + 1], axis=1).reshape(-1, 3)
+    return pos[quads].astype(np.float32)
+
+
+@pytest.mark.parametrize("tris", [soup(5000), sphere(), flat_grid(), duplicates(4000)],
+                         ids=["soup", "sphere", "flat", "duplicates"])
+def test_gpu_bvh4_collapse_is_a_valid_bvh4(gpu, tris):
+    """Every slot reached once, child boxes exactly their subtrees' bounds, 1..4 children, empty
+    slots at 1e30 with item 0 (test_bvh_wide.check); the GPU's nodes bit for bit bvh_wide's
+    packing of its slots and items; node visits near the CPU's SAH-optimal collapse."""
+    from test_bvh_wide import check
+
+    builder = bvh_gpu.builder_for(gpu)
+    g = builder.build(tris)
+    g4 = builder.collapse_bvh4(g)
+    b = g.to_bvh()
+    w = g4.to_wide(b)
+    check(w, *bvh.triangle_bounds(tris))
+    np.testing.assert_array_equal(g4.read_nodes().view(np.uint32), w.nodes.view(np.uint32))
+    inner = (w.slots >= 0) & ((w.items & bvh_wide.LEAF_BIT) == 0)
+    assert (w.items[inner] > np.nonzero(inner)[0]).all()   # numbered level by level from the root
+    optimal = bvh_wide.collapse(b)
+    assert optimal.sah_cost() <= w.sah_cost() * (1 + 1e-9) <= 1.06 * optimal.sah_cost()
+    assert w.sah_cost(c_tri=0) < 0.7 * b.sah_cost(c_tri=0)   # fewer node visits than the BVH2
+    assert (w.slots >= 0).sum(axis=1).mean() >= 2.7
+
+
+def test_gpu_bvh4_links_and_refit(gpu):
+    """Leaf items keep the build's tri_base, node items count from 0 whatever its node_base;
+    the WideBvh reads its boxes from the read-back BVH2, so a refit of that shows."""
+    from test_bvh_wide import check
+
+    tris = sphere(3)
+    builder = bvh_gpu.builder_for(gpu)
+    g = builder.build(tris)
+    plain = builder.collapse_bvh4(g).to_wide(g.to_bvh())
+    g = builder.build(tris, node_base=100, tri_base=7000)
+    shifted = builder.collapse_bvh4(g).read_nodes().view(np.uint32)[:, -4:]
+    leaf = (plain.items & bvh_wide.LEAF_BIT) != 0
+    np.testing.assert_array_equal(np.sort(shifted[leaf]), np.sort(plain.items[leaf] + 7000))
+    np.testing.assert_array_equal(np.sort(shifted[~leaf]), np.sort(plain.items[~leaf]))
+    moved = tris * np.float32([2.0, 0.5, 1.0])
+    plain.source.refit(*bvh.triangle_bounds(moved))
+    check(plain, *bvh.triangle_bounds(moved))
+
+
 def test_rays_through_gpu_bvh_match_embree(gl, tmp_path):
     pytest.importorskip("embreex.rtcore_scene")
     from test_ray_query import compare, meshes, scene_of
 
     for name in ("torus", "soup"):
         v, f = next((v, f) for n, v, f in meshes() if n == name)
-        compare(gl, scene_of(v, f, [np.eye(4)]), tmp_path, method="gpu", n=2000)
+        for layout in ("bvh4", "bvh2"):
+            compare(gl, scene_of(v, f, [np.eye(4)]), tmp_path, method="gpu", n=2000, bvh_layout=layout)
+    layers = np.concatenate([flat_grid(100), flat_grid(60) * np.float32(0.5) + np.float32([0, 0.4, 0])])
+    for tris in (sphere(), layers):   # 20k and 26k triangles (two flat layers: boxes of zero height)
+        positions = tris.reshape(-1, 3)
+        compare(gl, scene_of(positions, np.arange(len(positions)).reshape(-1, 3), [np.eye(4)]), tmp_path,
+                method="gpu", n=3000)
 
 
-def test_gpu_scene_uses_the_gpu_builder(gpu):
-    s = GpuScene(gpu, _scene(soup(600)), bvh_method="gpu")
-    assert s.blas[0].method == "gpu"
-    assert all(not b._bufs for b in bvh_gpu._builders.values()), "GpuScene frees the builder's scratch"
-    s.release()
+def test_gpu_scene_uses_the_gpu_builder(gpu, monkeypatch):
+    collapses = []
+    collapse = bvh_gpu.GpuBvhBuilder.collapse_bvh4
+    monkeypatch.setattr(bvh_gpu.GpuBvhBuilder, "collapse_bvh4",
+                        lambda self, g: collapses.append(g.triangle_count) or collapse(self, g))
+    for layout, on_gpu in (("bvh4", [600]), ("bvh4q", []), ("bvh2", [])):
+        collapses.clear()
+        s = GpuScene(gpu, _scene(soup(600)), bvh_method="gpu", bvh_layout=layout)
+        assert s.blas[0].method == "gpu"
+        assert collapses == on_gpu, "bvh4: collapsed on the GPU; bvh4q: on the CPU (quantised there)"
+        assert all(not b._bufs for b in bvh_gpu._builders.values()), "GpuScene frees the builder's scratch"
+        s.release()
     with pytest.raises(SceneError, match="bvh_method"):
         GpuScene(gpu, _scene(soup(50)), bvh_method="fast")
 

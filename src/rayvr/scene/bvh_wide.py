@@ -116,6 +116,17 @@ class WideBvh:
         items[inner] += np.uint32(node_base)
         return nodes
 
+    def sah_cost(self, c_trav: float = 1.0, c_tri: float = 1.0) -> float:
+        """Expected node visits (c_trav each) and triangle tests (c_tri each) per ray relative to
+        the root's area, as `Bvh.sah_cost` (the leaves are the source's, so only c_trav terms differ)."""
+        lo, hi, empty = self.exact_child_boxes()
+        area = _half_area(lo, hi)
+        leaf = (self.items & LEAF_BIT) != 0
+        count = ((self.items >> np.uint32(28)) & np.uint32(7)) + 1
+        root = max(float(_half_area(*self.source.bounds())), 1e-30)
+        inner = ~leaf & ~empty
+        return float((c_trav * (root + area[inner].sum()) + c_tri * (area * count)[leaf & ~empty].sum()) / root)
+
     def child_boxes(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) of every child as the GPU reads it, (K, 4, 3) each: exact boxes ("bvh4", empty
         slots at 1e30) or the decoded quantised ones ("bvh4q", empty slots inverted)."""

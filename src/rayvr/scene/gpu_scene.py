@@ -109,8 +109,11 @@ class GpuScene:
         BLAS-node buffers: each buffer allocated once at its total size, each mesh its slice."""
         t0 = time.perf_counter()
         s = self.scene
-        self.blas: list[bvh_mod.Bvh] = self._build_blas(method, progress)
-        self._blas_gpu = [None if b is None else bvh_wide.collapse_to(b, self.bvh_layout) for b in self.blas]
+        built = self._build_blas(method, progress)
+        collapsed = [isinstance(b, bvh_wide.WideBvh) for b in built]   # on the GPU already
+        self.blas: list[bvh_mod.Bvh] = [b.source if c else b for b, c in zip(built, collapsed)]
+        self._blas_gpu = [b if c or b is None else bvh_wide.collapse_to(b, self.bvh_layout)
+                          for b, c in zip(built, collapsed)]
         first_v = self._first_v = np.cumsum([0] + [len(m.positions) for m in s.meshes])
         first_t = self._first_t = np.cumsum([0] + [m.triangle_count for m in s.meshes])
         first_n = self._first_n = np.cumsum([0] + [0 if b is None else b.node_count for b in self._blas_gpu])
@@ -169,7 +172,9 @@ class GpuScene:
         """One BLAS per mesh; several meshes build at once on a thread pool (numpy releases the
         GIL), a single big mesh uses the threaded LBVH itself. method 'gpu': every mesh on the
         GPU builder (bvh_gpu); 'auto': the GPU builder for meshes of GPU_BVH_MIN triangles and
-        more on a hardware driver, binned SAH / LBVH on the CPU otherwise."""
+        more on a hardware driver, binned SAH / LBVH on the CPU otherwise. Each a `Bvh`, except the
+        GPU-built ones in layout "bvh4": collapsed on the GPU too, a `bvh_wide.WideBvh` (greedy;
+        the CPU-built ones get bvh_wide's SAH-optimal collapse in _build_meshes)."""
         import os
         from concurrent.futures import ThreadPoolExecutor
 
@@ -182,7 +187,8 @@ class GpuScene:
         on_gpu = [m.triangle_count > 0 and (method == "gpu" or (method == "auto" and hardware
                                                                   and m.triangle_count >= GPU_BVH_MIN))
                   for m in self.scene.meshes]
-        gpu_built = {k: bvh_gpu.build_gpu(self.gpu, m.triangles())   # GL calls: this thread only
+        build = bvh_gpu.build_gpu_bvh4 if self.bvh_layout == "bvh4" else bvh_gpu.build_gpu
+        gpu_built = {k: build(self.gpu, m.triangles())   # GL calls: this thread only
                      for k, (m, g) in enumerate(zip(self.scene.meshes, on_gpu)) if g}
         if gpu_built:
             bvh_gpu.release_scratch(self.gpu)
