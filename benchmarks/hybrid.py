@@ -59,7 +59,6 @@ def _time(renderer, frames: int, warmup: int) -> tuple[dict, str]:
 def run(args) -> dict:
     import rayvr as rv
     from rayvr.cli.options import load_scene_arg, parse_size
-    from rayvr.passes.compaction import read_pixel_list
     from rayvr.renderer import Renderer, default_views
 
     quick = args.quick
@@ -78,8 +77,7 @@ def run(args) -> dict:
         for m in scene.materials:
             m.effect = rv.Effect.RASTER if label == "all RASTER" else rv.Effect.SHADOWS
         g = rv.graphs.hybrid(light_samples=args.light_samples, gbuffer=args.gbuffer)
-        g.mark_output("GBuffer.effect")
-        g.mark_output("Compaction.reflectionPixels")
+        g.mark_output("GBuffer.effect")   # counts the reflective pixels (a marked compaction list would keep it running)
         if label.endswith("REFLECTIONS"):
             probe_graph = rv.graphs.hybrid()
             probe_graph.mark_output("GBuffer.effect")
@@ -91,9 +89,8 @@ def run(args) -> dict:
             times, method = _time(r, frames, warmup)
             gb_pass = r.compiled.passes["GBuffer"]
             gbuffer_choice = f"{type(gb_pass.impl).__name__} ({gb_pass.why})"
-            refl = 0
-            if "Compaction.reflectionPixels" in r.compiled.plan.outputs:
-                refl = read_pixel_list(r.compiled.get_output("Compaction.reflectionPixels"))[0]
+            effect = r.read_output("GBuffer.effect")[..., 0] & 0xFF   # gbuffer.glsl: the effect in the low byte
+            refl = int(((effect >= int(rv.Effect.REFLECTIONS)) & (effect != 0xFF)).sum())
         total = sum(times.values())
         rows.append([label, f"{args.views}x{size[0]}x{size[1]}", round(100.0 * refl / pixels, 1),
                      *[round(times[p], 3) if p in times else "pruned" for p in passes], round(total, 3)])
