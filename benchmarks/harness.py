@@ -72,12 +72,13 @@ def record(name: str, result: dict, env: dict, options: dict, out: Path) -> tupl
            "notes": result.get("notes", [])}
     jpath, mpath = out / f"{name}.json", out / f"{name}.md"
     write_text(jpath, json.dumps(doc, indent=2, default=str) + "\n")
-    meta_cols = ["date", "commit", "device", "driver"]
+    cols = ["date", "commit", "device", "driver"] + list(result["columns"])
+    header = "| " + " | ".join(cols) + " |"
     lines = []
     if not mpath.exists():
-        cols = meta_cols + list(result["columns"])
-        lines += [f"# benchmark: {name}", "", "| " + " | ".join(cols) + " |",
-                  "|" + "---|" * len(cols)]
+        lines += [f"# benchmark: {name}"]
+    if _last_header(mpath) != header:   # a new file, or columns changed: a new table
+        lines += ["", header, "|" + "---|" * len(cols)]
     device = env["device"] + (" (software)" if env["software"] else "")
     quick = " (quick)" if options.get("quick") else ""
     for row in rows:
@@ -86,6 +87,14 @@ def record(name: str, result: dict, env: dict, options: dict, out: Path) -> tupl
     with open(mpath, "a") as f:
         f.write("\n".join(lines) + "\n")
     return jpath, mpath
+
+
+def _last_header(mpath: Path) -> str | None:
+    """The header row of the last table in a results markdown file (None without one)."""
+    if not mpath.exists():
+        return None
+    heads = [line.rstrip("\n") for line in mpath.read_text().splitlines() if line.startswith("| date |")]
+    return heads[-1] if heads else None
 
 
 def print_table(result: dict) -> None:

@@ -26,6 +26,19 @@ def test_aliasing_quick_run_records_json_and_markdown(tmp_path, gpu, capsys):
     assert first["fraction"] == "0.3" and first["meets"] == "yes"
 
 
+def test_rows_with_other_columns_start_a_new_table(tmp_path):
+    env = {"device": "d", "software": False, "driver": "v", "date": "2026-11-22 00:00 UTC", "commit": "abc"}
+    harness.record("t", {"columns": ["a"], "rows": [[1]]}, env, {}, tmp_path)
+    harness.record("t", {"columns": ["a"], "rows": [[2]]}, env, {}, tmp_path)
+    harness.record("t", {"columns": ["a", "b"], "rows": [[3, 4]]}, env, {}, tmp_path)
+    md = (tmp_path / "t.md").read_text().splitlines()
+    heads = [i for i, line in enumerate(md) if line.startswith("| date |")]
+    assert [md[i] for i in heads] == ["| date | commit | device | driver | a |",
+                                      "| date | commit | device | driver | a | b |"]
+    assert md[heads[1] + 2] == "| 2026-11-22 00:00 UTC | abc | d | v | 3 | 4 |"
+    assert sum(line.startswith("| 2026") for line in md[:heads[1]]) == 2
+
+
 def test_graph_overhead_quick_has_all_settings(tmp_path, gpu):
     assert harness.main(["graph_overhead", "--quick", "--no-save", "--passes", "3"]) == 0
     assert not list(tmp_path.iterdir())
