@@ -34,14 +34,14 @@ def render(gpu, scene, monkeypatch, pixels_2d, max_bounces, tile=(8, 4), views=2
         monkeypatch.setattr(cls, "PIXELS_2D", pixels_2d)
         monkeypatch.setattr(cls, "TILE", tile)
     g = rv.graphs.hybrid(light_samples=2, max_bounces=max_bounces)
-    for name in OUTPUTS[:2]:
+    for name in (*OUTPUTS[:2], "GBuffer.effect"):
         g.mark_output(name)
     view_set = default_views(scene, views, (40, 36))   # not a multiple of the tiles (nor views of 4)
     with Renderer(scene, g, views=view_set, gpu=gpu) as r:
         r.render()
         for name in ("Shadows", "Reflections"):
             assert r.compiled.passes[name].defines()["PIXELS_2D"] == int(pixels_2d)
-        return {name: r.read_output(name).copy() for name in OUTPUTS}
+        return {name: r.read_output(name).copy() for name in (*OUTPUTS, "GBuffer.effect")}
 
 
 @pytest.mark.parametrize("max_bounces,tile,views", [(1, (8, 4), 2), (2, (8, 4), 2), (1, (16, 8), 2), (1, (8, 4), 6)])
@@ -49,8 +49,16 @@ def test_whole_image_dispatch_lights_the_same_pixels_as_the_list(gpu, monkeypatc
     scene = scene_with_every_light_kind()
     listed = render(gpu, scene, monkeypatch, False, max_bounces, views=views)
     tiled = render(gpu, scene, monkeypatch, True, max_bounces, tile, views)
+    effect = listed["GBuffer.effect"][..., 0] & 0xFF   # gbuffer.glsl: the effect id in the low byte
+    np.testing.assert_array_equal(effect, tiled["GBuffer.effect"][..., 0] & 0xFF)
+    drawn = effect != 0xFF
+    # a ray pass writes only the pixels whose effect needs its rays (elsewhere its output is
+    # undefined: fresh GPU memory); the composite writes every pixel
+    served = {"Shadows.shadowed": drawn & (effect >= int(rv.Effect.SHADOWS)),
+              "Reflections.reflection": drawn & (effect >= int(rv.Effect.REFLECTIONS)),
+              "Composite.color": np.ones_like(drawn)}
     for name, lit in zip(OUTPUTS, (0.25, 0.02, 0.4)):
-        a, b = listed[name], tiled[name]
+        a, b = listed[name][served[name]], tiled[name][served[name]]
         assert np.isfinite(a).all()
         assert (a[..., :3].max(axis=-1) > 0).mean() > lit, f"{name}: too few lit pixels to compare"
         # Same pixels, same random numbers: equal up to the float rounding in which two compiled
