@@ -59,7 +59,12 @@
 #define RQ_BVH_WIDTH 4       // the node layout GpuScene uploaded: 2 (BVH2) or 4 (BVH4); GpuScene.defines() sets it
 #endif
 #ifndef RQ_BVH_QUANTIZED
-#define RQ_BVH_QUANTIZED 1   // RQ_BVH_WIDTH 4: 64 B nodes of 8-bit child boxes (1) or 112 B float boxes (0)
+#define RQ_BVH_QUANTIZED 0   // RQ_BVH_WIDTH 4: 64 B nodes of 8-bit child boxes (1) or 112 B float boxes (0)
+#endif
+#if RQ_BVH_WIDTH == 4 && !RQ_BVH_QUANTIZED
+#define RQ_NODE_VEC4S 7      // vec4s per node
+#else
+#define RQ_NODE_VEC4S 4
 #endif
 
 layout(std430, binding = RAYVR_BLAS_NODE_SSBO) readonly buffer RqBlasNodes { vec4 rq_blas_nodes[]; };
@@ -313,32 +318,19 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
     while (true) {
         if ((item & RQ_LEAF_BIT) == 0u) {
             RQ_COUNT(rq_stat_nodes);
-#if RQ_BVH_WIDTH == 4 && RQ_BVH_QUANTIZED
-            uint base = item * 4u;
-            vec4 header, q, qz, items;
+            vec4 n[RQ_NODE_VEC4S];   // the node, from the level the ray is in
+            uint base = item * uint(RQ_NODE_VEC4S);
             if (instance == RQ_NO_INSTANCE) {
-                header = rq_tlas_nodes[base]; q = rq_tlas_nodes[base + 1u];
-                qz = rq_tlas_nodes[base + 2u]; items = rq_tlas_nodes[base + 3u];
+                for (int k = 0; k < RQ_NODE_VEC4S; ++k) n[k] = rq_tlas_nodes[base + uint(k)];
             } else {
-                header = rq_blas_nodes[base]; q = rq_blas_nodes[base + 1u];
-                qz = rq_blas_nodes[base + 2u]; items = rq_blas_nodes[base + 3u];
+                for (int k = 0; k < RQ_NODE_VEC4S; ++k) n[k] = rq_blas_nodes[base + uint(k)];
             }
-            uvec4 c = floatBitsToUint(items);
-            vec4 t = rq_box4q(header, floatBitsToUint(q), floatBitsToUint(qz.xy), c, r.inv, r.oi, tmax);
-#elif RQ_BVH_WIDTH == 4
-            uint base = item * 7u;
-            vec4 lox, hix, loy, hiy, loz, hiz, items;
-            if (instance == RQ_NO_INSTANCE) {
-                lox = rq_tlas_nodes[base]; hix = rq_tlas_nodes[base + 1u]; loy = rq_tlas_nodes[base + 2u];
-                hiy = rq_tlas_nodes[base + 3u]; loz = rq_tlas_nodes[base + 4u]; hiz = rq_tlas_nodes[base + 5u];
-                items = rq_tlas_nodes[base + 6u];
-            } else {
-                lox = rq_blas_nodes[base]; hix = rq_blas_nodes[base + 1u]; loy = rq_blas_nodes[base + 2u];
-                hiy = rq_blas_nodes[base + 3u]; loz = rq_blas_nodes[base + 4u]; hiz = rq_blas_nodes[base + 5u];
-                items = rq_blas_nodes[base + 6u];
-            }
-            vec4 t = rq_box4(lox, hix, loy, hiy, loz, hiz, r.inv, r.oi, tmax);
-            uvec4 c = floatBitsToUint(items);
+#if RQ_BVH_WIDTH == 4 && RQ_BVH_QUANTIZED   // header, lo/hi x y bytes, lo/hi z bytes, items
+            uvec4 c = floatBitsToUint(n[3]);
+            vec4 t = rq_box4q(n[0], floatBitsToUint(n[1]), floatBitsToUint(n[2].xy), c, r.inv, r.oi, tmax);
+#elif RQ_BVH_WIDTH == 4                     // lo.x, hi.x, lo.y, hi.y, lo.z, hi.z of 4 children, items
+            vec4 t = rq_box4(n[0], n[1], n[2], n[3], n[4], n[5], r.inv, r.oi, tmax);
+            uvec4 c = floatBitsToUint(n[6]);
 #endif
 #if RQ_BVH_WIDTH == 4
             // sort the children near to far (misses are RQ_MISS, last): a 5-comparator network
@@ -352,20 +344,11 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
                 item = c.x;
                 continue;
             }
-#else
-            uint base = item * 4u;
-            vec4 n0, n1, n2, n3;
-            if (instance == RQ_NO_INSTANCE) {
-                n0 = rq_tlas_nodes[base]; n1 = rq_tlas_nodes[base + 1u];
-                n2 = rq_tlas_nodes[base + 2u]; n3 = rq_tlas_nodes[base + 3u];
-            } else {
-                n0 = rq_blas_nodes[base]; n1 = rq_blas_nodes[base + 1u];
-                n2 = rq_blas_nodes[base + 2u]; n3 = rq_blas_nodes[base + 3u];
-            }
-            float t0 = rq_box(n0.xyz, n1.xyz, r.inv, r.oi, tmax);
-            float t1 = rq_box(n2.xyz, n3.xyz, r.inv, r.oi, tmax);
-            uint c0 = rq_item(floatBitsToUint(n0.w), floatBitsToUint(n1.w));
-            uint c1 = rq_item(floatBitsToUint(n2.w), floatBitsToUint(n3.w));
+#else                                       // min0 link0, max0 count0, min1 link1, max1 count1
+            float t0 = rq_box(n[0].xyz, n[1].xyz, r.inv, r.oi, tmax);
+            float t1 = rq_box(n[2].xyz, n[3].xyz, r.inv, r.oi, tmax);
+            uint c0 = rq_item(floatBitsToUint(n[0].w), floatBitsToUint(n[1].w));
+            uint c1 = rq_item(floatBitsToUint(n[2].w), floatBitsToUint(n[3].w));
             bool go0 = t0 >= 0.0, go1 = t1 >= 0.0;
             if (go0 && go1) {
                 bool near0 = t0 <= t1;
