@@ -308,8 +308,7 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
     bool found = false;
     if (instance_count() == 0u) return false;
     float tmax = min(tmax_in, 1e29);
-    RqRay world = rq_make_ray(o, d);
-    RqRay r = world;
+    RqRay r = rq_make_ray(o, d);   // render space; rebuilt, not kept, on leaving a BLAS (fewer registers)
     uint instance = RQ_NO_INSTANCE;
     int blas_base = -1;          // stack depth when the current BLAS was entered
     uint stack[RQ_STACK_SIZE];
@@ -374,7 +373,7 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
         }
         if (sp == blas_base) {   // this BLAS is done: back to the TLAS and the render-space ray
             instance = RQ_NO_INSTANCE;
-            r = world;
+            r = rq_make_ray(o, d);
             blas_base = -1;
         }
         if (sp == 0) break;
