@@ -54,13 +54,14 @@ def test_reset_starts_the_mean_again(gpu):
     np.testing.assert_allclose(run(xs[4]), xs[3:5].astype(np.float64).mean(0), rtol=2e-7)
 
 
-def test_sample_index_falling_back_resets(gpu):
+def test_sample_index_zero_restarts(gpu):
     run = Frames(gpu, Accumulate())
-    xs = frames(4, seed=2)
+    xs = frames(5, seed=2)
     run(xs[0], sample_index=0)
     run(xs[1], sample_index=1)
-    np.testing.assert_array_equal(run(xs[2], sample_index=0), xs[2])   # the renderer's reset signal
-    np.testing.assert_allclose(run(xs[3], sample_index=1), xs[2:4].astype(np.float64).mean(0), rtol=2e-7)
+    np.testing.assert_array_equal(run(xs[2], sample_index=0), xs[2])   # the renderer's restart signal
+    np.testing.assert_array_equal(run(xs[3], sample_index=0), xs[3])   # twice in a row: again
+    np.testing.assert_allclose(run(xs[4], sample_index=1), xs[3:5].astype(np.float64).mean(0), rtol=2e-7)
 
 
 def test_view_change_resets(gpu):

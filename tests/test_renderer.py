@@ -125,3 +125,23 @@ def test_sample_index_restarts_when_the_head_only_translates(gpu):
         assert r.sample_index == 0
         r.render(moved)
         assert r.sample_index == 1
+
+
+def test_sample_index_restarts_when_an_instance_moves_a_light_changes_or_a_material(gpu):
+    scene = builtin.cornell_box()
+    scene.lights.append(rv.scene.Light("point", position=(0.0, 1.0, 0.5), intensity=0.5))
+    with Renderer(scene, rv.graphs.hybrid(), views=1, size=(8, 8)) as r:
+        counts = []
+        for edit in (None, None, "instance", None, "light", "light again", None, "material", None):
+            if edit == "instance":
+                moved = scene.instances[0].transform.copy()
+                moved[0, 3] += 0.01
+                scene.instances[0].transform = moved
+            elif edit in ("light", "light again"):
+                scene.lights[-1].intensity += 0.25
+            elif edit == "material":
+                scene.materials["Floor"].base_color = (0.2, 0.3, 0.4, 1.0)
+            r.render()
+            counts.append(r.sample_index)
+    # two edits on consecutive frames restart twice: each frame with an edit is sample 0
+    assert counts == [0, 1, 0, 1, 0, 0, 1, 0, 1]

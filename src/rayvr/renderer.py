@@ -169,9 +169,10 @@ class Renderer:
         jitter = halton_jitter(self.frame_index) if self._jitter else (0.0, 0.0)
         packed = bytearray(view_set.pack(origin, self.frame_index, 0, jitter=jitter))
         # Accumulation restarts when any view's matrices, the render-space origin (a head that
-        # only translates leaves the render-space matrices as they were) or the materials change.
+        # only translates leaves the render-space matrices as they were) or what the GpuScene
+        # uploaded (instances, lights, materials) change: the one restart signal, sample_index 0.
         mats = np.frombuffer(packed, np.float32, offset=HEADER_BYTES).reshape(len(view_set), -1)[:, :48]
-        key = (mats.tobytes(), np.asarray(origin, np.float64).tobytes(), self.scene.materials.version)
+        key = (mats.tobytes(), np.asarray(origin, np.float64).tobytes(), self.gpu_scene.version)
         self.sample_index = self.sample_index + 1 if key == self._accum_key else 0
         self._accum_key = key
         struct.pack_into("<I", packed, 8, self.sample_index)

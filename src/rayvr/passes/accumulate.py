@@ -2,11 +2,11 @@
 input over frames (after Falcor's AccumulatePass), for converging path-traced renders.
 
 The sum lives in internal rgba32f pins (Kahan-compensated), so the mean of N frames equals the
-float mean of the inputs. It restarts when:
-- `reset()` is called;
-- the frame's views change (pose, field of view, size or count);
-- the scene changes (materials version, instance transforms, punctual lights);
-- `ctx.sample_index` falls back (0 after a positive value: the renderer's own reset signal).
+float mean of the inputs. It restarts when `reset()` is called, and then:
+- under a Renderer, when `ctx.sample_index` is 0: the Renderer's one signal that the views, the
+  render-space origin or the scene (instances, lights, materials) changed;
+- run without one (`ctx.sample_index` None), when its own check sees the frame's views (pose,
+  field of view, size or count) or the scene change.
 `max_frames` > 0 stops adding after that many frames; the output stays the mean of those.
 """
 from __future__ import annotations
@@ -31,7 +31,6 @@ class Accumulate(RenderPass):
         self._count = 0
         self._pending_reset = True
         self._key = None
-        self._last_sample_index = 0
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -65,7 +64,8 @@ class Accumulate(RenderPass):
         self.reset()
 
     def _change_key(self, ctx, data) -> tuple:
-        """What invalidates the mean: views and scene state (small, per view / per instance)."""
+        """What invalidates the mean without a Renderer: views and scene state (per view and per
+        instance in Python: for hand-driven graphs, not the Renderer's frames)."""
         parts: list = [data.size, data.views]
         if ctx.view_set is not None:
             parts += [np.round(v.pose.matrix(), 9).tobytes() + np.asarray(v.fov.tangents()).tobytes()
@@ -83,16 +83,15 @@ class Accumulate(RenderPass):
             return True
         if not self.auto_reset:
             return False
-        fell_back = ctx.sample_index < self._last_sample_index
-        self._last_sample_index = ctx.sample_index
-        return fell_back or self._change_key(ctx, data) != self._key
+        if ctx.sample_index is not None:
+            return ctx.sample_index == 0
+        return self._change_key(ctx, data) != self._key
 
     def execute(self, ctx, data):
         if self._needs_reset(ctx, data):
             self._count = 0
             self._pending_reset = False
-            self._last_sample_index = ctx.sample_index
-            if self.auto_reset:
+            if self.auto_reset and ctx.sample_index is None:
                 self._key = self._change_key(ctx, data)
         add = self.max_frames == 0 or self._count < self.max_frames
         if add:

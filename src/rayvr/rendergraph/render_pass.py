@@ -177,7 +177,8 @@ class RenderContext:
     views_buffer: Any = None      # moderngl.Buffer with the views SSBO (glsl/views.glsl)
     view_set: Any = None          # rayvr.xr.views.ViewSet of this frame
     frame_index: int = 0
-    sample_index: int = 0         # accumulated samples since the last camera or scene change
+    sample_index: int | None = None   # samples since the last camera or scene change (0: one
+                                      # happened); None when no Renderer counts them
 
 
 class RenderPass:

@@ -78,6 +78,8 @@ class GpuScene:
         self.features = scene.features
         self.timings: dict[str, float] = {}
         self.buffers: dict[str, object] = {}
+        self.version = 0   # grows when update() uploads changed instances, lights or materials
+        self._last_lights = None
         self._build_meshes(bvh_method, progress)
         self._build_textures()
         self._material_version = None
@@ -289,11 +291,13 @@ class GpuScene:
     # ---- per frame --------------------------------------------------------------------------
     def update(self, origin=None) -> None:
         """Move to this frame's render-space origin (float64 world point): instance transforms,
-        TLAS and punctual lights; re-upload materials when `materials.version` changed."""
+        TLAS and punctual lights; re-upload materials when `materials.version` changed. `version`
+        grows whenever something uploaded differs from the last frame's."""
         t0 = time.perf_counter()
         self.origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64)
         if self.scene.materials.version != self._material_version:
             self._upload_materials()
+            self.version += 1
         s = self.scene
         n = len(s.instances)
         mats = np.array([inst.transform for inst in s.instances], np.float64).reshape(n, 4, 4)
@@ -302,6 +306,7 @@ class GpuScene:
                 and np.array_equal(mats, self._last_instances[0]) and np.array_equal(mesh_ids, self._last_instances[1])):
             self._upload_instances(mats, mesh_ids)
             self._last_origin, self._last_instances = self.origin.copy(), (mats, mesh_ids)
+            self.version += 1
         self._upload_lights()
         self.timings["update_ms"] = (time.perf_counter() - t0) * 1e3
 
@@ -357,7 +362,10 @@ class GpuScene:
             cos_outer, cos_inner = np.cos(L.outer_cone_angle), np.cos(L.inner_cone_angle)
             out[r + 3, 0] = cos_outer
             out[r + 3, 1] = 1.0 / max(cos_inner - cos_outer, 1e-4)
-        self._buffer("punctual_lights", out)
+        if self._last_lights is None or not np.array_equal(out, self._last_lights):
+            self._buffer("punctual_lights", out)
+            self._last_lights = out
+            self.version += 1
 
     # ---- binding and drawing ----------------------------------------------------------------
     _BINDING = {"vertices": "RAYVR_VERTEX_SSBO", "indices": "RAYVR_INDEX_SSBO",
