@@ -31,8 +31,9 @@ def build_compute(gl, name: str, defines: dict | None = None):
 
 
 # Views a ray pass's warp spans (glsl/ray_group.glsl). Neighbouring views of a camera grid see
-# almost the same scene through the same pixel, so a warp of a few pixels in several views traces
-# more alike rays than a warp of more pixels in one small view. 1 turns it off.
+# nearly the same surface through the same pixel (exactly so on the focal plane), so a warp of a
+# few pixels in several views traces more alike rays than one of more pixels in one small view
+# (H100, tauray, 64 views of 512x683: GBufferRT 3.23 -> 3.15 ms, RTShadows 8.43 -> 8.15). 1: off.
 VIEW_GROUP = 4
 
 
