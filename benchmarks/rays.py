@@ -258,15 +258,15 @@ def _scene(spec: str):
     return s, "sah" if kind == "flat-sah" else "auto"
 
 
-def _tile_queue(surfaces, w: int, h: int):
-    """(buffer, length): the indices of the pixels with a primary hit, ordered by 8x4 screen tile
-    (a warp's worth of neighbouring pixels), as a wavefront renderer's compacted ray queue holds them."""
-    hit = np.frombuffer(surfaces.read(), np.float32)[3::8] != 0.0
+def _tile_queue(gl, hit: np.ndarray, w: int):
+    """(buffer, length): the indices of the pixels with a primary hit (`hit`, row-major), ordered by
+    8x4 screen tile (a warp's worth of neighbouring pixels), as a wavefront renderer's compacted ray
+    queue holds them."""
     idx = np.flatnonzero(hit).astype(np.uint32)
     x, y = idx % w, idx // w
     order = np.lexsort((x % 8, y % 4, x // 8, y // 4))
     q = idx[order]
-    return surfaces.ctx.buffer(q.tobytes() if len(q) else b"\0\0\0\0"), int(len(q))
+    return gl.buffer(q.tobytes() if len(q) else b"\0\0\0\0"), int(len(q))
 
 
 def parse_variants(text: str) -> list[tuple[str, dict]]:
@@ -364,16 +364,17 @@ def run(args) -> dict:
             for key, vdefs, progs in compiled:
                 scenes[key[0]].bind()
                 primary_ms = _time(gl, caps.timer_queries, lambda: progs["primary"].run(*groups), iters)
-                hits = int((np.frombuffer(result.read(w * h * 4), np.float32) > 0).sum())
+                primary_hit = np.frombuffer(result.read(w * h * 4), np.float32) > 0   # = the surfaces' hits
+                hits = int(primary_hit.sum())
                 progs["surfaces"].run(*groups)
                 gl.memory_barrier()
                 if queue_layout and queue is None:
-                    queue = _tile_queue(surfaces, w, h)
+                    queue = _tile_queue(gl, primary_hit, w)
                     queue[0].bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_3"])
                 diffuse_ms = _time(gl, caps.timer_queries, lambda: run_diffuse(progs["diffuse"]), iters)
                 d = np.frombuffer(result.read(), np.float32)
                 if queue_layout:   # pixels off the queue were never written: mark them as no-ray
-                    d = np.where(np.tile(np.frombuffer(surfaces.read(), np.float32)[3::8] != 0.0, per_hit), d, -2.0)
+                    d = np.where(np.tile(primary_hit, per_hit), d, -2.0)
                 if stats_buf is not None and key not in counts:
                     counts[key] = _stats(gl, programs({**scenes[key[0]].defines(), **vdefs, "RQ_STATS": 1}),
                                          dispatch, stats_buf, d > -1.5, w * h)
