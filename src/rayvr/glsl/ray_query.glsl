@@ -365,7 +365,7 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
             instance = item & 0x0FFFFFFFu;
             r = rq_object_ray(o, d, instance);
             blas_base = sp;
-            item = scene_instances[instance].info.y;
+            item = scene_meshes[scene_instances[instance].info.x].info.x;
             continue;
         } else {
             found = rq_leaf(r, instance, item & 0x0FFFFFFFu, ((item >> 28) & 7u) + 1u, tmax, hit, any_hit) || found;

@@ -62,8 +62,7 @@ struct MeshData {
 struct InstanceData {
     vec4 to_render[3];  // rows of the 3x4 object -> render space matrix
     vec4 to_object[3];  // rows of its inverse
-    uvec4 info;         // x: mesh, y: its BLAS root node, z: its first scene triangle (copies of
-                        // MeshData's: a ray entering the instance saves a dependent load)
+    uvec4 info;         // x: mesh
 };
 
 struct MaterialData {
@@ -117,7 +116,7 @@ vec3 safe_normalize(vec3 v, vec3 fallback) {
 }
 
 uint scene_triangle(uint instance, uint primitive) {
-    return scene_instances[instance].info.z + primitive;
+    return scene_meshes[scene_instances[instance].info.x].info.z + primitive;
 }
 
 vec3 srgb_to_linear(vec3 c) {

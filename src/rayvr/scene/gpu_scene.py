@@ -322,8 +322,7 @@ class GpuScene:
         rows = np.zeros((max(n, 1), INSTANCE_FLOATS), np.float32)   # one placeholder row when empty
         rows[:n, 0:12] = m[:, :3].reshape(n, 12)
         rows[:n, 12:24] = np.linalg.inv(m)[:, :3].reshape(n, 12)
-        info = rows[:n].view(np.uint32)[:, 24:27]   # InstanceData.info: mesh, BLAS root, first triangle
-        info[:, 0], info[:, 1], info[:, 2] = mesh_ids, self._first_n[mesh_ids], self._first_t[mesh_ids]
+        rows[:n].view(np.uint32)[:, 24] = mesh_ids
         w = np.einsum("nij,nkj->nki", m[:, :3], self._mesh_corners[mesh_ids])   # each mesh box's corners
         live = np.flatnonzero(self._mesh_live[mesh_ids])
         header = np.zeros(4, np.uint32)
