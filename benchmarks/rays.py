@@ -6,7 +6,10 @@ BVH4, 64 B quantised BVH4) side by side.
 
 Primary: one camera ray per pixel (trace_closest), from the scene's first camera or one framing
 its bounds. Diffuse: from every primary hit, a cosine-distributed direction about the geometric
-normal, origin moved by offset_ray_origin (trace_closest; incoherent rays). Roofline: every ray
+normal, origin moved by offset_ray_origin (trace_closest; incoherent rays), dispatched over every
+pixel (`--diffuse-layout pixels`, as a 1-spp path tracer's bounce), over the compacted queue of hit
+pixels (`queue`, as a wavefront renderer holds its rays), or over that queue by persistent threads
+that refill idle lanes (`persistent`, with ray_query.glsl's rq_begin/rq_step). Roofline: every ray
 of a batch tested against every triangle of a small set with the same triangle test and no
 BVH: the rate of ray-triangle tests the GPU sustains. `ratio` = rays/s / tests/s; a BVH that
 needs ~N box and triangle tests per ray lands near 1/N. Targets (H100): >= 3 Grays/s primary,
@@ -32,7 +35,7 @@ QUICK_SCENES = "cornell_box"
 
 _HEADER = """
 #include "ray_query.glsl"
-#if DIFFUSE_QUEUE && IS_DIFFUSE
+#if (DIFFUSE_QUEUE || DIFFUSE_PERSISTENT) && IS_DIFFUSE
 layout(local_size_x = 64) in;
 #else
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -88,11 +91,76 @@ void main() {
 DIFFUSE = "#define IS_DIFFUSE 1\n" + _HEADER + """
 layout(std430, binding = RAYVR_PASS_SSBO_0) writeonly buffer Result { float result[]; };
 layout(std430, binding = RAYVR_PASS_SSBO_1) readonly buffer Surfaces { vec4 surfaces[]; };
-#if DIFFUSE_QUEUE
+#if DIFFUSE_QUEUE || DIFFUSE_PERSISTENT
 layout(std430, binding = RAYVR_PASS_SSBO_3) readonly buffer Queue { uint queue[]; };
 uniform uint queue_length;
+uniform uint per_hit;
 #endif
 uint hash(uint x) { x ^= x >> 16; x *= 0x7feb352du; x ^= x >> 15; x *= 0x846ca68bu; x ^= x >> 16; return x; }
+// The cosine-distributed direction of sample k about normal n of pixel i.
+vec3 diffuse_dir(uint i, uint k, vec3 n) {
+    uint h1 = hash((i * 8u + k) * 2u + 1u), h2 = hash(h1 ^ 0x9e3779b9u);
+    float u1 = float(h1 >> 8) / 16777216.0, u2 = float(h2 >> 8) / 16777216.0;
+    float r = sqrt(u1), phi = 6.2831853 * u2;
+    vec3 t = normalize(abs(n.x) > 0.5 ? cross(n, vec3(0, 1, 0)) : cross(n, vec3(1, 0, 0)));
+    vec3 b = cross(n, t);
+    return normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(0.0, 1.0 - u1)) * n);
+}
+#if DIFFUSE_PERSISTENT
+// Persistent threads (Aila & Laine 2009): a fixed number of workgroups; a subgroup's lanes whose
+// ray is done take the next rays of the queue (one atomic per subgroup) whenever fewer than
+// REFILL_BELOW of its lanes are still tracing, so a warp does not idle behind its longest ray.
+#ifndef REFILL_BELOW
+#define REFILL_BELOW 16
+#endif
+#ifndef REFILL_STEPS
+#define REFILL_STEPS 1
+#endif
+layout(std430, binding = RAYVR_PASS_SSBO_4) coherent buffer Counter { uint next_ray; };
+uint lanes(bool b) { uvec2 m = unpackUint2x32(ballotARB(b)); return uint(bitCount(m.x) + bitCount(m.y)); }
+void main() {
+    uint total = queue_length * per_hit;
+    bool tracing = false, drained = false;
+    uint out_i = 0u;
+    while (true) {
+        if (!drained) {
+            bool need = !tracing;
+            uvec2 m = unpackUint2x32(ballotARB(need));
+            uint n = uint(bitCount(m.x) + bitCount(m.y));
+            if (n > 0u) {
+                uint leader = m.x != 0u ? uint(findLSB(m.x)) : 32u + uint(findLSB(m.y));
+                uint first = 0u;
+                if (gl_SubGroupInvocationARB == leader) first = atomicAdd(next_ray, n);
+                first = readInvocationARB(first, leader);
+                uvec2 lt = unpackUint2x32(gl_SubGroupLtMaskARB);
+                uint j = first + uint(bitCount(m.x & lt.x) + bitCount(m.y & lt.y));
+                drained = first + n >= total;
+                if (need && j < total) {
+                    uint q = j % queue_length, k = j / queue_length;
+                    uint i = queue[q];
+                    out_i = i + k * uint(size.x * size.y);
+                    vec4 p = surfaces[2u * i];
+                    rq_begin(p.xyz, diffuse_dir(i, k, surfaces[2u * i + 1u].xyz), 1e29, false);
+#if RQ_STATS
+                    rq_stat_nodes = 0u; rq_stat_triangles = 0u; rq_stat_instances = 0u;
+#endif
+                    tracing = !rq_done;
+                    if (rq_done) result[out_i] = -1.0;   // no instances
+                }
+            }
+        }
+        if (!anyInvocationARB(tracing)) break;
+        uint steps = 0u;
+        do {
+            if (tracing && !rq_step()) {
+                result[out_i] = rq_found ? rq_hit.t : -1.0;
+                WRITE_STATS(out_i);
+                tracing = false;
+            }
+        } while (++steps < uint(REFILL_STEPS) || lanes(tracing) >= (drained ? 1u : uint(REFILL_BELOW)));
+    }
+}
+#else
 void main() {
 #if DIFFUSE_QUEUE   // 1D over the hit pixels only, in screen-tile order; y of the dispatch = sample
     if (gl_GlobalInvocationID.x >= queue_length) return;
@@ -107,18 +175,12 @@ void main() {
     uint out_i = i + k * uint(size.x * size.y);
     vec4 p = surfaces[2u * i];
     if (p.w == 0.0) { result[out_i] = -2.0; WRITE_STATS(out_i); return; }
-    vec3 n = surfaces[2u * i + 1u].xyz;
-    uint h1 = hash((i * 8u + k) * 2u + 1u), h2 = hash(h1 ^ 0x9e3779b9u);
-    float u1 = float(h1 >> 8) / 16777216.0, u2 = float(h2 >> 8) / 16777216.0;
-    float r = sqrt(u1), phi = 6.2831853 * u2;
-    vec3 t = normalize(abs(n.x) > 0.5 ? cross(n, vec3(0, 1, 0)) : cross(n, vec3(1, 0, 0)));
-    vec3 b = cross(n, t);
-    vec3 d = normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(0.0, 1.0 - u1)) * n);
     Hit h;
-    bool hit = trace_closest(p.xyz, d, 1e29, h);
+    bool hit = trace_closest(p.xyz, diffuse_dir(i, k, surfaces[2u * i + 1u].xyz), 1e29, h);
     result[out_i] = hit ? h.t : -1.0;
     WRITE_STATS(out_i);
 }
+#endif
 """
 
 ROOFLINE = """
@@ -160,9 +222,11 @@ def add_arguments(parser) -> None:
                              "(a shared GPU's timings vary between dispatches; quick: 1)")
     parser.add_argument("--diffuse-per-hit", type=int, default=1,
                         help="diffuse rays from each primary hit (1..8; 1: one bounce of a 1-spp path tracer)")
-    parser.add_argument("--diffuse-layout", default="pixels", choices=("pixels", "queue"),
+    parser.add_argument("--diffuse-layout", default="pixels", choices=("pixels", "queue", "persistent"),
                         help="pixels: a 2D dispatch over every pixel, misses leave at once; queue: a 1D "
-                             "dispatch over the hit pixels only, in 8x4 screen-tile order")
+                             "dispatch over the hit pixels only, in 8x4 screen-tile order; persistent: the "
+                             "same queue taken by a fixed set of workgroups whose lanes refill as their rays "
+                             "finish (variant defines PERSISTENT_GROUPS, REFILL_BELOW, REFILL_STEPS)")
     parser.add_argument("--stats", action="store_true",
                         help="also count node visits, triangle tests and instance entries per ray (RQ_STATS)")
     parser.add_argument("--bvh-layouts", default="",
@@ -211,12 +275,16 @@ def _time(gl, use_queries: bool, fn, iterations: int) -> float:
     return statistics.median(times)
 
 
-def _program(gl, folder: Path, name: str, text: str, defines: dict):
+SUBGROUP_EXTENSIONS = ("#extension GL_ARB_shader_ballot : require\n#extension GL_ARB_shader_group_vote : require\n"
+                       "#extension GL_ARB_gpu_shader_int64 : require\n")
+
+
+def _program(gl, folder: Path, name: str, text: str, defines: dict, header: str = ""):
     from rayvr.gpu import compute_program
 
     path = folder / f"{name}.comp"
     path.write_text(text)
-    return compute_program(gl, path, defines)
+    return compute_program(gl, path, defines, header=header)
 
 
 def _roofline(gl, caps, folder: Path, rays: int, tris: int, iterations: int) -> float:
@@ -320,15 +388,22 @@ def run(args) -> dict:
         gs = scenes[layouts[0]]
         pos, right, up, fwd = _camera(scene, w / h)
         per_hit = max(1, min(8, args.diffuse_per_hit))
-        queue_layout = args.diffuse_layout == "queue"
+        queue_layout = args.diffuse_layout in ("queue", "persistent")
+        persistent = args.diffuse_layout == "persistent"
+        counter = gl.buffer(reserve=4) if persistent else None
         result = gl.buffer(reserve=w * h * 4 * per_hit)
         surfaces = gl.buffer(reserve=w * h * 32)
         stats_buf = gl.buffer(reserve=w * h * 16 * per_hit) if args.stats else None
         groups = ((w + 7) // 8, (h + 7) // 8)
         queue = None   # hit pixels in 8x4-tile order (queue layout), made once from the surfaces
 
-        def run_diffuse(prog):
-            if queue_layout:
+        def run_diffuse(prog, groups_persistent=2048):
+            if persistent:
+                counter.clear()
+                prog["queue_length"] = queue[1]
+                prog["per_hit"] = per_hit
+                prog.run(groups_persistent)
+            elif queue_layout:
                 prog["queue_length"] = queue[1]
                 prog.run((queue[1] + 63) // 64, per_hit)
             else:
@@ -337,20 +412,25 @@ def run(args) -> dict:
         dispatch = {"primary": lambda p: p.run(*groups), "diffuse": run_diffuse}
 
         def programs(defines):
-            defines = {**defines, "DIFFUSE_QUEUE": int(queue_layout)}
-            progs = {k: _program(gl, folder, k, src, defines) for k, src in
+            defines = {**defines, "DIFFUSE_QUEUE": int(queue_layout and not persistent),
+                       "DIFFUSE_PERSISTENT": int(persistent)}
+            progs = {k: _program(gl, folder, k, src, defines, SUBGROUP_EXTENSIONS if persistent and k == "diffuse" else "")
+                     for k, src in
                      (("primary", PRIMARY), ("surfaces", SURFACES), ("diffuse", DIFFUSE))}
             for p in progs.values():
                 for name, v in (("cam_pos", pos - gs.origin), ("cam_right", right), ("cam_up", up), ("cam_forward", fwd)):
                     if name in p:
                         p[name] = tuple(float(x) for x in v)
                 p["size"] = (w, h)
+            progs["groups"] = defines.get("PERSISTENT_GROUPS", 2048)
             return progs
 
         result.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"])
         surfaces.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_1"])
         if stats_buf is not None:
             stats_buf.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_2"])
+        if counter is not None:
+            counter.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_4"])
         counts: dict[tuple, dict] = {}
         compiled = [((layout, vname), vdefs, programs({**scenes[layout].defines(), **vdefs}))
                     for layout in layouts for vname, vdefs in variants]
@@ -371,7 +451,7 @@ def run(args) -> dict:
                 if queue_layout and queue is None:
                     queue = _tile_queue(gl, primary_hit, w)
                     queue[0].bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_3"])
-                diffuse_ms = _time(gl, caps.timer_queries, lambda: run_diffuse(progs["diffuse"]), iters)
+                diffuse_ms = _time(gl, caps.timer_queries, lambda: run_diffuse(progs["diffuse"], progs["groups"]), iters)
                 d = np.frombuffer(result.read(), np.float32)
                 if queue_layout:   # pixels off the queue were never written: mark them as no-ray
                     d = np.where(np.tile(primary_hit, per_hit), d, -2.0)
@@ -407,6 +487,8 @@ def run(args) -> dict:
             queue[0].release()
         if stats_buf is not None:
             stats_buf.release()
+        if counter is not None:
+            counter.release()
     cols = ["scene", "variant", "bvh_layout", "triangles", "size", "primary_ms", "primary_Grays_s", "diffuse_per_hit",
             "diffuse_layout", "diffuse_ms", "diffuse_Grays_s",
             "primary_hit_frac", "diffuse_hit_frac", "roofline_Gtests_s", "primary_ratio", "diffuse_ratio",

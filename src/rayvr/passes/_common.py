@@ -32,9 +32,13 @@ def build_compute(gl, name: str, defines: dict | None = None):
 
 # Views a ray pass's warp spans (glsl/ray_group.glsl). Neighbouring views of a camera grid see
 # nearly the same surface through the same pixel (exactly so on the focal plane), so a warp of a
-# few pixels in several views traces more alike rays than one of more pixels in one small view
-# (H100, tauray, 64 views of 512x683: GBufferRT 3.23 -> 3.15 ms, RTShadows 8.43 -> 8.15). 1: off.
+# few pixels in several views traces more alike rays than one of more pixels in one small view.
+# Each pass may pass its own count to ray_group; 1: off. Measured on the H100, tauray, 64 views of
+# 512x683, GPU ms for groups of 1 / 2 / 4 / 8 views: GBufferRT 2.87 / 2.71 / 3.04 / 3.83, RTShadows
+# 7.47 / 7.38 / 7.26 / 7.24 (primary rays only diverge so far before a wider warp costs more).
 VIEW_GROUP = 4
+# Frames with fewer views are not grouped: stereo's two eyes see the same pixel's surface far apart.
+MIN_GROUPED_VIEWS = 4
 
 
 def groups_2d(size: tuple[int, int], views: int, group: tuple[int, ...] = COMPUTE_GROUP) -> tuple[int, int, int]:
@@ -44,13 +48,14 @@ def groups_2d(size: tuple[int, int], views: int, group: tuple[int, ...] = COMPUT
     return (size[0] + gx - 1) // gx, (size[1] + gy - 1) // gy, (views + gz - 1) // gz
 
 
-def ray_group(views: int, tile: tuple[int, int] = COMPUTE_GROUP) -> tuple[int, int, int]:
+def ray_group(views: int, tile: tuple[int, int] = COMPUTE_GROUP, view_group: int | None = None) -> tuple[int, int, int]:
     """The (x, y, views) shape of a ray pass's workgroup of tile[0] * tile[1] invocations: the tile
-    shrunk (larger side first) to make room for VIEW_GROUP views when a frame has that many. Not
-    for stereo, whose two eyes see the same pixel's surface far apart."""
+    shrunk (larger side first) to make room for `view_group` views (default VIEW_GROUP) when a frame
+    has at least MIN_GROUPED_VIEWS."""
     x, y = tile
     z = 1
-    while z < VIEW_GROUP <= views and x * y > 1:
+    want = VIEW_GROUP if view_group is None else view_group
+    while z < want and views >= max(want, MIN_GROUPED_VIEWS) and x * y > 1:
         z *= 2
         if x > y:
             x //= 2
