@@ -54,6 +54,7 @@ class _GBufferLightingPass(RenderPass):
     # a warp often straddles two of them.
     PIXELS_2D: bool | None = None
     TILE = (8, 4)   # one warp (ray_group spreads it over views)
+    VIEW_GROUP: int | None = None   # views a workgroup spans in a camera grid (None: passes._common.VIEW_GROUP)
 
     def reflect(self, cd):
         r = Reflection()
@@ -73,7 +74,7 @@ class _GBufferLightingPass(RenderPass):
         self._defines = {**scene_defines(ctx), **effect_defines(), **GBUFFER_UNITS,
                          "RNG_SALT": self.SALT, **self.shader_defines()}
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
-        self._group = ray_group(cd.views, self.TILE)
+        self._group = ray_group(cd.views, self.TILE, self.VIEW_GROUP)
         self._defines.update(PIXELS_2D=int(self._pixels_2d), **ray_group_defines(self._group))
         if self.PIXEL_LIST and not self._pixels_2d:
             self._defines["PIXEL_LIST_SSBO"] = PASS_SSBO_0
@@ -146,8 +147,10 @@ class RTShadows(_GBufferLightingPass):
     PROPERTIES = {"light_samples": 1}
     # H100, tauray, all SHADOWS (the list is nearly full), list / 8x4 tiles / 8x8 tiles: stereo
     # 2x1440x1600 1.69 / 1.78 / 1.72 ms; 1x4096x5464 7.89 / 8.14 / 7.88; 64x512x683 camera grid,
-    # tiles over 4 views (ray_group) 8.77 / 8.52 / 8.15.
+    # tiles over 4 views (ray_group) 8.77 / 8.52 / 8.15. At 56559cc, 8x8 tiles over 4 / 8 views
+    # (4x4 / 4x2 pixels each): 7.18 / 6.99 ms (one 4096x5464 view: 6.95).
     TILE = (8, 8)
+    VIEW_GROUP = 8
 
     def skip_reason(self, cd):
         return unused_effect_reason(cd, Effect.SHADOWS)
