@@ -66,12 +66,9 @@ def assert_same_gbuffer(out, min_interior=0.3):
     scale = np.abs(pos_a).max()
     np.testing.assert_allclose(pos_b[:, :3], pos_a[:, :3], atol=1e-4 * scale, err_msg="posW")
     np.testing.assert_allclose(pos_b[:, 3], pos_a[:, 3], rtol=1e-4, err_msg="posW.w (linear depth)")
-    np.testing.assert_allclose(rt["normW"][hit][:, :3].astype(np.float64), ra["normW"][hit][:, :3].astype(np.float64),
-                               atol=2e-3, err_msg="normW")
-    # a pixel centre on the edge between two facets may see either one (the raster's fill rule and
-    # the ray's widened edges pick independently): face normals agree on all but such ties
-    face = np.abs(rt["faceNormalW"][hit][:, :3].astype(np.float64) - ra["faceNormalW"][hit][:, :3]).max(axis=1)
-    assert (face > 2e-3).mean() < 1e-3, f"faceNormalW differs on {(face > 2e-3).sum()} of {len(face)} pixels"
+    for pin in ("normW", "faceNormalW"):
+        np.testing.assert_allclose(rt[pin][hit][:, :3].astype(np.float64), ra[pin][hit][:, :3].astype(np.float64),
+                                   atol=2e-3, err_msg=pin)
     for pin in ("baseColor", "metalRough", "emissive"):
         np.testing.assert_array_equal(rt[pin][mask], ra[pin][mask], err_msg=pin)
     np.testing.assert_allclose(rt["motion"][hit].astype(np.float64), ra["motion"][hit].astype(np.float64),
@@ -97,15 +94,17 @@ def test_rt_equals_raster_in_stereo_with_motion(gpu):
         assert not np.array_equal(out[kind]["posW"][0], out[kind]["posW"][1])
 
 
-def test_rt_equals_raster_in_a_camera_grid_whose_views_straddle_workgroups(gpu):
-    # 9 views (3x3): GBufferRT's workgroups span 2 views (passes._common.ray_group), so the fifth
-    # workgroup along z has one view past the last one, and 40x36 pixels are no multiple either.
-    assert ray_group(9, view_group=GBufferRT.VIEW_GROUP)[2] == 2
+def test_rt_equals_raster_in_a_camera_grid_whose_views_straddle_workgroups(gpu, monkeypatch):
+    # 6 views in workgroups spanning 4 (passes._common.ray_group; GBufferRT's own default is 2):
+    # the second workgroup along z has two views past the last one, and 40x36 pixels are no
+    # multiple either.
+    monkeypatch.setattr(GBufferRT, "VIEW_GROUP", 4)
+    assert ray_group(6, view_group=GBufferRT.VIEW_GROUP)[2] == 4
     scene = builtin.spheres(n=2, subdivisions=2)
-    out = render_both(scene, 9, (40, 36))
+    out = render_both(scene, 6, (40, 36))
     assert_same_gbuffer(out)
     pos = out["rt"]["posW"]
-    assert all(not np.array_equal(pos[i], pos[i + 1]) for i in range(8)), "a view repeated its neighbour"
+    assert all(not np.array_equal(pos[i], pos[i + 1]) for i in range(5)), "a view repeated its neighbour"
 
 
 def test_ray_group_spans_views_only_in_camera_grids():
