@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ._timing import WARM_UP_S
+
 DEFAULT_SCENE = str(Path(__file__).resolve().parents[2] / "shared" / "scenes" / "tauray" / "test.glb")
 
 
@@ -43,7 +45,7 @@ def run(args) -> dict:
     configs = rv.tune.standard_configs(scene, reflect=args.reflect, spp=spp)
     results = rv.tune.measure(scene, configs, size=size, views=args.views, frames=frames, warmup=warmup,
                               reference_settings=settings, cache_dir=args.cache, ppd=args.ppd,
-                              metrics=metrics)
+                              metrics=metrics, warmup_s=0.0 if quick else WARM_UP_S)
     notes = [(f"timing: {results.method}; error of one frame against {settings.frames} x {settings.spp} spp "
               f"path-traced reference ({results.info['reference']})")]
     if not args.no_save:

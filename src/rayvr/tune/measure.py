@@ -33,13 +33,20 @@ class Timing:
     frames: int
 
 
-def timed_frames(renderer, frames: int, warmup: int) -> Timing:
-    """Render `warmup` untimed then `frames` timed frames; the per-pass means of the timed ones."""
+def timed_frames(renderer, frames: int, warmup: int, warmup_s: float = 0.0) -> Timing:
+    """Render untimed frames for at least `warmup_s` seconds and `warmup` frames, then `frames`
+    timed frames; the per-pass means of the timed ones. `warmup_s` lets a GPU that idled (an H100
+    drops to ~345 MHz) clock up again before short frames are timed."""
+    import time
+
     if frames < 1 or warmup < 0:
         raise OptionError(f"measure: frames must be >= 1 and warmup >= 0, got frames={frames}, warmup={warmup}")
-    for _ in range(warmup):
+    until = time.perf_counter() + warmup_s
+    done = 0
+    while done < warmup or time.perf_counter() < until:
         renderer.render()
-    renderer.gl.finish()
+        renderer.gl.finish()
+        done += 1
     compiled = renderer.compiled
     before = compiled.profile()
     for _ in range(frames):
@@ -78,7 +85,7 @@ def make_views(scene, views=2, size=(256, 256)):
 def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: int = 20, warmup: int = 3,
             reference_settings: ReferenceSettings | None = None, cache_dir=None, ppd: float | None = None,
             eps: float = 1e-2, metrics=tuple(M.METRICS), keep_images: bool = False, progress: bool = True,
-            gpu=None) -> Results:
+            gpu=None, warmup_s: float = 0.0) -> Results:
     """Render every `Config` of `configs` over `scene` and return its GPU ms and image error.
 
     `reference`: a (views, h, w, c) linear image (row 0 at the top), an .npz file with an
@@ -86,6 +93,8 @@ def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: in
     rayvr.tune.reference). `views`: a ViewSet or a view count from the scene's camera, `size`
     per view. Error metrics: FLIP (HDR, `ppd` pixels per degree), relMSE (`eps`), PSNR of the
     sRGB-encoded images; `metrics` picks some (HDR-FLIP of a 1440x1600 view takes seconds of CPU).
+    `warmup_s`: seconds of untimed frames before each configuration's `warmup` frames (the GPU
+    idles while the CPU computes the previous configuration's error).
     The scene's material effects are restored afterwards."""
     from tqdm import tqdm
 
@@ -110,7 +119,7 @@ def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: in
             graph = config.build_graph()
             pin = config.output_pin(graph)
             with Renderer(scene, graph, views=view_set, gpu=gpu) as r:
-                timing = timed_frames(r, frames, warmup)
+                timing = timed_frames(r, frames, warmup, warmup_s)
                 image = r.read_output(pin, flip_y=True)
             errors = M.all_metrics(image, ref, ppd=ppd, eps=eps, names=(f"config '{config.name}' {pin}", "reference"),
                                    which=metrics)
@@ -118,7 +127,7 @@ def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: in
                                      timing.frame_ms, timing.pass_ms, timing.cpu_ms, errors,
                                      image if keep_images else None))
     info = {"scene": scene.name, "views": len(view_set), "size": list(view_set.size), "frames": frames,
-            "warmup": warmup, "method": timing.method, "reference": ref_source, "ppd": ppd, "eps": eps}
+            "warmup": warmup, "warmup_s": warmup_s, "method": timing.method, "reference": ref_source, "ppd": ppd, "eps": eps}
     return Results(rows, info)
 
 
