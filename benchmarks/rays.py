@@ -275,6 +275,7 @@ def _time(gl, use_queries: bool, fn, iterations: int) -> float:
     return statistics.median(times)
 
 
+PERSISTENT_GROUPS = 2048   # workgroups of 64 of the persistent layout (variant define PERSISTENT_GROUPS)
 SUBGROUP_EXTENSIONS = ("#extension GL_ARB_shader_ballot : require\n#extension GL_ARB_shader_group_vote : require\n"
                        "#extension GL_ARB_gpu_shader_int64 : require\n")
 
@@ -397,7 +398,7 @@ def run(args) -> dict:
         groups = ((w + 7) // 8, (h + 7) // 8)
         queue = None   # hit pixels in 8x4-tile order (queue layout), made once from the surfaces
 
-        def run_diffuse(prog, groups_persistent=2048):
+        def run_diffuse(prog, groups_persistent=PERSISTENT_GROUPS):
             if persistent:
                 counter.clear()
                 prog["queue_length"] = queue[1]
@@ -422,7 +423,7 @@ def run(args) -> dict:
                     if name in p:
                         p[name] = tuple(float(x) for x in v)
                 p["size"] = (w, h)
-            progs["groups"] = defines.get("PERSISTENT_GROUPS", 2048)
+            progs["groups"] = defines.get("PERSISTENT_GROUPS", PERSISTENT_GROUPS)
             return progs
 
         result.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"])

@@ -54,3 +54,18 @@ def test_unknown_benchmark_suggests(capsys):
     assert harness.main(["alising"]) == 2
     assert "unknown benchmark 'alising' (did you mean 'aliasing'?)" in capsys.readouterr().err
     assert {"aliasing", "graph_overhead"} <= set(harness.available())
+
+
+def test_rays_diffuse_layouts_trace_the_same_rays(tmp_path, gpu):
+    """The queue and the persistent layout (lanes refilled through rq_begin/rq_step with subgroup
+    ballots) trace exactly the rays of the every-pixel dispatch: same hits, same node counts."""
+    rows = {}
+    for layout in ("pixels", "queue", "persistent"):
+        harness.main(["rays", "--quick", "--out", str(tmp_path / layout), "--diffuse-layout", layout,
+                      "--diffuse-per-hit", "2", "--stats"])
+        doc = json.loads((tmp_path / layout / "rays.json").read_text())
+        rows[layout] = dict(zip(doc["columns"], doc["rows"][0]))
+    assert 0.05 < rows["pixels"]["diffuse_hit_frac"] < 1.0
+    for layout in ("queue", "persistent"):
+        for col in ("primary_hit_frac", "diffuse_hit_frac", "diffuse_nodes", "diffuse_tris", "diffuse_instances"):
+            assert rows[layout][col] == rows["pixels"][col], (layout, col)
