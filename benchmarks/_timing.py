@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import time
 
+from rayvr.tune.measure import warm_up as measure_warm_up
+
 
 def wall_ms_per_frame(renderer, frames: int, warmup: int) -> float:
     """Wall ms per frame over `frames` renders, the GPU finished before and after."""
@@ -23,8 +25,7 @@ WARM_UP_S = 0.5   # an idle H100 clocks at ~345 MHz and needs a moment of load t
 
 
 def warm_up(renderer, seconds: float = WARM_UP_S) -> None:
-    """Render until `seconds` have passed, so the GPU's clocks are up before anything is timed."""
-    until = time.perf_counter() + seconds
-    while time.perf_counter() < until:
-        renderer.render()
-        renderer.gl.finish()
+    """rayvr.tune.measure.warm_up for the benchmarks' WARM_UP_S."""
+    measure_warm_up(renderer, seconds)
+
+

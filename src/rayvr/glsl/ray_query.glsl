@@ -338,8 +338,9 @@ void rq_begin(vec3 o, vec3 d, float tmax_in, bool any_hit) {
 
 // One step of the ray's traversal: one node fetch, one BLAS entry or one leaf, so that a loop
 // of steps from one call site keeps a warp's lanes in step. Returns false once the ray is done
-// (rq_done): rq_found and rq_hit then hold its result; do not call it again before rq_begin. A TLAS leaf switches the ray to the instance's object
-// space and the walk continues in its BLAS; popping back to the stack depth at entry switches back.
+// (rq_done): rq_found and rq_hit then hold its result; do not call it again before rq_begin. A
+// TLAS leaf switches the ray to the instance's object space and the walk continues in its BLAS;
+// popping back to the stack depth at entry switches back.
 bool rq_step() {
     if ((rq_next & RQ_LEAF_BIT) == 0u) {
         RQ_COUNT(rq_stat_nodes);

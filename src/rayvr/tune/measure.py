@@ -12,6 +12,7 @@ which matters on llvmpipe: it compiles a shader at its first dispatch).
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import numpy as np
 
@@ -33,20 +34,24 @@ class Timing:
     frames: int
 
 
-def timed_frames(renderer, frames: int, warmup: int, warmup_s: float = 0.0) -> Timing:
-    """Render untimed frames for at least `warmup_s` seconds and `warmup` frames, then `frames`
-    timed frames; the per-pass means of the timed ones. `warmup_s` lets a GPU that idled (an H100
-    drops to ~345 MHz) clock up again before short frames are timed."""
-    import time
-
-    if frames < 1 or warmup < 0:
-        raise OptionError(f"measure: frames must be >= 1 and warmup >= 0, got frames={frames}, warmup={warmup}")
-    until = time.perf_counter() + warmup_s
-    done = 0
-    while done < warmup or time.perf_counter() < until:
+def warm_up(renderer, seconds: float) -> None:
+    """Render until `seconds` have passed, so that a GPU which idled (an H100 drops to ~345 MHz)
+    has its clocks up before anything is timed."""
+    until = time.perf_counter() + seconds
+    while time.perf_counter() < until:
         renderer.render()
         renderer.gl.finish()
-        done += 1
+
+
+def timed_frames(renderer, frames: int, warmup: int, warmup_s: float = 0.0) -> Timing:
+    """Render untimed frames for `warmup_s` seconds (warm_up) and then `warmup` more, then
+    `frames` timed frames; the per-pass means of the timed ones."""
+    if frames < 1 or warmup < 0:
+        raise OptionError(f"measure: frames must be >= 1 and warmup >= 0, got frames={frames}, warmup={warmup}")
+    warm_up(renderer, warmup_s)
+    for _ in range(warmup):
+        renderer.render()
+    renderer.gl.finish()
     compiled = renderer.compiled
     before = compiled.profile()
     for _ in range(frames):
