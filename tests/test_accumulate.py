@@ -101,7 +101,7 @@ def test_disabled_passes_the_frame_through(gpu):
 def test_progressive_path_tracing_converges_like_one_over_sqrt_n(gpu):
     """Against the 64-frame mean, the k-frame mean's RMS error is sigma * sqrt(1/k - 1/64):
     4 frames are sqrt((1/4 - 1/64) / (1/16 - 1/64)) = 2.24 times worse than 16."""
-    from rayvr.graphs_pt import path_traced
+    from rayvr.graphs import path_traced
     from rayvr.renderer import Renderer
     from rayvr.scene import builtin
 

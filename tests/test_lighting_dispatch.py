@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 import rayvr as rv
-from rayvr.passes import lighting
 from rayvr.renderer import Renderer, default_views
 from rayvr.scene import builtin
 from rayvr.scene.model import Light
@@ -30,7 +29,7 @@ def scene_with_every_light_kind():
 
 
 def render(gpu, scene, monkeypatch, pixels_2d, max_bounces, tile=(8, 4), views=2):
-    for cls in (lighting.RTShadows, lighting.RTReflections):
+    for cls in (rv.passes.RTShadows, rv.passes.RTReflections):
         monkeypatch.setattr(cls, "PIXELS_2D", pixels_2d)
         monkeypatch.setattr(cls, "TILE", tile)
     g = rv.graphs.hybrid(light_samples=2, max_bounces=max_bounces)
@@ -81,4 +80,4 @@ def test_ray_passes_run_on_the_image_unless_a_material_is_path_traced(gpu, path_
         # the pixel lists are made only when a pass reads them; the report says why not
         assert ("Compaction" in r.compiled.plan.order) == path_traced
         assert ("leave unused: Shadows.pixels (runs over the whole image" in str(r.report())) == (not path_traced)
-        assert ("PIXEL_LIST_SSBO" in r.compiled.passes["Shadows"].defines()) == path_traced
+        assert ("PIXEL_LIST_INPUT" in r.compiled.passes["Shadows"].defines()) == path_traced

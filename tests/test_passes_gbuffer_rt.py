@@ -8,9 +8,9 @@ import pytest
 import rayvr as rv
 from rayvr.gpu.context import is_weak_raster
 from rayvr.materials.material import Material
-from rayvr.passes._common import ray_group
-from rayvr.passes.gbuffer_auto import choose_gbuffer
-from rayvr.passes.gbuffer_rt import GBufferRT
+from rayvr.passes.dispatch import ray_group
+from rayvr.passes.gbuffer.auto import choose_gbuffer
+from rayvr.passes.gbuffer import GBufferRT
 from rayvr.renderer import Renderer, default_views
 from rayvr.scene import builtin
 from rayvr.scene.model import Camera
@@ -95,7 +95,7 @@ def test_rt_equals_raster_in_stereo_with_motion(gpu):
 
 
 def test_rt_equals_raster_in_a_camera_grid_whose_views_straddle_workgroups(gpu, monkeypatch):
-    # 6 views in workgroups spanning 4 (passes._common.ray_group; GBufferRT's own default is 2):
+    # 6 views in workgroups spanning 4 (passes.dispatch.ray_group; GBufferRT's own default is 2):
     # the second workgroup along z has two views past the last one, and 40x36 pixels are no
     # multiple either.
     monkeypatch.setattr(GBufferRT, "VIEW_GROUP", 4)

@@ -144,13 +144,12 @@ def test_all_views_in_one_dispatch_each_view_its_own_rays(gpu):
 
 def gbuffer_pt_graph(pixel_list=False, **props):
     from rayvr.passes import EffectCompaction, GBufferRaster
-    from rayvr.passes._common import GBUFFER_PINS
+    from rayvr.passes.gbuffer import channels
 
     g = rv.RenderGraph("HybridPT")
     g.add_pass(GBufferRaster(), "GBuffer")
     g.add_pass(PathTracer(mode="gbuffer", **props), "PT")
-    for pin in GBUFFER_PINS:
-        g.add_edge(f"GBuffer.{pin}", f"PT.{pin}")
+    channels.wire(g, "GBuffer", "PT")
     if pixel_list:
         g.add_pass(EffectCompaction(path_list=True), "Compaction")
         g.add_edge("GBuffer.effect", "Compaction.effect")

@@ -1,11 +1,11 @@
-"""The graph builders of rayvr.graphs_pt: path_traced() renders and accumulates, hybrid_taa() puts
+"""The graph builders of rayvr.graphs: path_traced() renders and accumulates, hybrid_taa() puts
 TAA after the composite and reprojects with the G-buffer's motion vectors; the benchmark smoke-runs."""
 import dataclasses
 
 import numpy as np
 import pytest
 
-from rayvr.graphs_pt import hybrid_taa, path_traced
+from rayvr.graphs import hybrid_taa, path_traced
 from rayvr.renderer import Renderer, default_views
 from rayvr.scene import builtin
 from rayvr.scene.model import Camera

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import rayvr as rv
-from rayvr.graphs_pt import path_traced
+from rayvr.graphs import path_traced
 from rayvr.materials.material import Material
 from rayvr.renderer import Renderer
 from rayvr.scene import builtin

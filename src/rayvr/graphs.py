@@ -1,20 +1,26 @@
 """Ready-made render graphs. `hybrid()` is rayvr's main job: the Ray-VR pipeline.
 
+    hybrid():
     GBuffer ─┬─> Direct ───────────────────────────────────────┐
              ├─> Compaction ─┬─> Shadows ──────────────────────┤
              │               ├─> Reflections ──────────────────┼─> Composite ─> ToneMap
              │               └─> PathTracer ─> Accumulate ─────┘
              └─(G-buffer pins to every lighting pass; effect ids to Compaction and Composite)
 
+    path_traced():  PathTracer ─> Accumulate ─> ToneMap      (progressive reference renders)
+    hybrid_taa():   hybrid() with TAA between Composite and ToneMap, fed GBuffer.motion
+
 Passes that no material needs are pruned at compile time (see the compile report).
 """
 from __future__ import annotations
 
-from .graphs_pt import hybrid_taa, path_traced  # noqa: F401  (rv.graphs.path_traced, rv.graphs.hybrid_taa)
 from .rendergraph.graph import RenderGraph
 
 OUTPUT = "ToneMap.dst"        # display-referred rgba8, sRGB encoded
 HDR_OUTPUT = "Composite.color"  # linear radiance (rgba16f), for EXR
+PT_OUTPUT = "ToneMap.dst"          # path_traced(): display-referred rgba8, sRGB encoded
+PT_HDR_OUTPUT = "Accumulate.dst"   # path_traced(): linear radiance, mean over the accumulated frames (rgba32f)
+TAA_HDR_OUTPUT = "TAA.dst"         # hybrid_taa(): anti-aliased linear radiance (rgba16f)
 
 
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
@@ -29,7 +35,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     and named in the compile report); the pass is "GBuffer" either way.
     Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR)."""
     from . import passes as P
-    from .passes._common import GBUFFER_PINS
+    from .passes.gbuffer import channels
 
     g = RenderGraph(name)
     g.add_pass(P.GBufferAuto(mode=gbuffer, multiview=multiview), "GBuffer")
@@ -44,8 +50,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_pass(P.HybridComposite(), "Composite")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
     for lighting in ("Direct", "Shadows", "Reflections", "PathTracer"):
-        for pin in GBUFFER_PINS:
-            g.add_edge(f"GBuffer.{pin}", f"{lighting}.{pin}")
+        channels.wire(g, "GBuffer", lighting)
     g.add_edge("GBuffer.effect", "Compaction.effect")
     g.add_edge("Compaction.shadowPixels", "Shadows.pixels")
     g.add_edge("Compaction.reflectionPixels", "Reflections.pixels")
@@ -61,3 +66,39 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.mark_output(HDR_OUTPUT)
     return g
 
+
+def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int = 3, clamp: float = 0.0,
+                background=(0.0, 0.0, 0.0), max_frames: int = 0, tonemap: str = "aces",
+                exposure: float = 0.0, auto_exposure: bool = False, name: str = "PathTraced") -> RenderGraph:
+    """Every pixel path traced from the camera (PathTracer in "full" mode), averaged over frames
+    by Accumulate (restarts when the views or the scene change; `max_frames` > 0 stops it), tone
+    mapped. Outputs: `ToneMap.dst` (rgba8 sRGB) and `Accumulate.dst` (HDR mean, rgba32f)."""
+    from . import passes as P
+
+    g = RenderGraph(name)
+    g.add_pass(P.PathTracer(mode="full", samples_per_pixel=samples_per_pixel, max_bounces=max_bounces,
+                            rr_start=rr_start, clamp=clamp, background=list(background)), "PathTracer")
+    g.add_pass(P.Accumulate(max_frames=max_frames), "Accumulate")
+    g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
+    g.add_edge("PathTracer.color", "Accumulate.src")
+    g.add_edge("Accumulate.dst", "ToneMap.src")
+    g.mark_output(PT_OUTPUT)
+    g.mark_output(PT_HDR_OUTPUT)
+    return g
+
+
+def hybrid_taa(alpha: float = 0.1, sigma: float = 1.0, name: str = "HybridTAA", **hybrid_kw) -> RenderGraph:
+    """`rayvr.graphs.hybrid(**hybrid_kw)` with TAA on the composited radiance (motion vectors from
+    the G-buffer) before tone mapping. Outputs: `ToneMap.dst`, `Composite.color` and `TAA.dst`.
+    TAA asks for sub-pixel camera jitter in its reflection; the Renderer packs
+    `rayvr.passes.taa.halton_jitter(frame)` into the views and the G-buffer applies it."""
+    from .passes import TAA
+
+    g = hybrid(name=name, **hybrid_kw)
+    g.add_pass(TAA(alpha=alpha, sigma=sigma), "TAA")
+    g.remove_edge("Composite.color", "ToneMap.src")
+    g.add_edge("Composite.color", "TAA.color")
+    g.add_edge("GBuffer.motion", "TAA.motion")
+    g.add_edge("TAA.dst", "ToneMap.src")
+    g.mark_output(TAA_HDR_OUTPUT)
+    return g

@@ -13,12 +13,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import struct
 
 import numpy as np
 
 from .errors import OptionError, RayvrError
-from .passes.taa import TAA, halton_jitter
+from .xr.jitter import halton_jitter
 from .xr.views import HEADER_BYTES, VIEW_STRUCT_FLOATS, Fov, Pose, View, ViewSet
 
 DEFAULT_IPD = 0.063   # metres; the adult mean (Dodgson 2004)
@@ -90,7 +89,8 @@ class Renderer:
     """Renders `graph` over `scene` for a sink's views (or fixed `views`), see the module docstring.
 
     `views`: a ViewSet, or an int view count (from the scene's camera); `size`: per-view pixels;
-    `jitter`: sub-pixel camera jitter per frame (default: when the graph has TAA).
+    `jitter`: sub-pixel camera jitter per frame (default: when a pass of the compiled graph asks
+    for it in its reflection, as TAA does).
     Without a sink the Renderer renders `render(view_set)` calls for its fixed views.
     """
 
@@ -128,9 +128,7 @@ class Renderer:
         self._materials_version = None
         self._effects = None
         self._opened = False
-        # Sub-pixel jitter (Halton 2,3) only helps a graph that resolves it over time: on by
-        # default when the graph has a TAA pass.
-        self._jitter = any(isinstance(p, TAA) for p in graph.passes.values()) if jitter is None else jitter
+        self._jitter_asked = jitter
         self._compile()
 
     # -- compile -----------------------------------------------------------------------------
@@ -143,6 +141,8 @@ class Renderer:
                                            gpu=self.gpu, gpu_scene=self.gpu_scene,
                                            extra_report=[self.gpu_scene.report()], profiling=self.profiling)
         self.compiles += 1
+        # Sub-pixel jitter (Halton 2,3) only helps a graph that resolves it over time.
+        self._jitter = self.compiled.plan.wants_jitter if self._jitter_asked is None else bool(self._jitter_asked)
 
     def _maybe_recompile(self) -> None:
         version = self.scene.materials.version
@@ -166,17 +166,14 @@ class Renderer:
         self._maybe_recompile()
         origin = view_set.origin()
         self.gpu_scene.update(origin)
-        jitter = halton_jitter(self.frame_index) if self._jitter else (0.0, 0.0)
-        packed = bytearray(view_set.pack(origin, self.frame_index, 0, jitter=jitter))
-        # Accumulation restarts when any view's matrices, the render-space origin (a head that
-        # only translates leaves the render-space matrices as they were) or what the GpuScene
-        # uploaded (instances, lights, materials) change: the one restart signal, sample_index 0.
-        mats = np.frombuffer(packed, np.float32, offset=HEADER_BYTES).reshape(len(view_set), -1)[:, :48]
-        key = (mats.tobytes(), np.asarray(origin, np.float64).tobytes(), self.gpu_scene.version)
+        # Accumulation restarts when the views (ViewSet.restart_key: render-space matrices and
+        # origin) or what the GpuScene uploaded (instances, lights, materials) change: the one
+        # restart signal, sample_index 0.
+        key = (view_set.restart_key(origin), self.gpu_scene.version)
         self.sample_index = self.sample_index + 1 if key == self._accum_key else 0
         self._accum_key = key
-        struct.pack_into("<I", packed, 8, self.sample_index)
-        self.views_buffer.write(packed)
+        jitter = halton_jitter(self.frame_index) if self._jitter else (0.0, 0.0)
+        self.views_buffer.write(view_set.pack(origin, self.frame_index, self.sample_index, jitter=jitter))
         ctx = RenderContext(self.gl, self.gpu.caps, scene=self.gpu_scene, views_buffer=self.views_buffer,
                             view_set=view_set, frame_index=self.frame_index, sample_index=self.sample_index)
         self.compiled.execute(ctx)
@@ -210,8 +207,8 @@ class Renderer:
 
     def _open(self) -> None:
         if not self._opened and self.sink is not None:
-            if getattr(self.sink, "start_pose_given", True) is False:
-                # A simulated headset with no start pose stands where the scene's camera is.
+            if not self.sink.start_pose_given:
+                # A sink with no start pose of its own stands where the scene's camera is.
                 self.sink.place(camera_pose(self.scene)[0])
             self.sink.open(self.gpu)
             self._opened = True
@@ -254,11 +251,7 @@ class Renderer:
             self.sink.close()
             self._opened = False
         if self.compiled is not None:
-            for render_pass in self.compiled.passes.values():
-                release = getattr(render_pass, "release", None)
-                if callable(release):      # pass-owned GPU objects (the G-buffer's framebuffer)
-                    release()
-            self.compiled.release()
+            self.compiled.release()   # its resources and what each pass made (RenderPass.release)
             self.compiled = None
         if self.gpu_scene is not None:
             self.gpu_scene.release()

@@ -1,9 +1,16 @@
-// The one glTF metallic-roughness BSDF: Lambert diffuse + GGX specular with height-correlated
-// Smith masking and Schlick Fresnel. Shared by the raster lighting and every ray pass.
+// The one metallic-roughness BSDF, shared by the raster lighting and every ray pass: Lambert
+// diffuse + GGX specular with height-correlated Smith masking and Schlick Fresnel, the choice
+// between its lobes, and importance sampling with the matching pdf.
 // Conventions: n, v, l unit vectors in one space, v and l point away from the surface;
 // eval returns f(v, l) * max(dot(n, l), 0) (radiance per unit incoming radiance).
+//   BsdfParams bsdf_params(MaterialParams m)       the BSDF of a material (scene.glsl)
+//   vec3  bsdf_eval(b, n, v, l)                     f * cos
+//   float bsdf_pdf(b, n, v, l)                      solid-angle pdf of bsdf_sample choosing l
+//   bool  bsdf_sample(b, n, v, u, out BsdfSample)   u in [0,1)^3
 #pragma once
 #include "sampling.glsl"
+#include "color.glsl"
+#include "scene.glsl"
 
 struct BsdfParams {
     vec3 base_color;
@@ -11,12 +18,12 @@ struct BsdfParams {
     float roughness;    // perceptual; alpha = roughness^2
 };
 
-// Material parameters as the BSDF takes them: metallic and roughness clamped to [0, 1].
-BsdfParams bsdf_params(vec3 base_color, float metallic, float roughness) {
+// The BSDF of material parameters m (metallic and roughness clamped to [0, 1]).
+BsdfParams bsdf_params(MaterialParams m) {
     BsdfParams b;
-    b.base_color = base_color;
-    b.metallic = clamp(metallic, 0.0, 1.0);
-    b.roughness = clamp(roughness, 0.0, 1.0);
+    b.base_color = m.base_color;
+    b.metallic = clamp(m.metallic, 0.0, 1.0);
+    b.roughness = clamp(m.roughness, 0.0, 1.0);
     return b;
 }
 
@@ -100,7 +107,7 @@ vec3 bsdf_sample_specular(BsdfParams p, vec3 n, vec3 v, vec2 u, out vec3 l, out 
     return f * (smith_g2(n_v, n_l, alpha) / smith_g1(n_v, alpha));
 }
 
-// Pdf of bsdf_sample_specular's direction l (solid angle), for MIS.
+// Pdf of bsdf_sample_specular's direction l (solid angle).
 float bsdf_pdf_specular(BsdfParams p, vec3 n, vec3 v, vec3 l) {
     if (bsdf_is_mirror(p)) return 0.0;
     float n_v = max(dot(n, v), 1e-4);
@@ -113,4 +120,54 @@ float bsdf_pdf_specular(BsdfParams p, vec3 n, vec3 v, vec3 l) {
 vec3 bsdf_sample_diffuse(BsdfParams p, vec3 n, vec2 u, out vec3 l) {
     l = basis_from_normal(n) * sample_cosine_hemisphere(u);
     return bsdf_diffuse_albedo(p);
+}
+
+// Probability that bsdf_sample picks the specular lobe: its Fresnel-weighted share of the albedo.
+float bsdf_specular_probability(BsdfParams m, vec3 n, vec3 v) {
+    float ls = luminance(fresnel_schlick(bsdf_f0(m), clamp(dot(n, v), 0.0, 1.0)));
+    float ld = luminance(bsdf_diffuse_albedo(m));
+    if (ld <= 0.0) return 1.0;
+    return clamp(ls / max(ls + ld, 1e-8), 0.05, 0.95);
+}
+
+// Solid-angle pdf of bsdf_sample choosing l (its non-delta part).
+float bsdf_pdf(BsdfParams m, vec3 n, vec3 v, vec3 l) {
+    float n_l = dot(n, l);
+    if (n_l <= 0.0) return 0.0;
+    float p_spec = bsdf_specular_probability(m, n, v);
+    return p_spec * bsdf_pdf_specular(m, n, v, l) + (1.0 - p_spec) * n_l / RAYVR_PI;
+}
+
+struct BsdfSample {
+    vec3 l;          // sampled direction
+    vec3 weight;     // f cos / pdf
+    float pdf;       // solid angle; 0 for a delta (mirror) lobe
+    bool delta;
+};
+
+// One BSDF sample from u in [0,1)^3 (u.xy the direction, u.z the lobe); false when it failed.
+bool bsdf_sample(BsdfParams m, vec3 n, vec3 v, vec3 u, out BsdfSample s) {
+    float p_spec = bsdf_specular_probability(m, n, v);
+    s.delta = false;
+    s.pdf = 0.0;
+    s.weight = vec3(0.0);
+    s.l = n;
+    if (u.z < p_spec) {
+        bool valid;
+        vec3 w = bsdf_sample_specular(m, n, v, u.xy, s.l, valid);
+        if (!valid) return false;
+        if (bsdf_is_mirror(m)) {
+            s.delta = true;
+            s.weight = w / p_spec;
+            return true;
+        }
+    } else {
+        bsdf_sample_diffuse(m, n, u.xy, s.l);
+    }
+    float n_l = dot(n, s.l);
+    if (n_l <= 0.0) return false;
+    s.pdf = p_spec * bsdf_pdf_specular(m, n, v, s.l) + (1.0 - p_spec) * n_l / RAYVR_PI;
+    if (!(s.pdf > 0.0)) return false;
+    s.weight = bsdf_eval(m, n, v, s.l) / s.pdf;
+    return true;
 }

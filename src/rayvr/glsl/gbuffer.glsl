@@ -1,12 +1,17 @@
-// The hybrid G-buffer as compute passes read it: texture arrays (one layer per view) on fixed
-// sampler units, decoded into one GSurface. A reading pass gets the seven units as #defines
-// GBUF_POS_UNIT etc. (rayvr/passes/_common.py GBUFFER_UNITS; the formats are in
-// rayvr/passes/gbuffer.py) before including this file.
+// The hybrid G-buffer: one texture array per channel, one layer per view. The channels, their
+// formats and the GLSL to read and write them are generated from rayvr/passes/gbuffer/channels.py
+// ("gbuffer_channels.glsl"): GBufferTexel has one field per channel, named as its pin.
+//   readers:  #define GBUF_READER 1, then gbuf_load(p) (or gbuf_fetch_<channel>(p)); the pass binds
+//             its channel inputs to the samplers gbuf_<channel> (channels.bind_inputs).
+//   writers:  #define GBUF_WRITER 1 (compute: gbuf_store(p, t) into images gbuf_out_<channel>;
+//             raster: also GBUF_RASTER_WRITER, gbuf_output(t)); gbuf_encode() / gbuf_no_geometry()
+//             are the one encoding of GBufferRaster and GBufferRT.
 #pragma once
-// hdr.glsl is included here, outside any #if, because include guards are textual
-#include "hdr.glsl"
+// included here, outside any #if, because include guards are textual
+#include "color.glsl"
+#include "gbuffer_channels.glsl"
 
-// effect texture (r32ui): low byte effect id (rayvr.Effect), upper 24 bits material index;
+// effect word (r32ui): low byte effect id (rayvr.Effect), upper 24 bits material index;
 // GBUF_NO_GEOMETRY where no surface was drawn (sky).
 const uint GBUF_NO_GEOMETRY = 0xFFu;
 
@@ -15,29 +20,16 @@ uint gbuf_material_of(uint word) { return word >> 8u; }
 uint gbuf_pack_effect(uint effect, uint material) { return (material << 8u) | (effect & 0xFFu); }
 
 #ifdef GBUF_WRITER
-// What the G-buffer writers store per pixel (GBufferRaster's fragment shader, GBufferRT's compute
-// shader), in the targets' pin order; one encoding for both. Needs views.glsl and scene.glsl.
-struct GBufferTexel {
-    vec4 pos;           // posW: render-space position, w = linear eye depth
-    vec4 normal;        // normW
-    vec4 face_normal;   // faceNormalW
-    vec4 base_color;    // baseColor (rgb, alpha)
-    vec2 metal_rough;   // metalRough
-    vec4 emissive;      // emissive
-    uint effect;        // effect word (gbuf_pack_effect)
-    vec2 motion;        // motion in pixels: this frame - last frame
-};
-
 // The texel of the surface at render-space `pos` seen from view v: normals already facing the
 // viewer, material m (index `material`). Motion comes from the unjittered view_proj and
-// prev_view_proj, so it carries no TAA jitter.
+// prev_view_proj, so it carries no TAA jitter. Needs views.glsl and scene.glsl.
 GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, MaterialParams m, uint material) {
     GBufferTexel t;
-    t.pos = vec4(pos, -(views[v].view * vec4(pos, 1.0)).z);
-    t.normal = vec4(n, 0.0);
-    t.face_normal = vec4(ng, 0.0);
-    t.base_color = vec4(m.base_color, m.alpha);
-    t.metal_rough = vec2(m.metallic, m.roughness);
+    t.posW = vec4(pos, -(views[v].view * vec4(pos, 1.0)).z);
+    t.normW = vec4(n, 0.0);
+    t.faceNormalW = vec4(ng, 0.0);
+    t.baseColor = vec4(m.base_color, m.alpha);
+    t.metalRough = vec2(m.metallic, m.roughness);
     t.emissive = vec4(to_half_range(m.emissive), 0.0);   // the emissive target is rgba16f
     t.effect = gbuf_pack_effect(m.effect, material);
     vec4 now_clip = views[v].view_proj * vec4(pos, 1.0);
@@ -49,14 +41,14 @@ GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, MaterialParams m, ui
     return t;
 }
 
-// Where nothing was hit: the raster path's clear values (rayvr/passes/gbuffer.py OUTPUTS).
+// Where nothing was hit: the channels' clear values (rayvr/passes/gbuffer/channels.py).
 GBufferTexel gbuf_no_geometry() {
     GBufferTexel t;
-    t.pos = vec4(0.0);
-    t.normal = vec4(0.0);
-    t.face_normal = vec4(0.0);
-    t.base_color = vec4(0.0);
-    t.metal_rough = vec2(0.0);
+    t.posW = vec4(0.0);
+    t.normW = vec4(0.0);
+    t.faceNormalW = vec4(0.0);
+    t.baseColor = vec4(0.0);
+    t.metalRough = vec2(0.0);
     t.emissive = vec4(0.0);
     t.effect = GBUF_NO_GEOMETRY;
     t.motion = vec2(0.0);
@@ -64,6 +56,7 @@ GBufferTexel gbuf_no_geometry() {
 }
 #endif
 
+// A G-buffer texel decoded for shading.
 struct GSurface {
     vec3 pos;          // render space
     vec3 n;            // shading normal, facing the viewer
@@ -77,28 +70,22 @@ struct GSurface {
     uint material;
 };
 
-#ifdef GBUF_POS_UNIT
-layout(binding = GBUF_POS_UNIT) uniform sampler2DArray gbuf_pos;
-layout(binding = GBUF_NORMAL_UNIT) uniform sampler2DArray gbuf_normal;
-layout(binding = GBUF_FACE_NORMAL_UNIT) uniform sampler2DArray gbuf_face_normal;
-layout(binding = GBUF_BASE_COLOR_UNIT) uniform sampler2DArray gbuf_base_color;
-layout(binding = GBUF_METAL_ROUGH_UNIT) uniform sampler2DArray gbuf_metal_rough;
-layout(binding = GBUF_EFFECT_UNIT) uniform usampler2DArray gbuf_effect;
-layout(binding = GBUF_EMISSIVE_UNIT) uniform sampler2DArray gbuf_emissive;
+#ifdef GBUF_READER
+uint gbuf_effect_at(ivec3 p) { return gbuf_effect_of(gbuf_fetch_effect(p)); }
 
 GSurface gbuf_load(ivec3 p) {
     GSurface s;
-    s.pos = texelFetch(gbuf_pos, p, 0).xyz;
-    s.n = normalize(texelFetch(gbuf_normal, p, 0).xyz);
-    s.ng = normalize(texelFetch(gbuf_face_normal, p, 0).xyz);
-    vec4 bc = texelFetch(gbuf_base_color, p, 0);
+    s.pos = gbuf_fetch_posW(p).xyz;
+    s.n = normalize(gbuf_fetch_normW(p).xyz);
+    s.ng = normalize(gbuf_fetch_faceNormalW(p).xyz);
+    vec4 bc = gbuf_fetch_baseColor(p);
     s.base_color = bc.rgb;
     s.alpha = bc.a;
-    vec2 mr = texelFetch(gbuf_metal_rough, p, 0).xy;
+    vec2 mr = gbuf_fetch_metalRough(p);
     s.metallic = mr.x;
     s.roughness = mr.y;
-    s.emissive = texelFetch(gbuf_emissive, p, 0).rgb;
-    uint e = texelFetch(gbuf_effect, p, 0).x;
+    s.emissive = gbuf_fetch_emissive(p).rgb;
+    uint e = gbuf_fetch_effect(p);
     s.effect = gbuf_effect_of(e);
     s.material = gbuf_material_of(e);
     return s;

@@ -97,8 +97,6 @@ layout(std430, binding = RAYVR_EMISSIVE_TRIANGLE_SSBO) readonly buffer EmissiveT
 
 uint emissive_triangle_count() { return floatBitsToUint(emissive_info.x); }
 
-float light_luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
-
 float emissive_strategy_probability() {
 #if SCENE_HAS_PUNCTUAL_LIGHTS
     return punctual_light_count() > 0u ? 0.5 : 1.0;
@@ -159,7 +157,7 @@ float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p) {
     float area = 0.5 * length(cross(b - a, c - a));
     float total = emissive_info.y;
     if (area <= 0.0 || total <= 0.0) return 0.0;
-    float power = area * light_luminance(scene_materials[q.material].emission_cutoff.rgb);
+    float power = area * luminance(scene_materials[q.material].emission_cutoff.rgb);
     vec3 to = q.position - p;
     float d2 = dot(to, to);
     float cos_l = abs(dot(q.geometric_normal, normalize(to)));

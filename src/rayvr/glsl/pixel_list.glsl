@@ -1,8 +1,14 @@
-// Per-effect pixel lists built by the compaction pass (rayvr/passes/compaction.py) and consumed
+// Per-effect pixel lists built by the compaction pass (rayvr/passes/compaction/) and consumed
 // by the ray passes through ComputeShader.run_indirect. Buffer layout (std430, uint words):
 //   [0] pixel count, [1..3] indirect dispatch args (groups x, 1, 1), [4..] packed pixels.
 // A pixel packs x (13 bits) | y (13 bits) << 13 | view (6 bits) << 26: up to 8192 px and 64 views.
 #pragma once
+#ifndef PIXEL_LIST_INPUT
+#define PIXEL_LIST_INPUT 0
+#endif
+#ifndef PIXELS_2D
+#define PIXELS_2D 0
+#endif
 
 #define PIXEL_LIST_GROUP 64
 #define PIXEL_LIST_HEADER_WORDS 4
@@ -12,15 +18,15 @@ ivec3 pixel_list_unpack(uint w) { return ivec3(w & 0x1FFFu, (w >> 13u) & 0x1FFFu
 
 #include "ray_group.glsl"
 
-#ifdef PIXEL_LIST_SSBO
-layout(std430, binding = PIXEL_LIST_SSBO) readonly buffer PixelList {
+#if PIXEL_LIST_INPUT   // a ray pass that reads a list (bound to the block PixelList by name)
+layout(std430) readonly buffer PixelList {
     uint pixel_count;
     uint pixel_dispatch[3];
     uint pixel_items[];
 };
 #endif
 
-#if defined(PIXEL_LIST_SSBO) || PIXELS_2D
+#if PIXEL_LIST_INPUT || PIXELS_2D
 // The pixel a ray pass's invocation works on; false when it has none. From the list (dispatched
 // indirectly, PIXEL_LIST_GROUP threads a group), or with PIXELS_2D the invocation's own pixel of
 // the image when its effect is min_effect or above (then gbuffer.glsl must come first, and no
@@ -29,7 +35,7 @@ bool ray_pass_pixel(uint min_effect, ivec3 image_size, out ivec3 p) {
 #if PIXELS_2D
     p = ray_group_pixel();
     if (any(greaterThanEqual(p, image_size))) return false;
-    uint effect = gbuf_effect_of(texelFetch(gbuf_effect, p, 0).x);
+    uint effect = gbuf_effect_at(p);
     return effect != GBUF_NO_GEOMETRY && effect >= min_effect;
 #else
     uint i = gl_GlobalInvocationID.x;

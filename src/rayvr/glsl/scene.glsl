@@ -20,6 +20,7 @@
 // footprint instead (surface_at_cone, material_params_at: Akenine-Moeller et al., "Texture Level of
 // Detail Strategies for Real-Time Ray Tracing", Ray Tracing Gems ch. 20), or read level 0.
 #pragma once
+#include "color.glsl"
 
 #ifndef SCENE_HAS_TEXTURES
 #define SCENE_HAS_TEXTURES 0
@@ -119,10 +120,6 @@ uint scene_triangle(uint instance, uint primitive) {
     return scene_meshes[scene_instances[instance].info.x].info.z + primitive;
 }
 
-vec3 srgb_to_linear(vec3 c) {
-    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
-}
-
 // ---- materials ------------------------------------------------------------------------------
 
 struct MaterialParams {
@@ -159,8 +156,8 @@ vec4 material_texture(uint m, int slot, vec2 uv, float uv_lod) {
 }
 #endif
 
-// The material's parameters at uv, textures read for a footprint of 2^uv_lod uv units.
-MaterialParams material_params_at(uint m, vec2 uv, float uv_lod) {
+// Material m's factors as its table entry holds them, before any texture.
+MaterialParams material_factors(uint m) {
     MaterialData d = scene_materials[m];
     MaterialParams p;
     p.base_color = d.base_color.rgb;
@@ -177,7 +174,14 @@ MaterialParams material_params_at(uint m, vec2 uv, float uv_lod) {
 #if SCENE_HAS_TRANSMISSION
     p.transmission = d.pbr.z;
 #endif
+    return p;
+}
+
+// The material's parameters at uv, textures read for a footprint of 2^uv_lod uv units.
+MaterialParams material_params_at(uint m, vec2 uv, float uv_lod) {
+    MaterialParams p = material_factors(m);
 #if SCENE_HAS_TEXTURES
+    MaterialData d = scene_materials[m];
     if (d.tex[2 * TEX_BASE_COLOR].w >= 0.0) {
         vec4 t = material_texture(m, TEX_BASE_COLOR, uv, uv_lod);
         p.base_color *= srgb_to_linear(t.rgb);

@@ -1,7 +1,10 @@
-"""Binding points shared by every shader, injected as `#define`s so Python and GLSL agree.
+"""Binding points of the frame-wide resources, injected into every shader as `#define`s so Python
+and GLSL agree: SSBO 0 the views, 2-13 the GPU scene, one texture unit for the scene's textures.
 
-0-1: frame-wide (views); 2-15: the GPU scene; 16+: a pass's own buffers.
-Sampler units: 0-7 a pass's own textures, 8-15 the scene's textures.
+A pass's own textures, images and buffers get their units and points from the program's
+reflection by name (`rayvr.gpu.program_resources`), never from numbers in its code: they are
+allocated around these (SSBOs from FIRST_PASS_SSBO, samplers skipping the scene's unit).
+The BVH builders (`rayvr.scene.bvh_gpu`), which are not passes, use RAYVR_PASS_SSBO_0 + k.
 """
 
 BINDINGS = {
@@ -28,3 +31,24 @@ BINDINGS = {
     "RAYVR_SCENE_TEXTURE_UNIT": 8,
     "RAYVR_MAX_VIEWS": 64,
 }
+
+FIRST_PASS_SSBO = BINDINGS["RAYVR_PASS_SSBO_0"]
+
+# GLSL storage blocks and samplers bound frame-wide (views, GpuScene.bind()), by name: a pass's
+# program resources leave them at their fixed points.
+SHARED_BLOCKS = {
+    "ViewsBlock": "RAYVR_VIEWS_SSBO",
+    "SceneVertices": "RAYVR_VERTEX_SSBO",
+    "SceneIndices": "RAYVR_INDEX_SSBO",
+    "RqBlasNodes": "RAYVR_BLAS_NODE_SSBO",
+    "RqTlasNodes": "RAYVR_TLAS_NODE_SSBO",
+    "SceneInstances": "RAYVR_INSTANCE_SSBO",
+    "SceneMaterials": "RAYVR_MATERIAL_SSBO",
+    "PunctualLights": "RAYVR_PUNCTUAL_LIGHT_SSBO",
+    "EmissiveTriangles": "RAYVR_EMISSIVE_TRIANGLE_SSBO",
+    "RqTriangles": "RAYVR_TRIANGLE_SSBO",
+    "SceneMeshes": "RAYVR_MESH_SSBO",
+    "SceneTriangleMaterials": "RAYVR_TRIANGLE_MATERIAL_SSBO",
+    "SceneTangents": "RAYVR_TANGENT_SSBO",
+}
+SHARED_SAMPLERS = {"scene_textures": "RAYVR_SCENE_TEXTURE_UNIT"}

@@ -2,6 +2,8 @@
 
 Includes are resolved against the including file's folder, then the package's shared GLSL folder
 (`rayvr/glsl`), then the `rayvr` package root, so a pass writes `#include "ray_query.glsl"`.
+A few includes are generated from Python tables (`GENERATED_INCLUDES`: the G-buffer channels), so
+the GLSL that reads a table can never drift from it.
 Each file gets a GLSL source-string number through `#line`, which the error parser maps back
 to its path. Programs are cached per (sources, defines): a pass built twice compiles once.
 """
@@ -44,7 +46,21 @@ class ShaderSource:
         return _ERR_LOC.sub(sub, log)
 
 
+# include name -> "module:function" returning its GLSL text (imported on first use)
+GENERATED_INCLUDES = {"gbuffer_channels.glsl": "rayvr.passes.gbuffer.channels:glsl_source"}
+GENERATED_DIR = Path("<generated>")
+
+
+def _generated_text(path: Path) -> str:
+    import importlib
+
+    module, _, func = GENERATED_INCLUDES[path.name].partition(":")
+    return getattr(importlib.import_module(module), func)()
+
+
 def _resolve(name: str, including_dir: Path, search: list[Path]) -> Path:
+    if name in GENERATED_INCLUDES:
+        return GENERATED_DIR / name
     for base in [including_dir, *search, SHARED_GLSL, PACKAGE_ROOT]:
         p = (base / name).resolve()
         if p.is_file():
@@ -90,7 +106,7 @@ def preprocess(path: str | Path, defines: dict | None = None, search: list[Path]
             seen[p] = len(files)
             files.append(p)
             try:
-                texts[p] = p.read_text().splitlines()
+                texts[p] = (_generated_text(p) if p.parent == GENERATED_DIR else p.read_text()).splitlines()
             except OSError as exc:
                 raise ShaderError(f"{p}: cannot read shader source: {exc}") from exc
         idx, lines = seen[p], texts[p]

@@ -62,6 +62,16 @@ class GpuTimer:
         self._fresh = False
         return self.last_ms
 
+    def reset(self) -> None:
+        """Forget pending and finished measurements (a timer handed to a new owner)."""
+        if any(self._pending) and self.use_queries:
+            self.gl.finish()
+            for slot in (0, 1):
+                if self._pending[slot]:
+                    _ = self._queries[slot].elapsed   # drain the result so the query can restart
+        self._pending = [False, False]
+        self._slot, self._fresh, self.last_ms = 0, False, None
+
     def resolve(self) -> float | None:
         """Wait for the latest query's result (a stall), collect it for take(), and return the
         latest time in ms."""
@@ -70,3 +80,23 @@ class GpuTimer:
             if self._pending[prev]:
                 self._collect(prev)
         return self.last_ms
+
+
+# moderngl cannot delete a query object, so timers are pooled per context and reused: a graph
+# recompiled many times holds the same queries.
+_pools: dict[int, list[GpuTimer]] = {}
+
+
+def acquire_timer(gl: moderngl.Context, use_queries: bool) -> GpuTimer:
+    """A GpuTimer from the context's pool (or a new one); give it back with release_timer()."""
+    pool = _pools.setdefault(id(gl), [])
+    for i, t in enumerate(pool):
+        if t.use_queries == use_queries and t.gl is gl:
+            return pool.pop(i)
+    return GpuTimer(gl, use_queries)
+
+
+def release_timer(timer: GpuTimer) -> None:
+    """Return `timer` to its context's pool."""
+    timer.reset()
+    _pools.setdefault(id(timer.gl), []).append(timer)

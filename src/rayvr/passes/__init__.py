@@ -1,17 +1,23 @@
-"""Render passes: the hybrid pipeline (G-buffer, lighting, ray-traced effects, composite, tone
-mapping), path tracing with accumulation and TAA, and the simple ones in `rayvr.passes.basic`."""
-from .accumulate import Accumulate
-from .basic import *  # noqa: F403  (Clear, Checkerboard, Blit, ImageLoader)
-from .basic import __all__ as _basic_all
-from .compaction import EffectCompaction
-from .composite import HybridComposite
-from .gbuffer import GBufferRaster
-from .gbuffer_auto import GBufferAuto
-from .gbuffer_rt import GBufferRT
-from .lighting import DirectLighting, RTReflections, RTShadows
-from .path_tracer import PathTracer
-from .taa import TAA
-from .tonemap import ToneMapper
+"""Render passes, one folder each with its shaders beside it: the hybrid pipeline (G-buffer,
+lighting, ray-traced effects, composite, tone mapping), path tracing with accumulation and TAA,
+and the simple ones in `rayvr.passes.basic`.
 
-__all__ = ["GBufferRaster", "GBufferRT", "GBufferAuto", "DirectLighting", "EffectCompaction", "RTShadows", "RTReflections",
-           "HybridComposite", "ToneMapper", "PathTracer", "Accumulate", "TAA", *_basic_all]
+Every sub-folder that is a package is imported here, so its passes register themselves
+(`@register_pass`) and appear as `rayvr.passes.<ClassName>`: adding a pass is adding a folder
+(see docs/DESIGN.md, "Adding a pass").
+"""
+from __future__ import annotations
+
+import importlib
+import pkgutil
+
+__all__: list[str] = []
+for _info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+    if _info.ispkg:
+        _module = importlib.import_module(f"{__name__}.{_info.name}")
+        for _name in getattr(_module, "__all__", ()):
+            _value = getattr(_module, _name)
+            if isinstance(_value, type):
+                globals()[_name] = _value
+                __all__.append(_name)
+del _info, _module, _name, _value

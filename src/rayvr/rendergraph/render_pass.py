@@ -29,6 +29,16 @@ class PinKind(str, enum.Enum):
     BUFFER = "buffer"     # an SSBO of `byte_size` bytes
 
 
+class Access(str, enum.Enum):
+    """How a pass touches a pin's resource; the graph derives its memory barriers from these."""
+
+    SAMPLED = "sampled"          # texture fetches (sampler uniforms)
+    IMAGE = "image"              # image load/store
+    STORAGE = "storage"          # SSBO reads/writes
+    INDIRECT = "indirect"        # SSBO read as indirect dispatch arguments (and as storage)
+    FRAMEBUFFER = "framebuffer"  # colour attachment of a draw (written coherently: no barrier)
+
+
 class PinDirection(str, enum.Enum):
     INPUT = "input"
     OUTPUT = "output"
@@ -51,6 +61,17 @@ class Pin:
     is_optional: bool = False
     unused_reason: str | None = None  # an input this configuration does not read (see unused())
     mip_levels: int = 1
+    access: Access | None = None      # None: the kind's default (see access_kind)
+
+    @property
+    def access_kind(self) -> Access:
+        """How the pass touches the resource: textures are sampled (inputs) or image-stored
+        (outputs and internals), buffers are SSBOs, unless the pin declared otherwise."""
+        if self.access is not None:
+            return self.access
+        if self.kind is PinKind.BUFFER:
+            return Access.STORAGE
+        return Access.SAMPLED if self.direction is PinDirection.INPUT else Access.IMAGE
 
     def format(self, name: str) -> "Pin":
         """Declare the texture format (a name of `formats.FORMATS`)."""
@@ -69,6 +90,15 @@ class Pin:
         self.unused_reason = reason
         self.is_optional = True
         return self
+
+    def accessed(self, how: Access | str) -> "Pin":
+        """Declare how the pass touches the resource (default: see `access_kind`)."""
+        self.access = Access(how)
+        return self
+
+    def indirect(self) -> "Pin":
+        """A buffer input the pass dispatches indirectly from (and reads as an SSBO)."""
+        return self.accessed(Access.INDIRECT)
 
     def texture_size(self, width: int, height: int) -> "Pin":
         """A fixed size in pixels instead of the graph's output size."""
@@ -105,6 +135,7 @@ class Reflection:
 
     def __init__(self):
         self.pins: dict[str, Pin] = {}
+        self.jitter = False   # the pass wants sub-pixel camera jitter (request_jitter)
 
     def _add(self, name: str, direction: PinDirection, desc: str) -> Pin:
         if name in self.pins:
@@ -123,6 +154,11 @@ class Reflection:
         return self._add(name, PinDirection.INTERNAL, desc)
 
     addInput, addOutput, addInternal = add_input, add_output, add_internal
+
+    def request_jitter(self) -> "Reflection":
+        """Ask for sub-pixel camera jitter in the views (a temporal pass that resolves it, TAA)."""
+        self.jitter = True
+        return self
 
     def pins_of(self, direction: PinDirection) -> list[Pin]:
         """The pins of one direction, in declaration order."""
@@ -180,15 +216,49 @@ class RenderContext:
     sample_index: int | None = None   # samples since the last camera or scene change (0: one
                                       # happened); None when no Renderer counts them
 
+    def barrier(self, *accesses: Access | str) -> None:
+        """A memory barrier inside a pass, between two of its own dispatches: make what the first
+        wrote visible to the second's `accesses` (Access values; none: everything)."""
+        self.gl.memory_barrier(barrier_bits(accesses) if accesses else self.gl.ALL_BARRIER_BITS)
+
+
+# glMemoryBarrier bits that make shader writes visible to each kind of later access.
+_BARRIER_BITS = {
+    Access.SAMPLED: 0x00000008,      # GL_TEXTURE_FETCH_BARRIER_BIT
+    Access.IMAGE: 0x00000020,        # GL_SHADER_IMAGE_ACCESS_BARRIER_BIT
+    Access.STORAGE: 0x00002000,      # GL_SHADER_STORAGE_BARRIER_BIT
+    Access.INDIRECT: 0x00002040,     # + GL_COMMAND_BARRIER_BIT
+    Access.FRAMEBUFFER: 0x00000400,  # GL_FRAMEBUFFER_BARRIER_BIT
+}
+# What a reader outside the graph may do with a marked output: read it back (glGetTexImage,
+# GL_TEXTURE_UPDATE_BARRIER_BIT), sample or copy it (a sink), blit it.
+HOST_READ_BITS = 0x00000100 | 0x00000008 | 0x00000400 | 0x00000020 | 0x00000200 | 0x00000080
+
+
+def barrier_bits(accesses) -> int:
+    """The glMemoryBarrier bits for later accesses of the given kinds."""
+    bits = 0
+    for a in accesses:
+        bits |= _BARRIER_BITS[Access(a)]
+    return bits
+
 
 class RenderPass:
-    """Base of every pass. Subclasses set PROPERTIES (defaults) and override the hooks."""
+    """Base of every pass. Subclasses set PROPERTIES (defaults) and override the hooks.
+
+    `USES_SCENE`: the pass reads the GPU scene and the views (ray queries, materials, lights): the
+    graph refuses to compile it without a scene and binds both before it runs. Shaders live
+    beside the pass's module (`compute_program(gl, "name.comp")`). GPU objects a pass makes in
+    compile() go through `own()`, and the graph frees them (`release()`) on recompile and close.
+    """
 
     PROPERTIES: dict[str, Any] = {}
+    USES_SCENE = False
 
     def __init__(self, props: dict | None = None, **kwargs):
         self._props = copy.deepcopy(self.PROPERTIES)
         self.name = type(self).__name__   # the graph sets the instance name on add_pass
+        self._owned: list = []
         self.set_properties({**(props or {}), **kwargs})
 
     # -- properties ------------------------------------------------------------------------
@@ -240,7 +310,41 @@ class RenderPass:
         """Build programs and pass-owned GPU objects. Called once per graph compile."""
 
     def execute(self, ctx: RenderContext, data: RenderData) -> None:
-        """Bind and dispatch. Must not allocate GPU memory."""
+        """Bind and dispatch. Must not allocate GPU memory. The graph issues the memory barriers
+        between passes; a pass with several dispatches orders its own (`ctx.barrier`)."""
+
+    def release(self) -> None:
+        """Free the GPU objects compile() made (everything passed through `own()`)."""
+        owned = self.__dict__.get("_owned") or []
+        for obj in reversed(owned):
+            obj.release()
+        owned.clear()
+
+    def own(self, obj):
+        """Record a GPU object this pass made (buffer, sampler, framebuffer...) for `release()`."""
+        self.__dict__.setdefault("_owned", []).append(obj)
+        return obj
+
+    # -- shaders beside the pass ---------------------------------------------------------------
+    @classmethod
+    def shader_path(cls, name: str):
+        """The path of shader `name` in the folder of the module that defines the pass."""
+        import sys
+        from pathlib import Path
+
+        return Path(sys.modules[cls.__module__].__file__).resolve().parent / name
+
+    def compute_program(self, gl, name: str, defines: dict | None = None):
+        """The (cached) compute program of shader `name` beside the pass, with `defines`."""
+        from ..gpu.shaders import compute_program
+
+        return compute_program(gl, self.shader_path(name), defines)
+
+    def raster_program(self, gl, vertex: str, fragment: str, defines: dict | None = None):
+        """The (cached) vertex + fragment program of the shaders beside the pass."""
+        from ..gpu.shaders import raster_program
+
+        return raster_program(gl, self.shader_path(vertex), self.shader_path(fragment), defines)
 
     def defines(self) -> dict:
         """`#define`s this pass compiles its shaders with (shown in the compile report)."""

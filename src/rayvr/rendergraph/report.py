@@ -48,6 +48,8 @@ class CompileReport:
     left_out: list[str] = dataclasses.field(default_factory=list)
     extra: list = dataclasses.field(default_factory=list)
     timing: str = ""
+    stages: dict = dataclasses.field(default_factory=dict)      # compile stage -> CPU ms
+    barriers: dict = dataclasses.field(default_factory=dict)    # pass -> memory barrier before it
 
     @property
     def bytes_saved(self) -> int:
@@ -92,6 +94,10 @@ class CompileReport:
         if defs:
             lines.append("defines:")
             lines += [f"  {p}: " + ", ".join(f"{k}={v}" for k, v in d.items()) for p, d in defs.items()]
+        if self.barriers:
+            lines.append("barriers: " + "; ".join(f"{p}: {b}" for p, b in self.barriers.items()))
+        if self.stages:
+            lines.append("compile stages: " + ", ".join(f"{k} {v:.1f} ms" for k, v in self.stages.items()))
         if self.left_out:
             lines.append("left out:")
             lines += [f"  {x}" for x in self.left_out]

@@ -26,9 +26,9 @@ def hybrid_graph(spp: int = 1, max_bounces: int = 1, path_bounces: int = 4, ligh
 
 
 def path_traced_graph(spp: int = 1, max_bounces: int = 4, pixel_jitter: bool = False, **kw):
-    """`rayvr.graphs_pt.path_traced(...)`: every pixel path traced from the camera. Without
+    """`rayvr.graphs.path_traced(...)`: every pixel path traced from the camera. Without
     `pixel_jitter` paths start at pixel centres, as the raster G-buffer samples them."""
-    from ..graphs_pt import path_traced
+    from ..graphs import path_traced
 
     g = path_traced(samples_per_pixel=int(spp), max_bounces=max_bounces, **kw)
     g.update_pass("PathTracer", {"pixel_jitter": bool(pixel_jitter)})

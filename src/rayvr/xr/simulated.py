@@ -47,7 +47,7 @@ class SimulatedHeadset(Sink):
         if len(self._size) != 2 or min(self._size) <= 0:
             raise OptionError(f"SimulatedHeadset: size must be (width, height) in pixels, got {size!r}")
         self.start_pose = start_pose or DEFAULT_START
-        self.start_pose_given = start_pose is not None
+        self._start_pose_given = start_pose is not None
         self._trajectory_spec = trajectory
         self.trajectory = make_trajectory(trajectory, self.start_pose)
         self.frames = frames
@@ -63,9 +63,14 @@ class SimulatedHeadset(Sink):
         self._last_views = None
         self.gpu = None
 
+    @property
+    def start_pose_given(self) -> bool:
+        """Whether a start pose was given (else the Renderer places the headset at the scene's camera)."""
+        return self._start_pose_given
+
     def place(self, start_pose: Pose) -> None:
         """Start the (formula) trajectory from `start_pose`, e.g. the scene's camera; a pose log keeps its poses."""
-        self.start_pose, self.start_pose_given = start_pose, True
+        self.start_pose, self._start_pose_given = start_pose, True
         self.trajectory = make_trajectory(self._trajectory_spec, start_pose)
 
     @property

@@ -69,6 +69,15 @@ class Sink(abc.ABC):
     def close(self) -> None:
         """Release what `open()` took; safe to call twice."""
 
+    @property
+    def start_pose_given(self) -> bool:
+        """False when the sink has no start pose of its own and wants one from the scene (a
+        simulated headset built without one): the Renderer then calls place() before open()."""
+        return True
+
+    def place(self, pose: Pose) -> None:
+        """Start the views at `pose` (the scene's camera): the hook behind start_pose_given."""
+
     def __enter__(self):
         return self
 

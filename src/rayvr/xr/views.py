@@ -229,6 +229,15 @@ class ViewSet:
         proj = _projections(c[:, 7:11], c[:, 11], c[:, 12], c[:, 15] != 0)
         return {"view": view, "proj": proj, "view_proj": proj @ view, "inv_view": inv_view}
 
+    def restart_key(self, origin=None) -> bytes:
+        """What progressive accumulation depends on: the render-space matrices as the GPU sees
+        them (float32) and the render-space origin. A change restarts it: a head that only
+        translates leaves the render-space matrices as they were but moves the origin."""
+        origin = self.origin() if origin is None else np.asarray(origin, dtype=np.float64)
+        m = self._matrices(origin, self._columns())
+        mats = np.concatenate([m[k].astype(np.float32).reshape(-1) for k in ("view", "proj", "view_proj")])
+        return mats.tobytes() + origin.tobytes() + np.int64(len(self.views)).tobytes()
+
     def pack(self, origin=None, frame_index: int = 0, sample_index: int = 0, flags: int = 0,
              jitter=(0.0, 0.0)) -> bytes:
         """The bytes of the views SSBO for this frame (see glsl/views.glsl)."""

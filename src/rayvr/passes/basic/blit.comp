@@ -1,6 +1,6 @@
 // Blit: resample layer min(z, source layers - 1) of `src` into `dst` (scale and format change).
 #include "dst_image.glsl"
-layout(binding = 0) uniform sampler2DArray src;
+uniform sampler2DArray src;
 
 void main() {
     ivec3 p;

@@ -49,9 +49,7 @@ class Blit(RenderPass):
 
     def compile(self, ctx, cd):
         self._prog = program(ctx.gl, "blit.comp", self.out_format(cd))
-        self._sampler = ctx.gl.sampler(filter=FILTERS[self.filter], repeat_x=False, repeat_y=False)
+        self._sampler = self.own(ctx.gl.sampler(filter=FILTERS[self.filter], repeat_x=False, repeat_y=False))
 
     def execute(self, ctx, data):
-        data[self.SRC].use(0)
-        self._sampler.use(0)
-        run_over(ctx.gl, self._prog, data[self.DST])
+        run_over(self._prog, data[self.DST], data[self.SRC], self._sampler)

@@ -36,4 +36,4 @@ class Checkerboard(RenderPass):
         self._prog["color_a"].value = tuple(self.color_a)
         self._prog["color_b"].value = tuple(self.color_b)
         self._prog["cell"].value = self.cell
-        run_over(ctx.gl, self._prog, data[self.DST])
+        run_over(self._prog, data[self.DST])

@@ -47,4 +47,4 @@ class Clear(RenderPass):
         # The program is shared by every Clear of this format, so its uniforms are set each time.
         self._prog["colors"].write(self._colors)
         self._prog["color_count"].value = self._count
-        run_over(ctx.gl, self._prog, data[self.DST])
+        run_over(self._prog, data[self.DST])

@@ -5,8 +5,9 @@ from pathlib import Path
 
 from ...errors import OptionError
 from ...gpu import compute_program
+from ...gpu.program_resources import program_resources
 from ...rendergraph.formats import get_format
-from .._common import groups_2d
+from ..dispatch import groups_2d
 
 HERE = Path(__file__).resolve().parent
 
@@ -26,14 +27,17 @@ def program(gl, shader: str, fmt: str):
     return compute_program(gl, HERE / shader, {"DST_FORMAT": f.glsl, "DST_UINT": int(f.dtype == "u4")})
 
 
-def run_over(gl, prog, dst) -> None:
-    """Dispatch `prog` over every texel of every layer of texture array `dst`, then make the
-    image stores visible to whatever reads `dst` next. dst_image.glsl's local size is the
-    passes' COMPUTE_GROUP."""
+def run_over(prog, dst, src=None, sampler=None) -> None:
+    """Dispatch `prog` over every texel of every layer of texture array `dst` (its image `dst`),
+    sampling `src` (the sampler uniform `src`, with `sampler`'s filtering) when given.
+    dst_image.glsl's local size is the passes' COMPUTE_GROUP; the graph makes the stores visible
+    to the next reader."""
+    res = program_resources(prog)
+    if src is not None:
+        res.texture("src", src, sampler=sampler)
     w, h, layers = dst.size
-    dst.bind_to_image(0, read=False, write=True)
+    res.image("dst", dst)
     prog.run(*groups_2d((w, h), layers))
-    gl.memory_barrier()
 
 
 def rgba(value, pass_name: str, prop: str) -> tuple[float, float, float, float]:

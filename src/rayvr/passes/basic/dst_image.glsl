@@ -3,10 +3,10 @@
 #pragma once
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;   // COMPUTE_GROUP of passes/_common.py
 #if DST_UINT
-layout(DST_FORMAT, binding = 0) uniform writeonly uimage2DArray dst;
+layout(DST_FORMAT) uniform writeonly uimage2DArray dst;
 void store_dst(ivec3 p, vec4 c) { imageStore(dst, p, uvec4(c)); }
 #else
-layout(DST_FORMAT, binding = 0) uniform writeonly image2DArray dst;
+layout(DST_FORMAT) uniform writeonly image2DArray dst;
 void store_dst(ivec3 p, vec4 c) { imageStore(dst, p, c); }
 #endif
 

@@ -151,13 +151,12 @@ class ImageLoader(RenderPass):
         self._pixels = np.ascontiguousarray(np.stack(layers)).tobytes()
         self._uploaded_to = None
         self._prog = program(ctx.gl, "blit.comp", self.format or self._natural_format())
-        self._sampler = ctx.gl.sampler(filter=(moderngl.NEAREST, moderngl.NEAREST), repeat_x=False, repeat_y=False)
+        self._sampler = self.own(ctx.gl.sampler(filter=(moderngl.NEAREST, moderngl.NEAREST), repeat_x=False,
+                                                repeat_y=False))
 
     def execute(self, ctx, data):
         image = data[self.IMAGE]
         if self._uploaded_to is not image:   # once per compile (internal pins never alias)
             image.write(self._pixels)
             self._uploaded_to = image
-        image.use(0)
-        self._sampler.use(0)
-        run_over(ctx.gl, self._prog, data[self.DST])
+        run_over(self._prog, data[self.DST], image, self._sampler)

@@ -1,0 +1,22 @@
+"""The per-effect pixel lists EffectCompaction writes and the ray passes dispatch over
+(glsl/pixel_list.glsl has the layout): sizes, the indirect-dispatch offset, and a readback."""
+from __future__ import annotations
+
+import numpy as np
+
+HEADER_BYTES = 16   # count + indirect dispatch args
+DISPATCH_OFFSET = 4
+
+
+def pixel_list_bytes(size: tuple[int, int], views: int) -> int:
+    """Bytes of a pixel list that can hold every pixel of every view."""
+    return HEADER_BYTES + 4 * size[0] * size[1] * views
+
+
+def read_pixel_list(buffer) -> tuple[int, np.ndarray]:
+    """(count, (n, 3) x/y/view) of a pixel-list buffer; a readback for tests and tools."""
+    head = np.frombuffer(buffer.read(HEADER_BYTES), dtype=np.uint32)
+    n = int(head[0])
+    items = np.frombuffer(buffer.read(4 * n, offset=HEADER_BYTES), dtype=np.uint32) if n else np.zeros(0, np.uint32)
+    xyz = np.stack([items & 0x1FFF, (items >> 13) & 0x1FFF, items >> 26], axis=1)
+    return n, xyz

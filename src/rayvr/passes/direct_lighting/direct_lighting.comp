@@ -1,0 +1,27 @@
+// Emission + unshadowed direct light for every pixel of every view (RASTER materials use it as is;
+// with RASTER_ONLY the pixels the ray passes light are skipped).
+#define GBUF_READER 1
+#include "views.glsl"
+#include "gbuffer.glsl"
+#include "shading.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+layout(rgba16f) writeonly uniform image2DArray dst;
+uniform vec3 background;
+
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;
+    uint effect = gbuf_effect_at(p);
+    if (effect == GBUF_NO_GEOMETRY) {
+        imageStore(dst, p, vec4(background, 1.0));
+        return;
+    }
+#if RASTER_ONLY
+    if (effect >= EFFECT_SHADOWS) return;   // lit by the ray passes instead
+#endif
+    GSurface g = gbuf_load(p);
+    Rng rng = rng_init(uvec2(p.xy), uint(p.z), frame_index(), RNG_SALT);
+    vec3 c = g.emissive + shade_direct(path_vertex_at_gbuffer(g, uint(p.z)), rng);
+    imageStore(dst, p, vec4(c, 1.0));
+}

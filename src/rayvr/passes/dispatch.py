@@ -1,0 +1,41 @@
+"""Workgroup shapes of the passes' compute dispatches: plain 2D tiles over every view, and the
+ray passes' tiles that span several views of a camera grid (glsl/ray_group.glsl)."""
+from __future__ import annotations
+
+COMPUTE_GROUP = (8, 8)   # the local size of the passes' 2D compute shaders
+
+# Views a ray pass's warp spans. Neighbouring views of a camera grid see nearly the same surface
+# through the same pixel (exactly so on the focal plane), so a warp of a few pixels in several
+# views traces more alike rays than one of more pixels in one small view. Each pass may give its
+# own count to ray_group (benchmarks/RESULTS.md has the measurements behind each choice); 1: off.
+VIEW_GROUP = 4
+# Frames with fewer views are not grouped: stereo's two eyes see the same pixel's surface far apart.
+MIN_GROUPED_VIEWS = 4
+
+
+def groups_2d(size: tuple[int, int], views: int, group: tuple[int, ...] = COMPUTE_GROUP) -> tuple[int, int, int]:
+    """Workgroups covering `size` pixels of every view with `group`-sized workgroups: (x, y) pixels,
+    or (x, y, z) pixels by views."""
+    gx, gy, gz = (*group, 1)[:3]
+    return (size[0] + gx - 1) // gx, (size[1] + gy - 1) // gy, (views + gz - 1) // gz
+
+
+def ray_group(views: int, tile: tuple[int, int] = COMPUTE_GROUP, view_group: int | None = None) -> tuple[int, int, int]:
+    """The (x, y, views) shape of a ray pass's workgroup of tile[0] * tile[1] invocations: the tile
+    shrunk (larger side first) to make room for `view_group` views (default VIEW_GROUP) when a frame
+    has at least MIN_GROUPED_VIEWS."""
+    x, y = tile
+    z = 1
+    want = VIEW_GROUP if view_group is None else view_group
+    while z < want and views >= max(want, MIN_GROUPED_VIEWS) and x * y > 1:
+        z *= 2
+        if x > y:
+            x //= 2
+        else:
+            y //= 2
+    return x, y, z
+
+
+def ray_group_defines(group: tuple[int, int, int]) -> dict:
+    """The #defines glsl/ray_group.glsl reads."""
+    return {"RAY_GROUP_X": group[0], "RAY_GROUP_Y": group[1], "RAY_GROUP_Z": group[2]}

@@ -1,0 +1,40 @@
+// G-buffer fragment stage: material parameters, normals facing the viewer, effect id, motion;
+// the outputs (one per channel, in the table's order) come from gbuffer_channels.glsl.
+#define SCENE_MATERIAL_IMPLICIT_LOD 1
+#define GBUF_WRITER 1
+#define GBUF_RASTER_WRITER 1
+#include "views.glsl"
+#include "scene.glsl"
+#include "gbuffer.glsl"
+
+in vec3 v_pos;
+in vec3 v_normal;
+in vec2 v_uv;
+in vec4 v_tangent;
+flat in uint v_material;
+flat in uint v_view;
+
+
+void main() {
+    MaterialParams m = material_params(v_material, v_uv);
+#if SCENE_HAS_ALPHA_MASK
+    if (m.alpha_mode == ALPHA_MODE_MASK && m.alpha < scene_materials[v_material].emission_cutoff.a) discard;
+#endif
+    vec3 eye = views[v_view].eye.xyz;
+    vec3 to_eye = eye - v_pos;
+    // Geometric normal from screen-space derivatives of the render-space position.
+    vec3 ng = safe_normalize(cross(dFdx(v_pos), dFdy(v_pos)), v_normal);
+    if (dot(ng, to_eye) < 0.0) ng = -ng;
+    vec3 n = safe_normalize(v_normal, ng);
+    if (dot(n, ng) < 0.0) n = -n;   // back face seen: shade the side facing the viewer
+#if SCENE_HAS_NORMAL_MAPS
+    if (scene_materials[v_material].tex[2 * TEX_NORMAL].w >= 0.0 && dot(v_tangent.xyz, v_tangent.xyz) > 0.0) {
+        vec3 t = safe_normalize(v_tangent.xyz - n * dot(n, v_tangent.xyz), vec3(1, 0, 0));
+        vec3 b = cross(n, t) * (v_tangent.w < 0.0 ? -1.0 : 1.0);
+        vec3 tn = material_texture(v_material, TEX_NORMAL, v_uv, UV_LOD_FINEST).xyz * 2.0 - 1.0;
+        tn.xy *= scene_materials[v_material].tex[2 * TEX_NORMAL + 1].w;
+        n = safe_normalize(tn.x * t + tn.y * b + tn.z * n, n);
+    }
+#endif
+    gbuf_output(gbuf_encode(v_view, v_pos, n, ng, m, v_material));   // one output per channel
+}

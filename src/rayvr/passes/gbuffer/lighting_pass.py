@@ -1,0 +1,88 @@
+"""The anatomy the G-buffer lighting passes share (DirectLighting, RTShadows, RTReflections): the
+G-buffer channels as inputs, one rgba16f radiance output, and for the ray passes either the
+compaction's pixel list (indirect dispatch) or the whole image in small tiles (PIXELS_2D)."""
+from __future__ import annotations
+
+from ...gpu.program_resources import program_resources
+from ...materials.effect import Effect
+from ...rendergraph.render_pass import Reflection, RenderPass
+from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
+from ..dispatch import COMPUTE_GROUP, groups_2d, ray_group, ray_group_defines
+from ..effects import effect_defines, effects_used, scene_defines
+from . import channels
+
+
+class GBufferLightingPass(RenderPass):
+    """A pass that lights G-buffer pixels into one rgba16f output (see the module docstring)."""
+
+    USES_SCENE = True
+    SHADER = ""
+    OUTPUT = "color"
+    OUTPUT_DESC = ""
+    PIXEL_LIST: str | None = None   # input pin of the pixel list, for indirect dispatch
+    SALT = 0
+    # A pass with a pixel list may instead run over the whole image in TILE-sized workgroups, where
+    # the pixels whose effect needs no such rays leave at once: True, False (the list), or None
+    # (the image unless a material is PATH_TRACED). Same pixels, same random numbers, same image.
+    # Neighbouring pixels in one warp trace alike rays; the list's tiles come in random order and
+    # a warp often straddles two of them.
+    PIXELS_2D: bool | None = None
+    TILE = (8, 4)   # one warp (ray_group spreads it over views)
+    VIEW_GROUP: int | None = None   # views a workgroup spans in a camera grid (None: dispatch.VIEW_GROUP)
+
+    def reflect(self, cd):
+        r = Reflection()
+        channels.add_inputs(r)
+        if self.PIXEL_LIST:
+            pin = r.add_input(self.PIXEL_LIST, "pixels to work on (EffectCompaction)").buffer(
+                pixel_list_bytes(cd.size, cd.views)).indirect()
+            if self._dispatch_2d(cd):
+                pin.unused("runs over the whole image: no material is PATH_TRACED")
+        r.add_output(self.OUTPUT, self.OUTPUT_DESC).format("rgba16f")
+        return r
+
+    def shader_defines(self) -> dict:
+        return {}
+
+    def compile(self, ctx, cd):
+        self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
+        self._group = ray_group(cd.views, self.TILE, self.VIEW_GROUP)
+        self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": self.SALT, **self.shader_defines(),
+                         "PIXELS_2D": int(self._pixels_2d), **ray_group_defines(self._group)}
+        if self.PIXEL_LIST and not self._pixels_2d:
+            self._defines["PIXEL_LIST_INPUT"] = 1
+        self._prog = self.compute_program(ctx.gl, self.SHADER, self._defines)
+        self._res = program_resources(self._prog)
+        # whole-image dispatches: ray passes in ray_group tiles, DirectLighting in 8x8 tiles of one view
+        self._groups = groups_2d(cd.size, cd.views, self._group if self._pixels_2d else COMPUTE_GROUP)
+
+    def _dispatch_2d(self, cd) -> bool:
+        if self.PIXELS_2D is not None:
+            return self.PIXELS_2D
+        # A PATH_TRACED pixel may be on the path tracer's list instead of this one: only the list knows.
+        used = effects_used(cd)
+        return used is not None and Effect.PATH_TRACED not in used
+
+    def set_uniforms(self, res) -> None:
+        """Properties that are uniforms; set in execute() because programs are cached and shared
+        between passes with the same defines."""
+
+    def defines(self) -> dict:
+        return dict(getattr(self, "_defines", {}) or self.shader_defines())
+
+    def execute(self, ctx, data):
+        res = self._res
+        self.set_uniforms(res)
+        channels.bind_inputs(res, data)
+        res.image("dst", data[self.OUTPUT])
+        if self.PIXEL_LIST and not self._pixels_2d:
+            pixels = data[self.PIXEL_LIST]
+            res.buffer("PixelList", pixels)
+            self._prog.run_indirect(pixels, DISPATCH_OFFSET)
+        else:   # the shader declares no list (the compaction pass was pruned)
+            self._prog.run(*self._groups)
+
+
+def background(value) -> tuple[float, float, float]:
+    """A `background` property as linear RGB."""
+    return tuple(float(v) for v in value)[:3]

@@ -1,0 +1,46 @@
+"""GBufferRT: the G-buffer by ray tracing, in one compute dispatch for every view.
+
+The same pins, formats and encoding as GBufferRaster (glsl/gbuffer.glsl gbuf_encode), so either can
+feed the hybrid lighting passes. It pays off where fragment work is slow against compute (NVIDIA
+datacenter GPUs with few graphics-capable TPCs: Capabilities.weak_raster); GBufferAuto chooses.
+Like the raster path, only surfaces between the views' near and far planes are seen. Differences:
+textures are read at mip 0 (no screen-space derivatives), and silhouettes and sub-pixel triangles
+may land on other pixels (a ray samples the pixel centre exactly, raster follows its fill rules).
+"""
+from __future__ import annotations
+
+from ...gpu.program_resources import program_resources
+from ...rendergraph.registry import register_pass
+from ...rendergraph.render_pass import RenderPass
+from ..dispatch import groups_2d, ray_group, ray_group_defines
+from ..effects import effect_defines, scene_defines
+from . import channels
+from .raster import gbuffer_reflection
+
+
+@register_pass
+class GBufferRT(RenderPass):
+    """Traces one primary ray per pixel and view (pixel centre + the view's jitter) and writes the
+    G-buffer targets (see the module docstring)."""
+
+    USES_SCENE = True
+    # Views a workgroup spans in a camera grid (passes.dispatch.VIEW_GROUP): primary rays gain from
+    # 2 and lose from more (benchmarks/RESULTS.md, "views a ray pass's workgroup spans").
+    VIEW_GROUP = 2
+
+    def reflect(self, cd):
+        return gbuffer_reflection()
+
+    def compile(self, ctx, cd):
+        self._group = ray_group(cd.views, view_group=self.VIEW_GROUP)
+        self._defines = {**scene_defines(ctx), **effect_defines(), **ray_group_defines(self._group)}
+        self._prog = self.compute_program(ctx.gl, "gbuffer_rt.comp", self._defines)
+        self._res = program_resources(self._prog)
+        self._groups = groups_2d(cd.size, cd.views, self._group)
+
+    def defines(self) -> dict:
+        return dict(getattr(self, "_defines", {}))
+
+    def execute(self, ctx, data):
+        channels.bind_outputs(self._res, data)
+        self._prog.run(*self._groups)

@@ -1,0 +1,33 @@
+"""RTReflections: mirror and glossy reflections, only where a material asks for them."""
+from __future__ import annotations
+
+from ...materials.effect import Effect
+from ...rendergraph.registry import register_pass
+from ..effects import unused_effect_reason
+from ..gbuffer.lighting_pass import GBufferLightingPass, background
+
+
+@register_pass
+class RTReflections(GBufferLightingPass):
+    """Mirror and glossy (GGX VNDF) reflections for the pixels whose effect is REFLECTIONS or above,
+    `max_bounces` deep; reflected hits are shaded with ray-traced shadows. The output is the
+    reflected radiance already weighted by the specular BSDF (the composite adds it).
+    Runs over the whole image in 8x4 tiles unless a material is PATH_TRACED (benchmarks/RESULTS.md
+    compares the tile shapes and the list)."""
+
+    SHADER = "rt_reflections.comp"
+    OUTPUT = "reflection"
+    OUTPUT_DESC = "specular-weighted reflected radiance (listed pixels only)"
+    PIXEL_LIST = "pixels"
+    SALT = 3
+    PROPERTIES = {"max_bounces": 1, "light_samples": 1, "background": [0.0, 0.0, 0.0]}
+
+    def skip_reason(self, cd):
+        return unused_effect_reason(cd, Effect.REFLECTIONS)
+
+    def shader_defines(self):
+        return {"MAX_BOUNCES": max(1, int(self.max_bounces)), "LIGHT_SAMPLES": max(1, int(self.light_samples)),
+                "SHADE_SHADOWS": 1}
+
+    def set_uniforms(self, res):
+        res.set("background", background(self.background))

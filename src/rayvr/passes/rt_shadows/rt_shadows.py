@@ -1,0 +1,29 @@
+"""RTShadows: emission + ray-traced shadowed direct light, only where a material asks for it."""
+from __future__ import annotations
+
+from ...materials.effect import Effect
+from ...rendergraph.registry import register_pass
+from ..effects import unused_effect_reason
+from ..gbuffer.lighting_pass import GBufferLightingPass
+
+
+@register_pass
+class RTShadows(GBufferLightingPass):
+    """Emission + ray-traced shadowed direct light for the pixels whose effect is SHADOWS or above.
+    Area lights get soft shadows from `light_samples` samples per pixel. Over the whole image in
+    8x8 tiles spanning 8 views of a camera grid (benchmarks/RESULTS.md has the measurements)."""
+
+    SHADER = "rt_shadows.comp"
+    OUTPUT = "shadowed"
+    OUTPUT_DESC = "emission + shadowed direct light (listed pixels only)"
+    PIXEL_LIST = "pixels"
+    SALT = 2
+    PROPERTIES = {"light_samples": 1}
+    TILE = (8, 8)
+    VIEW_GROUP = 8
+
+    def skip_reason(self, cd):
+        return unused_effect_reason(cd, Effect.SHADOWS)
+
+    def shader_defines(self):
+        return {"LIGHT_SAMPLES": max(1, int(self.light_samples)), "SHADE_SHADOWS": 1}

@@ -1,0 +1,61 @@
+// TAA: blend this frame's colour with the reprojected history (motion vectors, bilinear), the
+// history first clamped to the 3x3 neighbourhood's colour box in YCoCg (mean +- sigma * std dev,
+// grown to hold the pixel's own colour).
+// All views in one dispatch; writes the output and the next frame's history.
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#include "color.glsl"
+uniform sampler2DArray taa_color;
+uniform sampler2DArray taa_history;   // linear, clamp to edge (sampler object)
+#if TAA_HAS_MOTION
+uniform sampler2DArray taa_motion;    // pixels, this frame - last frame
+#endif
+layout(TAA_DST_FORMAT) writeonly uniform image2DArray dst;
+layout(rgba32f) writeonly uniform image2DArray history_out;
+uniform float taa_alpha;          // weight of this frame
+uniform float taa_sigma;          // colour box half-size in standard deviations
+uniform bool taa_history_valid;
+uniform bool taa_clamp;
+
+vec3 rgb_to_ycocg(vec3 c) {
+    return vec3(0.25 * c.r + 0.5 * c.g + 0.25 * c.b, 0.5 * c.r - 0.5 * c.b, -0.25 * c.r + 0.5 * c.g - 0.25 * c.b);
+}
+
+vec3 ycocg_to_rgb(vec3 c) {
+    return vec3(c.x + c.y - c.z, c.x + c.z, c.x - c.y - c.z);
+}
+
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    ivec3 size = imageSize(dst);
+    if (any(greaterThanEqual(p, size))) return;
+    vec4 current = texelFetch(taa_color, p, 0);
+    vec4 result = current;
+    vec2 motion = vec2(0.0);
+#if TAA_HAS_MOTION
+    motion = texelFetch(taa_motion, p, 0).xy;
+#endif
+    vec2 prev = vec2(p.xy) + 0.5 - motion;
+    if (taa_history_valid && all(greaterThanEqual(prev, vec2(0.0))) && all(lessThanEqual(prev, vec2(size.xy)))) {
+        vec4 history = texture(taa_history, vec3(prev / vec2(size.xy), float(p.z)));
+        if (taa_clamp) {
+            vec3 m1 = vec3(0.0), m2 = vec3(0.0);
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    ivec3 q = ivec3(clamp(p.xy + ivec2(dx, dy), ivec2(0), size.xy - 1), p.z);
+                    vec3 c = rgb_to_ycocg(texelFetch(taa_color, q, 0).rgb);
+                    m1 += c;
+                    m2 += c * c;
+                }
+            vec3 mean = m1 / 9.0;
+            vec3 sd = sqrt(max(m2 / 9.0 - mean * mean, 0.0));
+            // the box always holds this pixel's own colour, so a static image is a fixed point
+            vec3 centre = rgb_to_ycocg(current.rgb);
+            vec3 h = clamp(rgb_to_ycocg(history.rgb), min(mean - taa_sigma * sd, centre), max(mean + taa_sigma * sd, centre));
+            history.rgb = ycocg_to_rgb(h);
+        }
+        result = mix(history, current, taa_alpha);
+    }
+    result = finite_or(result, current);
+    imageStore(dst, p, result);
+    imageStore(history_out, p, result);
+}

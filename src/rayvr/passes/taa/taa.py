@@ -1,0 +1,92 @@
+"""TAA pass: temporal anti-aliasing after Falcor's TAA.
+
+Each frame blends its colour with the history reprojected by the G-buffer's motion vectors
+(optional `motion` input, pixels, this frame - last frame; without it the history is read in
+place), the history clamped first to the 3x3 neighbourhood's colour box in YCoCg (mean +- sigma
+standard deviations) so disoccluded and changed pixels do not ghost. History is per view (texture
+array layers) in two internal rgba32f pins used in turn. TAA asks for sub-pixel camera jitter in
+its reflection; the Renderer packs `halton_jitter(frame_index)` (rayvr.xr.jitter) into the views.
+"""
+from __future__ import annotations
+
+from ...errors import OptionError
+from ...gpu.program_resources import program_resources
+from ...rendergraph.registry import register_pass
+from ...rendergraph.render_pass import Reflection, RenderPass
+from ..dispatch import groups_2d
+
+from ...xr.jitter import halton, halton_jitter  # noqa: F401  (rayvr.passes.taa.halton_jitter)
+
+
+@register_pass
+class TAA(RenderPass):
+    """Temporal anti-aliasing: `color` (+ optional `motion`) -> `dst` (see the module docstring).
+
+    Properties: `alpha` (weight of the new frame, 0..1], `sigma` (colour box half-size in
+    standard deviations), `clamp` (neighbourhood clamping on/off), `format` of `dst`."""
+
+    COLOR, MOTION, DST = "color", "motion", "dst"
+    HISTORY = ("history0", "history1")
+    PROPERTIES = {"alpha": 0.1, "sigma": 1.0, "clamp": True, "format": "rgba16f"}
+    FORMATS = ("rgba16f", "rgba32f")
+
+    def __init__(self, props: dict | None = None, **kwargs):
+        super().__init__(props, **kwargs)
+        self._frames = 0
+
+    def validate_property(self, key, value):
+        value = super().validate_property(key, value)
+        if key == "alpha" and not 0.0 < value <= 1.0:
+            raise OptionError(f"pass {self.name}: property 'alpha' must be in (0, 1] (weight of the new frame), "
+                              f"got {value!r}")
+        if key == "sigma" and value <= 0.0:
+            raise OptionError(f"pass {self.name}: property 'sigma' must be > 0, got {value!r}")
+        if key == "format" and value not in self.FORMATS:
+            raise OptionError(f"pass {self.name}: property 'format' is {value!r}; use one of {', '.join(self.FORMATS)}")
+        return value
+
+    def reset(self) -> None:
+        """Forget the history: the next frame is output as is."""
+        self._frames = 0
+
+    def reflect(self, cd):
+        r = Reflection()
+        r.add_input(self.COLOR, "this frame's colour (linear)")
+        r.add_input(self.MOTION, "motion vectors in pixels (GBuffer.motion)").format("rg16f").optional()
+        r.add_output(self.DST, "anti-aliased colour").format(self.format)
+        for name in self.HISTORY:
+            r.add_internal(name, "history (used in turn)").format("rgba32f")
+        r.request_jitter()   # sub-pixel camera jitter, resolved over frames
+        return r
+
+    def compile(self, ctx, cd):
+        import moderngl
+
+        self._has_motion = self.MOTION in cd.input_formats
+        self._defines = {"TAA_HAS_MOTION": int(self._has_motion), "TAA_DST_FORMAT": self.format}
+        self._prog = self.compute_program(ctx.gl, "taa.comp", self._defines)
+        self._res = program_resources(self._prog)
+        self._groups = groups_2d(cd.size, cd.views)
+        self._sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR), repeat_x=False,
+                                                repeat_y=False))
+        self.reset()
+
+    def defines(self) -> dict:
+        return dict(getattr(self, "_defines", {}))
+
+    def execute(self, ctx, data):
+        read, write = (self.HISTORY[self._frames % 2], self.HISTORY[(self._frames + 1) % 2])
+        values = {"taa_alpha": float(self.alpha), "taa_sigma": float(self.sigma),
+                  "taa_history_valid": self._frames > 0, "taa_clamp": bool(self.clamp)}
+        res = self._res
+        for key, value in values.items():
+            res.set(key, value)
+        res.texture("taa_color", data[self.COLOR])
+        res.texture("taa_history", data[read], sampler=self._sampler)
+        if self._has_motion:   # cd.input_formats names only bound inputs
+            res.texture("taa_motion", data[self.MOTION])
+        res.image("dst", data[self.DST])
+        res.image("history_out", data[write])
+        self._prog.run(*self._groups)
+        res.clear_sampler("taa_history")
+        self._frames += 1
