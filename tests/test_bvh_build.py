@@ -145,5 +145,5 @@ def test_refit_rewrites_one_mesh_as_a_full_repack_would(monkeypatch, bvh_layout)
     fresh = GpuScene(get_context(), s, bvh_layout=bvh_layout)
     for name in ("vertices", "triangles", "blas_nodes", "meshes", "indices"):
         assert gs.buffers[name].read() == fresh.buffers[name].read(), name
-    np.testing.assert_array_equal(gs._mesh_corners, fresh._mesh_corners)
+    np.testing.assert_array_equal(gs.mesh_corners, fresh.mesh_corners)
     gs.release(), fresh.release()

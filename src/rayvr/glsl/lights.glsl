@@ -38,7 +38,7 @@ LightSample no_light_sample() {
 
 #if SCENE_HAS_PUNCTUAL_LIGHTS
 struct PunctualLight {
-    vec4 position_type;    // render-space position, type (uint bits)
+    vec4 position_type;    // anchor-space position (scene.glsl render_shift), type (uint bits)
     vec4 direction_range;  // direction the light points, range (0: infinite)
     vec4 intensity;        // colour * intensity
     vec4 cone;             // cos(outer), 1 / (cos(inner) - cos(outer))
@@ -62,7 +62,7 @@ LightSample eval_punctual_light(uint i, vec3 p) {
         s.weight = L.intensity.rgb;
         return s;
     }
-    vec3 to = L.position_type.xyz - p;
+    vec3 to = (L.position_type.xyz + render_shift()) - p;
     float d2 = max(dot(to, to), 1e-12);
     s.distance = sqrt(d2);
     s.direction = to / s.distance;

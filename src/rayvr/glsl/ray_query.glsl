@@ -303,7 +303,7 @@ uint rq_item(uint link, uint count) {
 
 // The state of one ray's traversal (rq_begin / rq_step): per-invocation globals, so that a kernel
 // can interleave steps with other work (a persistent kernel refilling the lanes whose ray is done).
-vec3 rq_o, rq_d;           // the render-space ray
+vec3 rq_o, rq_d;           // the ray in anchor space (render space - scene_shift)
 float rq_tmax;             // the nearest hit so far, or the ray's end
 bool rq_any_hit;
 RqRay rq_r;                // the ray in the current level's space: rebuilt, not kept, on leaving a BLAS (fewer registers)
@@ -325,11 +325,11 @@ void rq_begin(vec3 o, vec3 d, float tmax_in, bool any_hit) {
     rq_hit.primitive = RQ_NO_INSTANCE;
     rq_found = false;
     rq_done = instance_count() == 0u;
-    rq_o = o;
+    rq_o = o - render_shift();   // the TLAS and the instance transforms are in anchor space
     rq_d = d;
     rq_any_hit = any_hit;
     rq_tmax = min(tmax_in, 1e29);
-    rq_r = rq_make_ray(o, d);
+    rq_r = rq_make_ray(rq_o, d);
     rq_instance = RQ_NO_INSTANCE;
     rq_blas_base = -1;
     rq_sp = 0;

@@ -1,7 +1,9 @@
 // The GPU scene (rayvr.scene.GpuScene): buffers, vertex pulling for raster, surfaces and materials.
 //
-// Spaces: vertices are object space; InstanceData holds object -> render space (world minus the
-// frame origin) as three rows of a 3x4 matrix, and the inverse. All results are render space.
+// Spaces: vertices are object space; InstanceData holds object -> anchor space (world minus the
+// anchor, where the instances were last uploaded) as three rows of a 3x4 matrix, and the
+// inverse; render space (world minus the frame's origin) = anchor space + scene_shift
+// (rayvr/scene/gpu_frame.py). All results are render space.
 //
 // Raster: GpuScene.draw(program, instances_per_draw) issues ONE glMultiDrawArraysIndirect over
 // all instances, with no index buffer: command i draws instance i's mesh as 3*T vertices with
@@ -79,6 +81,7 @@ layout(std430, binding = RAYVR_INDEX_SSBO) readonly buffer SceneIndices { uint s
 layout(std430, binding = RAYVR_MESH_SSBO) readonly buffer SceneMeshes { MeshData scene_meshes[]; };
 layout(std430, binding = RAYVR_INSTANCE_SSBO) readonly buffer SceneInstances {
     uvec4 scene_info;      // x: instance count, y: material count
+    vec4 scene_shift;      // xyz: anchor - origin, render space = anchor space + shift
     InstanceData scene_instances[];
 };
 layout(std430, binding = RAYVR_MATERIAL_SSBO) readonly buffer SceneMaterials { MaterialData scene_materials[]; };
@@ -94,10 +97,12 @@ layout(binding = RAYVR_SCENE_TEXTURE_UNIT) uniform sampler2DArray scene_textures
 
 uint instance_count() { return scene_info.x; }
 
+vec3 render_shift() { return scene_shift.xyz; }
+
 vec3 instance_point_to_render(uint i, vec3 p) {
     vec4 q = vec4(p, 1.0);
     return vec3(dot(scene_instances[i].to_render[0], q), dot(scene_instances[i].to_render[1], q),
-                dot(scene_instances[i].to_render[2], q));
+                dot(scene_instances[i].to_render[2], q)) + scene_shift.xyz;
 }
 
 vec3 instance_vector_to_render(uint i, vec3 v) {

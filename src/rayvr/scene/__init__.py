@@ -1,6 +1,6 @@
 """Scenes: the CPU model, built-in scenes, glTF loading, the GPU scene and its BVH."""
 from ..materials.material import AlphaMode, Material, MaterialTable, TextureRef
-from .model import FEATURES, Camera, Instance, Light, LightType, Mesh, Scene, Texture
+from .model import FEATURES, Camera, Instance, InstanceTable, Light, LightType, Mesh, Scene, Texture
 from .gpu_scene import GpuScene
 
 
@@ -11,5 +11,5 @@ def load_scene(path) -> Scene:
     return load_gltf(path)
 
 
-__all__ = ["Scene", "Mesh", "Instance", "Light", "LightType", "Camera", "Texture", "Material",
+__all__ = ["Scene", "Mesh", "Instance", "InstanceTable", "Light", "LightType", "Camera", "Texture", "Material",
            "MaterialTable", "AlphaMode", "TextureRef", "FEATURES", "GpuScene", "load_scene"]

@@ -2,8 +2,10 @@
 material/light tables and scene textures, and the one-call raster draw of every instance.
 
 Layouts are declared in `glsl/scene.glsl`, `glsl/ray_query.glsl` and `glsl/lights.glsl`.
-Per frame, `update(origin)` rewrites only what depends on the origin or on edits: instance
-transforms (render space), the TLAS over instances, punctual lights, and materials when
+GpuScene builds what a scene's lifetime needs once (meshes, BLASes, textures, materials, the
+emissive table); its `frame` (`gpu_frame.SceneFrame`) owns what changes per frame (instances and
+the TLAS, punctual lights, the render-space shift). `update(origin)` uploads only what changed:
+a head that moves rewrites the 32-byte shift, edits rebuild their part, materials re-upload when
 `scene.materials.version` moved. `bvh_layout` picks the node layout of both BVH levels: "bvh2"
 (bvh.py's 64 B BVH2 nodes), "bvh4" (bvh_wide.py's 112 B BVH4 nodes, collapsed from the same BVH2
 builds; the default: fastest on the H100) or "bvh4q" (the same BVH4 with 8-bit quantised child
@@ -21,10 +23,10 @@ from ..gpu.bindings import BINDINGS
 from ..materials.material import TEXTURE_SLOTS, Material
 from . import bvh as bvh_mod
 from . import bvh_wide
+from .gpu_frame import SceneFrame
 from .model import FEATURES, Scene
 
 MATERIAL_FLOATS = 64          # 256 B, see MaterialData
-INSTANCE_FLOATS = 28          # 6 vec4 + uvec4
 MAX_TEXTURE_SIZE = 2048
 GPU_BVH_MIN = 200_000         # 'auto' builds meshes this big on the GPU (hardware drivers only)
 BVH_LAYOUTS = bvh_wide.LAYOUTS
@@ -37,6 +39,15 @@ _LAYOUT_DEFINES = {"bvh2": {"RQ_BVH_WIDTH": 2, "RQ_BVH_QUANTIZED": 0},
 def _luminance(rgb) -> np.ndarray:
     rgb = np.asarray(rgb, dtype=np.float64)
     return rgb[..., 0] * 0.2126 + rgb[..., 1] * 0.7152 + rgb[..., 2] * 0.0722
+
+
+def scene_scale(scene: Scene) -> float:
+    """The diagonal of the scene's bounds (1.0 for an empty scene), clamped to a sane range."""
+    if not scene.instances:
+        return 1.0
+    lo, hi = np.asarray(scene.bounds(), dtype=np.float64)
+    extent = float(np.linalg.norm(hi - lo))
+    return float(np.clip(extent, 1e-6, 1e12)) if np.isfinite(extent) and extent > 0 else 1.0
 
 
 def pack_materials(materials, texture_layers: dict[int, int] | None = None) -> np.ndarray:
@@ -79,16 +90,21 @@ class GpuScene:
         self.timings: dict[str, float] = {}
         self.buffers: dict[str, object] = {}
         self.version = 0   # grows when update() uploads changed instances, lights or materials
-        self._last_lights = None
+        self._scale = None
         self._build_meshes(bvh_method, progress)
         self._build_textures()
         self._material_version = None
         self._upload_materials()
         self._build_emissive_table()
         self._draws: dict[tuple, tuple | None] = {}   # (program id, instances per draw) -> (vao, commands, count, ids)
+        self.frame = SceneFrame(self)
         self.update(np.zeros(3))
 
     # ---- static data ------------------------------------------------------------------------
+    def upload(self, name: str, data) -> None:
+        """Write `data` into buffer `name` (made, or remade when the size changes)."""
+        self._buffer(name, data)
+
     def _buffer(self, name: str, data) -> None:
         data = np.ascontiguousarray(data)
         if data.nbytes == 0:
@@ -129,8 +145,8 @@ class GpuScene:
         idx = np.empty((t_total, 3), np.uint32)
         tri_mats = np.empty(t_total, np.uint32)
         slots = np.zeros((t_total, 3, 4), np.float32)   # a BVH slot per triangle (empty meshes have none)
-        nodes = np.empty((first_n[-1], self._node_floats), np.float32)
-        self._mesh_corners = np.zeros((max(len(s.meshes), 1), 8, 4))
+        nodes = np.empty((first_n[-1], self.node_floats), np.float32)
+        self.mesh_corners = np.zeros((max(len(s.meshes), 1), 8, 4))
         for k, mesh in enumerate(s.meshes):
             v, t, n = (slice(f[k], f[k + 1]) for f in (first_v, first_t, first_n))
             self._pack_mesh(k, verts[v], slots[t], nodes[n])
@@ -138,14 +154,13 @@ class GpuScene:
                 tangents[v] = mesh.tangents
             idx[t] = mesh.indices + np.uint32(first_v[k])
             tri_mats[t] = mesh.material_ids
-        self._mesh_live = np.array([b is not None for b in self.blas] or [False])
-        self._last_instances = None
+        self.mesh_live = np.array([b is not None for b in self.blas] or [False])
         any_mesh, any_bvh = bool(s.meshes), len(nodes) > 0
         self._buffer("vertices", verts if any_mesh else np.zeros((1, 8), np.float32))
         self._buffer("indices", idx if any_mesh else np.zeros(3, np.uint32))
         self._buffer("triangle_materials", tri_mats if any_mesh else np.zeros(1, np.uint32))
         self._buffer("triangles", slots if any_bvh else np.zeros((1, 3, 4), np.float32))
-        self._buffer("blas_nodes", nodes if any_bvh else np.zeros((1, self._node_floats), np.float32))
+        self._buffer("blas_nodes", nodes if any_bvh else np.zeros((1, self.node_floats), np.float32))
         self._buffer("meshes", np.stack([first_n[:-1], first_t[:-1], first_t[:-1], np.diff(first_t)],
                                         axis=1).astype(np.uint32).reshape(-1, 4))
         if normal_maps:
@@ -168,7 +183,7 @@ class GpuScene:
         t_base = np.uint32(self._first_t[k])
         nodes[:] = self._blas_gpu[k].relinked(lambda slot: slot + t_base, int(self._first_n[k]))
         lo, hi = b.bounds()
-        self._mesh_corners[k] = [[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+        self.mesh_corners[k] = [[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
 
     def _build_blas(self, method: str, progress) -> list:
         """One BLAS per mesh; several meshes build at once on a thread pool (numpy releases the
@@ -290,81 +305,27 @@ class GpuScene:
 
     # ---- per frame --------------------------------------------------------------------------
     def update(self, origin=None) -> None:
-        """Move to this frame's render-space origin (float64 world point): instance transforms,
-        TLAS and punctual lights; re-upload materials when `materials.version` changed. `version`
-        grows whenever something uploaded differs from the last frame's."""
+        """Move to this frame's render-space origin (float64 world point) and upload what changed
+        since the last frame: materials (`materials.version`), instances and the TLAS, lights
+        (see gpu_frame.SceneFrame). `version` grows whenever something uploaded differs from the
+        last frame's; a moving origin alone does not count (render space follows it)."""
         t0 = time.perf_counter()
-        self.origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64)
         if self.scene.materials.version != self._material_version:
             self._upload_materials()
             self.version += 1
-        s = self.scene
-        n = len(s.instances)
-        mats = np.array([inst.transform for inst in s.instances], np.float64).reshape(n, 4, 4)
-        mesh_ids = np.array([inst.mesh for inst in s.instances], np.int64)
-        if not (self._last_instances is not None and np.array_equal(self.origin, self._last_origin)
-                and np.array_equal(mats, self._last_instances[0]) and np.array_equal(mesh_ids, self._last_instances[1])):
-            self._upload_instances(mats, mesh_ids)
-            self._last_origin, self._last_instances = self.origin.copy(), (mats, mesh_ids)
+        if self.frame.update(origin):
             self.version += 1
-        self._upload_lights()
         self.timings["update_ms"] = (time.perf_counter() - t0) * 1e3
 
-    def _upload_instances(self, mats: np.ndarray, mesh_ids: np.ndarray) -> None:
-        """Render-space instance matrices and the TLAS over their boxes (no per-vertex work)."""
-        n = len(mats)
-        m = mats.copy()
-        m[:, :3, 3] -= self.origin
-        bad = np.flatnonzero(~(np.abs(np.linalg.det(m[:, :3, :3])) > 1e-300) | ~np.isfinite(m).all(axis=(1, 2)))
-        if len(bad):
-            name = self.scene.instances[bad[0]].name
-            raise SceneError(f"instance '{name}'.transform: singular or non-finite matrix; give it a non-zero scale")
-        rows = np.zeros((max(n, 1), INSTANCE_FLOATS), np.float32)   # one placeholder row when empty
-        rows[:n, 0:12] = m[:, :3].reshape(n, 12)
-        rows[:n, 12:24] = np.linalg.inv(m)[:, :3].reshape(n, 12)
-        rows[:n].view(np.uint32)[:, 24] = mesh_ids
-        w = np.einsum("nij,nkj->nki", m[:, :3], self._mesh_corners[mesh_ids])   # each mesh box's corners
-        live = np.flatnonzero(self._mesh_live[mesh_ids])
-        header = np.zeros(4, np.uint32)
-        header[0] = n if len(live) else 0     # 0: no geometry, traversal returns at once
-        header[1] = len(self.scene.materials)
-        self._buffer("instances", np.concatenate([header.view(np.float32), rows.reshape(-1)]))
-        self._build_tlas(live, w.min(axis=1), w.max(axis=1))
+    @property
+    def origin(self) -> np.ndarray:
+        """The render-space origin of the last update (float64 world point)."""
+        return self.frame.origin
 
     @property
-    def _node_floats(self) -> int:
+    def node_floats(self) -> int:
+        """Floats per BVH node of this scene's layout."""
         return _NODE_FLOATS[self.bvh_layout]
-
-    def _build_tlas(self, live: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
-        if not len(live):
-            self._buffer("tlas_nodes", np.zeros((1, self._node_floats), np.float32))
-            return
-        pad = 1e-6 * np.maximum(np.abs(lo[live]), np.abs(hi[live])).max(axis=1, keepdims=True)
-        t = bvh_mod.build(lo[live] - pad, hi[live] + pad, method="sah" if len(live) < 4096 else "lbvh",
-                          leaf_size=1, progress=False)
-        nodes = bvh_wide.collapse_to(t, self.bvh_layout).relinked(lambda slot: live[t.order[slot]])
-        self._buffer("tlas_nodes", nodes)
-
-    def _upload_lights(self) -> None:
-        lights = self.scene.lights
-        if not lights:
-            return
-        out = np.zeros((1 + 4 * len(lights), 4), np.float32)
-        out.view(np.uint32)[0, 0] = len(lights)
-        for k, L in enumerate(lights):
-            r = 1 + 4 * k
-            out[r, 0:3] = L.position - self.origin
-            out[r].view(np.uint32)[3] = L.type
-            out[r + 1, 0:3] = L.direction
-            out[r + 1, 3] = L.range
-            out[r + 2, 0:3] = np.asarray(L.color) * L.intensity
-            cos_outer, cos_inner = np.cos(L.outer_cone_angle), np.cos(L.inner_cone_angle)
-            out[r + 3, 0] = cos_outer
-            out[r + 3, 1] = 1.0 / max(cos_inner - cos_outer, 1e-4)
-        if self._last_lights is None or not np.array_equal(out, self._last_lights):
-            self._buffer("punctual_lights", out)
-            self._last_lights = out
-            self.version += 1
 
     # ---- binding and drawing ----------------------------------------------------------------
     _BINDING = {"vertices": "RAYVR_VERTEX_SSBO", "indices": "RAYVR_INDEX_SSBO",
@@ -391,12 +352,11 @@ class GpuScene:
 
     @property
     def scale(self) -> float:
-        """The diagonal of the scene's bounds (1.0 for an empty scene), clamped to a sane range."""
-        if not self.scene.instances:
-            return 1.0
-        lo, hi = np.asarray(self.scene.bounds(), dtype=np.float64)
-        extent = float(np.linalg.norm(hi - lo))
-        return float(np.clip(extent, 1e-6, 1e12)) if np.isfinite(extent) and extent > 0 else 1.0
+        """The diagonal of the scene's bounds when the GpuScene was built (1.0 for an empty scene),
+        clamped to a sane range: what SCENE_SCALE compiles into the shaders."""
+        if self._scale is None:
+            self._scale = scene_scale(self.scene)
+        return self._scale
 
     def draw(self, program, instances_per_draw: int = 1, mode=None) -> None:
         """Draw every instance in one glMultiDrawArraysIndirect (see scene.glsl): the program's
@@ -446,13 +406,13 @@ class GpuScene:
         v_base, t_base, n_base = (int(f[mesh]) for f in (self._first_v, self._first_t, self._first_n))
         verts = np.zeros((len(pos), 8), np.float32)
         slots = np.zeros((m.triangle_count, 3, 4), np.float32)
-        nodes = np.empty((0 if b is None else self._blas_gpu[mesh].node_count, self._node_floats), np.float32)
+        nodes = np.empty((0 if b is None else self._blas_gpu[mesh].node_count, self.node_floats), np.float32)
         self._pack_mesh(mesh, verts, slots, nodes)
         for name, data, offset in (("vertices", verts, v_base * 32), ("triangles", slots, t_base * 48),
-                                   ("blas_nodes", nodes, n_base * nodes.itemsize * self._node_floats)):
+                                   ("blas_nodes", nodes, n_base * nodes.itemsize * self.node_floats)):
             if len(data):
                 self.buffers[name].write(data, offset=offset)
-        self._last_instances = None
+        self.frame.invalidate()
 
     # ---- report -----------------------------------------------------------------------------
     @property

@@ -66,16 +66,91 @@ def vertex_normals(positions: np.ndarray, indices: np.ndarray) -> np.ndarray:
     return out.astype(np.float32)
 
 
-@dataclasses.dataclass
 class Instance:
-    """One placement of a mesh: float64 4x4 object-to-world transform."""
+    """One placement of a mesh: float64 4x4 object-to-world transform. An instance of a scene is
+    a view of its row in the scene's InstanceTable: `inst.transform[:3, 3] = p` and
+    `inst.transform = m` both move it."""
 
-    mesh: int
-    transform: np.ndarray = dataclasses.field(default_factory=lambda: np.eye(4))
-    name: str = ""
+    __slots__ = ("_table", "_index", "_mesh", "_transform", "name")
 
-    def __post_init__(self):
-        self.transform = np.asarray(self.transform, dtype=np.float64).reshape(4, 4)
+    def __init__(self, mesh: int, transform=None, name: str = ""):
+        self._table, self._index = None, -1
+        self._mesh = int(mesh)
+        self._transform = np.eye(4) if transform is None else np.asarray(transform, dtype=np.float64).reshape(4, 4).copy()
+        self.name = name
+
+    @property
+    def mesh(self) -> int:
+        return int(self._table.meshes[self._index]) if self._table is not None else self._mesh
+
+    @mesh.setter
+    def mesh(self, value: int) -> None:
+        if self._table is not None:
+            self._table.meshes[self._index] = int(value)
+        else:
+            self._mesh = int(value)
+
+    @property
+    def transform(self) -> np.ndarray:
+        """The (4, 4) float64 object-to-world matrix (a view: writing into it moves the instance)."""
+        return self._table.transforms[self._index] if self._table is not None else self._transform
+
+    @transform.setter
+    def transform(self, value) -> None:
+        m = np.asarray(value, dtype=np.float64).reshape(4, 4)
+        if self._table is not None:
+            self._table.transforms[self._index] = m
+        else:
+            self._transform = m.copy()
+
+    def __repr__(self) -> str:
+        return f"Instance(mesh={self.mesh}, name={self.name!r})"
+
+
+class InstanceTable:
+    """A scene's instances: every transform in one (n, 4, 4) float64 array and every mesh index
+    in one (n,) array, so per-frame work reads them without a loop over instances. Indexing and
+    iteration give `Instance` views of the rows."""
+
+    def __init__(self):
+        self._transforms = np.zeros((0, 4, 4))
+        self._meshes = np.zeros(0, np.int64)
+        self._items: list[Instance] = []
+
+    @property
+    def transforms(self) -> np.ndarray:
+        """(n, 4, 4) float64 object-to-world matrices (live: writes move the instances)."""
+        return self._transforms[:len(self._items)]
+
+    @property
+    def meshes(self) -> np.ndarray:
+        """(n,) mesh index per instance (live)."""
+        return self._meshes[:len(self._items)]
+
+    def append(self, inst: Instance) -> None:
+        """Add `inst`, which becomes a view of its new row."""
+        n = len(self._items)
+        if n == len(self._transforms):   # grow by doubling: appends stay O(1) amortised
+            cap = max(8, 2 * n)
+            t, m = np.zeros((cap, 4, 4)), np.zeros(cap, np.int64)
+            t[:n], m[:n] = self._transforms[:n], self._meshes[:n]
+            self._transforms, self._meshes = t, m
+        self._transforms[n] = inst.transform
+        self._meshes[n] = inst.mesh
+        inst._table, inst._index = self, n
+        self._items.append(inst)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __getitem__(self, i) -> Instance:
+        return self._items[i]
+
+    def __iter__(self):
+        return iter(self._items)
+
+    def __bool__(self) -> bool:
+        return bool(self._items)
 
 
 class LightType:
@@ -155,7 +230,7 @@ class Scene:
         self.name = name
         self.path = path
         self.meshes: list[Mesh] = []
-        self.instances: list[Instance] = []
+        self.instances = InstanceTable()
         self.materials = MaterialTable()
         self.textures: list[Texture] = []
         self.lights: list[Light] = []
@@ -199,16 +274,21 @@ class Scene:
         """World-space AABB over all instances: [[min xyz], [max xyz]] float64."""
         lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
         mesh_boxes = {}   # once per mesh, not per instance
-        for inst in self.instances:
-            if inst.mesh not in mesh_boxes:
-                p = self.meshes[inst.mesh].positions
-                mesh_boxes[inst.mesh] = np.stack([p.min(axis=0), p.max(axis=0)]).astype(np.float64) if len(p) else None
-            box = mesh_boxes[inst.mesh]
-            if box is None:
-                continue
-            corners = np.array([[x, y, z] for x in box[:, 0] for y in box[:, 1] for z in box[:, 2]])
-            w = corners @ inst.transform[:3, :3].T + inst.transform[:3, 3]
-            lo, hi = np.minimum(lo, w.min(0)), np.maximum(hi, w.max(0))
+        meshes = self.instances.meshes
+        if not len(meshes):
+            return np.zeros((2, 3))
+        for k in np.unique(meshes):   # once per mesh, not per instance
+            p = self.meshes[k].positions
+            if len(p):
+                mesh_boxes[int(k)] = np.stack([p.min(axis=0), p.max(axis=0)]).astype(np.float64)
+        live = np.array([int(k) in mesh_boxes for k in meshes])
+        if not live.any():
+            return np.zeros((2, 3))
+        boxes = np.stack([mesh_boxes[int(k)] for k in meshes[live]])           # (n, 2, 3)
+        corners = np.stack([boxes[:, [i, j, k], [0, 1, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)], axis=1)
+        t = self.instances.transforms[live]
+        w = np.einsum("nij,nkj->nki", t[:, :3, :3], corners) + t[:, None, :3, 3]
+        lo, hi = np.minimum(lo, w.min(axis=(0, 1))), np.maximum(hi, w.max(axis=(0, 1)))
         if not np.isfinite(lo).all():
             return np.zeros((2, 3))
         return np.stack([lo, hi])
@@ -216,8 +296,8 @@ class Scene:
     def used_materials(self) -> set[int]:
         """Indices of the materials that some instanced mesh's triangles use."""
         used = set()
-        for m in {i.mesh for i in self.instances}:
-            used.update(np.unique(self.meshes[m].material_ids).tolist())
+        for m in np.unique(self.instances.meshes):
+            used.update(np.unique(self.meshes[int(m)].material_ids).tolist())
         return used
 
     def effects_used(self) -> set[Effect]:
@@ -241,7 +321,7 @@ class Scene:
             f.add("SCENE_HAS_ALPHA_MASK")
         if any(m.transmission > 0 for m in mats):
             f.add("SCENE_HAS_TRANSMISSION")
-        if len(self.instances) > len({i.mesh for i in self.instances}):
+        if len(self.instances) > len(np.unique(self.instances.meshes)):
             f.add("SCENE_HAS_INSTANCING")
         return f
 

@@ -1,0 +1,55 @@
+"""What a compiled graph allocates, it frees: passes' own GPU objects (RenderPass.own/release),
+resources and timers, on recompile and on close."""
+import rayvr as rv
+from rayvr.gpu.objects import live_gl_objects
+from rayvr.renderer import default_views
+from rayvr.scene import GpuScene, builtin
+
+
+def hybrid_everything():
+    """A graph whose passes all make objects of their own in compile(): TAA (a sampler), auto
+    exposure (two buffers), the raster G-buffer (a framebuffer and a depth array), Blit (a sampler)."""
+    g = rv.graphs.hybrid_taa(auto_exposure=True, gbuffer="raster")
+    g.add_pass(rv.passes.Blit({"format": "rgba16f"}), "Copy")
+    g.add_edge("TAA.dst", "Copy.src")
+    g.mark_output("Copy.dst")
+    return g
+
+
+def test_two_hundred_recompiles_keep_the_gl_object_count_flat(gpu):
+    scene = builtin.cornell_box()
+    for m in scene.materials:
+        m.effect = rv.Effect.REFLECTIONS
+    gpu_scene = GpuScene(gpu, scene)
+    views = default_views(scene, 2, (16, 16))
+    graph = hybrid_everything()
+    counts = []
+    try:
+        for i in range(200):
+            compiled = graph.compile(scene=scene, size=(16, 16), views=2, gpu=gpu, gpu_scene=gpu_scene)
+            if i % 50 == 0:   # a frame, so that per-frame state (the G-buffer's framebuffer) exists
+                gpu_scene.update(views.origin())
+                buf = gpu.gl.buffer(views.pack(views.origin()))
+                compiled.execute(compiled.make_context(scene=gpu_scene, views_buffer=buf, view_set=views))
+                gpu.gl.finish()
+                buf.release()
+            compiled.release()
+            if i in (0, 1, 199):
+                counts.append(live_gl_objects())
+    finally:
+        gpu_scene.release()
+    # programs are cached per source and defines: compiled once, kept; everything else comes back
+    assert counts[0] == counts[1] == counts[2], counts
+
+
+def test_renderer_close_frees_what_it_allocated(gpu):
+    scene = builtin.cornell_box()
+    before = live_gl_objects()
+    with rv.Renderer(scene, hybrid_everything(), views=2, size=(16, 16), gpu=gpu) as r:
+        r.render()
+        during = live_gl_objects()
+    after = live_gl_objects()
+    assert during["textures"] > before["textures"] and during["buffers"] > before["buffers"]
+    # programs are cached per source and defines; timer queries are pooled for the next graph
+    leaked = {k: after[k] - before[k] for k in after if k not in ("programs", "queries") and after[k] != before[k]}
+    assert not leaked, leaked
