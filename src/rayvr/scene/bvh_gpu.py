@@ -8,8 +8,7 @@ also gathers the BVH-ordered triangles and applies Kensler's tree rotations wher
 the SAH cost (`rotations` rounds of that pass; 0: the plain Karras tree of the CPU LBVH) -> a
 scan of the nodes that stay internal (more than `leaf_size` triangles; smaller subtrees become
 leaves, as the CPU LBVH cuts them) -> the 64-byte nodes at their compacted indices.
-Measured on the H100 (upload + kernels + glFinish): 1.04M triangles 16.5 ms, 2.7M 40.6 ms, SAH
-cost ~4-8% below the CPU LBVH (1.16x the binned-SAH reference on MetalRoughSpheres).
+Build times and SAH costs against the CPU builders: benchmarks/RESULTS.md ("bvh").
 A build's result stays in the builder's GPU buffers (`GpuBvh`): `to_bvh()` reads it back into a
 `bvh.Bvh` (what `build_gpu` returns and GpuScene keeps, for refit), `copy_into()` places it in
 larger buffers without a read-back.
@@ -20,8 +19,8 @@ counter numbering the next level's nodes, siblings adjacent), each BVH4 node is 
 internal child of largest area is opened while it has fewer than 4 children (bvh4_collapse.comp).
 Leaves keep the builder's (<= LEAF_SIZE slots, so one leaf item each). `build_gpu_bvh4` returns
 it as a `bvh_wide.WideBvh` over the read-back BVH2 (what GpuScene uploads and refits); the CPU's
-`bvh_wide.collapse` is SAH-optimal instead (SAH cost 1-2% lower on test meshes), but numpy
-(~0.35 s per 1M triangles; llvmpipe, 200k triangles: GPU collapse 8 ms, CPU 55 ms).
+`bvh_wide.collapse` is SAH-optimal instead (SAH cost 1-2% lower on test meshes), but numpy and
+several times slower (benchmarks/RESULTS.md).
 """
 from __future__ import annotations
 
