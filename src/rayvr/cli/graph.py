@@ -25,6 +25,8 @@ def register(sub) -> None:
 
 
 def run_show(args) -> int:
+    """Load the graph (and scene), compile it, print the report or DOT; the picture is drawn
+    last, so a command that fails writes nothing."""
     from ..fileio import check_writable
     from ..rendergraph.graph import RenderGraph
     from ..rendergraph.picture import picture_format
@@ -34,23 +36,24 @@ def run_show(args) -> int:
         picture_format(args.png)
         check_writable(args.png, "--png")
     graph = RenderGraph.load(args.file)
+    if args.dot:
+        text = graph.to_dot()
+    else:
+        scene = gpu_scene = None
+        extra = []
+        if args.scene:
+            from ..gpu import get_context
+            from ..scene import GpuScene
+
+            scene = load_scene_arg(args.scene)
+            gpu_scene = GpuScene(get_context(), scene)
+            extra.append(gpu_scene.report())
+        report = graph.compile(scene=scene, size=size, views=args.views, gpu_scene=gpu_scene,
+                               extra_report=extra).report()
+        text = (json.dumps(report.as_dict(), indent=2, default=str) if args.json else str(report)) + "\n"
     if args.png:
         graph.save_picture(args.png)
-    if args.dot:
-        print(graph.to_dot(), end="")
-        return 0
-    scene = gpu_scene = None
-    extra = []
-    if args.scene:
-        from ..gpu import get_context
-        from ..scene import GpuScene
-
-        scene = load_scene_arg(args.scene)
-        gpu_scene = GpuScene(get_context(), scene)
-        extra.append(gpu_scene.report())
-    report = graph.compile(scene=scene, size=size, views=args.views, gpu_scene=gpu_scene,
-                           extra_report=extra).report()
-    print(json.dumps(report.as_dict(), indent=2, default=str) if args.json else report)
-    if args.png:
+    print(text, end="")
+    if args.png and not args.dot:
         print(f"picture: {args.png}")
     return 0

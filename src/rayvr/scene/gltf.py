@@ -228,7 +228,7 @@ class _Loader:
         self._nodes()
         self.scene.warnings = [f"{self.r.path}: {w}" for w in dict.fromkeys(self.warnings)]
         for w in self.scene.warnings:
-            warnings.warn(w, SceneWarning, stacklevel=3)
+            warnings.warn(w, SceneWarning, stacklevel=4)   # the caller of rv.load_scene
         return self.scene
 
     # ---- textures and materials ------------------------------------------------------------
