@@ -31,8 +31,8 @@ class PinFinding:
     config: str                 # 'hybrid RASTER', 'path_traced', ...
     pass_name: str
     pin: str
-    values: int                 # components checked (texels x channels x views), summed over frames
-    nonfinite: int              # of them NaN or +-Inf, summed over frames
+    values: int                 # components checked per frame (texels x channels x views)
+    nonfinite: int              # of them NaN or +-Inf, in the worst frame
     mask: np.ndarray | None = None   # (views, h, w) bool, rows top-down, where any frame had one
     source: str = "readback"    # or "gpu counters"
 
@@ -89,9 +89,8 @@ def nonfinite_by_pass(compiled, config: str, findings: dict):
                 else:
                     values, count, mask = _read_mask(tex, dtype)
                     source = "readback"
-                f = findings.setdefault((name, pin), PinFinding(config, name, pin, 0, 0, source=source))
-                f.values += values
-                f.nonfinite += count
+                f = findings.setdefault((name, pin), PinFinding(config, name, pin, values, 0, source=source))
+                f.nonfinite = max(f.nonfinite, count)
                 if count:
                     f.mask = mask if f.mask is None else (f.mask | mask)
         return step
