@@ -61,6 +61,8 @@ MISUSES = [
     (["render", "--views", "2.5"], ["--views 2.5", "expected an integer"]),
     (["render", "--size", "0x10"], ["--size 0x10", "WIDTHxHEIGHT"]),
     (["render", "--size", "9000x10"], ["--size 9000x10", "at most 8192"]),
+    (["render", "--size", "4096x4096", "--views", "64"], ["--size 4096x4096 with --views 64", "fewer views"]),
+    (["tune", "--spp", "1,100000"], ["--spp '100000'", "from 1 to 1024"]),
     (["render", "--exposure", "nan"], ["--exposure nan", "-64 to 64"]),
     (["render", "--exposure", "100"], ["--exposure 100", "-64 to 64"]),
     (["render", "--view-cone", "0"], ["--view-cone 0", "> 0 and < 180 degrees"]),

@@ -36,7 +36,7 @@ def run(args) -> int:
     from ..check import run_check
     from ..fileio import atomic_group, check_writable, write_image
 
-    size = parse_size(args.size)
+    size = parse_size(args.size, views=args.views)
     masks = Path(args.masks) if args.masks else None
     if masks is not None:
         check_writable(masks, "--masks", folder=True)

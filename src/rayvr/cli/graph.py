@@ -31,7 +31,7 @@ def run_show(args) -> int:
     from ..rendergraph.graph import RenderGraph
     from ..rendergraph.picture import picture_format
 
-    size = parse_size(args.size)
+    size = parse_size(args.size, views=args.views)
     if args.png:
         picture_format(args.png)
         check_writable(args.png, "--png")

@@ -12,6 +12,7 @@ from ..errors import OptionError, SceneWarning, did_you_mean
 from ..gpu.bindings import BINDINGS
 
 MAX_SIDE = 8192
+MAX_PIXELS = 1 << 28   # views x width x height: 64 views of 2048x2048; G-buffers take ~100 bytes a pixel
 MAX_VIEWS = BINDINGS["RAYVR_MAX_VIEWS"]   # the pixel lists pack the view index in 6 bits
 
 
@@ -66,14 +67,17 @@ def views_count(option: str = "--views"):
     return integer(option, 1, MAX_VIEWS)
 
 
-def parse_size(text: str, option: str = "--size") -> tuple[int, int]:
-    """'WIDTHxHEIGHT' in pixels, each side 1..8192."""
+def parse_size(text: str, option: str = "--size", views: int = 1) -> tuple[int, int]:
+    """'WIDTHxHEIGHT' in pixels, each side 1..8192, and `views` of them at most MAX_PIXELS."""
     m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", str(text))
     if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
         raise OptionError(f"{option} {text}: expected WIDTHxHEIGHT in pixels, e.g. {option} 1440x1600")
     w, h = int(m.group(1)), int(m.group(2))
     if w > MAX_SIDE or h > MAX_SIDE:
         raise OptionError(f"{option} {text}: at most {MAX_SIDE} pixels a side; use a smaller size")
+    if views * w * h > MAX_PIXELS:
+        raise OptionError(f"{option} {text} with --views {views}: {views * w * h} pixels in all, more than the "
+                          f"{MAX_PIXELS} rayvr allocates frame buffers for; use fewer views or a smaller size")
     return w, h
 
 

@@ -149,7 +149,7 @@ def run(args) -> int:
     from ..passes.tonemap import OPERATORS
     from ..renderer import Renderer, default_views
 
-    size = parse_size(args.size)
+    size = parse_size(args.size, views=args.views)
     if args.tonemap.lower() not in OPERATORS:
         raise OptionError(f"--tonemap {args.tonemap}: use one of {', '.join(OPERATORS)}")
     auto_exposure, exposure = parse_exposure(args.exposure)

@@ -58,13 +58,13 @@ def parse_list(text: str, option: str, parse) -> list:
 
 
 def parse_spp(text: str) -> int:
-    """One --spp item: an integer >= 1."""
+    """One --spp item: an integer from 1 to 1024."""
     try:
         n = int(text)
     except ValueError:
         n = 0
-    if n < 1:
-        raise OptionError(f"--spp {text!r}: samples per pixel must be integers >= 1, e.g. --spp 1,4,16")
+    if not 1 <= n <= 1024:
+        raise OptionError(f"--spp {text!r}: samples per pixel must be integers from 1 to 1024, e.g. --spp 1,4,16")
     return n
 
 
@@ -74,7 +74,7 @@ def check(args) -> tuple:
     from ..materials.effect import Effect
     from .options import parse_size
 
-    size = parse_size(args.size)
+    size = parse_size(args.size, views=args.views)
     levels = parse_list(args.levels, "--levels", lambda s: Effect.parse(s, where="--levels"))
     spp = parse_list(args.spp, "--spp", parse_spp)
     table_metrics = parse_list(args.metrics, "--metrics", str.lower)
