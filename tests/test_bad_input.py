@@ -298,7 +298,8 @@ GLTF_CASES = [
     ("sparse indices not increasing", _sparse([2, 1]), ["sparse", "indices", "must increase"]),
     ("sparse index out of range", _sparse([1, 7]), ["sparse", "indices", "index 7 out of range for 4"]),
     ("sparse count above count", _sparse([0, 1, 2, 3, 4]), ["accessors[0].sparse.count", "more elements"]),
-    ("texture source out of range", _merge({"textures": [{"source": 3}]}), ["textures[0].source", "image 3 out of range"]),
+    ("texture source out of range", _merge({"textures": [{"source": 3}]}),
+     ["textures[0].source", "image 3 out of range"]),
     ("material texture out of range", _set(("materials", 0, "pbrMetallicRoughness", "baseColorTexture"), {"index": 5}),
      ["baseColorTexture.index", "texture 5 out of range"]),
     ("image undecodable", _merge({"images": [{"uri": "data:image/png;base64,bm90IGEgcG5n"}],
@@ -412,7 +413,8 @@ def test_broken_glb_through_tune_and_graph_show(tmp_path, capsys, monkeypatch, c
     rv.graphs.hybrid().save(graphs / "g.json")
     argv = (["tune", str(path), "--quiet", "--size", "8x8", "--report", str(tmp_path / "out" / "report"),
              "--cache", str(tmp_path / "out" / "cache")] if command == "tune"
-            else ["graph", "show", str(graphs / "g.json"), "--scene", str(path), "--png", str(tmp_path / "out" / "g.png")])
+            else ["graph", "show", str(graphs / "g.json"), "--scene", str(path),
+                  "--png", str(tmp_path / "out" / "g.png")])
     _expect_refusal(argv, path, words, capsys, monkeypatch, tmp_path, extra_allowed=[graphs])
 
 
@@ -488,7 +490,8 @@ def test_warnings_print_once_one_line_each_and_do_not_fail(tmp_path, capsys):
 def test_a_required_extension_that_is_implemented_loads(tmp_path):
     import rayvr as rv
 
-    path = _build(tmp_path, _merge({"extensionsUsed": ["KHR_materials_ior"], "extensionsRequired": ["KHR_materials_ior"]}))
+    path = _build(tmp_path, _merge({"extensionsUsed": ["KHR_materials_ior"],
+                                    "extensionsRequired": ["KHR_materials_ior"]}))
     assert rv.load_scene(path).warnings == []
 
 

@@ -419,8 +419,9 @@ class _Validator:
             self.texture_info(m, "emissiveTexture", f)
             self.numbers(m, "emissiveFactor", f, 3, low=0, high=1)
             mode = self.enum(m, "alphaMode", f, ("OPAQUE", "MASK", "BLEND"))
-            if self.number(m, "alphaCutoff", f, low=0) is not None and (mode or "OPAQUE") != "MASK":
-                self.warn(f"{f}.alphaCutoff", "is used only with alphaMode MASK")   # [MATERIAL_ALPHA_CUTOFF_INVALID_MODE]
+            cutoff = self.number(m, "alphaCutoff", f, low=0)
+            if cutoff is not None and (mode or "OPAQUE") != "MASK":   # [MATERIAL_ALPHA_CUTOFF_INVALID_MODE]
+                self.warn(f"{f}.alphaCutoff", "is used only with alphaMode MASK")
             self.get(m, "doubleSided", f, "boolean")
             for name, body in (m.get("extensions") or {}).items():
                 rule = MATERIAL_EXTENSION_RULES.get(name)
