@@ -17,7 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from rayvr.fileio import write_text
+from rayvr.fileio import atomic_group, write_text
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
@@ -65,13 +65,12 @@ def _cell(v) -> str:
 
 
 def record(name: str, result: dict, env: dict, options: dict, out: Path) -> tuple[Path, Path]:
-    """Write OUT/NAME.json and append to OUT/NAME.md; returns both paths."""
-    out.mkdir(parents=True, exist_ok=True)
+    """Write OUT/NAME.json and append to OUT/NAME.md (both replaced together, atomically);
+    returns both paths."""
     rows = _rows_as_lists(result)
     doc = {"benchmark": name, **env, "options": options, "columns": result["columns"], "rows": rows,
            "notes": result.get("notes", [])}
     jpath, mpath = out / f"{name}.json", out / f"{name}.md"
-    write_text(jpath, json.dumps(doc, indent=2, default=str) + "\n")
     cols = ["date", "commit", "device", "driver"] + list(result["columns"])
     header = "| " + " | ".join(cols) + " |"
     lines = []
@@ -84,8 +83,10 @@ def record(name: str, result: dict, env: dict, options: dict, out: Path) -> tupl
     for row in rows:
         cells = [env["date"], env["commit"] + quick, device, env["driver"], *map(_cell, row)]
         lines.append("| " + " | ".join(cells) + " |")
-    with open(mpath, "a") as f:
-        f.write("\n".join(lines) + "\n")
+    old = mpath.read_text() if mpath.exists() else ""
+    with atomic_group():
+        write_text(jpath, json.dumps(doc, indent=2, default=str) + "\n")
+        write_text(mpath, old + "\n".join(lines) + "\n")
     return jpath, mpath
 
 

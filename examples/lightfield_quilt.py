@@ -3,17 +3,14 @@
     python examples/lightfield_quilt.py [SCENE.gltf] --display portrait --view-scale 0.25 --out out/quilt.png
 
 The views are a horizontal row of sheared (off-axis) cameras converging on the focal plane at
-the scene camera's target distance, spanning the display's view cone; the quilt is composed on
-the GPU (view 0 bottom-left) and saved with Looking Glass's `_qs{cols}x{rows}a{aspect}` suffix.
+the scene's centre, spanning the display's view cone (`rayvr.xr.quilt.quilt_views`, as
+`rayvr render --quilt` uses); the quilt is composed on the GPU (view 0 bottom-left) and saved with
+Looking Glass's `_qs{cols}x{rows}a{aspect}` suffix.
 """
 import argparse
-import math
-
-import numpy as np
 
 import rayvr as rv
-from rayvr.renderer import camera_pose
-from rayvr.xr.quilt import compose_quilt, looking_glass, quilt_filename, write_quilt_png
+from rayvr.xr.quilt import compose_quilt, looking_glass, quilt_filename, quilt_views, write_quilt_png
 
 
 def main() -> None:
@@ -29,12 +26,8 @@ def main() -> None:
 
     layout = looking_glass(args.display)
     scene = rv.load_scene(args.scene) if args.scene else rv.scenes.cornell_box()
-    pose, yfov = camera_pose(scene)
     vw, vh = (max(8, round(s * args.view_scale)) for s in layout.view_size)
-    lo, hi = np.asarray(scene.bounds(), dtype=np.float64)
-    focus = args.focus or float(np.linalg.norm(0.5 * (lo + hi) - pose.position))
-    fov = rv.xr.Fov.symmetric(math.degrees(yfov), layout.aspect)
-    views = rv.xr.lightfield_row(layout.views, args.cone, focus, fov, (vw, vh), center_pose=pose)
+    views = quilt_views(scene, layout.cols, layout.rows, (vw, vh), args.cone, args.focus)
     with rv.Renderer(scene, rv.graphs.hybrid(), views=views) as r:
         r.render()
         quilt = compose_quilt(r.gl, r.output_texture(), layout.cols, layout.rows)

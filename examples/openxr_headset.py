@@ -6,8 +6,9 @@ SteamVR (Linux desktop, GLX: set RAYVR_GL_BACKEND=default with DISPLAY set) or M
 context) must be the active OpenXR runtime (XR_RUNTIME_JSON or /etc/xdg/openxr/1/active_runtime.json).
 For Monado's headless null compositor: XR_RUNTIME_JSON=<build>/openxr_monado-dev.json
 XRT_COMPOSITOR_NULL=1 SIMULATED_ENABLE=1. Keep stdin on /dev/null: some Monado builds close fd 0
-when GL swapchains are destroyed. Without a runtime this prints
-"no OpenXR runtime: install SteamVR or Monado, or use SimulatedHeadset" and exits with code 2.
+when GL swapchains are destroyed (the sink puts /dev/null back on fd 0 when that happens). Without
+a runtime this prints "no OpenXR runtime: install SteamVR or Monado and make it the active runtime
+(set XR_RUNTIME_JSON ...)" and exits with code 2; Ctrl-C ends the session cleanly (exit code 130).
 """
 import argparse
 import sys
@@ -39,6 +40,9 @@ def main() -> int:
     except rv.RayvrError as exc:
         print(f"openxr_headset: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:   # the Renderer's close() has ended the session
+        print("openxr_headset: interrupted", file=sys.stderr)
+        return 130
     return 0
 
 

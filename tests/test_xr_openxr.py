@@ -1,8 +1,10 @@
 """OpenXRSink at the pyopenxr boundary: conversions, typed structs, the session lifecycle, and a
 whole frame loop against a scripted fake runtime (real pyopenxr structs, real GL swapchain images)."""
+import contextlib
 import ctypes
 import math
 import os
+import re
 from collections import deque
 from pathlib import Path
 from types import SimpleNamespace
@@ -112,8 +114,9 @@ def test_no_runtime_message(gpu):
         def enumerate_instance_extension_properties(self):
             raise xr.exception.RuntimeUnavailableError("The loader was unable to find or load a runtime.")
 
-    with pytest.raises(XrError, match="^no OpenXR runtime: install SteamVR or Monado, or use SimulatedHeadset$"):
+    with pytest.raises(XrError, match=f"^{re.escape(NO_RUNTIME)}$"):
         OpenXRSink(api=NoRuntime()).open(gpu)
+    assert "XR_RUNTIME_JSON" in NO_RUNTIME and "SimulatedHeadset" in NO_RUNTIME
     if not _runtime_installed():      # the real loader, with nothing installed
         with pytest.raises(XrError) as info:
             OpenXRSink().open(gpu)
@@ -256,8 +259,14 @@ class FakeRuntime:
         self.events.extend([*down, S.STOPPING])
 
     # frames
+    waited_not_begun = False
+
     def wait_frame(self, session, info):
         self._log("wait_frame")
+        if self.waited_not_begun:   # the specification: this xrWaitFrame would block until xrBeginFrame
+            raise AssertionError("xrWaitFrame called while the previous frame was waited and never begun: "
+                                 "a real runtime blocks here forever")
+        self.waited_not_begun = True
         self.state_at_wait = self._state
         visible = self._state in (S.VISIBLE, S.FOCUSED)
         return SimpleNamespace(predicted_display_time=1_000_000_000 + 11_111_111 * self.frames_ended,
@@ -267,6 +276,7 @@ class FakeRuntime:
 
     def begin_frame(self, session, info):
         self._log("begin_frame")
+        self.waited_not_begun = False
 
     def locate_views(self, session, info):
         assert _hid(info.space) == 0x300
@@ -455,6 +465,114 @@ def test_runtime_failures_become_xr_errors_naming_the_step(gpu):
 
     with pytest.raises(XrError, match="found no headset"):
         OpenXRSink(api=NoHmd({})).size
+
+
+class InterruptedWait(TrackingRuntime):
+    """Ctrl-C arrives while xrWaitFrame of frame `at` blocks: the wait completes in the runtime,
+    then Python raises KeyboardInterrupt before the sink sees the result."""
+
+    def __init__(self, script, at, **kw):
+        super().__init__(script, **kw)
+        self.at = at
+
+    def wait_frame(self, session, info):
+        state = super().wait_frame(session, info)
+        if self.calls.count("wait_frame") == self.at:
+            raise KeyboardInterrupt
+        return state
+
+
+def test_ctrl_c_inside_wait_frame_begins_and_ends_that_frame_before_waiting_again(gpu, gl):
+    rt = InterruptedWait({1: [S.SYNCHRONIZED, S.VISIBLE]}, at=3)
+    sink = OpenXRSink(api=rt)
+    _, tex = _eyes(gl, 16, 12)
+    sink.open(gpu)
+    with pytest.raises(KeyboardInterrupt):
+        while (r := sink.wait_frame()) is not None:
+            sink.submit(tex if r.should_render else None, r)
+    assert sink.frame_phase == "waiting" and rt.frames_ended == 2
+    sink.close()       # the fake raises, as a real runtime would hang, if it waits before beginning
+    frame_calls = [c for c in rt.calls if c in ("wait_frame", "begin_frame", "end_frame")]
+    assert frame_calls[6:9] == ["wait_frame", "begin_frame", "end_frame"]   # the interrupted frame, settled
+    assert rt.layers[2] == []                                                # with no layers
+    assert sink.lifecycle.history[-1] == S.EXITING and sink.frame_phase is None
+    assert rt.calls[-1] == "destroy_instance"
+
+
+def test_a_begun_frame_left_unsubmitted_is_ended_with_no_layers_on_close(gpu, gl):
+    rt = TrackingRuntime({1: [S.SYNCHRONIZED, S.VISIBLE]})
+    sink = OpenXRSink(api=rt)
+    sink.open(gpu)
+    for _ in range(3):
+        r = sink.wait_frame()
+        sink.submit(None, r)
+    r = sink.wait_frame()                        # then the application dies (Ctrl-C) mid-frame
+    assert sink.frame_phase == "begun"
+    ended = rt.frames_ended
+    sink.close()
+    assert rt.frames_ended > ended and rt.layers[ended] == []
+    waits = [i for i, c in enumerate(rt.calls) if c == "wait_frame"]
+    assert rt.calls.index("end_frame", waits[3]) < waits[4]   # ended before the next wait
+    assert sink.lifecycle.history[-1] == S.EXITING
+
+
+@pytest.mark.parametrize("where, step", [("wait_frame", "waiting for the next frame"),
+                                         ("end_frame", "submitting frame 0"),
+                                         ("begin_session", "waiting for the next frame")])
+def test_runtime_errors_in_the_frame_loop_are_xr_errors(gpu, gl, where, step):
+    class Failing(TrackingRuntime):
+        pass
+
+    def fail(self, *args):
+        raise xr.exception.RuntimeFailureError("the runtime fell over")
+
+    setattr(Failing, where, fail)
+    rt = Failing({1: [S.SYNCHRONIZED, S.VISIBLE]})
+    sink = OpenXRSink(api=rt, frames=2)
+    sink.open(gpu)
+    with pytest.raises(XrError, match=f"OpenXR runtime failed while {step}: .*RuntimeFailureError"):
+        while (r := sink.wait_frame()) is not None:
+            sink.submit(None, r)
+    sink.close()
+
+
+def test_depth_sink_driven_by_the_renderer_refuses_instead_of_dropping_depth(gpu, gl):
+    import rayvr as rv
+    from rayvr.xr.openxr_gl import GL_DEPTH_COMPONENT32F
+
+    rt = TrackingRuntime({1: [S.SYNCHRONIZED, S.VISIBLE]}, formats=(GL_SRGB8_ALPHA8, GL_DEPTH_COMPONENT32F))
+    sink = OpenXRSink(api=rt, depth=True, frames=4)
+    with pytest.raises(XrError, match=r"depth=True.*without depth_array.*depth=False"):
+        with rv.Renderer(rv.scenes.quad(), rv.graphs.hybrid(), sink=sink) as r:
+            for _ in r.frames():
+                pass
+    assert rt.calls[-1] == "destroy_instance"          # closed cleanly all the same
+    # the same sink without depth runs under the Renderer, and creates no depth swapchain
+    rt = TrackingRuntime({1: [S.SYNCHRONIZED, S.VISIBLE]}, formats=(GL_SRGB8_ALPHA8, GL_DEPTH_COMPONENT32F))
+    sink = OpenXRSink(api=rt, frames=3)
+    with rv.Renderer(rv.scenes.quad(), rv.graphs.hybrid(), sink=sink) as r:
+        assert sum(1 for _ in r.frames()) >= 3
+    assert rt.calls.count("create_swapchain:2") == 1 and not sink.depth_swapchains
+
+
+def test_stdin_is_put_back_when_the_runtime_closes_fd_0(gpu, gl):
+    class ClosesStdin(TrackingRuntime):
+        def destroy_swapchain(self, h):   # as Monado does on GL swapchain destroy
+            super().destroy_swapchain(h)
+            with contextlib.suppress(OSError):
+                os.close(0)
+
+    saved = os.dup(0)
+    try:
+        rt = ClosesStdin({1: [S.SYNCHRONIZED, S.VISIBLE]})
+        _run(OpenXRSink(api=rt, frames=2), gpu, _eyes(gl, 16, 12)[1])
+        assert os.fstat(0).st_rdev == os.stat(os.devnull).st_rdev
+        probe = os.open(os.devnull, os.O_RDONLY)
+        assert probe != 0                                  # new files no longer land on fd 0
+        os.close(probe)
+    finally:
+        os.dup2(saved, 0)
+        os.close(saved)
 
 
 @pytest.mark.skipif(not os.environ.get("RAYVR_TEST_OPENXR"), reason="set RAYVR_TEST_OPENXR=1 with a runtime "

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import importlib
 
-from .errors import (GpuError, GraphError, OptionError, RayvrError, SceneError, ShaderError,
-                     XrError)
+from .errors import (GpuError, GraphError, OptionError, OutputError, RayvrError, SceneError, SceneWarning,
+                     ShaderError, XrError)
 from .materials.effect import Effect
 
 __version__ = "0.1.0"
@@ -34,8 +34,8 @@ _LAZY = {
     "load_scene": ("rayvr.scene", "load_scene"),
 }
 
-__all__ = ["Effect", "RayvrError", "GpuError", "GraphError", "OptionError", "SceneError",
-           "ShaderError", "XrError", *_LAZY]
+__all__ = ["Effect", "RayvrError", "GpuError", "GraphError", "OptionError", "OutputError", "SceneError",
+           "SceneWarning", "ShaderError", "XrError", *_LAZY]
 
 
 def __getattr__(name: str):

@@ -33,6 +33,15 @@ class XrError(RayvrError):
     """An OpenXR runtime or headset problem (no runtime, lost session, bad view config)."""
 
 
+class OutputError(RayvrError):
+    """An output file or folder cannot be written (read-only, under a regular file, disk full)."""
+
+
+class SceneWarning(UserWarning):
+    """A scene file is valid but questionable (the glTF validator's warnings); the CLI prints each
+    on one line, library users get it through the `warnings` module and in `Scene.warnings`."""
+
+
 def did_you_mean(name: str, candidates) -> str:
     """A ' (did you mean 'x'?)' suffix for the closest candidate, or '' when none is close."""
     import difflib

@@ -53,12 +53,10 @@ def camera_pose(scene) -> tuple[Pose, float]:
     return look_at(eye, centre), yfov
 
 
-def default_views(scene, views: int = 1, size=(256, 256), ipd: float = DEFAULT_IPD,
-                  grid: tuple[int, int] | None = None) -> ViewSet:
-    """Views from the scene's camera: 1 = mono, 2 = stereo (IPD apart), N = a camera grid
-    (`grid` cols x rows, spacing ipd, frusta converging on the scene's centre)."""
-    from .xr.cameras import camera_grid, stereo_views
-
+def scene_frustum(scene, size) -> tuple[Pose, Fov, float, float, float]:
+    """(pose, fov, near, far, focal distance) of the scene's camera at `size` pixels: what
+    `default_views` and light-field quilts build their views from. The focal distance is the
+    scene's centre as seen from the camera (light-field frusta converge there)."""
     w, h = int(size[0]), int(size[1])
     if w <= 0 or h <= 0:
         raise OptionError(f"size: {w}x{h} is not a positive pixel size; use e.g. 256x256")
@@ -66,21 +64,29 @@ def default_views(scene, views: int = 1, size=(256, 256), ipd: float = DEFAULT_I
     cam = (getattr(scene, "cameras", None) or [None])[0]
     near = getattr(cam, "znear", 0.05) or 0.05
     far = getattr(cam, "zfar", 1000.0) or 1000.0
-    fov = Fov.symmetric(math.degrees(yfov), w / h)
+    lo, hi = np.asarray(scene.bounds(), dtype=np.float64)
+    focal = max(float(np.linalg.norm(0.5 * (lo + hi) - pose.position)), near * 2)
+    return pose, Fov.symmetric(math.degrees(yfov), w / h), near, far, focal
+
+
+def default_views(scene, views: int = 1, size=(256, 256), ipd: float = DEFAULT_IPD,
+                  grid: tuple[int, int] | None = None) -> ViewSet:
+    """Views from the scene's camera: 1 = mono, 2 = stereo (IPD apart), N = a camera grid
+    (`grid` cols x rows, default the most square one of N views (`grid_for_views`), spacing ipd,
+    frusta converging on the scene's centre)."""
+    from .xr.cameras import camera_grid, grid_for_views, stereo_views
+
+    pose, fov, near, far, focal = scene_frustum(scene, size)
+    w, h = int(size[0]), int(size[1])
     if views == 1 and grid is None:
         return ViewSet([View(pose, fov, w, h, near, far)])
     if views == 2 and grid is None:
         return stereo_views(pose, ipd, fov, fov, (w, h), near, far)
     if grid is None:
-        cols = math.ceil(math.sqrt(views))
-        grid = (cols, math.ceil(views / cols))
+        grid = grid_for_views(views)
     if grid[0] * grid[1] != views:
         raise OptionError(f"--grid {grid[0]}x{grid[1]} has {grid[0] * grid[1]} views but --views is {views}; "
                           f"make cols x rows equal the view count")
-    # Light-field displays expect frusta sheared to converge on a focal plane: put it at the
-    # scene's centre as seen from the camera.
-    lo, hi = np.asarray(scene.bounds(), dtype=np.float64)
-    focal = max(float(np.linalg.norm(0.5 * (lo + hi) - pose.position)), near * 2)
     return camera_grid(grid[0], grid[1], ipd, fov, (w, h), center_pose=pose, focal_distance=focal,
                        near=near, far=far)
 

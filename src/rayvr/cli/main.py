@@ -1,20 +1,33 @@
 """The `rayvr` command: subcommands live in modules of this package, each with
-`register(subparsers)` adding its parser and setting `func(args) -> int`."""
+`register(subparsers)` adding its parser and setting `func(args) -> int`.
+
+Exit codes: 0 done, 1 a check found a problem (`rayvr check`), 2 bad input (a RayvrError,
+printed on one line: the file, option or field and the fix), 130 interrupted (Ctrl-C; outputs
+are written all at once at the end, so an interrupted command leaves none).
+"""
 from __future__ import annotations
 
 import argparse
 import importlib
 import sys
 
-from ..errors import RayvrError
+from ..errors import OptionError, RayvrError
 
 # Subcommand modules, in the order `rayvr --help` lists them.
-COMMAND_MODULES = ["info", "render", "graph", "tune"]
+COMMAND_MODULES = ["info", "render", "graph", "tune", "check"]
+INTERRUPTED = 130   # 128 + SIGINT, as shells report it
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse whose usage errors are OptionErrors: one line naming the option, exit code 2."""
+
+    def error(self, message: str):
+        raise OptionError(f"{self.prog}: {message} (see '{self.prog} --help')")
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The `rayvr` parser with every subcommand of COMMAND_MODULES."""
-    parser = argparse.ArgumentParser(prog="rayvr", description="Hybrid raster/ray-traced rendering for VR headsets.")
+    parser = Parser(prog="rayvr", description="Hybrid raster/ray-traced rendering for VR headsets.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(f"rayvr.cli.{name}").register(sub)
@@ -23,18 +36,21 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the `rayvr` command; a RayvrError is printed to stderr (on one line unless it has
-    several, as shader compile logs do) and gives exit code 2."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 2
+    several, as shader compile logs do) and gives exit code 2; Ctrl-C prints one line and gives 130."""
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 2
         return int(args.func(args) or 0)
     except RayvrError as exc:
         msg = " ".join(str(exc).split()) if "\n" not in str(exc).strip() else str(exc).strip()
         print(f"rayvr: error: {msg}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("rayvr: interrupted", file=sys.stderr)
+        return INTERRUPTED
 
 
 if __name__ == "__main__":

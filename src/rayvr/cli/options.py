@@ -1,29 +1,91 @@
-"""Command-line values shared by the `rayvr` subcommands and the benchmarks: sizes and scenes."""
+"""Command-line values shared by the `rayvr` subcommands and the benchmarks: sizes, numbers in
+a range, scenes (with the loader's warnings printed once, one line each, on stderr)."""
 from __future__ import annotations
 
+import math
 import re
+import sys
+import warnings
 from pathlib import Path
 
-from ..errors import OptionError, did_you_mean
+from ..errors import OptionError, SceneWarning, did_you_mean
+from ..gpu.bindings import BINDINGS
 
 MAX_SIDE = 8192
+MAX_PIXELS = 1 << 28   # views x width x height: 64 views of 2048x2048; G-buffers take ~100 bytes a pixel
+MAX_VIEWS = BINDINGS["RAYVR_MAX_VIEWS"]   # the pixel lists pack the view index in 6 bits
 
 
-def parse_size(text: str, option: str = "--size") -> tuple[int, int]:
-    """'WIDTHxHEIGHT' in pixels, each side 1..8192."""
+def _bound(low, high, low_open=False, high_open=False) -> str:
+    if high is None:
+        return f"{'>' if low_open else '>='} {low:g}"
+    if low is None:
+        return f"{'<' if high_open else '<='} {high:g}"
+    return f"{'>' if low_open else '>='} {low:g} and {'<' if high_open else '<='} {high:g}"
+
+
+def integer(option: str, low: int, high: int | None = None):
+    """An argparse `type`: an integer in [low, high]; anything else is an OptionError naming
+    `option` and the range (argparse's own message would be two lines)."""
+    accepted = f"an integer from {low} to {high}" if high is not None else f"an integer >= {low}"
+
+    def parse(text):
+        try:
+            value = int(str(text).strip(), 10)
+        except ValueError:
+            raise OptionError(f"{option} {text}: expected {accepted}") from None
+        if value < low or (high is not None and value > high):
+            raise OptionError(f"{option} {value}: out of range; give {accepted}")
+        return value
+
+    parse.__name__ = "integer"
+    return parse
+
+
+def number(option: str, low=None, high=None, low_open: bool = False, high_open: bool = False, unit: str = ""):
+    """An argparse `type`: a finite number in the given range (NaN and infinities are refused)."""
+    accepted = f"a finite number {_bound(low, high, low_open, high_open)}{unit}" if (low, high) != (None, None) \
+        else f"a finite number{unit}"
+
+    def parse(text):
+        try:
+            value = float(str(text).strip())
+        except ValueError:
+            raise OptionError(f"{option} {text}: expected {accepted}") from None
+        bad = not math.isfinite(value) or (low is not None and (value < low or (low_open and value == low))) or \
+            (high is not None and (value > high or (high_open and value == high)))
+        if bad:
+            raise OptionError(f"{option} {text}: out of range; give {accepted}")
+        return value
+
+    parse.__name__ = "number"
+    return parse
+
+
+def views_count(option: str = "--views"):
+    """The view count: 1..MAX_VIEWS."""
+    return integer(option, 1, MAX_VIEWS)
+
+
+def parse_size(text: str, option: str = "--size", views: int = 1) -> tuple[int, int]:
+    """'WIDTHxHEIGHT' in pixels, each side 1..8192, and `views` of them at most MAX_PIXELS."""
     m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", str(text))
     if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
         raise OptionError(f"{option} {text}: expected WIDTHxHEIGHT in pixels, e.g. {option} 1440x1600")
     w, h = int(m.group(1)), int(m.group(2))
     if w > MAX_SIDE or h > MAX_SIDE:
         raise OptionError(f"{option} {text}: at most {MAX_SIDE} pixels a side; use a smaller size")
+    if views * w * h > MAX_PIXELS:
+        raise OptionError(f"{option} {text} with --views {views}: {views * w * h} pixels in all, more than the "
+                          f"{MAX_PIXELS} rayvr allocates frame buffers for; use fewer views or a smaller size")
     return w, h
 
 
-def load_scene_arg(spec: str | None, option: str = "scene"):
+def load_scene_arg(spec: str | None, option: str = "scene", print_warnings: bool = True):
     """A glTF file (.gltf/.glb), a folder holding one, or a built-in scene by name (None: the
-    Cornell box)."""
-    from ..scene import builtin, load_scene
+    Cornell box). The loader's warnings go to stderr, one line each, unless `print_warnings`
+    is false (they stay in `scene.warnings`)."""
+    from ..scene import builtin
 
     if not spec:
         return builtin.cornell_box()
@@ -32,10 +94,22 @@ def load_scene_arg(spec: str | None, option: str = "scene"):
         found = sorted(path.glob("*.gl[tb]*")) or sorted(path.glob("glTF-Binary/*.glb")) or sorted(path.glob("glTF/*.gltf"))
         if not found:
             raise OptionError(f"{option} {spec}: the folder holds no .gltf or .glb file")
-        return load_scene(found[0])
+        return _load_file(found[0], print_warnings)
     if path.exists() or path.suffix.lower() in (".gltf", ".glb"):
-        return load_scene(path)   # a missing file gets the loader's SceneError naming it
+        return _load_file(path, print_warnings)   # a missing file gets the loader's SceneError naming it
     if spec in builtin.SCENES:
         return builtin.SCENES[spec]()
     raise OptionError(f"{option} '{spec}': no such file and no built-in scene of that name"
                       f"{did_you_mean(spec, builtin.SCENES)}; built-ins: {', '.join(builtin.SCENES)}")
+
+
+def _load_file(path: Path, print_warnings: bool):
+    """Load a glTF file; its warnings go to stderr once, one line each (not through `warnings`)."""
+    from ..scene import load_scene
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SceneWarning)
+        scene = load_scene(path)
+    for line in scene.warnings if print_warnings else ():
+        print(f"rayvr: warning: {line}", file=sys.stderr)
+    return scene

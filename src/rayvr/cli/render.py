@@ -1,9 +1,18 @@
 """`rayvr render [SCENE] --views 2 --size 1440x1600 --out F`: the hybrid graph on a scene.
 
 No SCENE renders the built-in Cornell box; a name of a built-in scene (cornell_box, spheres, ...)
-renders that; anything else is a glTF file. PNGs per view (out_L/out_R for stereo, out_v{i} for
-more views) or side by side; `.exr` writes linear HDR. Files are written under a temporary name
-in the same folder and renamed, so a failure never leaves a half-written output.
+renders that; anything else is a glTF file. Images per view (out_L/out_R for stereo, out_v{i} for
+more views) or side by side; `.exr` writes linear HDR, `.png`/`.jpg` tone-mapped 8-bit.
+
+Views: 1 mono, 2 stereo (--ipd apart), N a camera grid (--grid COLSxROWS, default the most
+square one, e.g. 8x6 for 48; a prime N is one row) with --ipd between cameras. With --quilt the
+N views are a Looking Glass light field instead: one horizontal row of cameras spanning
+--view-cone, tiled into a quilt of --grid (default as above) tiles, written to exactly the
+--quilt path (--quilt-suffix appends Looking Glass's `_qs{cols}x{rows}a{aspect}`).
+
+Every output path is checked for writability before rendering; all files of one render are
+written under temporary names and renamed together at the end, so a failure or Ctrl-C leaves
+none of them.
 """
 from __future__ import annotations
 
@@ -12,31 +21,46 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import OptionError, did_you_mean
-from ..fileio import write_exr, write_png
-from .options import load_scene_arg, parse_size
+from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
+from .options import MAX_VIEWS, integer, load_scene_arg, number, parse_size, views_count
 
 LAYOUTS = ("per-view", "side-by-side")
+OUT_SUFFIXES = (".png", ".jpg", ".jpeg", ".exr")
+MAX_IPD_M = 1.0   # metres: eyes are 0.05-0.08 apart; a light-field grid's spacing stays below a metre
 
 
 def register(sub) -> None:
     """Add the `render` subcommand to the CLI's subparsers."""
     p = sub.add_parser("render", help="render a scene with the hybrid graph and write images")
     p.add_argument("scene", nargs="?", help="glTF file or built-in scene name (default: the Cornell box)")
-    p.add_argument("--views", type=int, default=2, help="view count: 1 mono, 2 stereo, N a camera grid (default 2)")
+    p.add_argument("--views", type=views_count(), default=2,
+                   help=f"view count: 1 mono, 2 stereo, N a camera grid (1 to {MAX_VIEWS}; default 2)")
     p.add_argument("--size", default="256x256", help="per-view size WIDTHxHEIGHT (default 256x256)")
-    p.add_argument("--out", default="out/render.png", help="output image: .png (tone mapped) or .exr (HDR)")
+    p.add_argument("--out", default="out/render.png",
+                   help="output image: .png or .jpg (tone mapped) or .exr (HDR); default out/render.png")
     p.add_argument("--layout", default="per-view", choices=LAYOUTS, help="one file per view, or side by side")
     p.add_argument("--effect", action="append", default=[], metavar="MATERIAL=EFFECT",
                    help="set a material's effect (raster, shadows, reflections, path_traced); '*' for all; repeatable")
     p.add_argument("--tonemap", default="aces", help="aces, reinhard or linear (default aces)")
     p.add_argument("--exposure", default="auto",
-                   help="exposure in stops, or 'auto' for the frame's mean luminance (default auto)")
-    p.add_argument("--max-bounces", type=int, default=1, help="reflection bounces (default 1)")
-    p.add_argument("--light-samples", type=int, default=1, help="light samples per pixel (default 1)")
-    p.add_argument("--frames", type=int, default=1, help="frames to render (timings average over them)")
-    p.add_argument("--ipd", type=float, default=0.063, help="eye distance in metres for stereo (default 0.063)")
-    p.add_argument("--grid", help="light-field camera grid COLSxROWS (its product must equal --views)")
-    p.add_argument("--quilt", help="also write a Looking Glass quilt PNG of the views (with --grid)")
+                   help="exposure in stops (-64 to 64), or 'auto' for the frame's mean luminance (default auto)")
+    p.add_argument("--max-bounces", type=integer("--max-bounces", 1, 64), default=1,
+                   help="reflection bounces, 1 to 64 (default 1)")
+    p.add_argument("--light-samples", type=integer("--light-samples", 1, 256), default=1,
+                   help="light samples per pixel, 1 to 256 (default 1)")
+    p.add_argument("--frames", type=integer("--frames", 1, 100_000), default=1,
+                   help="frames to render, 1 to 100000 (timings average over them)")
+    p.add_argument("--ipd", type=number("--ipd", 0, MAX_IPD_M, low_open=True, unit=" metres"), default=0.063,
+                   help="eye distance for stereo, or camera spacing of a grid, in metres: > 0 and <= 1 "
+                        "(default 0.063)")
+    p.add_argument("--grid", help="COLSxROWS: the camera grid of N views, or with --quilt the quilt's tiles; "
+                                  "its product must equal --views (default: the most square grid)")
+    p.add_argument("--quilt", metavar="FILE", help="also write a Looking Glass quilt (.png or .jpg) of the views, "
+                                                   "which then lie on one horizontal line of cameras")
+    p.add_argument("--quilt-suffix", action="store_true",
+                   help="append Looking Glass's _qs{cols}x{rows}a{aspect} to the --quilt file name")
+    p.add_argument("--view-cone", type=number("--view-cone", 0, 180, low_open=True, high_open=True, unit=" degrees"),
+                   default=40.0, help="the quilt's view cone in degrees, > 0 and < 180 (default 40)")
     p.add_argument("--multiview", default="auto", choices=("auto", "on", "off"), help="G-buffer multiview")
     p.add_argument("--gbuffer", default="auto", choices=("auto", "raster", "rt"),
                    help="G-buffer: raster, ray-traced, or auto (ray-traced on GPUs with weak raster units)")
@@ -45,13 +69,13 @@ def register(sub) -> None:
 
 
 def parse_exposure(text) -> tuple[bool, float]:
-    """(auto, stops): 'auto' or a number of stops."""
+    """(auto, stops): 'auto' or a finite number of stops in [-64, 64]."""
     if str(text).strip().lower() == "auto":
         return True, 0.0
     try:
-        return False, float(text)
-    except ValueError:
-        raise OptionError(f"--exposure {text}: give stops (e.g. 0, 1.5, -1) or 'auto'") from None
+        return False, number("--exposure", -64, 64, unit=" stops")(text)
+    except OptionError:
+        raise OptionError(f"--exposure {text}: give stops from -64 to 64 (e.g. 0, 1.5, -1) or 'auto'") from None
 
 
 def apply_effects(scene, specs) -> None:
@@ -83,39 +107,78 @@ def output_paths(out: Path, views: int, layout: str) -> list[Path]:
     return [out.with_name(f"{out.stem}_v{i}{out.suffix}") for i in range(views)]
 
 
+def choose_grid(args) -> tuple[int, int] | None:
+    """The camera grid (or the quilt's tiles): --grid, checked against --views, else the most
+    square grid of --views (None for mono and stereo without a quilt)."""
+    from ..xr.cameras import grid_for_views
+    from ..xr.quilt import parse_grid
+
+    if args.grid:
+        grid = parse_grid(args.grid)
+        if grid[0] * grid[1] != args.views:
+            cols, rows = grid_for_views(args.views)
+            raise OptionError(f"--grid {args.grid} has {grid[0] * grid[1]} views but --views is {args.views}; "
+                              f"give a grid of {args.views} (e.g. --grid {cols}x{rows}) or --views "
+                              f"{grid[0] * grid[1]}")
+        return grid
+    if args.views <= 2 and not args.quilt:
+        return None
+    return grid_for_views(args.views)
+
+
+def quilt_path(args, grid, size) -> Path | None:
+    """Exactly the --quilt path, or with --quilt-suffix the Looking Glass name; its format is
+    checked now (PNG or JPEG by the suffix)."""
+    from ..xr.quilt import quilt_filename
+
+    if not args.quilt:
+        if args.quilt_suffix:
+            raise OptionError("--quilt-suffix names a quilt file: give --quilt FILE with it")
+        return None
+    if args.views < 2:
+        raise OptionError(f"--quilt needs a light field of 2 or more views; --views is {args.views}")
+    image_format(args.quilt, "--quilt")
+    path = Path(args.quilt)
+    return quilt_filename(path, grid[0], grid[1], size[0] / size[1]) if args.quilt_suffix else path
+
+
 def run(args) -> int:
-    """`rayvr render`: validate the options, render with the hybrid graph, write the images."""
+    """`rayvr render`: validate the options and outputs, render with the hybrid graph, write
+    every image at once."""
     from ..graphs import HDR_OUTPUT, OUTPUT, hybrid
     from ..passes.tonemap import OPERATORS
     from ..renderer import Renderer, default_views
 
-    size = parse_size(args.size)
-    if args.views < 1:
-        raise OptionError(f"--views {args.views}: need at least 1 view")
-    if args.frames < 1:
-        raise OptionError(f"--frames {args.frames}: need at least 1 frame")
+    size = parse_size(args.size, views=args.views)
     if args.tonemap.lower() not in OPERATORS:
         raise OptionError(f"--tonemap {args.tonemap}: use one of {', '.join(OPERATORS)}")
     auto_exposure, exposure = parse_exposure(args.exposure)
     out = Path(args.out)
-    if out.suffix.lower() not in (".png", ".exr"):
-        raise OptionError(f"--out {args.out}: write .png (tone mapped) or .exr (HDR)")
-    grid = None
-    if args.grid:
-        from ..xr.quilt import parse_grid
-
-        grid = parse_grid(args.grid)
-    if args.quilt and grid is None:
-        raise OptionError("--quilt needs --grid COLSxROWS (e.g. --views 48 --grid 8x6 --quilt q.png)")
+    if out.suffix.lower() not in OUT_SUFFIXES:
+        raise OptionError(f"--out {args.out}: write .png or .jpg (tone mapped) or .exr (HDR)")
+    grid = choose_grid(args)
+    quilt = quilt_path(args, grid, size)
+    paths = output_paths(out, args.views, args.layout)
+    if quilt is not None and quilt.resolve() in {p.resolve() for p in paths}:
+        raise OptionError(f"--quilt {quilt}: is also a view's output file; give the quilt its own name")
+    for path in paths:
+        check_writable(path, "--out")
+    if quilt is not None:
+        check_writable(quilt, "--quilt")
     scene = load_scene_arg(args.scene)
     apply_effects(scene, args.effect)
 
-    views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
+    if quilt is not None:
+        from ..xr.quilt import quilt_views
+
+        views = quilt_views(scene, grid[0], grid[1], size, args.view_cone)
+    else:
+        views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
     graph = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
                    auto_exposure=auto_exposure, light_samples=args.light_samples,
                    multiview=args.multiview, gbuffer=args.gbuffer)
     hdr = out.suffix.lower() == ".exr"
-    written = []
+    quilt_pixels = None
     with Renderer(scene, graph, views=views) as r:
         for _ in range(args.frames):
             r.render()
@@ -124,16 +187,19 @@ def run(args) -> int:
             print(r.report())
         print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {args.frames} frame(s)")
         print(r.profile())
-        if args.quilt:
-            from ..xr.quilt import compose_quilt, quilt_filename, write_quilt_png
+        if quilt is not None:
+            from ..xr.quilt import compose_quilt, read_quilt
 
-            q = compose_quilt(r.gl, r.output_texture(OUTPUT), *grid)
-            qpath = quilt_filename(args.quilt, grid[0], grid[1], size[0] / size[1])
-            written.append(write_quilt_png(q, qpath))
+            quilt_pixels = read_quilt(compose_quilt(r.gl, r.output_texture(OUTPUT), *grid))
     images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
-    for path, img in zip(output_paths(out, len(views), args.layout), images):
-        (write_exr if hdr else write_png)(path, img)
-        written.append(path)
-    for path in written:
+    with atomic_group():
+        for path, img in zip(paths, images):
+            write_exr(path, img) if hdr else write_image(path, img)
+        if quilt is not None:
+            write_image(quilt, quilt_pixels, alpha=True)
+    for path in paths:
         print(f"wrote {path}")
+    if quilt is not None:
+        print(f"wrote {quilt} (quilt of {grid[0]}x{grid[1]} tiles, view aspect {size[0] / size[1]:.4g}, "
+              f"views on one horizontal line)")
     return 0

@@ -33,17 +33,29 @@ def graph_to_dot(graph) -> str:
     return "\n".join(lines) + "\n"
 
 
+def picture_format(path) -> str:
+    """'png', 'svg' or 'pdf' from the suffix of `path`; GraphError for any other."""
+    fmt = Path(path).suffix.lower().lstrip(".")
+    if fmt not in ("png", "svg", "pdf"):
+        raise GraphError(f"save_picture('{path}'): use a .png, .svg or .pdf file name")
+    return fmt
+
+
 def save_picture(graph, path) -> Path:
     """Draw `graph` to a .png, .svg or .pdf file: graphviz `dot` when on PATH, else matplotlib."""
     path = Path(path)
-    fmt = path.suffix.lower().lstrip(".")
-    if fmt not in ("png", "svg", "pdf"):
-        raise GraphError(f"save_picture('{path}'): use a .png, .svg or .pdf file name")
+    fmt = picture_format(path)
     dot = shutil.which("dot")
     if dot:
         dot_text = graph_to_dot(graph).encode()
-        return atomic_write(path, lambda tmp: subprocess.run([dot, f"-T{fmt}", "-o", str(tmp)],
-                                                             input=dot_text, check=True))
+
+        def run_dot(tmp: Path) -> None:
+            done = subprocess.run([dot, f"-T{fmt}", "-o", str(tmp)], input=dot_text, capture_output=True)
+            if done.returncode:
+                raise GraphError(f"save_picture('{path}'): graphviz dot failed: "
+                                 f"{done.stderr.decode(errors='replace').strip() or done.returncode}")
+
+        return atomic_write(path, run_dot)
     return _draw_matplotlib(graph, path)
 
 

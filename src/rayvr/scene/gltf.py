@@ -1,131 +1,178 @@
-"""glTF 2.0 (.gltf / .glb) into a `Scene`: pygltflib parses the file, numpy decodes accessors,
-Pillow decodes images. Every refusal is a SceneError naming the file and the glTF field.
+"""glTF 2.0 (.gltf / .glb) into a `Scene`. Every refusal is a SceneError naming the file and the
+glTF field; every warning is one line in `Scene.warnings` (and a `rayvr.SceneWarning`).
+
+Reading goes in three steps: `gltf_container` reads the file's bytes (strict JSON, the GLB
+header and chunks), `gltf_validate` checks the document against the specification's rules as
+the Khronos glTF-Validator does (types, ranges, references, extents, hierarchy, extensions)
+before any data is read, and this module decodes the data (pygltflib's object model over the
+validated JSON, numpy for accessors, Pillow for images) with the checks only the data allows
+(NaN positions, vertex and sparse indices).
 
 Supported: node hierarchy (matrix or TRS) and instancing, triangle primitives (strips and fans
-converted), metallic-roughness materials with textures and factors, alpha modes, doubleSided,
-KHR_materials_emissive_strength, KHR_materials_transmission, KHR_materials_ior,
-KHR_texture_transform, KHR_lights_punctual, perspective cameras, and material
-`extras.rayvr_effect`. URIs must stay inside the scene's folder: anything else is refused
-before it is read.
+converted), sparse accessors, metallic-roughness materials with textures and factors, alpha
+modes, doubleSided, the extensions of SUPPORTED_EXTENSIONS, perspective cameras, and material
+`extras.rayvr_effect`. URIs must name regular files inside the scene's folder: anything else
+(parent folders, absolute paths, other schemes, devices) is refused before it is opened.
 """
 from __future__ import annotations
 
 import base64
+import binascii
 import io
 import json
 import math
+import re
+import stat
+import warnings
 from pathlib import Path
+from urllib.parse import unquote
 
 import numpy as np
 
-from ..errors import OptionError, SceneError
+from ..errors import OptionError, SceneError, SceneWarning
 from ..materials.effect import Effect
 from ..materials.material import AlphaMode, Material, TextureRef
+from .gltf_container import read_container
+from .gltf_validate import validate
 from .model import Camera, Light, Mesh, Scene, Texture
+
+# The extensions this loader implements: a file may require these (extensionsRequired); any
+# other required extension is refused, any other used one is ignored with a warning.
+SUPPORTED_EXTENSIONS = frozenset({
+    "KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
+    "KHR_texture_transform", "KHR_lights_punctual"})
 
 _COMPONENT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")
+_BUFFER_MIME = ("application/octet-stream", "application/gltf-buffer")
+_IMAGE_MIME = ("image/png", "image/jpeg")
 
 
 class _Reader:
+    """The validated document and its bytes: buffers, buffer views, accessors, URIs."""
+
     def __init__(self, path: Path):
         import pygltflib
 
         self.path = path
         self.folder = path.parent.resolve()
-        if not path.is_file():
+        if not (path.exists() or path.is_symlink()):
             raise SceneError(f"{path}: file not found; check the path (built-in scenes: rayvr.scenes.cornell_box())")
         if path.suffix.lower() not in (".gltf", ".glb"):
             raise SceneError(f"{path}: not a glTF file; give a .gltf or .glb")
-        try:
-            self.doc = pygltflib.GLTF2().load(str(path))
-        except (json.JSONDecodeError, UnicodeDecodeError, ValueError, KeyError, TypeError) as exc:
-            raise SceneError(f"{path}: broken glTF JSON ({exc}); re-export the scene") from exc
-        if self.doc is None:
-            raise SceneError(f"{path}: could not be parsed as glTF; re-export the scene")
+        doc, self.glb_bin, container_warnings = read_container(path)
+        self.warnings = container_warnings + validate(doc, str(path), SUPPORTED_EXTENSIONS,
+                                                      None if self.glb_bin is None else len(self.glb_bin))
+        self.json = doc
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")   # dataclasses_json's notes on absent optional fields
+            try:
+                self.doc = pygltflib.GLTF2.from_json(json.dumps(doc))   # (from_dict keeps attributes as dicts)
+            except (TypeError, ValueError, KeyError, AttributeError) as exc:
+                raise SceneError(f"{path}: pygltflib cannot read the document ({exc}); re-export the scene") from None
         self._buffers: dict[int, bytes] = {}
 
     def fail(self, field: str, what: str) -> SceneError:
         return SceneError(f"{self.path}: {field}: {what}")
 
     # ---- raw data ----------------------------------------------------------------------------
-    def read_uri(self, uri: str, field: str) -> bytes:
+    def read_uri(self, uri: str, field: str, mime_types, length: int | None = None) -> bytes:
+        """The bytes `uri` names: a base64 data URI, or a regular file inside the scene folder
+        (checked before it is opened); `length`: the declared byte count (a buffer's byteLength)."""
         if uri.startswith("data:"):
-            try:
-                return base64.b64decode(uri.split(",", 1)[1])
-            except (IndexError, ValueError) as exc:
-                raise self.fail(field, f"bad data URI ({exc})") from exc
-        from urllib.parse import unquote
-
-        if "://" in uri:
-            raise self.fail(field, f"URI '{uri}' is not a relative file; only files inside {self.folder} are read")
+            return self._data_uri(uri, field, mime_types, length)
+        if _SCHEME.match(uri) or uri.startswith(("/", "\\")) or "\\" in uri:
+            raise self.fail(field, f"URI '{uri}' is an absolute path or URL, outside the scene folder "
+                                   f"{self.folder}; refused (copy the file next to the scene)")
         target = (self.folder / unquote(uri)).resolve()
         if not target.is_relative_to(self.folder):
             raise self.fail(field, f"URI '{uri}' points outside the scene folder {self.folder}; refused "
                                    f"(copy the file next to the scene)")
         try:
-            return target.read_bytes()
+            st = target.stat()
         except OSError as exc:
-            raise self.fail(field, f"cannot read '{uri}' ({exc.strerror})") from exc
+            raise self.fail(field, f"cannot read '{uri}' ({exc.strerror})") from None
+        if not stat.S_ISREG(st.st_mode):
+            raise self.fail(field, f"URI '{uri}' is not a regular file (a device, pipe or folder); refused")
+        if length is not None and st.st_size < length:   # [BUFFER_EXTERNAL_BYTELENGTH_MISMATCH]
+            raise self.fail(field, f"'{uri}' has {st.st_size} bytes, fewer than the declared byteLength {length}")
+        try:
+            with open(target, "rb") as f:
+                return f.read(length if length is not None else -1)
+        except OSError as exc:
+            raise self.fail(field, f"cannot read '{uri}' ({exc.strerror})") from None
+
+    def _data_uri(self, uri: str, field: str, mime_types, length: int | None) -> bytes:
+        header, comma, payload = uri[5:].partition(",")
+        if not comma or not header.endswith(";base64"):
+            raise self.fail(field, "data URI is not base64 ('data:<mime>;base64,<data>'); re-export the scene")
+        mime = header[:-len(";base64")]
+        if mime_types and mime not in mime_types:   # [BUFFER_DATA_URI_MIME_TYPE_INVALID]
+            raise self.fail(field, f"data URI of type '{mime}'; use {' or '.join(mime_types)}")
+        try:
+            data = base64.b64decode(payload, validate=True)
+        except (binascii.Error, ValueError) as exc:
+            raise self.fail(field, f"bad data URI ({exc})") from None
+        if length is not None and len(data) != length:   # [BUFFER_EMBEDDED_BYTELENGTH_MISMATCH]
+            raise self.fail(field, f"data URI holds {len(data)} bytes, the declared byteLength is {length}")
+        return data
 
     def buffer(self, i: int) -> bytes:
         if i not in self._buffers:
-            if not 0 <= i < len(self.doc.buffers):
-                raise self.fail(f"buffers[{i}]", "index out of range")
-            b = self.doc.buffers[i]
-            if b.uri is None:
-                blob = self.doc.binary_blob()
-                if blob is None:
-                    raise self.fail(f"buffers[{i}]", "no uri and no GLB binary chunk")
-                self._buffers[i] = bytes(blob)
+            b = self.json["buffers"][i]
+            if "uri" not in b:
+                self._buffers[i] = self.glb_bin[:b["byteLength"]]
             else:
-                self._buffers[i] = self.read_uri(b.uri, f"buffers[{i}].uri")
+                self._buffers[i] = self.read_uri(b["uri"], f"buffers[{i}].uri", _BUFFER_MIME, b["byteLength"])
         return self._buffers[i]
 
     def buffer_view(self, i: int) -> tuple[bytes, int, int, int | None]:
-        if i is None or not 0 <= i < len(self.doc.bufferViews):
-            raise self.fail(f"bufferViews[{i}]", "index out of range")
-        bv = self.doc.bufferViews[i]
-        data = self.buffer(bv.buffer)
-        start = bv.byteOffset or 0
-        if start + bv.byteLength > len(data):
-            raise self.fail(f"bufferViews[{i}]", f"bytes {start}..{start + bv.byteLength} out of range of "
-                                                 f"buffers[{bv.buffer}] ({len(data)} bytes)")
-        return data, start, bv.byteLength, bv.byteStride
+        bv = self.json["bufferViews"][i]
+        return self.buffer(bv["buffer"]), bv.get("byteOffset", 0), bv["byteLength"], bv.get("byteStride")
+
+    def _elements(self, view: int, offset: int, count: int, dtype, width: int, stride: int | None) -> np.ndarray:
+        """(count, width) elements of `dtype` from bufferViews[view] (extents are validated)."""
+        data, start, _, view_stride = self.buffer_view(view)
+        elem = dtype.itemsize * width
+        stride = stride or view_stride or elem
+        raw = np.frombuffer(data, np.uint8, count=(count - 1) * stride + elem, offset=start + offset)
+        if stride == elem:
+            return raw.view(dtype).reshape(count, width).copy()
+        rows = np.lib.stride_tricks.as_strided(raw, (count, elem), (stride, 1))
+        return np.ascontiguousarray(rows).view(dtype).reshape(count, width)
 
     def accessor(self, i: int, field: str) -> np.ndarray:
-        if i is None or not 0 <= i < len(self.doc.accessors):
-            raise self.fail(field, f"accessor {i} out of range ({len(self.doc.accessors)} accessors)")
-        a = self.doc.accessors[i]
-        where = f"accessors[{i}] ({field})"
-        if a.componentType not in _COMPONENT or a.type not in _WIDTH:
-            raise self.fail(where, f"unsupported componentType {a.componentType} / type {a.type}")
-        dtype = np.dtype(_COMPONENT[a.componentType]).newbyteorder("<")
-        width = _WIDTH[a.type]
-        if a.bufferView is None:
-            out = np.zeros((a.count, width), dtype)
+        a = self.json["accessors"][i]
+        dtype = np.dtype(_COMPONENT[a["componentType"]]).newbyteorder("<")
+        width, count = _WIDTH[a["type"]], a["count"]
+        if a.get("bufferView") is None:
+            out = np.zeros((count, width), dtype)
         else:
-            data, start, length, stride = self.buffer_view(a.bufferView)
-            elem = dtype.itemsize * width
-            stride = stride or elem
-            off = start + (a.byteOffset or 0)
-            need = (a.count - 1) * stride + elem if a.count else 0
-            if (a.byteOffset or 0) + need > length:
-                raise self.fail(where, f"{a.count} elements at offset {a.byteOffset or 0} run past the end of "
-                                       f"bufferViews[{a.bufferView}] ({length} bytes)")
-            raw = np.frombuffer(data, np.uint8, count=need, offset=off) if a.count else np.zeros(0, np.uint8)
-            if stride == elem:
-                out = raw.view(dtype).reshape(a.count, width).copy()
-            else:
-                rows = np.lib.stride_tricks.as_strided(raw, (a.count, elem), (stride, 1))
-                out = np.ascontiguousarray(rows).view(dtype).reshape(a.count, width)
-        if a.sparse is not None:
-            raise self.fail(where, "sparse accessors are not supported; re-export without sparse data")
-        if a.normalized and dtype.kind in "ui":
+            out = self._elements(a["bufferView"], a.get("byteOffset", 0), count, dtype, width, None)
+        sparse = a.get("sparse")
+        if sparse is not None:
+            self._apply_sparse(out, sparse, f"accessors[{i}].sparse ({field})", dtype, width)
+        if a.get("normalized") and dtype.kind in "ui":
             out = out.astype(np.float32) / np.float32(np.iinfo(dtype).max)
             if dtype.kind == "i":
                 out = np.maximum(out, -1.0)
         return out
+
+    def _apply_sparse(self, out: np.ndarray, sparse: dict, where: str, dtype, width: int) -> None:
+        """Overwrite the elements sparse.indices names with sparse.values (glTF 2.0, "Sparse Accessors")."""
+        n, ind, val = sparse["count"], sparse["indices"], sparse["values"]
+        idtype = np.dtype(_COMPONENT[ind["componentType"]]).newbyteorder("<")
+        index = self._elements(ind["bufferView"], ind.get("byteOffset", 0), n, idtype, 1, idtype.itemsize)[:, 0]
+        index = index.astype(np.int64)
+        if n > 1 and not (np.diff(index) > 0).all():   # [ACCESSOR_SPARSE_INDICES_NON_INCREASING]
+            k = int(np.argmin(np.diff(index) > 0)) + 1
+            raise self.fail(f"{where}.indices", f"element {k} ({index[k]}) is not greater than the one before "
+                                                f"({index[k - 1]}); sparse indices must increase")
+        if index[-1] >= len(out):   # [ACCESSOR_SPARSE_INDEX_OOB]
+            raise self.fail(f"{where}.indices", f"index {int(index[-1])} out of range for {len(out)} elements")
+        out[index] = self._elements(val["bufferView"], val.get("byteOffset", 0), n, dtype, width,
+                                    dtype.itemsize * width)
 
 
 def _local_matrix(node) -> np.ndarray:
@@ -172,14 +219,16 @@ class _Loader:
         self.r = _Reader(path)
         self.doc = self.r.doc
         self.scene = Scene(path.stem, str(path))
-        self.warnings: list[str] = []
+        self.warnings: list[str] = list(self.r.warnings)
 
     def load(self) -> Scene:
         self._textures()
         self._materials()
         self._meshes()
         self._nodes()
-        self.scene.warnings = self.warnings
+        self.scene.warnings = [f"{self.r.path}: {w}" for w in dict.fromkeys(self.warnings)]
+        for w in self.scene.warnings:
+            warnings.warn(w, SceneWarning, stacklevel=4)   # the caller of rv.load_scene
         return self.scene
 
     # ---- textures and materials ------------------------------------------------------------
@@ -195,17 +244,15 @@ class _Loader:
                 img = self.doc.images[src]
                 field = f"images[{src}]"
                 if img.uri is not None:
-                    raw = self.r.read_uri(img.uri, f"{field}.uri")
-                elif img.bufferView is not None:
+                    raw = self.r.read_uri(img.uri, f"{field}.uri", None)
+                else:
                     data, start, length, _ = self.r.buffer_view(img.bufferView)
                     raw = data[start:start + length]
-                else:
-                    raise self.r.fail(field, "neither uri nor bufferView")
                 try:
                     with Image.open(io.BytesIO(raw)) as im:
                         images[src] = np.asarray(im.convert("RGBA"), dtype=np.uint8)
-                except (UnidentifiedImageError, OSError, ValueError) as exc:
-                    raise self.r.fail(field, f"image cannot be decoded ({exc}); use PNG or JPEG") from exc
+                except (UnidentifiedImageError, Image.DecompressionBombError, OSError, ValueError) as exc:
+                    raise self.r.fail(field, f"image cannot be decoded ({exc}); use PNG or JPEG") from None
             self.scene.textures.append(Texture(images[src], name=tex.name or f"texture{t_index}"))
 
     def _texref(self, info, field: str, strength_attr: str | None = None) -> TextureRef | None:
@@ -272,9 +319,6 @@ class _Loader:
                     m.effect = Effect.parse(extras["rayvr_effect"], f"{self.r.path}: {f}.extras.rayvr_effect")
                 except OptionError as exc:
                     raise SceneError(str(exc)) from None
-            for name, v in (("metallicFactor", m.metallic), ("roughnessFactor", m.roughness)):
-                if not math.isfinite(v):
-                    raise self.r.fail(f"{f}.{name}", f"{v} is not a finite number")
             self.scene.add_material(m)
 
     def _default_material(self) -> int:
@@ -295,11 +339,9 @@ class _Loader:
                 f = f"meshes[{mi}].primitives[{pi}]"
                 mode = 4 if prim.mode is None else prim.mode
                 if prim.attributes.POSITION is None:
-                    raise self.r.fail(f"{f}.attributes.POSITION", "missing")
+                    continue   # the validator warned: nothing to draw
                 p = self.r.accessor(prim.attributes.POSITION, f"{f}.attributes.POSITION").astype(np.float32)
-                if p.shape[1] != 3:
-                    raise self.r.fail(f"{f}.attributes.POSITION", "must be VEC3")
-                if not np.isfinite(p).all():
+                if not np.isfinite(p).all():   # [ACCESSOR_INVALID_FLOAT]
                     raise self.r.fail(f"{f}.attributes.POSITION", "contains NaN or Inf; fix the exporter")
                 if prim.indices is not None:
                     ind = self.r.accessor(prim.indices, f"{f}.indices").reshape(-1).astype(np.int64)
@@ -323,12 +365,7 @@ class _Loader:
                         uv.append(np.zeros((len(p), 2), np.float32))
                 if has_t:
                     tan.append(self.r.accessor(prim.attributes.TANGENT, f"{f}.attributes.TANGENT").astype(np.float32))
-                if prim.material is None:
-                    mid = self._default_material()
-                elif not 0 <= prim.material < len(self.doc.materials or []):
-                    raise self.r.fail(f"{f}.material", f"material {prim.material} does not exist")
-                else:
-                    mid = prim.material
+                mid = self._default_material() if prim.material is None else prim.material
                 mats.append(np.full(len(tri), mid, np.uint32))
             if not pos:
                 self.mesh_map[mi] = None
@@ -343,36 +380,26 @@ class _Loader:
 
     # ---- node graph ----------------------------------------------------------------------------
     def _nodes(self) -> None:
+        """Walk the default scene's node trees (references, single parents and the absence of
+        loops are validated) into instances, cameras and lights."""
         doc = self.doc
         lights_def = ((doc.extensions or {}).get("KHR_lights_punctual") or {}).get("lights", [])
         if doc.scenes:
-            s = doc.scene if doc.scene is not None else 0
-            if not 0 <= s < len(doc.scenes):
-                raise self.r.fail("scene", f"scene {s} does not exist")
-            roots = doc.scenes[s].nodes or []
+            roots = doc.scenes[doc.scene if doc.scene is not None else 0].nodes or []
         else:
             children = {c for n in doc.nodes or [] for c in (n.children or [])}
             roots = [i for i in range(len(doc.nodes or [])) if i not in children]
-        stack = [(r, np.eye(4), ()) for r in reversed(roots)]
+        stack = [(r, np.eye(4)) for r in reversed(roots)]
         while stack:
-            ni, parent, path = stack.pop()
-            if not 0 <= ni < len(doc.nodes or []):
-                raise self.r.fail(f"nodes[{path[-1] if path else '?'}].children", f"node {ni} does not exist")
-            if ni in path:
-                raise self.r.fail(f"nodes[{ni}].children", "the node hierarchy has a cycle")
+            ni, parent = stack.pop()
             node = doc.nodes[ni]
             world = parent @ _local_matrix(node)
             if not np.isfinite(world).all():
                 raise self.r.fail(f"nodes[{ni}]", "transform is not finite")
             name = node.name or f"node{ni}"
-            if node.mesh is not None:
-                if node.mesh not in self.mesh_map:
-                    raise self.r.fail(f"nodes[{ni}].mesh", f"mesh {node.mesh} does not exist")
-                if self.mesh_map[node.mesh] is not None:
-                    self.scene.add_instance(self.mesh_map[node.mesh], world, name)
+            if node.mesh is not None and self.mesh_map[node.mesh] is not None:
+                self.scene.add_instance(self.mesh_map[node.mesh], world, name)
             if node.camera is not None:
-                if not 0 <= node.camera < len(doc.cameras or []):
-                    raise self.r.fail(f"nodes[{ni}].camera", f"camera {node.camera} does not exist")
                 cam = doc.cameras[node.camera]
                 if cam.type == "perspective" and cam.perspective is not None:
                     p = cam.perspective
@@ -382,22 +409,15 @@ class _Loader:
                     self.warnings.append(f"cameras[{node.camera}]: only perspective cameras are used")
             lp = (node.extensions or {}).get("KHR_lights_punctual")
             if lp is not None:
-                k = lp.get("light")
-                if k is None or not 0 <= k < len(lights_def):
-                    raise self.r.fail(f"nodes[{ni}].extensions.KHR_lights_punctual.light", f"light {k} does not exist")
-                L = lights_def[k]
-                kind = L.get("type")
-                if kind not in ("point", "spot", "directional"):
-                    raise self.r.fail(f"extensions.KHR_lights_punctual.lights[{k}].type",
-                                      f"unknown {kind!r}; use point, spot or directional")
+                L = lights_def[lp["light"]]
                 spot = L.get("spot") or {}
                 self.scene.lights.append(Light(
-                    kind, position=world[:3, 3].copy(), direction=-world[:3, 2],
+                    L["type"], position=world[:3, 3].copy(), direction=-world[:3, 2],
                     color=tuple(L.get("color", (1.0, 1.0, 1.0))), intensity=float(L.get("intensity", 1.0)),
                     range=float(L.get("range") or 0.0), inner_cone_angle=float(spot.get("innerConeAngle", 0.0)),
                     outer_cone_angle=float(spot.get("outerConeAngle", math.pi / 4)), name=L.get("name") or name))
             for c in reversed(node.children or []):
-                stack.append((c, world, (*path, ni)))
+                stack.append((c, world))
 
 
 def load_gltf(path) -> Scene:

@@ -2,7 +2,7 @@
 
 `OpenXRSink` loads on first use, so rayvr imports and renders without pyopenxr installed.
 """
-from .cameras import camera_grid, eye_poses, lightfield_row, look_at, mono_view, stereo_views
+from .cameras import camera_grid, eye_poses, grid_for_views, lightfield_row, look_at, mono_view, stereo_views
 from .compositor import Compositor
 from .presets import PRESETS, HeadsetPreset, get_preset
 from .quilt import LOOKING_GLASS, QuiltLayout, compose_quilt, read_quilt, write_quilt_png
@@ -13,7 +13,7 @@ from .trajectory import PoseLog, Trajectory, make_trajectory
 from .views import Fov, Pose, View, ViewSet, projection
 
 __all__ = ["Fov", "Pose", "View", "ViewSet", "projection",
-           "look_at", "eye_poses", "mono_view", "stereo_views", "camera_grid", "lightfield_row",
+           "look_at", "eye_poses", "mono_view", "stereo_views", "camera_grid", "grid_for_views", "lightfield_row",
            "Sink", "FrameRequest", "OffscreenViews", "SimulatedHeadset", "Compositor",
            "PRESETS", "HeadsetPreset", "get_preset", "Trajectory", "PoseLog", "make_trajectory",
            "compose_quilt", "read_quilt", "write_quilt_png", "QuiltLayout", "LOOKING_GLASS",

@@ -1,6 +1,8 @@
 """Camera rigs that build ViewSets: look-at poses, mono and stereo views, N-view camera grids."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..errors import OptionError
@@ -99,3 +101,13 @@ def lightfield_row(n_views: int, view_cone_deg: float, focal_distance: float, fo
     baseline = 2 * focal_distance * np.tan(np.radians(view_cone_deg) / 2)
     spacing = baseline / (n_views - 1) if n_views > 1 else 0.0
     return camera_grid(n_views, 1, (spacing, 0.0), fov, size, center_pose, focal_distance, **kwargs)
+
+
+def grid_for_views(n_views: int) -> tuple[int, int]:
+    """The camera grid (cols, rows) for `n_views` when none is given: the most square
+    factorisation with cols >= rows and cols * rows == n_views (48: 8x6, 12: 4x3); a prime count
+    is one horizontal row (7: 7x1)."""
+    if n_views < 1:
+        raise OptionError(f"grid_for_views: need at least 1 view, got {n_views}")
+    rows = max(r for r in range(1, math.isqrt(n_views) + 1) if n_views % r == 0)
+    return n_views // rows, rows

@@ -11,11 +11,18 @@ swapchains (one array swapchain with a layer per view, else one per view) -> the
 xrPollEvent (session lifecycle, see openxr_lifecycle.py), xrWaitFrame, xrBeginFrame,
 xrLocateViews, [render], acquire/wait/copy/release swapchain images, xrEndFrame with one
 projection layer whose views carry the located pose and fov.
+
+The frame the sink is in the middle of is tracked (`frame_phase`: waiting, waited, begun): a
+frame that was waited but not begun (Ctrl-C inside xrWaitFrame, or an error between the calls)
+is begun and ended with no layers before any further xrWaitFrame and in close(), because the
+specification lets the next xrWaitFrame block until the previous frame is begun. Runtime errors
+anywhere in the session, the frame loop included, reach the caller as XrError naming the step.
 """
 from __future__ import annotations
 
 import contextlib
 import ctypes
+import os
 import time
 
 from ..errors import XrError
@@ -26,7 +33,9 @@ from .openxr_lifecycle import Action, SessionLifecycle, SessionState
 from .sink import FrameRequest, Sink, check_texture_array
 from .views import Pose
 
-NO_RUNTIME = "no OpenXR runtime: install SteamVR or Monado, or use SimulatedHeadset"
+NO_RUNTIME = ("no OpenXR runtime: install SteamVR or Monado and make it the active runtime (set XR_RUNTIME_JSON "
+              "to its manifest, e.g. XR_RUNTIME_JSON=<monado build>/openxr_monado-dev.json, or install "
+              "/etc/xdg/openxr/1/active_runtime.json), or use SimulatedHeadset")
 VALIDATION_LAYER = "XR_APILAYER_LUNARG_core_validation"
 
 
@@ -54,7 +63,10 @@ class OpenXRSink(Sink):
     reference_space: "stage" (floor-level, falls back to "local") or "local".
     world_pose: where the reference space sits in the scene (a Pose; default identity).
     depth: also submit depth (XR_KHR_composition_layer_depth) when the runtime has it; pass
-    `depth_array=` (same internal format as the depth swapchain) to submit().
+    `depth_array=` (same internal format as the depth swapchain) to every rendered submit().
+    rv.Renderer submits colour only (its graphs have no depth output): with depth=True a rendered
+    frame submitted without depth_array is refused with an XrError rather than silently sent
+    without depth, so drive such a sink yourself or leave depth off.
     source_srgb: whether submitted colour is sRGB-encoded (default: yes for rgba8, no for floats).
     validation: enable the Khronos core validation layer (if installed with pyopenxr).
     frames: request exit after this many frames (None: until the runtime ends the session).
@@ -87,6 +99,9 @@ class OpenXRSink(Sink):
         self._view_count = None
         self._previous_views = None
         self._instance_lost = False
+        self.frame_phase = None      # None, "waiting", "waited" (not begun) or "begun" (not ended)
+        self._display_time = None    # the XrTime of the frame in flight (or of the last one)
+        self._display_period = 0
 
     # -- Sink -------------------------------------------------------------------------------
 
@@ -111,13 +126,14 @@ class OpenXRSink(Sink):
 
     @contextlib.contextmanager
     def _runtime_errors(self, step: str):
-        """Turn a pyopenxr error result into an XrError naming the step."""
+        """Turn a pyopenxr exception (an error result, or a success code nobody expected) into an
+        XrError naming the step; KeyboardInterrupt and rayvr's own errors pass through."""
         try:
             yield
         except XrError:
             raise
         except Exception as exc:
-            if self.xr is not None and isinstance(exc, self.xr.exception.ErrorResult):
+            if self.xr is not None and isinstance(exc, self.xr.exception.XrException):
                 raise XrError(f"OpenXR runtime failed while {step}: {exc} ({type(exc).__name__}); "
                               f"see the runtime's log, or use SimulatedHeadset") from exc
             raise
@@ -143,6 +159,10 @@ class OpenXRSink(Sink):
         self.blend_mode = xr.EnvironmentBlendMode.OPAQUE if xr.EnvironmentBlendMode.OPAQUE in modes else modes[0]
 
     def wait_frame(self) -> FrameRequest | None:
+        with self._runtime_errors("waiting for the next frame"):
+            return self._wait_frame()
+
+    def _wait_frame(self) -> FrameRequest | None:
         xr = self.xr
         deadline = None
         while True:
@@ -170,12 +190,20 @@ class OpenXRSink(Sink):
             time.sleep(0.002)   # IDLE: wait for the runtime's READY (or EXITING)
 
     def submit(self, texture_array, request: FrameRequest, depth_array=None) -> None:
-        xr = self.xr
         located = request.sink_data.get("located")
         if located is None or request.sink_data.get("ended"):
             raise XrError(f"OpenXRSink.submit(): frame {request.index} was not begun by this sink's wait_frame() "
                           f"or was already submitted; submit each request once")
+        if self.depth_swapchains and request.should_render and texture_array is not None and depth_array is None:
+            raise XrError(f"OpenXRSink(depth=True): frame {request.index} was submitted without depth_array; pass "
+                          f"the frame's depth (a {self.depth_format and hex(self.depth_format)} texture array) or "
+                          f"create the sink with depth=False (rv.Renderer has no depth output to submit)")
         request.sink_data["ended"] = True
+        with self._runtime_errors(f"submitting frame {request.index}"):
+            self._submit(texture_array, request, located, depth_array)
+
+    def _submit(self, texture_array, request: FrameRequest, located, depth_array) -> None:
+        xr = self.xr
         layers = []   # the structs it points to are locals, alive until xrEndFrame returns
         if request.should_render and texture_array is not None:
             check_texture_array(texture_array, self, "OpenXRSink")
@@ -193,6 +221,7 @@ class OpenXRSink(Sink):
             layers = [ctypes.byref(layer)]
         xr.end_frame(self.session, xr.FrameEndInfo(display_time=request.sink_data["display_time"],
                                                    environment_blend_mode=self.blend_mode, layers=layers))
+        self.frame_phase = None
         self.frame_count += 1
 
     def request_exit(self) -> None:
@@ -200,24 +229,32 @@ class OpenXRSink(Sink):
         self.lifecycle.exit_requested = True
 
     def close(self) -> None:
+        """End the session the way the lifecycle asks (request exit, run empty frames until
+        STOPPING, end it), then destroy everything. A frame left in flight is settled first; a
+        runtime that fails on the way out does not stop the release."""
         if self.xr is None or self.instance is None:
             return
         xr = self.xr
+        self._settle_frame()
         if self.session is not None and self.lifecycle.running and not self._instance_lost:
             self.request_exit()
             deadline = time.monotonic() + self.exit_timeout_s
-            while self.lifecycle.running and time.monotonic() < deadline:
-                request = self.wait_frame()
-                if request is None:
-                    break
-                request.should_render = False
-                self.submit(None, request)
+            try:
+                while self.lifecycle.running and time.monotonic() < deadline:
+                    request = self.wait_frame()
+                    if request is None:
+                        break
+                    request.should_render = False
+                    self.submit(None, request)
+            except XrError:
+                self._settle_frame()   # the runtime is failing: release what we hold all the same
         self._destroy_session()
         try:
             xr.destroy_instance(self.instance)
         except Exception:   # the instance may already be lost; nothing more to release
             pass
         self.instance = None
+        restore_stdin()
 
     # -- setup ------------------------------------------------------------------------------
 
@@ -342,6 +379,7 @@ class OpenXRSink(Sink):
             except Exception:   # already gone with a lost session
                 pass
         self.swapchains, self.depth_swapchains = [], []
+        restore_stdin()   # Monado closes fd 0 when GL swapchains are destroyed
         for handle, destroy in ((self.space, "destroy_space"), (self.session, "destroy_session")):
             if handle is not None:
                 try:
@@ -392,17 +430,47 @@ class OpenXRSink(Sink):
             xr.end_session(self.session)
             self.lifecycle.ended_session()
 
+    def _settle_frame(self) -> None:
+        """Begin and end (with no layers) a frame left waited-but-not-begun or begun-but-not-ended,
+        so that the next xrWaitFrame cannot block on it. Runtime errors are ignored: the frame
+        may already be gone with the session."""
+        xr = self.xr
+        if self.frame_phase is None or self.session is None:
+            self.frame_phase = None
+            return
+        display_time = self._display_time or 0
+        if self.frame_phase == "waiting":   # an interrupted xrWaitFrame never told its time: guess the next
+            display_time += self._display_period or 1
+        if self.frame_phase in ("waiting", "waited"):
+            with contextlib.suppress(xr.exception.XrException):
+                xr.begin_frame(self.session, xr.FrameBeginInfo())
+            self.frame_phase = "begun"
+        with contextlib.suppress(xr.exception.XrException):
+            xr.end_frame(self.session, xr.FrameEndInfo(display_time=display_time,
+                                                       environment_blend_mode=self.blend_mode, layers=[]))
+        self.frame_phase = None
+
     def _begin_frame(self) -> FrameRequest:
         xr = self.xr
+        self._settle_frame()
+        self.frame_phase = "waiting"   # set before the call: Ctrl-C lands after it returns
         try:
             frame_state = xr.wait_frame(self.session, xr.FrameWaitInfo())
         except xr.exception.SessionLossPending:
+            self.frame_phase = None
             self.lifecycle.on_state_changed(SessionState.LOSS_PENDING)
-            return self.wait_frame()
+            return self._wait_frame()
+        except xr.exception.XrException:
+            self.frame_phase = None    # the runtime refused the call: no frame was waited
+            raise
+        self._display_time = frame_state.predicted_display_time
+        self._display_period = getattr(frame_state, "predicted_display_period", 0)
+        self.frame_phase = "waited"
         try:
             xr.begin_frame(self.session, xr.FrameBeginInfo())
         except xr.exception.FrameDiscarded:
             pass   # the previous frame was never ended; this one proceeds (spec: XR_FRAME_DISCARDED)
+        self.frame_phase = "begun"
         view_state, located = xr.locate_views(self.session, xr.ViewLocateInfo(
             view_configuration_type=xr.ViewConfigurationType.PRIMARY_STEREO,
             display_time=frame_state.predicted_display_time, space=self.space))
@@ -437,3 +505,19 @@ class OpenXRSink(Sink):
         return xr.SwapchainSubImage(swapchain=sc.handle,
                                     image_rect=xr.Rect2Di(offset=xr.Offset2Di(0, 0), extent=xr.Extent2Di(w, h)),
                                     image_array_index=view if sc.array else 0)
+
+
+def restore_stdin() -> bool:
+    """Put /dev/null back on file descriptor 0 if the runtime closed it (Monado does when GL
+    swapchains are destroyed): otherwise the next file opened would become fd 0 and anything
+    reading stdin would read it. True when fd 0 had to be restored."""
+    try:
+        os.fstat(0)
+        return False
+    except OSError:
+        pass
+    fd = os.open(os.devnull, os.O_RDONLY)
+    if fd != 0:
+        os.dup2(fd, 0)
+        os.close(fd)
+    return True

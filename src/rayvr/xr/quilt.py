@@ -1,8 +1,10 @@
 """Light-field output: Looking Glass quilts composed on the GPU from a texture array of views.
 
 A quilt tiles N views into one image, `cols` x `rows`, view 0 at the bottom-left, going right
-then up (Looking Glass Factory, "Quilt" documentation). Looking Glass Bridge reads the layout
-from the file name suffix `_qs{cols}x{rows}a{aspect}` (`quilt_filename()`).
+then up (Looking Glass Factory, "Quilt" documentation). The views themselves lie on one
+horizontal line of cameras, view 0 leftmost (a Looking Glass shows horizontal parallax only):
+`quilt_views()`. Looking Glass Bridge reads the layout from the file name suffix
+`_qs{cols}x{rows}a{aspect}` (`quilt_filename()`).
 """
 from __future__ import annotations
 
@@ -71,6 +73,18 @@ def quilt_filename(path: str | Path, cols: int, rows: int, aspect: float) -> Pat
     return path.with_name(f"{path.stem}_qs{cols}x{rows}a{aspect:.4g}{path.suffix}")
 
 
+def quilt_views(scene, cols: int, rows: int, size, view_cone_deg: float = 40.0, focus: float | None = None):
+    """The cols * rows views of a quilt from the scene's camera: one horizontal row of sheared
+    cameras (`lightfield_row`), view 0 leftmost, spanning `view_cone_deg` as seen from the focal
+    plane at `focus` metres (default: the scene's centre, where `default_views` converges)."""
+    from ..renderer import scene_frustum
+    from .cameras import lightfield_row
+
+    pose, fov, near, far, focal = scene_frustum(scene, size)
+    return lightfield_row(cols * rows, view_cone_deg, focus or focal, fov, size, center_pose=pose,
+                          near=near, far=far)
+
+
 def compose_quilt(gl: moderngl.Context, texture_array, cols: int, rows: int, out=None) -> moderngl.Texture:
     """Tile the layers of `texture_array` into one RGBA texture of (cols * w, rows * h).
 
@@ -107,7 +121,8 @@ def read_quilt(texture, encode_srgb: bool = False):
 
 
 def write_quilt_png(texture, path: str | Path, encode_srgb: bool = False) -> Path:
-    """Write the quilt to `path` (written to a temporary name first, so no half-written file)."""
-    from ..fileio import write_png
+    """Write the quilt to exactly `path`, PNG or JPEG by its suffix (written to a temporary name
+    first, so no half-written file)."""
+    from ..fileio import write_image
 
-    return write_png(path, read_quilt(texture, encode_srgb), alpha=True)
+    return write_image(path, read_quilt(texture, encode_srgb), alpha=True)

@@ -116,14 +116,15 @@ class SimulatedHeadset(Sink):
                 self._record(texture_array, request.index)
 
     def _record(self, texture_array, index: int) -> None:
-        from ..fileio import write_png
+        from ..fileio import atomic_group, write_png
         from .readback import read_layers, side_by_side
 
         eyes = read_layers(texture_array, self.encode_srgb)
-        for name, img in zip(("left", "right"), eyes):
-            write_png(self.record_dir / f"frame_{index:05d}_{name}.png", img, alpha=True)
-        sbs = side_by_side(eyes)
-        write_png(self.record_dir / f"frame_{index:05d}_sbs.png", sbs, alpha=True)
+        with atomic_group():   # a frame's three files appear together
+            for name, img in zip(("left", "right"), eyes):
+                write_png(self.record_dir / f"frame_{index:05d}_{name}.png", img, alpha=True)
+            sbs = side_by_side(eyes)
+            write_png(self.record_dir / f"frame_{index:05d}_sbs.png", sbs, alpha=True)
         if self.video:
             if self._video_writer is None:
                 import imageio.v2 as imageio
