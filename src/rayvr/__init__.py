@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import importlib
 
-from .errors import (GpuError, GraphError, OptionError, RayvrError, SceneError, ShaderError,
-                     XrError)
+from .errors import (ClusterError, GpuError, GraphError, OptionError, RayvrError, SceneError,
+                     ShaderError, XrError)
 from .materials.effect import Effect
 
 __version__ = "0.1.0"
@@ -28,13 +28,14 @@ _LAZY = {
     "graphs": ("rayvr.graphs", None),
     "xr": ("rayvr.xr", None),
     "tune": ("rayvr.tune", None),
+    "cluster": ("rayvr.cluster", None),   # Ray is imported only when a Cluster starts
     "RenderGraph": ("rayvr.rendergraph.graph", "RenderGraph"),
     "RenderPass": ("rayvr.rendergraph.render_pass", "RenderPass"),
     "Renderer": ("rayvr.renderer", "Renderer"),
     "load_scene": ("rayvr.scene", "load_scene"),
 }
 
-__all__ = ["Effect", "RayvrError", "GpuError", "GraphError", "OptionError", "SceneError",
+__all__ = ["Effect", "RayvrError", "ClusterError", "GpuError", "GraphError", "OptionError", "SceneError",
            "ShaderError", "XrError", *_LAZY]
 
 

@@ -33,6 +33,11 @@ class XrError(RayvrError):
     """An OpenXR runtime or headset problem (no runtime, lost session, bad view config)."""
 
 
+class ClusterError(RayvrError):
+    """rayvr.cluster cannot run a job: no Ray (the cluster extra), no reachable cluster, or
+    every worker lost."""
+
+
 def did_you_mean(name: str, candidates) -> str:
     """A ' (did you mean 'x'?)' suffix for the closest candidate, or '' when none is close."""
     import difflib
