@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cluster import cli as cluster_cli
 from ..errors import OptionError, did_you_mean
 from ..fileio import write_exr, write_png
 from .options import load_scene_arg, parse_size
@@ -41,6 +42,7 @@ def register(sub) -> None:
     p.add_argument("--gbuffer", default="auto", choices=("auto", "raster", "rt"),
                    help="G-buffer: raster, ray-traced, or auto (ray-traced on GPUs with weak raster units)")
     p.add_argument("--report", action="store_true", help="print the graph's compile report")
+    cluster_cli.add_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -85,9 +87,9 @@ def output_paths(out: Path, views: int, layout: str) -> list[Path]:
 
 def run(args) -> int:
     """`rayvr render`: validate the options, render with the hybrid graph, write the images."""
-    from ..graphs import HDR_OUTPUT, OUTPUT, hybrid
+    from ..graphs import hybrid
     from ..passes.tonemap import OPERATORS
-    from ..renderer import Renderer, default_views
+    from ..renderer import default_views
 
     size = parse_size(args.size)
     if args.views < 1:
@@ -115,6 +117,25 @@ def run(args) -> int:
                    auto_exposure=auto_exposure, light_samples=args.light_samples,
                    multiview=args.multiview, gbuffer=args.gbuffer)
     hdr = out.suffix.lower() == ".exr"
+    if cluster_cli.requested(args):
+        pixels, written = cluster_cli.render(args, args.scene, scene, graph, views, hdr, grid)
+    else:
+        pixels, written = render_here(args, scene, graph, views, hdr, grid)
+    images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
+    for path, img in zip(output_paths(out, len(views), args.layout), images):
+        (write_exr if hdr else write_png)(path, img)
+        written.append(path)
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
+def render_here(args, scene, graph, views, hdr: bool, grid) -> tuple:
+    """Render in this process: (pixels (views, h, w, c) rows top-down, [quilt path])."""
+    from ..graphs import HDR_OUTPUT, OUTPUT
+    from ..renderer import Renderer
+
+    size = views.size
     written = []
     with Renderer(scene, graph, views=views) as r:
         for _ in range(args.frames):
@@ -130,10 +151,4 @@ def run(args) -> int:
             q = compose_quilt(r.gl, r.output_texture(OUTPUT), *grid)
             qpath = quilt_filename(args.quilt, grid[0], grid[1], size[0] / size[1])
             written.append(write_quilt_png(q, qpath))
-    images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
-    for path, img in zip(output_paths(out, len(views), args.layout), images):
-        (write_exr if hdr else write_png)(path, img)
-        written.append(path)
-    for path in written:
-        print(f"wrote {path}")
-    return 0
+    return pixels, written

@@ -292,19 +292,10 @@ def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: in
     not given) converges split by samples and goes into the same cache as tune's. Rows keep the
     order of `configs`."""
     from ..tune import metrics as M
-    from ..tune.configs import Config
-    from ..tune.measure import make_views
+    from ..tune.measure import check_configs, make_views
     from ..tune.results import Results
 
-    configs = list(configs)
-    if not configs:
-        raise OptionError("measure: no configurations; pass e.g. rv.tune.standard_configs(scene)")
-    names = [cfg.name for cfg in configs]
-    if len(set(names)) != len(names):
-        raise OptionError(f"measure: configuration names must be unique, got {names}")
-    for cfg in configs:
-        if not isinstance(cfg, Config):
-            raise OptionError(f"measure: {cfg!r} is not a rayvr.tune.Config")
+    configs = check_configs(configs)
     metrics = M.check_metrics(tuple(M.METRICS) if metrics is None else metrics)
     scene, payload = _scene_and_payload(scene, payload)
     view_set = make_views(scene, views, size)

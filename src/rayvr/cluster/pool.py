@@ -60,7 +60,7 @@ class Cluster:
         self._ray = ray
         self._owns_ray = False
         if not ray.is_initialized():
-            kwargs = {"include_dashboard": False, "log_to_driver": False, "logging_level": "warning",
+            kwargs = {"include_dashboard": False, "log_to_driver": False, "logging_level": "error",
                       **(ray_init or {})}
             try:
                 ray.init(address=address, **kwargs)
@@ -69,19 +69,22 @@ class Cluster:
                 raise ClusterError(f"cannot start or reach {where}: {exc}; check the address "
                                    f"(ray status on the head node) or leave --address out for a local one") from None
             self._owns_ray = True
-        resources = ray.cluster_resources()
-        self.cluster_gpus = float(resources.get("GPU", 0.0))
-        cpus = float(resources.get("CPU", 1.0))
-        count = int(workers) if workers else max(1, int(self.cluster_gpus))
+        free = ray.available_resources()      # another Cluster of this process may hold some
+        self.cluster_gpus = float(ray.cluster_resources().get("GPU", 0.0))
+        gpus = float(free.get("GPU", 0.0))
+        count = int(workers) if workers else max(1, int(gpus))
         if count < 1:
             raise ClusterError(f"--workers {workers}: need at least 1 worker")
         if gpus_per_worker is None:
-            gpus_per_worker = 1.0 if self.cluster_gpus >= count else self.cluster_gpus / count
-        if gpus_per_worker * count > self.cluster_gpus + 1e-9:
+            if self.cluster_gpus and not gpus:
+                raise ClusterError(f"the cluster's {self.cluster_gpus:g} GPUs are all in use; free one or wait")
+            gpus_per_worker = 1.0 if gpus >= count else gpus / count
+        if gpus_per_worker * count > gpus + 1e-9:
             raise ClusterError(f"{count} workers x {gpus_per_worker:g} GPU need {gpus_per_worker * count:g} GPUs; "
-                               f"the cluster has {self.cluster_gpus:g}: ask for fewer workers or a share of a GPU each")
+                               f"the cluster has {gpus:g} free: ask for fewer workers or a share of a GPU each")
         self.gpus_per_worker = float(gpus_per_worker)
-        self.cpus_per_worker = min(1.0, cpus / count)
+        # CPUs only place the workers (llvmpipe uses every core anyway): what is free, shared.
+        self.cpus_per_worker = min(1.0, float(free.get("CPU", 0.0)) / count)
         self.max_attempts = int(max_attempts)
         self.max_restarts = int(max_restarts)
         options = {"num_gpus": self.gpus_per_worker, "num_cpus": self.cpus_per_worker, "max_restarts": 0}

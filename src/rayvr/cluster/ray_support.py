@@ -16,9 +16,10 @@ def require_ray(what: str = "rayvr.cluster"):
 
 
 def have_ray() -> bool:
-    """Whether Ray imports here."""
+    """Whether Ray is installed here (without importing it)."""
+    import importlib.util
+
     try:
-        import ray  # noqa: F401
-    except ImportError:
+        return importlib.util.find_spec("ray") is not None
+    except ValueError:   # sys.modules["ray"] is None: imports of it are blocked
         return False
-    return True

@@ -62,19 +62,15 @@ def split_by_weights(total: int, weights) -> list[int]:
     """Integer counts summing to `total`, proportional to `weights` (largest remainders), each at
     least 1 while there are as many items as weights."""
     w = np.maximum(np.asarray(weights, dtype=np.float64), 0.0)
-    n = len(w)
-    if n == 0:
+    if len(w) == 0:
         return []
     if not w.sum() > 0:
-        w = np.ones(n)
-    floor_one = total >= n
+        w = np.ones(len(w))
     ideal = w / w.sum() * total
     counts = np.floor(ideal).astype(int)
-    if floor_one:
-        counts = np.maximum(counts, 1)
-    while counts.sum() > total:       # the floor of 1 took items from the largest shares
-        counts[int(np.argmax(counts - ideal))] -= 1
-    order = np.argsort(-(ideal - counts), kind="stable")
-    for i in order[: total - counts.sum()]:
+    for i in np.argsort(-(ideal - counts), kind="stable")[: total - counts.sum()]:
         counts[i] += 1
+    while total >= len(w) and counts.min() == 0:   # nobody idles: take from the largest share
+        counts[int(np.argmin(counts))] += 1
+        counts[int(np.argmax(counts))] -= 1
     return [int(c) for c in counts]

@@ -39,22 +39,27 @@ class RenderWorker:
     """A rayvr context on this process's GPU; see the module docstring.
 
     `label`: how results name this worker; `progress`: a ProgressCounter actor handle (or None);
-    `device_index`: the EGL device ("auto": the CUDA device's, via EGL_NV_device_cuda)."""
+    `device_index`: the EGL device ("auto": the CUDA device's, via EGL_NV_device_cuda); `gpu`:
+    an existing GpuContext to use instead (a worker inside the driver's process)."""
 
-    def __init__(self, label: str = "worker", progress=None, device_index="auto", backend: str | None = None):
+    def __init__(self, label: str = "worker", progress=None, device_index="auto", backend: str | None = None,
+                 gpu=None):
         from ..gpu import create_context, set_context
         from ..gpu.egl_devices import select_device
 
         self.label = label
         self._progress = progress
         self.gpu_ids = [str(g) for g in _ray_gpu_ids()]
-        if device_index == "auto":
-            device_index, self.device_reason = select_device(0)
+        if gpu is not None:
+            self.gpu, self.device_index, self.device_reason = gpu, None, "the given context"
         else:
-            self.device_reason = "given"
-        self.device_index = device_index
-        self.gpu = create_context(backend, device_index)
-        set_context(self.gpu)   # code that asks rayvr.gpu.get_context() gets this device
+            if device_index == "auto":
+                device_index, self.device_reason = select_device(0)
+            else:
+                self.device_reason = "given"
+            self.device_index = device_index
+            self.gpu = create_context(backend, device_index)
+            set_context(self.gpu)   # code that asks rayvr.gpu.get_context() gets this device
         self._scenes: dict = {}
         self._renderers: collections.OrderedDict = collections.OrderedDict()
         self._fail_after: int | None = None
