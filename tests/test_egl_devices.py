@@ -6,15 +6,18 @@ NV = "EGL_NV_device_cuda EGL_EXT_device_drm"
 MESA = "EGL_MESA_device_software EGL_EXT_device_drm_render_node"
 
 
-def test_llvmpipe_enumerates_and_selects_a_device_a_context_opens_on():
+def test_llvmpipe_enumerates_and_selects_a_device_a_context_opens_on(gpu):
     devices = list_devices()
     assert devices and [d.index for d in devices] == list(range(len(devices)))
     index, why = select_device(0)
     # Mesa answers no CUDA device: the default display, or else a valid index.
     assert index is None or 0 <= index < len(devices), why
-    gpu = create_context(device_index=0 if index is None else index)
-    assert gpu.caps.gl_version >= 450
-    gpu.gl.release()
+    other = create_context(device_index=0 if index is None else index)
+    try:
+        assert other.caps.gl_version >= 450
+    finally:
+        other.gl.release()
+        gpu.gl.__enter__()      # the session's context is the current one again
 
 
 def test_cuda_ordinal_numbering_skips_the_software_device():
