@@ -55,6 +55,8 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
         last = share["first_view"] + share["views"] - 1
         print(f"  views {share['first_view']}-{last}: {share['render_ms']:.2f} ms per frame (wall), "
               f"{share['worker']}")
+    if getattr(args, "report", False):
+        print("--report: each worker compiles its own graph; run without --workers for the compile report")
     radiance = result.pixels[HDR_OUTPUT]
     if hdr:
         return radiance, []
