@@ -8,7 +8,7 @@ import pytest
 
 import rayvr as rv
 from rayvr.cluster import PinnedViews, RenderWorker, ScenePayload, TrajectoryViews
-from rayvr.cluster.host_split import rebalanced
+from rayvr.cluster.host_split import WorkerSpeed, rebalanced
 from rayvr.cluster.progress import ProgressCounter
 from rayvr.cluster.shares import split_by_weights, split_evenly, view_range
 from rayvr.errors import ClusterError
@@ -33,13 +33,26 @@ def test_split_by_weights_is_proportional_and_keeps_everyone_busy():
     assert sum(split_by_weights(7, [0.3, 2.9, 1.1])) == 7
 
 
+def speed(**by_count):
+    s = WorkerSpeed()
+    for views, ms in by_count.items():
+        s.observe(int(views[1:]), ms)
+    return s
+
+
 def test_rebalance_follows_speed_with_hysteresis():
     # worker 1 takes twice as long per view: it should get half as many views
-    assert rebalanced([32, 32], [1.0, 2.0]) == [43, 21]
+    assert rebalanced([32, 32], [speed(n32=32.0), speed(n32=64.0)]) == [43, 21]
     # nearly equal speeds: a re-split would gain less than 5%, keep the shares
-    assert rebalanced([32, 32], [1.0, 1.02]) == [32, 32]
-    # a skewed start with equal speeds goes back to even
-    assert rebalanced([1, 3], [1.0, 1.0]) == [2, 2]
+    assert rebalanced([32, 32], [speed(n32=32.0), speed(n32=32.6)]) == [32, 32]
+    # equal workers with a fixed cost per frame, seen at 1 and 3 views: back to even
+    equal = [speed(n1=3.0, n2=4.0), speed(n3=5.0, n2=4.0)]
+    assert [s.line() for s in equal] == [pytest.approx((2.0, 1.0))] * 2
+    assert rebalanced([1, 3], equal) == [2, 2]
+    # ms per view alone reads the 1-view worker as the slower one: one view moves to probe the
+    # fixed cost; once both have their line, nothing moves
+    assert rebalanced([1, 3], [speed(n1=3.0), speed(n3=5.0)]) == [2, 2]
+    assert rebalanced([2, 2], equal) == [2, 2]
 
 
 def test_payloads_rebuild_the_scene_with_its_effects(tmp_path):

@@ -2,11 +2,12 @@
 frame's views, the pixels come back through host memory (Ray's shared-memory object store) and
 are written into the primary GPU's view array, a texture array on the driver's context.
 
-Shares follow measured speed: each worker's ms per view is a moving average, and the views are
-re-split in proportion to 1 / (ms per view) when that shortens the slowest share by more than
-`hysteresis`. A worker compiles its graph again for a view count it has not rendered yet (it
-caches RENDERER_CACHE of them), so the frame after a re-split is slower; that frame does not
-count in the averages.
+Shares follow measured speed: each worker keeps a moving average of its render ms at each view
+count it rendered, and a line through them (`WorkerSpeed`: a fixed cost per frame plus ms per
+view; ms per view alone until it has rendered two counts). The views are re-split to make the
+slowest predicted share shortest when that shortens it by more than `hysteresis`. A worker
+compiles its graph again for a view count it has not rendered yet (it caches RENDERER_CACHE of
+them), so the frame after a re-split is slower; that frame does not count in the averages.
 
 Latency is measured as the primary sees it: from the frame's start (before any share is sent)
 to the primary's array complete (every share written and the primary's GL finished).
@@ -19,7 +20,7 @@ import time
 import numpy as np
 
 from .jobs import VIEW_STREAM_STRIDE, _graph_for, _scene_and_payload
-from .shares import Share, split_by_weights, split_evenly, view_range
+from .shares import Share, split_evenly, view_range
 
 
 @dataclasses.dataclass
@@ -39,15 +40,66 @@ class FrameTiming:
         return dataclasses.asdict(self)
 
 
-def rebalanced(counts: list, ms_per_view: list, hysteresis: float = 0.05) -> list:
-    """Views per worker in proportion to their speed (1 / ms per view), if that makes the
-    slowest share (views x ms per view) shorter by more than `hysteresis`; else `counts`."""
-    proposal = split_by_weights(sum(counts), [1.0 / max(m, 1e-6) for m in ms_per_view])
+@dataclasses.dataclass
+class WorkerSpeed:
+    """One worker's render ms as `fixed + per_view * views`, fitted (least squares) to moving
+    averages of its ms at each view count it rendered; through the origin while it has one."""
+
+    smoothing: float = 0.3
+    by_count: dict = dataclasses.field(default_factory=dict)
+
+    def observe(self, views: int, ms: float) -> None:
+        old = self.by_count.get(views)
+        self.by_count[views] = ms if old is None else (1 - self.smoothing) * old + self.smoothing * ms
+
+    @property
+    def known(self) -> bool:
+        return bool(self.by_count)
+
+    def line(self) -> tuple[float, float]:
+        """(fixed ms, ms per view)."""
+        n = np.array(list(self.by_count), np.float64)
+        t = np.array(list(self.by_count.values()), np.float64)
+        through_origin = (0.0, float((n * t).sum() / (n * n).sum()))
+        if len(n) < 2:
+            return through_origin
+        slope, fixed = np.polyfit(n, t, 1)
+        if fixed < 0 or slope <= 0:     # noise: fall back to ms per view
+            return through_origin
+        return float(fixed), float(slope)
+
+    def predict(self, views: int) -> float:
+        fixed, per_view = self.line()
+        return fixed + per_view * views if views else 0.0
+
+
+def rebalanced(counts: list, speeds: list, hysteresis: float = 0.05) -> list:
+    """Views per worker that make the slowest predicted share (WorkerSpeed.predict) shortest,
+    every worker keeping at least one view, if that beats `counts` by `hysteresis`; else one
+    view moved from the slowest to the fastest worker while either has been seen at one view
+    count only (a probe for its fixed cost); else `counts`."""
+    total, n = sum(counts), len(counts)
+    proposal = [1] * n if total >= n else [0] * n
+    for _ in range(total - sum(proposal)):   # each view to the worker that would finish first with it
+        k = min(range(n), key=lambda i: speeds[i].predict(proposal[i] + 1))
+        proposal[k] += 1
 
     def slowest(c):
-        return max(n * m for n, m in zip(c, ms_per_view))
+        return max(speed.predict(v) for speed, v in zip(speeds, c))
 
-    return proposal if slowest(proposal) < (1 - hysteresis) * slowest(counts) else list(counts)
+    if slowest(proposal) < (1 - hysteresis) * slowest(counts):
+        return proposal
+    times = [speed.predict(v) for speed, v in zip(speeds, counts)]
+    slow, fast = max(range(n), key=times.__getitem__), min(range(n), key=times.__getitem__)
+    if counts[slow] > 1 and times[slow] > (1 + hysteresis) * times[fast] and \
+            any(len(speeds[k].by_count) < 2 for k in (slow, fast)):
+        # Uneven, but ms per view alone cannot say whether a fixed cost per frame is why: move
+        # one view, so that both workers are seen at a second view count and get their line.
+        probe = list(counts)
+        probe[slow] -= 1
+        probe[fast] += 1
+        return probe
+    return list(counts)
 
 
 class HostFrameSplitter:
@@ -75,9 +127,9 @@ class HostFrameSplitter:
         self.counts += [0] * (n - len(self.counts))
         if sum(self.counts) != len(views) or len(self.counts) != n:
             raise ValueError(f"initial_shares {initial_shares} must give {len(views)} views to {n} workers")
-        self.ms_per_view: list = [None] * n
+        self.speeds = [WorkerSpeed(float(smoothing)) for _ in range(n)]
         self._compiled: set = set()
-        self.smoothing, self.rebalance, self.hysteresis = float(smoothing), bool(rebalance), float(hysteresis)
+        self.rebalance, self.hysteresis = bool(rebalance), float(hysteresis)
         self.frame_index = 0
         self.array = None
         self.history: list[FrameTiming] = []
@@ -129,17 +181,15 @@ class HostFrameSplitter:
         return timing
 
     def _learn(self, timing: FrameTiming) -> None:
-        """Fold this frame's ms per view into the moving averages; re-split if it pays. A
+        """Fold this frame's render times into the workers' speeds; re-split if it pays. A
         worker's first frame at a view count compiles its graph: it does not count."""
         for k, (count, ms) in enumerate(zip(timing.shares, timing.render_ms)):
             if count and (k, count) not in self._compiled:
                 self._compiled.add((k, count))
             elif count:
-                per_view = ms / count
-                old = self.ms_per_view[k]
-                self.ms_per_view[k] = per_view if old is None else (1 - self.smoothing) * old + self.smoothing * per_view
-        if self.rebalance and all(m is not None for m in self.ms_per_view):
-            self.counts = rebalanced(self.counts, self.ms_per_view, self.hysteresis)
+                self.speeds[k].observe(count, ms)
+        if self.rebalance and all(s.known for s in self.speeds):
+            self.counts = rebalanced(self.counts, self.speeds, self.hysteresis)
 
     def pixels(self, flip_y: bool = True) -> np.ndarray:
         """The primary's view array as numpy (views, h, w, c); rows top-down unless not flip_y."""
