@@ -109,9 +109,9 @@ def run(args) -> dict:
         fn()
         return time.perf_counter() - t0
 
-    def with_cluster(n, share, body):
+    def with_cluster(n, share, body, same_node=False):
         t0 = time.perf_counter()
-        with rc.Cluster(n, gpus_per_worker=share) as c:
+        with rc.Cluster(n, gpus_per_worker=share, same_node=same_node) as c:
             return body(c, time.perf_counter() - t0)
 
     ref_frames = max(1, spp // spf)
@@ -182,7 +182,7 @@ def run(args) -> dict:
                         per_frame = (time.perf_counter() - t0) / split_frames
                     return startup, per_frame, timings
 
-                startup, per_frame, timings = with_cluster(n, None, body)
+                startup, per_frame, timings = with_cluster(n, None, body, same_node=True)
                 latency = sum(t.latency_ms for t in timings) / len(timings)
                 render = sum(max(t.render_ms) for t in timings) / len(timings)
                 rows.append(_row("host-split", n, 1.0 if gpus >= n else gpus / n,

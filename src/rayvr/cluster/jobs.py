@@ -222,14 +222,15 @@ def render_sequence(scene, graph, sequence, pins=None, chunk: int | None = None,
                     on_frame=None, keep: bool = True, frame_index_base: int = 0, cluster=None, workers=None,
                     address=None, payload=None, progress: bool = True) -> SequenceResult:
     """Render `sequence` (rayvr.cluster.TrajectoryViews) with `graph` in chunks of contiguous
-    frames (default: 4 chunks per worker) and deliver `pins` (default the first output; () for
-    none: timing only) per frame, in frame order, to `on_frame(index, {pin: array})` and/or keep
+    frames (default: 4 chunks per worker) and deliver `pins` (None: the first output; empty:
+    none, for timing) per frame, in frame order, to `on_frame(index, {pin: array})` and/or keep
     them. Frame i renders with frame index `frame_index_base + i`, as one process would.
     History: each chunk starts without it; `warmup` frames before a chunk's first are rendered
     for history only. Graphs without temporal passes give one process's frames exactly (with
     warmup >= 1 motion vectors too); TAA's exponential history only approaches them."""
     scene, payload = _scene_and_payload(scene, payload)
-    graph_dict, pins = _graph_for(graph, pins) if pins != () else (graph.to_dict(), [])
+    no_pins = pins is not None and len(pins) == 0
+    graph_dict, pins = (graph.to_dict(), []) if no_pins else _graph_for(graph, pins)
     frames = int(sequence.frames)
     kept: dict = {pin: [None] * frames for pin in pins} if keep else {}
     chunks: list = []
