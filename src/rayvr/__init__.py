@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import importlib
 
-from .errors import (GpuError, GraphError, OptionError, OutputError, RayvrError, SceneError, SceneWarning,
+from .errors import (ClusterError, GpuError, GraphError, OptionError, OutputError, RayvrError, SceneError, SceneWarning,
                      ShaderError, XrError)
 from .materials.effect import Effect
 
@@ -28,13 +28,14 @@ _LAZY = {
     "graphs": ("rayvr.graphs", None),
     "xr": ("rayvr.xr", None),
     "tune": ("rayvr.tune", None),
+    "cluster": ("rayvr.cluster", None),   # Ray is imported only when a Cluster starts
     "RenderGraph": ("rayvr.rendergraph.graph", "RenderGraph"),
     "RenderPass": ("rayvr.rendergraph.render_pass", "RenderPass"),
     "Renderer": ("rayvr.renderer", "Renderer"),
     "load_scene": ("rayvr.scene", "load_scene"),
 }
 
-__all__ = ["Effect", "RayvrError", "GpuError", "GraphError", "OptionError", "OutputError", "SceneError",
+__all__ = ["Effect", "RayvrError", "ClusterError", "GpuError", "GraphError", "OptionError", "OutputError", "SceneError",
            "SceneWarning", "ShaderError", "XrError", *_LAZY]
 
 

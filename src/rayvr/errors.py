@@ -42,6 +42,11 @@ class SceneWarning(UserWarning):
     on one line, library users get it through the `warnings` module and in `Scene.warnings`."""
 
 
+class ClusterError(RayvrError):
+    """rayvr.cluster cannot run a job: no Ray (the cluster extra), no reachable cluster, or
+    every worker lost."""
+
+
 def did_you_mean(name: str, candidates) -> str:
     """A ' (did you mean 'x'?)' suffix for the closest candidate, or '' when none is close."""
     import difflib

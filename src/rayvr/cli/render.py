@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cluster import cli as cluster_cli
 from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
 from .options import MAX_VIEWS, integer, load_scene_arg, number, parse_size, views_count
@@ -65,6 +66,7 @@ def register(sub) -> None:
     p.add_argument("--gbuffer", default="auto", choices=("auto", "raster", "rt"),
                    help="G-buffer: raster, ray-traced, or auto (ray-traced on GPUs with weak raster units)")
     p.add_argument("--report", action="store_true", help="print the graph's compile report")
+    cluster_cli.add_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -143,11 +145,11 @@ def quilt_path(args, grid, size) -> Path | None:
 
 
 def run(args) -> int:
-    """`rayvr render`: validate the options and outputs, render with the hybrid graph, write
-    every image at once."""
-    from ..graphs import HDR_OUTPUT, OUTPUT, hybrid
+    """`rayvr render`: validate the options and outputs, render with the hybrid graph (here, or
+    over the workers of a cluster with --workers), write every image at once."""
+    from ..graphs import hybrid
     from ..passes.tonemap import OPERATORS
-    from ..renderer import Renderer, default_views
+    from ..renderer import default_views
 
     size = parse_size(args.size, views=args.views)
     if args.tonemap.lower() not in OPERATORS:
@@ -178,19 +180,11 @@ def run(args) -> int:
                    auto_exposure=auto_exposure, light_samples=args.light_samples,
                    multiview=args.multiview, gbuffer=args.gbuffer)
     hdr = out.suffix.lower() == ".exr"
-    quilt_pixels = None
-    with Renderer(scene, graph, views=views) as r:
-        for _ in range(args.frames):
-            r.render()
-        pixels = r.read_output(HDR_OUTPUT if hdr else OUTPUT, flip_y=True)
-        if args.report:
-            print(r.report())
-        print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {args.frames} frame(s)")
-        print(r.profile())
-        if quilt is not None:
-            from ..xr.quilt import compose_quilt, read_quilt
-
-            quilt_pixels = read_quilt(compose_quilt(r.gl, r.output_texture(OUTPUT), *grid))
+    quilt_grid = grid if quilt is not None else None
+    if cluster_cli.requested(args):
+        pixels, quilt_pixels = cluster_cli.render(args, args.scene, scene, graph, views, hdr, quilt_grid)
+    else:
+        pixels, quilt_pixels = render_here(args, scene, graph, views, hdr, quilt_grid)
     images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
     with atomic_group():
         for path, img in zip(paths, images):
@@ -203,3 +197,26 @@ def run(args) -> int:
         print(f"wrote {quilt} (quilt of {grid[0]}x{grid[1]} tiles, view aspect {size[0] / size[1]:.4g}, "
               f"views on one horizontal line)")
     return 0
+
+
+def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
+    """Render in this process: (pixels (views, h, w, c) rows top-down, the quilt's pixels when
+    `quilt_grid` (cols, rows) is given, else None)."""
+    from ..graphs import HDR_OUTPUT, OUTPUT
+    from ..renderer import Renderer
+
+    size = views.size
+    quilt_pixels = None
+    with Renderer(scene, graph, views=views) as r:
+        for _ in range(args.frames):
+            r.render()
+        pixels = r.read_output(HDR_OUTPUT if hdr else OUTPUT, flip_y=True)
+        if args.report:
+            print(r.report())
+        print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {args.frames} frame(s)")
+        print(r.profile())
+        if quilt_grid is not None:
+            from ..xr.quilt import compose_quilt, read_quilt
+
+            quilt_pixels = read_quilt(compose_quilt(r.gl, r.output_texture(OUTPUT), *quilt_grid))
+    return pixels, quilt_pixels

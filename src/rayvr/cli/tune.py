@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..cluster import cli as cluster_cli
 from ..errors import OptionError
 from .options import MAX_VIEWS, integer, number, views_count
 
@@ -46,6 +47,7 @@ def register(sub) -> None:
     p.add_argument("--ppd", type=number("--ppd", 0, 1000, low_open=True),
                    help="display pixels per degree for FLIP, > 0 (default FLIP's 67)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
+    cluster_cli.add_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -88,16 +90,8 @@ def check(args) -> tuple:
 
 def run(args) -> int:
     from ..fileio import atomic_group, check_writable, write_text
-    from ..tune import (
-        Config,
-        ReferenceSettings,
-        choose_effects,
-        make_views,
-        measure,
-        standard_configs,
-    )
+    from ..tune import Config, ReferenceSettings, choose_effects, make_views, standard_configs
     from ..tune.configs import hybrid_graph
-    from ..tune.probe import probe_cost_model
     from .options import load_scene_arg as load
 
     size, levels, spp, table_metrics = check(args)
@@ -111,14 +105,15 @@ def run(args) -> int:
     view_set = make_views(scene, args.views, size)
     settings = ReferenceSettings(args.reference_frames, args.reference_spp)
     progress = not args.quiet
-    model, ref, _ = probe_cost_model(scene, view_set, hybrid_graph, {}, metric=args.metric, levels=levels,
-                                     frames=args.frames, warmup=args.warmup, reference_settings=settings,
-                                     cache_dir=args.cache, ppd=args.ppd, progress=progress)
-    tuned = choose_effects(model, args.budget_ms, levels)
-    tuned_name = f"tuned for {args.budget_ms:g} ms"
-    configs = standard_configs(scene, spp=spp) + [Config(tuned_name, dict(tuned.assignment))]
-    results = measure(scene, configs, reference=ref, views=view_set, frames=args.frames, warmup=args.warmup,
-                      ppd=args.ppd, metrics=table_metrics, progress=progress)
+    with cluster_cli.tune_functions(args, args.scene, scene) as (probe_cost_model, measure):
+        model, ref, _ = probe_cost_model(scene, view_set, hybrid_graph, {}, metric=args.metric, levels=levels,
+                                         frames=args.frames, warmup=args.warmup, reference_settings=settings,
+                                         cache_dir=args.cache, ppd=args.ppd, progress=progress)
+        tuned = choose_effects(model, args.budget_ms, levels)
+        tuned_name = f"tuned for {args.budget_ms:g} ms"
+        configs = standard_configs(scene, spp=spp) + [Config(tuned_name, dict(tuned.assignment))]
+        results = measure(scene, configs, reference=ref, views=view_set, frames=args.frames, warmup=args.warmup,
+                          ppd=args.ppd, metrics=table_metrics, progress=progress)
     row = results[tuned_name]
     tuned.record_measurement(row.frame_ms, row.errors[args.metric], results.method, "--budget-ms")
     print(results.table())

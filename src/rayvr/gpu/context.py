@@ -94,16 +94,21 @@ class GpuContext:
 _default: GpuContext | None = None
 
 
-def create_context(backend: str | None = None) -> GpuContext:
-    """Create a new headless context (EGL unless RAYVR_GL_BACKEND or `backend` says otherwise)."""
+def create_context(backend: str | None = None, device_index: int | None = None) -> GpuContext:
+    """Create a new headless context (EGL unless RAYVR_GL_BACKEND or `backend` says otherwise).
+    `device_index`: the EGL device to render on (rayvr.gpu.egl_devices.select_device picks the
+    one of a CUDA device); None is the default display."""
     backend = backend or os.environ.get("RAYVR_GL_BACKEND", "egl")
     try:
         kwargs = {"standalone": True, "require": 450}
         if backend != "default":
             kwargs["backend"] = backend
+        if device_index is not None:
+            kwargs["device_index"] = int(device_index)
         gl = moderngl.create_context(**kwargs)
     except Exception as exc:  # glcontext raises plain Exceptions with the loader's words
-        raise GpuError(f"no OpenGL 4.5 context through {backend}: {exc}; {_INSTALL_HINT}") from exc
+        where = f" on EGL device {device_index}" if device_index is not None else ""
+        raise GpuError(f"no OpenGL 4.5 context through {backend}{where}: {exc}; {_INSTALL_HINT}") from exc
     return GpuContext(gl)
 
 
@@ -113,3 +118,10 @@ def get_context() -> GpuContext:
     if _default is None:
         _default = create_context()
     return _default
+
+
+def set_context(gpu: GpuContext) -> None:
+    """Make `gpu` the process-wide context that `get_context()` returns (a cluster worker
+    creates its context on its own device first)."""
+    global _default
+    _default = gpu

@@ -105,15 +105,7 @@ def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: in
 
     from ..renderer import Renderer
 
-    configs = list(configs)
-    if not configs:
-        raise OptionError("measure: no configurations; pass e.g. rv.tune.standard_configs(scene)")
-    names = [c.name for c in configs]
-    if len(set(names)) != len(names):
-        raise OptionError(f"measure: configuration names must be unique, got {names}")
-    for c in configs:
-        if not isinstance(c, Config):
-            raise OptionError(f"measure: {c!r} is not a rayvr.tune.Config")
+    configs = check_configs(configs)
     metrics = M.check_metrics(metrics)
     view_set = make_views(scene, views, size)
     ref, ref_source = load_reference(scene, view_set, reference, reference_settings, cache_dir, gpu, progress)
@@ -134,6 +126,20 @@ def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: in
     info = {"scene": scene.name, "views": len(view_set), "size": list(view_set.size), "frames": frames,
             "warmup": warmup, "warmup_s": warmup_s, "method": timing.method, "reference": ref_source, "ppd": ppd, "eps": eps}
     return Results(rows, info)
+
+
+def check_configs(configs) -> list[Config]:
+    """`configs` as a list: at least one, every one a Config, names unique."""
+    configs = list(configs)
+    if not configs:
+        raise OptionError("measure: no configurations; pass e.g. rv.tune.standard_configs(scene)")
+    names = [c.name for c in configs]
+    if len(set(names)) != len(names):
+        raise OptionError(f"measure: configuration names must be unique, got {names}")
+    for c in configs:
+        if not isinstance(c, Config):
+            raise OptionError(f"measure: {c!r} is not a rayvr.tune.Config")
+    return configs
 
 
 def load_reference(scene, view_set, reference, settings, cache_dir, gpu, progress) -> tuple[np.ndarray, str]:

@@ -100,17 +100,35 @@ def reference_image(scene, view_set, settings: ReferenceSettings = ReferenceSett
     cache when there, else rendered and stored (`cache_dir=False` disables the cache)."""
     if cache_dir is False:
         return render_reference(scene, view_set, settings, gpu, progress), None
+    path = reference_path(scene, view_set, settings, cache_dir)
+    image = cached_reference(path)
+    if image is not None:
+        return image, path
+    image = render_reference(scene, view_set, settings, gpu, progress)
+    store_reference(path, image, scene, view_set, settings)
+    return image, path
+
+
+def reference_path(scene, view_set, settings: ReferenceSettings, cache_dir=None) -> Path:
+    """The cache file of this reference (in `cache_dir`, default `default_cache_dir()`)."""
     folder = Path(cache_dir) if cache_dir else default_cache_dir()
-    path = folder / f"{scene.name}-{len(view_set)}x{view_set.size[0]}x{view_set.size[1]}-" \
+    return folder / f"{scene.name}-{len(view_set)}x{view_set.size[0]}x{view_set.size[1]}-" \
                     f"{reference_key(scene, view_set, settings)}.npz"
+
+
+def cached_reference(path: Path) -> np.ndarray | None:
+    """The image in cache file `path`, or None when it is missing or damaged."""
     if path.exists():
         try:
             with np.load(path) as data:
-                return data["image"], path
+                return data["image"]
         except (OSError, ValueError, KeyError):
             pass   # a damaged cache file: render again and replace it
-    image = render_reference(scene, view_set, settings, gpu, progress)
+    return None
+
+
+def store_reference(path: Path, image: np.ndarray, scene, view_set, settings: ReferenceSettings) -> Path:
+    """Write a reference to cache file `path` atomically."""
     meta = json.dumps({"scene": scene.name, "views": len(view_set), "size": list(view_set.size),
                        **dataclasses.asdict(settings)})
-    atomic_write(path, lambda tmp: np.savez_compressed(tmp, image=image, meta=np.array(meta)))
-    return image, path
+    return atomic_write(path, lambda tmp: np.savez_compressed(tmp, image=image, meta=np.array(meta)))

@@ -25,6 +25,7 @@ class ConfigResult:
     cpu_ms: float          # CPU ms inside the graph's execute() per frame
     errors: dict           # metric -> value (see rayvr.tune.metrics.METRICS)
     image: object = None   # the linear image (views, h, w, c) when measure(keep_images=True)
+    timed_on: str | None = None   # the worker (GPU, host) that timed it, when a cluster measured it
 
     def as_dict(self) -> dict:
         d = dataclasses.asdict(self)
@@ -94,11 +95,14 @@ class Results:
     def table(self, per_pass: bool = False) -> str:
         """A markdown table: configuration, GPU ms per frame, each metric (and each pass's ms)."""
         passes = self.passes() if per_pass else []
-        cols = ["configuration", "GPU ms/frame", *(METRICS[m] for m in self.metrics()), *(f"{p} ms" for p in passes)]
+        timed_on = any(r.timed_on for r in self.rows)
+        cols = ["configuration", "GPU ms/frame", *(METRICS[m] for m in self.metrics()), *(f"{p} ms" for p in passes),
+                *(["timed on"] if timed_on else [])]
         lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
         for r in self.rows:
             cells = [r.name, _fmt(r.frame_ms), *(_fmt(r.errors[m]) for m in self.metrics()),
-                     *(_fmt(r.pass_ms[p]) if p in r.pass_ms else "-" for p in passes)]
+                     *(_fmt(r.pass_ms[p]) if p in r.pass_ms else "-" for p in passes),
+                     *([r.timed_on or "-"] if timed_on else [])]
             lines.append("| " + " | ".join(c.replace("|", "/") for c in cells) + " |")
         i = self.info
         lines.append("")
@@ -119,12 +123,14 @@ class Results:
 
     def to_csv(self) -> str:
         passes, metrics = self.passes(), self.metrics()
+        timed_on = any(r.timed_on for r in self.rows)
         out = io.StringIO()
         w = csv.writer(out)
-        w.writerow(["configuration", "frame_ms", *metrics, *(f"{p}_ms" for p in passes), "method"])
+        w.writerow(["configuration", "frame_ms", *metrics, *(f"{p}_ms" for p in passes), "method",
+                    *(["timed_on"] if timed_on else [])])
         for r in self.rows:
             w.writerow([r.name, r.frame_ms, *(r.errors[m] for m in metrics),
-                        *(r.pass_ms.get(p, "") for p in passes), self.method])
+                        *(r.pass_ms.get(p, "") for p in passes), self.method, *([r.timed_on or ""] if timed_on else [])])
         return out.getvalue()
 
     # -- plots -------------------------------------------------------------------------------

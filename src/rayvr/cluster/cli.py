@@ -1,0 +1,95 @@
+"""`--workers N` / `--address ADDR` for the rayvr subcommands (render, tune; converge can use the
+same three functions): the options, the Cluster they ask for, and the subcommands' cluster paths.
+Nothing here imports Ray unless the options ask for a cluster."""
+from __future__ import annotations
+
+import contextlib
+import functools
+
+from ..errors import OptionError
+
+
+def add_arguments(parser) -> None:
+    """Add --workers and --address to a subcommand's parser."""
+    group = parser.add_argument_group("cluster (needs the cluster extra: pip install 'rayvr[cluster]')")
+    group.add_argument("--workers", type=int, metavar="N",
+                       help="split the work over N Ray workers, one GPU each (llvmpipe without GPUs)")
+    group.add_argument("--address", metavar="ADDR",
+                       help="an existing Ray cluster ('auto', host:6379, ray://host:10001); default: a local one")
+
+
+def requested(args) -> bool:
+    """Whether the options ask for a cluster."""
+    return getattr(args, "workers", None) is not None or bool(getattr(args, "address", None))
+
+
+def open_cluster(args):
+    """The Cluster the options ask for (ClusterError with the install hint without Ray)."""
+    from .ray_support import require_ray
+
+    if args.workers is not None and args.workers < 1:
+        raise OptionError(f"--workers {args.workers}: need at least 1 worker")
+    require_ray("--workers" if args.workers is not None else "--address")
+    from .pool import Cluster
+
+    return Cluster(args.workers, args.address)
+
+
+def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
+    """`rayvr render --workers`: the views split over the workers, each rendering `--frames`
+    frames; linear radiance gathered and tone mapped here (auto exposure sees every view).
+    Returns (pixels (views, h, w, c) rows top-down, the quilt's pixels when `grid` is given, else
+    None) and prints what ran where; rayvr render writes them (all or nothing)."""
+    from ..graphs import HDR_OUTPUT
+    from .gather import tone_map
+    from .jobs import render_views
+    from .payload import ScenePayload, effects_of
+
+    payload = ScenePayload.of(spec, effects_of(scene))
+    with open_cluster(args) as cluster:
+        result = render_views(scene, graph, views, pins=[HDR_OUTPUT], frames=args.frames, cluster=cluster,
+                              payload=payload, progress=True)
+    size = views.size
+    print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {args.frames} frame(s) "
+          f"on {len(result.shares)} worker share(s)")
+    for share in result.shares:
+        last = share["first_view"] + share["views"] - 1
+        print(f"  views {share['first_view']}-{last}: {share['render_ms']:.2f} ms per frame (wall), "
+              f"{share['worker']}")
+    if getattr(args, "report", False):
+        print("--report: each worker compiles its own graph; run without --workers for the compile report")
+    radiance = result.pixels[HDR_OUTPUT]
+    if hdr and grid is None:
+        return radiance, None
+    tm = graph.get_pass("ToneMap")
+    pixels, texture, compiled = tone_map(radiance, tm.operator, tm.exposure, tm.auto_exposure)
+    try:
+        quilt_pixels = None
+        if grid is not None:
+            from ..gpu import get_context
+            from ..xr.quilt import compose_quilt, read_quilt
+
+            quilt_pixels = read_quilt(compose_quilt(get_context().gl, texture, *grid))
+    finally:
+        compiled.release()
+    return (radiance if hdr else pixels), quilt_pixels
+
+
+@contextlib.contextmanager
+def tune_functions(args, spec, scene):
+    """(probe_cost_model, measure) for `rayvr tune`: rayvr.tune's own, or with --workers the
+    cluster's (the reference split by samples, the probe on one worker, the configurations
+    split over all, each row naming the worker that timed it)."""
+    if not requested(args):
+        from ..tune import measure
+        from ..tune.probe import probe_cost_model
+
+        yield probe_cost_model, measure
+        return
+    from . import jobs
+    from .payload import ScenePayload, effects_of
+
+    payload = ScenePayload.of(spec, effects_of(scene))
+    with open_cluster(args) as cluster:
+        yield (functools.partial(jobs.probe_cost_model, cluster=cluster, payload=payload),
+               functools.partial(jobs.measure, cluster=cluster, payload=payload))

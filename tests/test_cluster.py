@@ -1,0 +1,222 @@
+"""rayvr.cluster on a local Ray with two llvmpipe workers: a 4-view grid split by views equals one
+process's render, a reference split by samples agrees with one process (the same paths) and
+statistically across seeds, sequences split by frames, the error study split by configuration,
+the host-local frame split, workers killed mid-job, Ctrl-C, and `--workers` on the CLI."""
+import _thread
+import threading
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import rayvr as rv
+import rayvr.cluster as rc
+from rayvr.cli.main import main
+from rayvr.renderer import default_views
+
+ray = pytest.importorskip("ray", reason="the cluster tests need Ray: pip install -e '.[test,cluster]'")
+
+SIZE = (24, 24)
+
+
+def shadows_scene():
+    """box_on_plane with SHADOWS everywhere: a point light, so no pass draws random numbers."""
+    scene = rv.scenes.box_on_plane()
+    for m in scene.materials:
+        m.effect = rv.Effect.SHADOWS
+    return scene
+
+
+def one_process(scene, graph, views, pins, frames=1):
+    with rv.Renderer(scene, graph, views=views) as r:
+        for _ in range(frames):
+            r.render()
+        return {pin: r.read_output(pin, flip_y=True) for pin in pins}
+
+
+def pt_graph():
+    return rv.tune.path_traced_graph(spp=1, max_bounces=3)
+
+
+# -- split by views ----------------------------------------------------------------------------------
+def test_four_view_grid_split_by_views_equals_one_process(cluster):
+    scene = shadows_scene()
+    views = default_views(scene, 4, SIZE, grid=(2, 2))
+    pins = ["Composite.color", "ToneMap.dst"]
+    got = rc.render_views(scene, rv.graphs.hybrid(), views, pins=pins, cluster=cluster, progress=False)
+    want = one_process(scene, rv.graphs.hybrid(), views, pins)
+    assert len(got.shares) == 2 and {s["worker"] for s in got.shares} == set(got_workers(cluster))
+    for pin in pins:
+        assert got.pixels[pin].dtype == want[pin].dtype
+        assert np.array_equal(got.pixels[pin], want[pin]), pin
+    assert want["ToneMap.dst"].max() > 0
+
+
+def got_workers(cluster):
+    return [ray.get(h.describe.remote()) for h in cluster.handles]
+
+
+def test_random_passes_split_by_views_first_share_exact_others_another_sample(cluster):
+    # The Cornell box's area light is sampled per pixel, seeded by the view's layer: the first
+    # share's layers are the frame's, later shares draw other (decorrelated) random numbers.
+    scene = rv.scenes.cornell_box()
+    views = default_views(scene, 4, SIZE)
+    got = rc.render_views(scene, rv.graphs.hybrid(), views, pins=["Composite.color"], cluster=cluster,
+                          progress=False).pixels["Composite.color"].astype(np.float64)
+    want = one_process(scene, rv.graphs.hybrid(), views, ["Composite.color"])["Composite.color"].astype(np.float64)
+    assert np.array_equal(got[:2], want[:2])
+    assert not np.array_equal(got[2:], want[2:])
+    assert abs(got[2:, ..., :3].mean() - want[2:, ..., :3].mean()) < 0.02 * want[2:, ..., :3].mean()
+
+
+# -- split by samples --------------------------------------------------------------------------------
+def test_reference_split_by_samples_is_one_process_paths_and_reruns_identically(cluster, gpu):
+    scene = rv.scenes.cornell_box()
+    views = default_views(scene, 2, SIZE)
+    one = rv.tune.render_reference(scene, views, rv.tune.ReferenceSettings(8, 1, 3), gpu=gpu, progress=False)
+    ref = rc.converge_reference(scene, views, frames=8, spp=1, max_bounces=3, cluster=cluster, progress=False)
+    assert ref.shares == 8 and ref.samples_per_pixel == 8 and len(set(ref.workers)) == 2
+    assert np.allclose(ref.image, one, rtol=1e-5, atol=1e-6)
+    again = rc.converge_reference(scene, views, frames=8, spp=1, max_bounces=3, cluster=cluster, progress=False)
+    assert np.array_equal(again.image, ref.image)
+
+
+def test_independent_seeds_agree_within_standard_errors_and_variance_falls_as_one_over_n(cluster):
+    scene = rv.scenes.cornell_box()
+    views = default_views(scene, 2, SIZE)
+
+    def run(seed, frames):
+        return rc.converge_reference(scene, views, frames=frames, spp=1, graph=pt_graph(), seed=seed,
+                                     cluster=cluster, progress=False)
+
+    a8, b8, a32, b32 = run(1, 8), run(2, 8), run(3, 32), run(4, 32)
+    d8 = (a8.image - b8.image)[..., :3].astype(np.float64)
+    d32 = (a32.image - b32.image)[..., :3].astype(np.float64)
+    for d, a, b in ((d8, a8, b8), (d32, a32, b32)):
+        var = (a.stderr[..., :3].astype(np.float64) ** 2 + b.stderr[..., :3] ** 2)
+        pixels = var.shape[0] * var.shape[1] * var.shape[2]
+        se = np.sqrt(var.reshape(-1, 3).sum(axis=0)) / pixels            # s.e. of each channel's image mean
+        assert np.all(np.abs(d.reshape(-1, 3).mean(axis=0)) < 4 * se), (d.reshape(-1, 3).mean(axis=0), se)
+        assert 0.5 < var.mean() / (d ** 2).mean() < 2.0                  # batch-means errors are honest
+    assert 2.5 < (d8 ** 2).mean() / (d32 ** 2).mean() < 6.5              # 4x the samples, 1/4 the variance
+
+
+# -- split by frames and by configurations ---------------------------------------------------------------
+def test_sequence_split_into_chunks_equals_one_chunk(cluster):
+    scene = rv.scenes.cornell_box()     # random numbers follow the absolute frame index: exact anyway
+    seq = rc.TrajectoryViews(default_views(scene, 2, SIZE), "turn", frames=8, fps=30)
+    seen = []
+    split = rc.render_sequence(scene, rv.graphs.hybrid(), seq, pins=["Composite.color"], chunk=2, warmup=1,
+                               on_frame=lambda i, f: seen.append(i), cluster=cluster, progress=False)
+    whole = rc.render_sequence(scene, rv.graphs.hybrid(), seq, pins=["Composite.color"], chunk=8,
+                               cluster=cluster, progress=False)
+    assert seen == list(range(8)) and len(split.chunks) == 4 and len(whole.chunks) == 1
+    a, b = split.frames["Composite.color"], whole.frames["Composite.color"]
+    assert a.shape == (8, 2, SIZE[1], SIZE[0], 4) and np.array_equal(a, b)
+    assert not np.array_equal(a[0], a[4])          # the head turned
+
+
+def test_error_study_split_by_configuration_matches_one_process(cluster, gpu):
+    scene = rv.scenes.cornell_box()
+    views = default_views(scene, 2, SIZE)
+    ref = rv.tune.render_reference(scene, views, rv.tune.ReferenceSettings(4, 1, 3), gpu=gpu, progress=False)
+    configs = rv.tune.standard_configs(scene, spp=(1,))
+    kw = {"reference": ref, "views": views, "frames": 1, "warmup": 1, "metrics": ("relmse", "psnr")}
+    split = rc.measure(scene, configs, cluster=cluster, progress=False, **kw)
+    here = rv.tune.measure(scene, configs, progress=False, gpu=gpu, **kw)
+    assert [r.name for r in split.rows] == [c.name for c in configs]
+    for a, b in zip(split.rows, here.rows):
+        assert a.errors == pytest.approx(b.errors, rel=1e-12), a.name
+        assert a.timed_on and a.timed_on.startswith("worker") and a.frame_ms > 0
+    assert "timed on" in split.table() and len(split.info["workers"]) == 2
+
+
+# -- one frame over the host's GPUs -------------------------------------------------------------------------
+def test_host_split_gathers_exact_pixels_and_balances_a_skewed_start(cluster):
+    scene = shadows_scene()
+    views = default_views(scene, 4, (64, 64))
+    want = one_process(scene, rv.graphs.hybrid(), views, ["Composite.color"])["Composite.color"]
+    with rc.HostFrameSplitter(scene, rv.graphs.hybrid(), views, pin="Composite.color", cluster=cluster,
+                              initial_shares=[1, 3]) as split:
+        timings = [split.render() for _ in range(8)]
+        assert np.array_equal(split.pixels(), want)
+    assert timings[0].shares == [1, 3]
+    assert [2, 2] in [t.shares for t in timings]                 # measured speeds even the shares out
+    for t in timings:
+        assert t.latency_ms >= max(t.arrival_ms) >= max(t.render_ms) > 0 and t.copy_ms > 0
+
+
+# -- faults and Ctrl-C ---------------------------------------------------------------------------------------
+def test_worker_exiting_mid_share_is_rerun_with_the_same_result(cluster):
+    scene = rv.scenes.cornell_box()
+    views = default_views(scene, 2, SIZE)
+    clean = rc.converge_reference(scene, views, frames=8, spp=1, graph=pt_graph(), cluster=cluster, progress=False)
+    ray.get(cluster.handles[0].fail_after.remote(1))     # os._exit in its next share's first frame
+    faulty = rc.converge_reference(scene, views, frames=8, spp=1, graph=pt_graph(), cluster=cluster, progress=False)
+    assert np.array_equal(faulty.image, clean.image)
+    assert cluster.size == 2                              # replaced
+
+
+def test_killed_worker_views_rerun_elsewhere(cluster):
+    scene = shadows_scene()
+    views = default_views(scene, 4, SIZE)
+    victim = cluster.handles[1]
+    ray.kill(victim)
+    got = rc.render_views(scene, rv.graphs.hybrid(), views, pins=["Composite.color"], cluster=cluster,
+                          progress=False)
+    want = one_process(scene, rv.graphs.hybrid(), views, ["Composite.color"])
+    assert np.array_equal(got.pixels["Composite.color"], want["Composite.color"])
+    with pytest.raises(ray.exceptions.RayActorError):
+        ray.get(victim.ping.remote())
+
+
+def test_ctrl_c_stops_the_busy_workers_and_the_next_job_runs(cluster):
+    scene = rv.scenes.cornell_box()
+    views = default_views(scene, 2, SIZE)
+    busy = list(cluster.handles)
+    timer = threading.Timer(1.0, _thread.interrupt_main)
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            rc.converge_reference(scene, views, frames=20000, spp=1, graph=pt_graph(), cluster=cluster,
+                                  progress=False)
+    finally:
+        timer.cancel()
+    for handle in busy:
+        with pytest.raises(ray.exceptions.RayActorError):
+            ray.get(handle.ping.remote(), timeout=30)
+    ref = rc.converge_reference(scene, views, frames=2, spp=1, graph=pt_graph(), cluster=cluster, progress=False)
+    assert np.isfinite(ref.image).all() and cluster.size == 2
+
+
+def test_progress_bar_aggregates_the_workers(cluster, capsys):
+    scene = shadows_scene()
+    rc.render_views(scene, rv.graphs.hybrid(), default_views(scene, 4, SIZE), frames=3, cluster=cluster,
+                    progress=True)
+    err = capsys.readouterr().err
+    assert "views box_on_plane" in err and "12/12" in err      # 4 views x 3 frames over both workers
+
+
+# -- the command line ------------------------------------------------------------------------------------------
+def test_render_with_workers_writes_one_process_images_and_quilt(cluster, tmp_path, capsys):
+    common = ["render", "box_on_plane", "--views", "4", "--grid", "2x2", "--size", "24x24", "--effect", "*=shadows"]
+    assert main(common + ["--out", str(tmp_path / "here.png"), "--quilt", str(tmp_path / "qh.png")]) == 0
+    code = main(common + ["--workers", "2", "--out", str(tmp_path / "split.png"), "--quilt", str(tmp_path / "qs.png")])
+    out = capsys.readouterr().out
+    assert code == 0 and "2 worker share(s)" in out
+    for i in range(4):
+        assert np.array_equal(np.asarray(Image.open(tmp_path / f"split_v{i}.png")),
+                              np.asarray(Image.open(tmp_path / f"here_v{i}.png")))
+    here_q = [p for p in tmp_path.iterdir() if p.name.startswith("qh")]
+    split_q = [p for p in tmp_path.iterdir() if p.name.startswith("qs")]
+    assert len(here_q) == len(split_q) == 1
+    assert np.array_equal(np.asarray(Image.open(here_q[0])), np.asarray(Image.open(split_q[0])))
+
+
+def test_tune_with_workers_names_the_worker_of_each_row(cluster, tmp_path, capsys):
+    code = main(["tune", "--views", "1", "--size", "16x16", "--frames", "1", "--warmup", "1", "--reference-frames", "4",
+                 "--reference-spp", "1", "--spp", "1", "--metrics", "relmse", "--metric", "relmse", "--quiet",
+                 "--cache", str(tmp_path / "cache"), "--workers", "2"])
+    out = capsys.readouterr().out
+    assert code == 0 and "timed on" in out and out.count("| worker ") >= 5
+    assert list((tmp_path / "cache").glob("*.npz"))      # the split reference went into tune's cache
