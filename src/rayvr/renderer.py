@@ -144,6 +144,11 @@ class Renderer:
                                            extra_report=[self.gpu_scene.report()], profiling=self.profiling)
         self.compiles += 1
 
+    def recompile(self) -> None:
+        """Compile the graph again, keeping the GpuScene: after `graph.update_pass(...)` or other
+        graph edits (the compiled graph holds the pass instances it was compiled with)."""
+        self._compile()
+
     def _maybe_recompile(self) -> None:
         version = self.scene.materials.version
         if version == self._materials_version:

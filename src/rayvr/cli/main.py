@@ -9,7 +9,7 @@ import sys
 from ..errors import RayvrError
 
 # Subcommand modules, in the order `rayvr --help` lists them.
-COMMAND_MODULES = ["info", "render", "graph", "tune"]
+COMMAND_MODULES = ["info", "render", "graph", "tune", "view"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -35,6 +35,9 @@ def main(argv: list[str] | None = None) -> int:
         msg = " ".join(str(exc).split()) if "\n" not in str(exc).strip() else str(exc).strip()
         print(f"rayvr: error: {msg}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("rayvr: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -2,8 +2,9 @@
 
 No SCENE renders the built-in Cornell box; a name of a built-in scene (cornell_box, spheres, ...)
 renders that; anything else is a glTF file. PNGs per view (out_L/out_R for stereo, out_v{i} for
-more views) or side by side; `.exr` writes linear HDR. Files are written under a temporary name
-in the same folder and renamed, so a failure never leaves a half-written output.
+more views) or side by side; `.exr` writes linear HDR. `--camera-path FILE` (a path `rayvr view`
+recorded) renders one frame per recorded pose into out_0000, out_0001, ... Files are written under
+a temporary name in the same folder and renamed, so a failure never leaves a half-written output.
 """
 from __future__ import annotations
 
@@ -41,6 +42,9 @@ def register(sub) -> None:
     p.add_argument("--gbuffer", default="auto", choices=("auto", "raster", "rt"),
                    help="G-buffer: raster, ray-traced, or auto (ray-traced on GPUs with weak raster units)")
     p.add_argument("--report", action="store_true", help="print the graph's compile report")
+    p.add_argument("--camera-path", metavar="FILE",
+                   help="replay a camera path JSON (rayvr view records them): one frame per pose, "
+                        "written as OUT_0000, OUT_0001, ...")
     p.set_defaults(func=run)
 
 
@@ -83,6 +87,19 @@ def output_paths(out: Path, views: int, layout: str) -> list[Path]:
     return [out.with_name(f"{out.stem}_v{i}{out.suffix}") for i in range(views)]
 
 
+def frame_path(out: Path, index: int) -> Path:
+    """Frame `index` of a camera path replay: out_0000.png, out_0001.png, ..."""
+    return out.with_name(f"{out.stem}_{index:04d}{out.suffix}")
+
+
+def write_views(out: Path, pixels: np.ndarray, layout: str) -> list[Path]:
+    """Write (views, h, w, c) rows top-down: one file per view or side by side; .exr as HDR."""
+    hdr = out.suffix.lower() == ".exr"
+    images = [np.concatenate(list(pixels), axis=1)] if layout == "side-by-side" else list(pixels)
+    return [(write_exr if hdr else write_png)(path, img)
+            for path, img in zip(output_paths(out, len(pixels), layout), images)]
+
+
 def run(args) -> int:
     """`rayvr render`: validate the options, render with the hybrid graph, write the images."""
     from ..graphs import HDR_OUTPUT, OUTPUT, hybrid
@@ -107,6 +124,15 @@ def run(args) -> int:
         grid = parse_grid(args.grid)
     if args.quilt and grid is None:
         raise OptionError("--quilt needs --grid COLSxROWS (e.g. --views 48 --grid 8x6 --quilt q.png)")
+    camera_path = None
+    if args.camera_path:
+        from ..xr.camera_path import CameraPath
+
+        if args.views > 2 or grid is not None:
+            raise OptionError(f"--camera-path replays 1 or 2 views, not --views {args.views}; use --views 1 or 2")
+        if args.frames != 1:
+            raise OptionError("--camera-path renders one frame per recorded pose; leave out --frames")
+        camera_path = CameraPath.load(args.camera_path)
     scene = load_scene_arg(args.scene)
     apply_effects(scene, args.effect)
 
@@ -117,12 +143,19 @@ def run(args) -> int:
     hdr = out.suffix.lower() == ".exr"
     written = []
     with Renderer(scene, graph, views=views) as r:
-        for _ in range(args.frames):
-            r.render()
-        pixels = r.read_output(HDR_OUTPUT if hdr else OUTPUT, flip_y=True)
+        if camera_path is None:
+            for _ in range(args.frames):
+                r.render()
+            pixels = r.read_output(HDR_OUTPUT if hdr else OUTPUT, flip_y=True)
+        else:
+            for i in range(len(camera_path)):
+                r.render(camera_path.view_set(i, views))
+                written += write_views(frame_path(out, i), r.read_output(HDR_OUTPUT if hdr else OUTPUT,
+                                                                         flip_y=True), args.layout)
         if args.report:
             print(r.report())
-        print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {args.frames} frame(s)")
+        frames = args.frames if camera_path is None else len(camera_path)
+        print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {frames} frame(s)")
         print(r.profile())
         if args.quilt:
             from ..xr.quilt import compose_quilt, quilt_filename, write_quilt_png
@@ -130,10 +163,8 @@ def run(args) -> int:
             q = compose_quilt(r.gl, r.output_texture(OUTPUT), *grid)
             qpath = quilt_filename(args.quilt, grid[0], grid[1], size[0] / size[1])
             written.append(write_quilt_png(q, qpath))
-    images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
-    for path, img in zip(output_paths(out, len(views), args.layout), images):
-        (write_exr if hdr else write_png)(path, img)
-        written.append(path)
+    if camera_path is None:
+        written += write_views(out, pixels, args.layout)
     for path in written:
         print(f"wrote {path}")
     return 0

@@ -1,7 +1,8 @@
 """OpenGL context, capability probe, shader loading and GPU timing."""
-from .context import Capabilities, GpuContext, create_context, get_context, probe
+from .context import (Capabilities, GpuContext, attach_context, create_context, get_context, probe,
+                      use_context)
 from .shaders import ShaderSource, compute_program, preprocess, raster_program
 from .timer import GpuTimer
 
-__all__ = ["Capabilities", "GpuContext", "create_context", "get_context", "probe",
+__all__ = ["Capabilities", "GpuContext", "attach_context", "create_context", "get_context", "probe", "use_context",
            "ShaderSource", "compute_program", "preprocess", "raster_program", "GpuTimer"]

@@ -1,0 +1,31 @@
+"""`rayvr view` / `rv.view()`: a live window on a scene and render graph, with Dear ImGui panels.
+
+    import rayvr as rv
+    scene = rv.scenes.cornell_box()
+    rv.view(scene, rv.graphs.hybrid())     # fly around; edit effects and pass properties; screenshot
+
+Modules: `window` (glfw, the GL 4.5 context the renderer shares), `offscreen` (the same loop
+without a display), `camera` (fly and orbit), `view_rig` (views, fov, IPD, headset presets),
+`input` and `script` (events, scripted input), `ui` and `panels` (ImGui), `display` (the output
+texture array on screen), `screenshot`, `assignment` (effects as JSON), `app` (the frame loop).
+glfw and imgui-bundle (the `viewer` extra) are imported only when a viewer starts.
+"""
+from __future__ import annotations
+
+
+def view(*args, **kwargs):
+    """See `rayvr.viewer.app.view`."""
+    from .app import view as _view
+
+    return _view(*args, **kwargs)
+
+
+def __getattr__(name: str):
+    if name == "Viewer":
+        from .app import Viewer
+
+        return Viewer
+    raise AttributeError(f"module 'rayvr.viewer' has no attribute '{name}'")
+
+
+__all__ = ["view", "Viewer"]
