@@ -93,7 +93,11 @@ SCRIPT = {"dt": DT, "events": [
     {"frame": 12, "key": "D", "action": "down"},        # strafe right for frames 12, 13
     {"frame": 14, "key": "D", "action": "up"},
     {"frame": 14, "screenshot": "strafed.png"},
-    {"frame": 15, "quit": True}]}
+    {"frame": 15, "mouse": [128, 128]},                # drag 20 px right with the right button
+    {"frame": 15, "button": "right", "action": "down"},
+    {"frame": 16, "mouse": [148, 128]},
+    {"frame": 17, "button": "right", "action": "up"},
+    {"frame": 18, "quit": True}]}
 
 
 @pytest.fixture(scope="module")
@@ -160,6 +164,15 @@ def test_strafe_key_shifts_the_walls_left(scripted):
     assert ml1 < ml0 - 5 and mr1 < mr0 - 5
 
 
+def test_mouse_drag_turns_the_camera(scripted):
+    from rayvr.viewer.camera import LOOK_RADIANS_PER_PIXEL, yaw_pitch
+
+    folder, path, scene, rig = scripted
+    (yaw0, pitch0), (yaw1, pitch1) = yaw_pitch(path.poses[15]), yaw_pitch(path.poses[16])
+    assert yaw1 - yaw0 == pytest.approx(-20 * LOOK_RADIANS_PER_PIXEL) and pitch1 == pytest.approx(pitch0)
+    np.testing.assert_allclose(path.poses[16].position, path.poses[15].position)
+
+
 def test_switching_a_material_effect_changes_its_pixels(scripted):
     folder, path, scene, rig = scripted
     before, again, after = (view_pixels(folder / n) for n in ("a.png", "a_again.png", "left_wall_pt.png"))
@@ -178,7 +191,7 @@ def test_recorded_camera_path_replays_in_rayvr_render(scripted, display):
     out = rayvr_cmd(["render", "--camera-path", "path.json", "--views", "1", "--size", f"{SIZE}x{SIZE}", "--effect",
                      "*=raster", "--exposure", "0", "--out", "replay/r.png"], display, folder)
     assert out.returncode == 0, out.stderr
-    assert len(list((folder / "replay").glob("r_*.png"))) == len(path) == 16
+    assert len(list((folder / "replay").glob("r_*.png"))) == len(path) == 19
     for shot, frame in (("a.png", 2), ("forward.png", 11), ("strafed.png", 14)):
         replay = view_pixels_1x(folder / "replay" / f"r_{frame:04d}.png")
         np.testing.assert_array_equal(view_pixels(folder / shot), replay)
@@ -195,11 +208,21 @@ def test_ui_is_drawn_over_the_frame_and_only_there(display, tmp_path):
     without the panels differ exactly where the panel window is."""
     script = {"events": [{"frame": 2, "key": "H", "action": "tap"}, {"frame": 4, "screenshot": "no_ui.png"},
                          {"frame": 5, "key": "H", "action": "tap"}, {"frame": 6, "screenshot": "ui.png"},
-                         {"frame": 7, "quit": True}]}
+                         # a drag that starts on the panel is the panel's; one beside it turns the camera
+                         {"frame": 7, "mouse": [60, 120]}, {"frame": 8, "button": "left", "action": "down"},
+                         {"frame": 9, "mouse": [90, 120]}, {"frame": 10, "button": "left", "action": "up"},
+                         {"frame": 11, "mouse": [252, 120]}, {"frame": 12, "button": "left", "action": "down"},
+                         {"frame": 13, "mouse": [232, 120]}, {"frame": 14, "button": "left", "action": "up"},
+                         {"frame": 15, "quit": True}]}
     (tmp_path / "s.json").write_text(json.dumps(script))
     out = rayvr_cmd(["view", "--views", "1", "--size", "128x128", "--window", "256x256", "--effect", "*=raster",
-                     "--target-frames", "1", "--script", "s.json"], display, tmp_path)
+                     "--target-frames", "1", "--script", "s.json", "--record", "p.json"], display, tmp_path)
     assert out.returncode == 0, out.stderr
+    from rayvr.viewer.camera import yaw_pitch
+
+    yaws = [yaw_pitch(p)[0] for p in CameraPath.load(tmp_path / "p.json").poses]
+    assert yaws[10] == yaws[0]
+    assert yaws[13] > yaws[12] + 0.05                          # dragged left: turned left
     from PIL import Image
 
     ui, no_ui = (np.asarray(Image.open(tmp_path / n), dtype=np.int32) for n in ("ui.png", "no_ui.png"))

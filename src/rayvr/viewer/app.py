@@ -29,6 +29,7 @@ from .view_rig import ViewRig
 
 BUDGET_MS = 11.1          # 90 Hz
 HISTORY = 240             # frames of timing kept for the plots
+MAX_WINDOW = (1600, 900)  # the default window's largest size
 GRAPHS = ("hybrid", "path_traced")
 
 
@@ -77,28 +78,21 @@ class Viewer:
         self.rig = ViewRig.from_scene(self.scene, views, size, ipd=ipd)
         if preset:
             self.rig = self.rig.with_preset(preset, preset_scale)
-        self._stack = contextlib.ExitStack()
-        if surface is None:
-            from .window import Window
+        lo, hi = np.asarray(self.scene.bounds(), dtype=np.float64)
+        self.extent = max(float(np.linalg.norm(hi - lo)), 1e-3)
+        from ..renderer import camera_pose
 
-            w, h = self.rig.size
-            surface = Window(window_size or (w * self.rig.views, h), title=f"rayvr: {self.scene.name}")
-        self.surface = surface
-        self.gpu = surface.gpu
-        self._stack.enter_context(use_context(self.gpu))   # get_context() answers the window's context
-        self._stack.callback(surface.close)
+        self.camera = CameraRig(camera_pose(self.scene)[0], 0.5 * (lo + hi), speed=0.5 * self.extent)
         self.input = InputState()
-        surface.on_event = self.handle_event
-        if isinstance(script, (str, Path)):
-            script = InputScript.load(script, surface.key_names)
-        self.script: InputScript | None = script
-        self.dt = dt if dt is not None else (script.dt if script is not None else None)
+        self.script: InputScript | None = script if isinstance(script, InputScript) else None
+        self.dt = dt
         self.on_frame = on_frame
-        self.show_ui = bool(show_ui)
+        self.ui = self.renderer = None
+        self._show_ui = bool(show_ui)
         self.display_mode = "side_by_side"
         self.error_overlay = None   # hook: callable(viewer) -> texture array like the output, or None
         self.overlay_alpha = 0.5
-        self.target_frames = 0     # stop rendering once this many frames accumulated (0: never)
+        self.target_frames = 0      # stop rendering once this many frames accumulated (0: never)
         self.target_seconds = 0.0   # ... or once this long since the view last changed (0: never)
         self.status, self.status_is_error = "", False
         self.recording = None       # a rayvr.xr.CameraPath while recording
@@ -112,29 +106,52 @@ class Viewer:
         self.rendered = False       # whether the last frame rendered (False: converged, shown again)
         self.rendered_once = False  # whether this view and scene state has rendered at all
         self._quit = False
-        self._screenshots: list[str] = []
-        self._pending_rebuild = False
-        self._pending_recompile = False
-        self._last_views = None
-        self._view_key = None
+        self._screenshots: list[tuple[str, bool]] = []
+        self._pending_rebuild = self._pending_recompile = False
+        self._last_views = self._view_key = self._last_wall = None
         self._accum_started = time.perf_counter()
-        self._last_wall = None
-        lo, hi = np.asarray(self.scene.bounds(), dtype=np.float64)
-        self.extent = max(float(np.linalg.norm(hi - lo)), 1e-3)
-        from ..renderer import camera_pose
+        self._stack = contextlib.ExitStack()
+        try:
+            self._open(surface, window_size, script)
+        except BaseException:
+            self._stack.close()   # the window closes, a stepped-aside context returns
+            raise
 
-        self.camera = CameraRig(camera_pose(self.scene)[0], 0.5 * (lo + hi), speed=0.5 * self.extent)
-        self.display = FrameDisplay(self.gpu.gl)
-        self._stack.callback(self.display.release)
-        self.renderer = None
-        self._stack.callback(self._close_renderer)
-        self._make_renderer()
+    def _open(self, surface, window_size, script) -> None:
+        """The window (or the given surface), its context as the default, the renderer, the UI."""
         from .panels import Panels
         from .ui import Ui
 
+        if surface is None:
+            from .window import Window
+
+            surface = Window(window_size or default_window_size(self.rig), title=f"rayvr: {self.scene.name}")
+        self._stack.callback(surface.close)
+        self.surface, self.gpu = surface, surface.gpu
+        self._stack.enter_context(use_context(self.gpu))   # get_context() answers the window's context
+        surface.on_event = self.handle_event
+        if isinstance(script, (str, Path)):
+            self.script = InputScript.load(script, surface.key_names)
+        if self.dt is None and self.script is not None:
+            self.dt = self.script.dt
+        self.display = FrameDisplay(self.gpu.gl)
+        self._stack.callback(self.display.release)
+        self._stack.callback(self._close_renderer)
+        self._make_renderer()
         self.ui = Ui()
         self._stack.callback(self.ui.close)
         self.panels = Panels(self)
+
+    @property
+    def show_ui(self) -> bool:
+        """Whether the panels are drawn (and get input)."""
+        return self._show_ui
+
+    @show_ui.setter
+    def show_ui(self, on: bool) -> None:
+        if on and not self._show_ui and self.ui is not None:
+            self.ui.resume(self.input)   # it got no input while hidden
+        self._show_ui = bool(on)
 
     # -- renderer ---------------------------------------------------------------------------------
     def _make_renderer(self) -> None:
@@ -292,7 +309,8 @@ class Viewer:
     # -- input ---------------------------------------------------------------------------------------
     def handle_event(self, event: InputEvent) -> None:
         """One input event, from the window or the script: to ImGui, then to the camera's state."""
-        self.ui.feed(event)
+        if self.show_ui:   # hidden panels get no input: ImGui would queue it for when they show
+            self.ui.feed(event)
         self.input.handle(event)
 
     def _shortcuts(self) -> None:
@@ -433,6 +451,13 @@ class Viewer:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def default_window_size(rig: ViewRig) -> tuple[int, int]:
+    """The views side by side, shrunk to fit MAX_WINDOW (a headset's panels are large)."""
+    w, h = rig.size[0] * rig.views, rig.size[1]
+    scale = min(1.0, MAX_WINDOW[0] / w, MAX_WINDOW[1] / h)
+    return max(1, round(w * scale)), max(1, round(h * scale))
 
 
 def _view_key(views) -> bytes:

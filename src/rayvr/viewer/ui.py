@@ -68,6 +68,16 @@ class Ui:
         elif event.kind == "scroll":
             io.add_mouse_wheel_event(event.dx, event.dy)
 
+    def resume(self, inp: InputState) -> None:
+        """The panels show again after being hidden (they got no input meanwhile): forget held
+        keys and buttons and tell ImGui where the mouse is."""
+        io = self.imgui.get_io()
+        io.clear_events_queue()
+        io.clear_input_keys()
+        io.clear_input_mouse()
+        if inp.mouse is not None:
+            io.add_mouse_pos_event(*inp.mouse)
+
     def share_wants(self, inp: InputState) -> None:
         """Tell the input state whether ImGui wants the mouse and keyboard (from its last frame)."""
         io = self.imgui.get_io()
