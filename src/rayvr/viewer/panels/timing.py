@@ -15,7 +15,7 @@ def draw(v, state) -> None:
         implot.setup_axes("frame", "ms", implot.AxisFlags_.no_tick_labels | implot.AxisFlags_.auto_fit)
         peak = max((max(t) for t in v.history.values() if t), default=0.0)
         implot.setup_axis_limits(implot.ImAxis_.y1, 0.0, 1.1 * max(peak, 1.2 * BUDGET_MS), implot.Cond_.always)
-        implot.setup_legend(implot.Location_.north_west)
+        implot.setup_legend(implot.Location_.north, implot.LegendFlags_.outside | implot.LegendFlags_.horizontal)
         for name, times in v.history.items():
             if len(times) > 1:
                 implot.plot_line(name, np.fromiter(times, np.float64, len(times)))
