@@ -27,11 +27,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--scene", default="cornell_box", help="glTF path or built-in scene (default cornell_box)")
     parser.add_argument("--size", default="1440x1600", help="per-view WIDTHxHEIGHT (default 1440x1600; quick 256x256)")
     parser.add_argument("--views", type=int, default=2, choices=(1, 2), help="1 or 2 views (default 2)")
-    parser.add_argument("--frames", type=int, default=200, help="timed frames per setting (quick: 20)")
+    parser.add_argument("--frames", type=int, default=200, help="timed frames per setting (quick: 30)")
     parser.add_argument("--warmup", type=int, default=20, help="untimed frames first (quick: 3)")
 
 
-def measure(scene, size, views: int, frames: int, warmup: int, block: int = 5) -> dict:
+def measure(scene, size, views: int, frames: int, warmup: int, block: int = 2) -> dict:
     """{False: ..., True: ...}: frame ms and per-phase ms of the viewer loop, panels hidden / shown."""
     from rayvr.graphs import hybrid
     from rayvr.viewer.app import Viewer
@@ -64,7 +64,7 @@ def measure(scene, size, views: int, frames: int, warmup: int, block: int = 5) -
 
 def run(args) -> dict:
     size = (256, 256) if args.quick and args.size == "1440x1600" else parse_size(args.size)
-    frames, warmup = (20, 3) if args.quick else (args.frames, args.warmup)
+    frames, warmup = (30, 3) if args.quick else (args.frames, args.warmup)
     scene = load_scene_arg(args.scene)
     rows = []
     results = measure(scene, size, args.views, frames, warmup)
@@ -83,5 +83,5 @@ def run(args) -> dict:
                   f"the UI phase alone {results[True]['ui_ms']:.3f} ms (median)",
                   "offscreen: the same Viewer.step() as a window, on a window-sized framebuffer of the "
                   "headless context; a window's buffer swap is not included",
-                  "frame ms finish the GPU once a frame; phase ms after each phase; medians over alternating blocks of 5 frames"],
+                  "frame ms finish the GPU once a frame; phase ms after each phase; medians over alternating blocks of 2 frames"],
     }

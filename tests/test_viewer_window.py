@@ -268,8 +268,8 @@ def test_stereo_side_by_side_and_screenshot_option(display, tmp_path):
 
 def test_python_hook_presets_properties_and_saves(display, tmp_path):
     """rv.view(..., on_frame=hook) in a script: a headset preset changes the views' size and fov at
-    the next frame, a ToneMap exposure edit recompiles and brightens the frame, and the graph,
-    the effects and the HDR output are written."""
+    the next frame, a ToneMap exposure edit recompiles and brightens the frame, the graph, the
+    effects and the HDR output are written, and an error-overlay hook's map is drawn over the views."""
     code = r'''
 import json, numpy as np, rayvr as rv
 scene = rv.scenes.cornell_box()
@@ -291,7 +291,16 @@ def hook(v):
     if i == 6:
         v.set_effect("Floor", "reflections")
         v.save_graph("g.json"); v.save_effects("effects.json"); v.request_screenshot("hdr.exr")
-    return i < 7
+    if i == 7:      # the error-overlay hook: an opaque magenta map over both views
+        w, h = v.renderer.size
+        magenta = np.tile(np.array([255, 0, 255, 255], np.uint8), (2, h, w, 1))
+        tex = v.gpu.gl.texture_array((w, h, 2), 4, magenta.tobytes())
+        v.error_overlay, v.overlay_alpha = (lambda viewer: tex), 1.0
+    if i == 8:
+        window = v.read_window()
+        log[-1]["centre"] = window[window.shape[0] // 2, window.shape[1] // 2].tolist()
+        log[-1]["corner"] = window[0, 0].tolist()
+    return i < 8
 n = rv.view(scene, graph, views=1, size=(64, 64), on_frame=hook)
 print(json.dumps({"frames": n, "log": log, "exposure": graph.get_pass("ToneMap").exposure,
                   "floor": scene.materials["Floor"].effect.name}))
@@ -302,7 +311,7 @@ print(json.dumps({"frames": n, "log": log, "exposure": graph.get_pass("ToneMap")
     assert out.returncode == 0, out.stderr
     doc = json.loads(out.stdout.strip().splitlines()[-1])
     log = {e["frame"]: e for e in doc["log"]}
-    assert doc["frames"] == 8
+    assert doc["frames"] == 9
     assert log[1]["size"] == [64, 64] and log[1]["views"] == 1
     assert log[2]["size"] == [72, 80] and log[2]["views"] == 2          # index: 1440x1600 x 0.05, stereo
     index = rv.xr.get_preset("index")
@@ -311,6 +320,8 @@ print(json.dumps({"frames": n, "log": log, "exposure": graph.get_pass("ToneMap")
     assert log[5]["output"] > 1.5 * log[4]["output"]                   # two stops brighter
     assert log[5]["window"] > log[4]["window"]                          # and so is the window
     assert doc["exposure"] == 2.0 and doc["floor"] == "REFLECTIONS"     # the caller's objects changed
+    assert log[8]["centre"] == [255, 0, 255]                            # the overlay covers the image
+    assert log[8]["corner"] != [255, 0, 255]                            # ... and not the letterbox
     saved = rv.RenderGraph.load(tmp_path / "g.json")
     assert saved.get_pass("ToneMap").exposure == 2.0
     effects = json.loads((tmp_path / "effects.json").read_text())

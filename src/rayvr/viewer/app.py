@@ -101,7 +101,9 @@ class Viewer:
         self.time = 0.0             # simulated seconds (dt per frame) or wall seconds
         self.phase_ms = {"render": 0.0, "display": 0.0, "ui": 0.0}
         self.sync_phases = False    # finish the GPU after each phase so phase_ms includes its work
-        self.history: dict[str, collections.deque] = {}
+        self.history: dict[str, collections.deque] = {}   # pass -> its last frames' ms, and "total"
+        self._history_compiles = None
+        self.profile = None         # the renderer's profile after the last frame rendered
         self.frame_ms = collections.deque(maxlen=HISTORY)
         self.rendered = False       # whether the last frame rendered (False: converged, shown again)
         self.rendered_once = False  # whether this view and scene state has rendered at all
@@ -160,6 +162,7 @@ class Viewer:
         self._close_renderer()
         self._last_views = None
         self.renderer = Renderer(self.scene, self.graph, views=self.rig.view_set(self.camera.pose), gpu=self.gpu)
+        self.profile = self.renderer.profile()
         self.history.clear()
         self.frame_ms.clear()
 
@@ -175,7 +178,6 @@ class Viewer:
         elif self._pending_recompile:
             self._pending_recompile = False
             self.renderer.recompile()
-            self.history.clear()
 
     # -- what the panels and scripts change (applied at the next frame boundary) ------------------
     def set_rig(self, rig: ViewRig) -> None:
@@ -416,7 +418,12 @@ class Viewer:
         self.frame_index += 1
 
     def _record_times(self) -> None:
-        profile = self.renderer.profile()
+        """Keep this frame's profile (the panels read it) and each pass's time for the plots; a
+        recompile (new effects, an edited property) starts the plots again."""
+        self.profile = profile = self.renderer.profile()
+        if self.renderer.compiles != self._history_compiles:
+            self.history.clear()
+            self._history_compiles = self.renderer.compiles
         total = 0.0
         for name, stats in profile.passes.items():
             self.history.setdefault(name, collections.deque(maxlen=HISTORY)).append(stats.last_ms)

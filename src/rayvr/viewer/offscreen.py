@@ -15,7 +15,7 @@ class OffscreenSurface:
         self._color = self.gpu.gl.texture(self.size, 4)
         self.framebuffer = self.gpu.gl.framebuffer(color_attachments=[self._color])
         self.on_event = None
-        self.key_names: set[str] = set()
+        self.key_names = _glfw_key_names()   # so a script's keys are checked as for a window
 
     @property
     def framebuffer_size(self) -> tuple[int, int]:
@@ -44,3 +44,14 @@ class OffscreenSurface:
     def close(self) -> None:
         self.framebuffer.release()
         self._color.release()
+
+
+def _glfw_key_names() -> set[str]:
+    """glfw's key names when glfw is installed (no display needed), else none."""
+    try:
+        import glfw
+    except ImportError:
+        return set()
+    from .window import key_names
+
+    return set(key_names(glfw).values())

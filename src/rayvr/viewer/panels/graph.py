@@ -9,7 +9,7 @@ def draw(v, state) -> None:
     from imgui_bundle import imgui
 
     report = v.renderer.report()
-    profile = v.renderer.profile()
+    profile = v.profile
     w, h = report.size
     imgui.text(f"'{report.graph}': {w}x{h} x {report.views} view(s)")
     imgui.text("runs, in order:")

@@ -9,7 +9,7 @@ from ..app import BUDGET_MS
 def draw(v, state) -> None:
     from imgui_bundle import imgui, implot
 
-    profile = v.renderer.profile()
+    profile = v.profile
     imgui.text_disabled(f"GPU ms per pass ({profile.method}); budget {BUDGET_MS} ms (90 Hz)")
     if implot.begin_plot("##gpu_ms", imgui.ImVec2(-1, 170), implot.Flags_.no_menus | implot.Flags_.no_box_select):
         implot.setup_axes("frame", "ms", implot.AxisFlags_.no_tick_labels | implot.AxisFlags_.auto_fit)
