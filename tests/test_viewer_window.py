@@ -340,3 +340,28 @@ def test_bad_script_exits_2_with_one_line(display, tmp_path):
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "events[0].key" in lines[0] and "'WW'" in lines[0] and "s.json" in lines[0]
     assert not list(Path(tmp_path).glob("*.png"))
+
+
+def test_headless_rendering_continues_after_a_window_in_the_same_process(display, tmp_path):
+    """A notebook renders headless (EGL), opens rv.view (GLX: the EGL context steps aside, as
+    GLVND allows one current context per thread), closes it, and renders headless again: the
+    same pixels before and after."""
+    code = r'''
+import numpy as np, rayvr as rv
+scene = rv.scenes.cornell_box()
+for m in scene.materials:
+    m.effect = rv.Effect.RASTER
+def frame():
+    with rv.Renderer(scene, rv.graphs.hybrid(), views=1, size=(32, 32)) as r:
+        r.render()
+        return r.read_output()
+before = frame()
+assert rv.view(scene, views=1, size=(32, 32), frames=2) == 2
+after = frame()
+print(int(np.abs(before.astype(int) - after).max()), rv.gpu.get_context().caps.renderer)
+'''
+    env = {**os.environ, "DISPLAY": display}
+    out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True,
+                         timeout=180)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split()[0] == "0"

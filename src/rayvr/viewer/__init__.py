@@ -13,11 +13,14 @@ glfw and imgui-bundle (the `viewer` extra) are imported only when a viewer start
 from __future__ import annotations
 
 
-def view(*args, **kwargs):
-    """See `rayvr.viewer.app.view`."""
+def view(scene=None, graph=None, **kwargs):
+    """Open a window on `scene` (a Scene, built-in name or glTF path) rendered by `graph` (a
+    RenderGraph, 'hybrid', 'path_traced' or a saved .json/.py) until it is closed. Keywords:
+    views (1, 2), size (per view), frames, screenshot, script, on_frame(viewer), preset, show_ui,
+    window_size; see `rayvr.viewer.app.view`. Returns the frames drawn."""
     from .app import view as _view
 
-    return _view(*args, **kwargs)
+    return _view(scene, graph, **kwargs)
 
 
 def __getattr__(name: str):
