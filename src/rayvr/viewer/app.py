@@ -214,9 +214,8 @@ class Viewer:
 
     def use_scene_camera(self, index: int) -> None:
         """Stand at the scene's camera `index`, with its vertical fov."""
-        from ..xr.views import Pose
-
         from ..xr import quaternion
+        from ..xr.views import Pose
 
         cam = self.scene.cameras[index]
         m = np.asarray(cam.transform, dtype=np.float64)
@@ -404,7 +403,7 @@ class Viewer:
         self._last_views = views
         fb_size = self.surface.framebuffer_size
         self._timed("display", self.display.draw, self.surface.framebuffer, fb_size, self.renderer.output_texture(),
-                    self.rig.views, self.rig.size, self.display_mode,
+                    self.renderer.view_count, self.renderer.size, self.display_mode,
                     self.error_overlay(self) if self.error_overlay else None, self.overlay_alpha)
         if self.show_ui:
             self._timed("ui", self.ui.frame, self.surface.window_size, fb_size, max(dt, 1e-3), self.panels.draw)
