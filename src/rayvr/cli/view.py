@@ -22,8 +22,8 @@ def register(sub) -> None:
     p.add_argument("--size", default="512x512", help="per-view render size WIDTHxHEIGHT (default 512x512)")
     p.add_argument("--window", help="window size WIDTHxHEIGHT (default: the views side by side)")
     p.add_argument("--preset", help="headset preset for per-eye fov, IPD and size (index, quest2, quest3, vive_pro2)")
-    p.add_argument("--preset-scale", type=float, default=0.25,
-                   help="the preset's panel size times this (default 0.25; 1 for the full panels)")
+    p.add_argument("--preset-scale", type=float, default=1.0,
+                   help="render the preset's panel size times this (default 1; e.g. 0.25 on a software renderer)")
     p.add_argument("--effect", action="append", default=[], metavar="MATERIAL=EFFECT",
                    help="set a material's effect (raster, shadows, reflections, path_traced); '*' for all; repeatable")
     p.add_argument("--assignment", metavar="FILE",
@@ -65,6 +65,8 @@ def run(args) -> int:
         from ..xr.presets import get_preset
 
         get_preset(args.preset)
+        if not 0 < args.preset_scale <= 1:
+            raise OptionError(f"--preset-scale {args.preset_scale}: use a factor in (0, 1]")
     require_extra()
     script = None
     if args.script:   # checked before a window opens

@@ -76,8 +76,9 @@ class Viewer:
         self.scene = resolve_scene(scene)
         self.graph = resolve_graph(graph)
         self.rig = ViewRig.from_scene(self.scene, views, size, ipd=ipd)
+        self.preset_scale = float(preset_scale)   # a preset's panel size times this
         if preset:
-            self.rig = self.rig.with_preset(preset, preset_scale)
+            self.rig = self.rig.with_preset(preset, self.preset_scale)
         lo, hi = np.asarray(self.scene.bounds(), dtype=np.float64)
         self.extent = max(float(np.linalg.norm(hi - lo)), 1e-3)
         from ..renderer import camera_pose
@@ -186,12 +187,15 @@ class Viewer:
             self._pending_rebuild = True
         self.rig = rig
 
-    def set_preset(self, name: str | None, scale: float = 1.0) -> None:
-        """A headset preset's per-eye fov, IPD and (scaled) panel size; None: the scene's camera."""
+    def set_preset(self, name: str | None, scale: float | None = None) -> None:
+        """A headset preset's per-eye fov, IPD and panel size times `scale` (default
+        `preset_scale`); None: the scene's camera at the current size."""
+        if scale is not None:
+            self.preset_scale = float(scale)
         if name is None:
             self.set_rig(ViewRig.from_scene(self.scene, self.rig.views, self.rig.size, ipd=self.rig.ipd))
         else:
-            self.set_rig(self.rig.with_preset(name, scale))
+            self.set_rig(self.rig.with_preset(name, self.preset_scale))
 
     def set_pass_property(self, pass_name: str, key: str, value) -> None:
         """Set one property of a pass (graph.update_pass); the graph recompiles before the next frame."""
@@ -473,8 +477,8 @@ def _view_key(views) -> bytes:
 
 
 def view(scene=None, graph=None, views: int = 2, size=(512, 512), frames: int | None = None,
-         screenshot=None, script=None, on_frame=None, preset: str | None = None, show_ui: bool = True,
-         window_size=None) -> int:
+         screenshot=None, script=None, on_frame=None, preset: str | None = None, preset_scale: float = 1.0,
+         show_ui: bool = True, window_size=None) -> int:
     """Open a window on `scene` (a Scene, a built-in name or a glTF path; None: the Cornell box)
     rendered by `graph` (a RenderGraph, 'hybrid', 'path_traced' or a saved .json/.py; None:
     hybrid) until it is closed, or for `frames` frames; `screenshot`: a .png of the window (or .exr
@@ -485,8 +489,8 @@ def view(scene=None, graph=None, views: int = 2, size=(512, 512), frames: int | 
     require_window_support()
     if screenshot is not None and frames is None:
         raise OptionError(f"screenshot {screenshot}: needs frames=N (the frame to write)")
-    with Viewer(scene, graph, views=views, size=size, preset=preset, show_ui=show_ui, script=script,
-                on_frame=on_frame, window_size=window_size) as viewer:
+    with Viewer(scene, graph, views=views, size=size, preset=preset, preset_scale=preset_scale, show_ui=show_ui,
+                script=script, on_frame=on_frame, window_size=window_size) as viewer:
         return viewer.run(frames, screenshot)
 
 

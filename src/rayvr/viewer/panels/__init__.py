@@ -28,7 +28,6 @@ class PanelState:
     graph_path: str = "out/graph.py"
     effects_path: str = "out/effects.json"
     camera_path: str = "out/camera_path.json"
-    preset_scale: float = 0.25
     edits: dict = dataclasses.field(default_factory=dict)
 
 

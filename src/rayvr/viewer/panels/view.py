@@ -60,11 +60,11 @@ def draw(v, state) -> None:
     imgui.set_next_item_width(160)
     changed, index = imgui.combo("headset", keys.index(v.rig.preset) if v.rig.preset in keys else 0, names)
     if changed:
-        guarded(v, v.set_preset, keys[index], state.preset_scale)
+        guarded(v, v.set_preset, keys[index])
     imgui.set_next_item_width(160)
-    _, state.preset_scale = imgui.slider_float("resolution scale", state.preset_scale, 0.05, 1.0, "%.2f")
+    _, v.preset_scale = imgui.slider_float("resolution scale", v.preset_scale, 0.05, 1.0, "%.2f")
     if imgui.is_item_deactivated_after_edit() and v.rig.preset:   # a new size: a new renderer, once
-        guarded(v, v.set_preset, v.rig.preset, state.preset_scale)
+        guarded(v, v.set_preset, v.rig.preset)
     if v.rig.preset:
         p = PRESETS[v.rig.preset]
         left, right, up, down = p.left_fov.degrees()
