@@ -5,14 +5,15 @@
     g = rv.graphs.hybrid()
     with rv.Renderer(scene, g, sink=rv.xr.SimulatedHeadset(preset="index")) as r: ...
 
-Submodules load on first use, so `import rayvr` stays cheap and never needs pyopenxr.
+Submodules load on first use, so `import rayvr` stays cheap and never needs pyopenxr, a display
+or the viewer extra (glfw, imgui-bundle).
 """
 from __future__ import annotations
 
 import importlib
 
 from .errors import (ClusterError, GpuError, GraphError, OptionError, OutputError, RayvrError, SceneError, SceneWarning,
-                     ShaderError, XrError)
+                     ShaderError, ViewerError, XrError)
 from .materials.effect import Effect
 
 __version__ = "0.1.0"
@@ -33,10 +34,12 @@ _LAZY = {
     "RenderPass": ("rayvr.rendergraph.render_pass", "RenderPass"),
     "Renderer": ("rayvr.renderer", "Renderer"),
     "load_scene": ("rayvr.scene", "load_scene"),
+    "viewer": ("rayvr.viewer", None),
+    "view": ("rayvr.viewer", "view"),   # imports glfw and imgui-bundle only when called
 }
 
 __all__ = ["Effect", "RayvrError", "ClusterError", "GpuError", "GraphError", "OptionError", "OutputError", "SceneError",
-           "SceneWarning", "ShaderError", "XrError", *_LAZY]
+           "SceneWarning", "ShaderError", "ViewerError", "XrError", *_LAZY]
 
 
 def __getattr__(name: str):

@@ -47,6 +47,10 @@ class ClusterError(RayvrError):
     every worker lost."""
 
 
+class ViewerError(RayvrError):
+    """The viewer cannot start or run: no display, the viewer extra missing, no window."""
+
+
 def did_you_mean(name: str, candidates) -> str:
     """A ' (did you mean 'x'?)' suffix for the closest candidate, or '' when none is close."""
     import difflib

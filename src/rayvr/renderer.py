@@ -150,6 +150,11 @@ class Renderer:
         # Sub-pixel jitter (Halton 2,3) only helps a graph that resolves it over time.
         self._jitter = self.compiled.plan.wants_jitter if self._jitter_asked is None else bool(self._jitter_asked)
 
+    def recompile(self) -> None:
+        """Compile the graph again, keeping the GpuScene: after `graph.update_pass(...)` or other
+        graph edits (the compiled graph holds the pass instances it was compiled with)."""
+        self._compile()
+
     def _maybe_recompile(self) -> None:
         version = self.scene.materials.version
         if version == self._materials_version:

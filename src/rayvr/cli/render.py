@@ -13,6 +13,8 @@ N views are a Looking Glass light field instead: one horizontal row of cameras s
 Every output path is checked for writability before rendering; all files of one render are
 written under temporary names and renamed together at the end, so a failure or Ctrl-C leaves
 none of them.
+`--camera-path FILE` (a path `rayvr view` recorded) renders one frame per recorded pose into
+out_0000, out_0001, ...
 """
 from __future__ import annotations
 
@@ -67,6 +69,9 @@ def register(sub) -> None:
                    help="G-buffer: raster, ray-traced, or auto (ray-traced on GPUs with weak raster units)")
     p.add_argument("--report", action="store_true", help="print the graph's compile report")
     cluster_cli.add_arguments(p)
+    p.add_argument("--camera-path", metavar="FILE",
+                   help="replay a camera path JSON (rayvr view records them): one frame per pose, "
+                        "written as OUT_0000, OUT_0001, ...")
     p.set_defaults(func=run)
 
 
@@ -107,6 +112,11 @@ def output_paths(out: Path, views: int, layout: str) -> list[Path]:
     if views == 2:
         return [out.with_name(f"{out.stem}_L{out.suffix}"), out.with_name(f"{out.stem}_R{out.suffix}")]
     return [out.with_name(f"{out.stem}_v{i}{out.suffix}") for i in range(views)]
+
+
+def frame_path(out: Path, index: int) -> Path:
+    """Frame `index` of a camera path replay: out_0000.png, out_0001.png, ..."""
+    return out.with_name(f"{out.stem}_{index:04d}{out.suffix}")
 
 
 def choose_grid(args) -> tuple[int, int] | None:
@@ -167,6 +177,17 @@ def run(args) -> int:
         check_writable(path, "--out")
     if quilt is not None:
         check_writable(quilt, "--quilt")
+    camera_path = None
+    if args.camera_path:
+        from ..xr.camera_path import CameraPath
+
+        if args.views > 2 or args.grid or quilt is not None:
+            raise OptionError(f"--camera-path replays 1 or 2 views, not --views {args.views}; use --views 1 or 2")
+        if args.frames != 1:
+            raise OptionError("--camera-path renders one frame per recorded pose; leave out --frames")
+        if cluster_cli.requested(args):
+            raise OptionError("--camera-path renders in this process; leave out --workers")
+        camera_path = CameraPath.load(args.camera_path)
     scene = load_scene_arg(args.scene)
     apply_effects(scene, args.effect)
 
@@ -180,6 +201,12 @@ def run(args) -> int:
                    auto_exposure=auto_exposure, light_samples=args.light_samples,
                    multiview=args.multiview, gbuffer=args.gbuffer)
     hdr = out.suffix.lower() == ".exr"
+    if camera_path is not None:
+        with atomic_group():   # every frame's files, or none
+            written = render_path(args, scene, graph, views, hdr, camera_path, out)
+        for path in written:
+            print(f"wrote {path}")
+        return 0
     quilt_grid = grid if quilt is not None else None
     if cluster_cli.requested(args):
         pixels, quilt_pixels = cluster_cli.render(args, args.scene, scene, graph, views, hdr, quilt_grid)
@@ -220,3 +247,24 @@ def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
 
             quilt_pixels = read_quilt(compose_quilt(r.gl, r.output_texture(OUTPUT), *quilt_grid))
     return pixels, quilt_pixels
+
+
+def render_path(args, scene, graph, views, hdr: bool, camera_path, out: Path) -> list[Path]:
+    """Replay `camera_path`: one frame per pose, its views written as out_0000..., (inside the
+    caller's atomic group: the files appear together at its end)."""
+    from ..graphs import HDR_OUTPUT, OUTPUT
+    from ..renderer import Renderer
+
+    written = []
+    with Renderer(scene, graph, views=views) as r:
+        for i in range(len(camera_path)):
+            r.render(camera_path.view_set(i, views))
+            pixels = r.read_output(HDR_OUTPUT if hdr else OUTPUT, flip_y=True)
+            images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
+            for path, img in zip(output_paths(frame_path(out, i), len(views), args.layout), images):
+                written.append(write_exr(path, img) if hdr else write_image(path, img))
+        if args.report:
+            print(r.report())
+        print(f"{scene.name}: {len(views)} view(s) of {views.size[0]}x{views.size[1]}, {len(camera_path)} frame(s)")
+        print(r.profile())
+    return written

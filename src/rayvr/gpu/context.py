@@ -5,6 +5,7 @@ One context is shared per process (`get_context()`), as every GPU resource belon
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import re
@@ -125,3 +126,27 @@ def set_context(gpu: GpuContext) -> None:
     creates its context on its own device first)."""
     global _default
     _default = gpu
+
+
+def attach_context() -> GpuContext:
+    """Wrap the OpenGL context current on this thread (a window's, made current by its toolkit,
+    e.g. glfw) as a GpuContext; it must be OpenGL 4.5. moderngl can attach to GLX contexts only
+    (glcontext's EGL backend has no attach mode), so on Linux the window's context is GLX."""
+    try:
+        gl = moderngl.create_context(require=450)
+    except Exception as exc:  # glcontext and moderngl raise plain Exceptions
+        raise GpuError(f"cannot use the window's OpenGL context: {exc}; rayvr needs OpenGL 4.5 "
+                       f"(core profile) through GLX") from exc
+    return GpuContext(gl)
+
+
+@contextlib.contextmanager
+def use_context(gpu: GpuContext):
+    """Make `gpu` the process-wide default (what `get_context()` returns) inside the block, so code
+    that asks for the shared context renders into a window's context instead of making a headless one."""
+    global _default
+    previous, _default = _default, gpu
+    try:
+        yield gpu
+    finally:
+        _default = previous
