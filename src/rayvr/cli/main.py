@@ -9,7 +9,7 @@ import sys
 from ..errors import RayvrError
 
 # Subcommand modules, in the order `rayvr --help` lists them.
-COMMAND_MODULES = ["info", "render", "graph", "tune"]
+COMMAND_MODULES = ["info", "render", "graph", "converge", "tune"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -23,7 +23,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the `rayvr` command; a RayvrError is printed to stderr (on one line unless it has
-    several, as shader compile logs do) and gives exit code 2."""
+    several, as shader compile logs do) and gives exit code 2; Ctrl-C gives one line and 130
+    (outputs are written atomically, so nothing half-written is left)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
@@ -35,6 +36,9 @@ def main(argv: list[str] | None = None) -> int:
         msg = " ".join(str(exc).split()) if "\n" not in str(exc).strip() else str(exc).strip()
         print(f"rayvr: error: {msg}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"rayvr: interrupted; {args.command} wrote nothing", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":
