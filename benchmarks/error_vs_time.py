@@ -41,6 +41,7 @@ def run(args) -> dict:
     from rayvr.tune import Motion, ReferenceSettings, StudySettings, cached_reference, make_views, standard_configs
     from rayvr.tune import write_report
     from rayvr.tune.report import slug
+    from rayvr.tune.results import effects_text
     from rayvr.tune.timing import GPU_WARM_UP_S
     from rayvr.tune.tuner import tuned_study
     from rayvr.xr.presets import get_preset
@@ -64,7 +65,8 @@ def run(args) -> dict:
         results, tuned = tuned_study(scene, view_set, ref, settings, standard_configs(scene, ref_settings), budgets,
                                      cache_dir=args.cache)
         notes.append(f"{scene.name}: reference {ref.verdict()}")
-        notes += [f"{scene.name}: tuned for {b:g} ms: {', '.join(f'{m}={e.name}' for m, e in t.assignment.items())}"
+        notes += [f"{scene.name}: tuned for {b:g} ms (predicted {t.predicted_ms:.3g} ms, measured {t.measured_ms:.3g}): "
+                  f"{effects_text({m: e.name for m, e in t.assignment.items()})}"
                   + (f" ({'; '.join(t.notes)})" if t.notes else "") for b, t in tuned.items()]
         if not args.no_save:
             folder = write_report(results, Path(args.out) / f"error_vs_time_{slug(scene.name)}", budget_ms=budgets[0])

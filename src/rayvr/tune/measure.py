@@ -159,6 +159,7 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
     with effects_restored(scene), study.progress:
         ref = given or study.reference(0, view_set, "reference")
         study.display = settings.display.fixed(ref.image)
+        halves, _, _ = study.judge(ref.half_a, ref.half_b, "reference half A")
         motion_refs = [(i, study.reference(k + 1, _views(motion_frames[i]), f"reference of trajectory frame {i}"))
                        for k, i in enumerate(motion.sample_frames())] if motion else []
         rows = [study.row(c, ref, motion_frames, dict(motion_refs)) for c in configs]
@@ -168,6 +169,7 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
             "display": study.display.as_dict(), "display_text": study.display.describe(), "eps": settings.eps,
             "timing": study.method or "?", "warmup_s": warmup_s, "device": gpu.caps.renderer,
             "software": bool(gpu.caps.is_software), "settings": settings.as_dict(), "notes": list(notes),
+            "reference_halves": {m: float(np.mean(v)) for m, v in halves.items()},
             "seconds": study.progress.spent, "metric_descriptions": {m: d for m, d in _descriptions().items()
                                                                       if m in settings.metrics}}
     return Results(ref, rows, made, info, motion_refs)

@@ -168,6 +168,9 @@ def sections(results, images: _Images, plots: dict, budget_ms=None, title: str |
         f"**{'Enough' if ref.bounces_enough else 'Too few'} bounces**: one more bounce changes the mean radiance by "
         f"{100 * ref.bounce_change:+.3f}% (tolerance {100 * rs.bounce_tolerance:g}%; rendered over "
         f"{rs.bounce_check_frames} frames with half A's random numbers, so only the extra bounce differs).",
+        f"Half A against half B (each half the paths): " + ", ".join(
+            f"{METRICS[m]} {fmt(v, 3)}" for m, v in s.get("reference_halves", {}).items())
+        + ": the smallest error this reference can tell apart from its own noise.",
         f"Source: {ref.source}."])]
     ref_blocks.append(("images", [(images.shown("reference", ref.image), "reference (displayed)"),
                                   (images.add("reference-noise", colour_map(np.sqrt(ref.noise_map()))),
@@ -187,6 +190,10 @@ def sections(results, images: _Images, plots: dict, budget_ms=None, title: str |
         how.append(f"In motion: the views carried along the '{motion['trajectory']}' trajectory at "
                    f"{motion['refresh_hz']:g} Hz for {motion['frames']} frames; frames {motion['sampled_frames']} "
                    f"judged, each against its own reference (same settings, own seeds).")
+    if any(r.settings.get("graph") == "hybrid_taa" for r in results.rows):
+        how.append("The reference samples pixel centres, as the G-buffer does; a jittered, anti-aliased "
+                   "configuration (TAA) differs from it at edges, most at the light's, and that counts in its error "
+                   "and its floor.")
     if st.get("floors"):
         how.append(f"Bias floor: each configuration rendered converged ({100 * st['floor_fraction']:g}% of the "
                    f"reference's paths per pixel, its own seeds) against the reference: its relMSE, and the part "

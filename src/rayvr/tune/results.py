@@ -80,6 +80,15 @@ class Curve:
         return dataclasses.asdict(self)
 
 
+def effects_text(effects: dict) -> str:
+    """The most common effect, then the materials that differ: 'SHADOWS, Floor=REFLECTIONS'."""
+    if not effects:
+        return "-"
+    values = list(effects.values())
+    common = max(set(values), key=values.count)
+    return ", ".join([common] + [f"{m}={e}" for m, e in effects.items() if e != common])
+
+
 def markdown_table(cols: list[str], rows: list[list[str]]) -> str:
     lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     lines += ["| " + " | ".join(str(c).replace("|", "/") for c in row) + " |" for row in rows]
@@ -163,11 +172,9 @@ class Results:
                 "gi"]
         rows = []
         for r in self.rows:
-            effects = r.settings.get("effects", {})
-            levels = sorted(set(effects.values()))
-            eff = levels[0] if len(levels) == 1 else ", ".join(f"{m}={e}" for m, e in effects.items())
-            rows.append([r.name, *(fmt(r.settings.get(k)) for k in keys), eff])
-        return ["configuration", *keys, "effects"], rows
+            rows.append([r.name, *(fmt(r.settings.get(k)) for k in keys), effects_text(r.settings.get("effects", {}))])
+        return ["configuration", *[k.replace("bounces", "path bounces") if k == "bounces" else k for k in keys],
+                "effects"], rows
 
     def curve_data(self) -> tuple[list[str], list[list[str]]]:
         """(columns, cells): each progressive curve's points."""
