@@ -25,10 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fileio import atomic_write
 from . import seeds
 from .configs import effects_restored
-from .reference import CACHE_VERSION, default_cache_dir, scene_digest, views_digest
+from .reference import CACHE_VERSION, default_cache_dir, load_halves, scene_digest, store_halves, views_digest
 
 
 @dataclasses.dataclass
@@ -93,22 +92,13 @@ def bias_floor(scene, config, view_set, frames: int, cache_dir=None, gpu=None, t
     if cache_dir is False:
         return render_floor(scene, config, view_set, frames, gpu, tick)
     path = floor_path(scene, config, view_set, frames, cache_dir)
-    if path.exists():
-        try:
-            with np.load(path) as data:
-                meta = json.loads(str(data["meta"]))
-                image, a = data["image"], data["half_a"]
-            from .progressive import split_halves
-
-            _, b = split_halves(a, image)
-            return Floor(config.name, image, a, b, int(meta["frames"]), int(meta["first_frame"]), 0.0, str(path))
-        except (OSError, ValueError, KeyError):
-            pass
+    cached = load_halves(path)
+    if cached is not None:
+        image, a, b, meta = cached
+        return Floor(config.name, image, a, b, int(meta["frames"]), int(meta["first_frame"]), 0.0, str(path))
     floor = render_floor(scene, config, view_set, frames, gpu, tick)
-    meta = json.dumps({"config": config.name, "frames": floor.frames, "first_frame": floor.first_frame,
-                       "seconds": floor.seconds})
-    atomic_write(path, lambda tmp: np.savez_compressed(tmp, image=floor.image, half_a=floor.half_a,
-                                                       meta=np.array(meta)))
+    store_halves(path, floor.image, floor.half_a, {"config": config.name, "frames": floor.frames,
+                                                    "first_frame": floor.first_frame, "seconds": floor.seconds})
     floor.source = str(path)
     return floor
 

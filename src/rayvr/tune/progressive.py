@@ -53,11 +53,10 @@ def mean_output(graph, pin: str) -> str:
 
 
 def render_mean(scene, graph, pin: str, view_set, frames: int, first_frame: int, snapshots=(), gpu=None,
-                tick=None, renderer=None) -> list[Snapshot]:
+                tick=None) -> list[Snapshot]:
     """The mean of `pin` over `frames` frames from `first_frame`, read after each frame count in
     `snapshots` and after the last frame (sorted, one Snapshot each). `tick(frames_done)` is
-    called after every frame (progress). With `renderer`, that Renderer (whose graph is `graph`)
-    renders; its next frame index must be `first_frame`."""
+    called after every frame (progress)."""
     from ..renderer import Renderer
 
     if frames < 1:
@@ -65,27 +64,25 @@ def render_mean(scene, graph, pin: str, view_set, frames: int, first_frame: int,
     seeds.check_length(frames, f"mean of {pin}")
     counts = sorted({int(n) for n in snapshots if 1 <= int(n) <= frames} | {int(frames)})
     mean_pin = mean_output(graph, pin)
-    own = renderer is None
-    r = renderer or Renderer(scene, graph, views=view_set, gpu=gpu, profiling=False, first_frame=first_frame)
-    if r.frame_index != first_frame:
-        raise OptionError(f"render_mean: the renderer's next frame is {r.frame_index}, not {first_frame}")
-    try:
-        out, wall, done = [], 0.0, 0
-        r.gl.finish()
-        for n in counts:
-            t0 = time.perf_counter()
-            for _ in range(n - done):
-                r.render()
-                done += 1
-                if tick is not None:
-                    tick(done)
-            r.gl.finish()
-            wall += time.perf_counter() - t0
-            out.append(Snapshot(n, r.read_output(mean_pin, flip_y=True).astype(np.float32), wall))
-        return out
-    finally:
-        if own:
-            r.close()
+    with Renderer(scene, graph, views=view_set, gpu=gpu, profiling=False, first_frame=first_frame) as r:
+        return list(read_after(r, mean_pin, counts, tick))
+
+
+def read_after(renderer, pin: str, counts, tick=None):
+    """Render on, yielding a Snapshot of `pin` after each of the (increasing) frame `counts`;
+    its wall seconds count the rendering only (the GPU finished before each reading)."""
+    wall, done = 0.0, 0
+    renderer.gl.finish()
+    for count in counts:
+        t0 = time.perf_counter()
+        for _ in range(count - done):
+            renderer.render()
+            done += 1
+            if tick is not None:
+                tick(done)
+        renderer.gl.finish()
+        wall += time.perf_counter() - t0
+        yield Snapshot(count, renderer.read_output(pin, flip_y=True).astype(np.float32), wall)
 
 
 def split_halves(first_half: np.ndarray, whole: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -132,18 +129,8 @@ def progressive_curve(scene, name: str, graph, settings: dict, view_set, frames:
         for n, p in r.compiled.passes.items():
             if type(p).__name__ == "Accumulate":
                 p.reset()
-        wall, done = 0.0, 0
-        for count in counts:
-            t0 = time.perf_counter()
-            for _ in range(count - done):
-                r.render()
-                done += 1
-                if tick is not None:
-                    tick(done)
-            r.gl.finish()
-            wall += time.perf_counter() - t0
-            image = r.read_output(pin, flip_y=True)
-            per_view = judge(image, reference.image, f"{name} after {count} frames")[0]
-            points.append({"frames": count, "wall_s": wall, "gpu_s": count * timing.frame_ms / 1e3,
+        for shot in read_after(r, pin, counts, tick):
+            per_view = judge(shot.image, reference.image, f"{name} after {shot.frames} frames")[0]
+            points.append({"frames": shot.frames, "wall_s": shot.wall_s, "gpu_s": shot.frames * timing.frame_ms / 1e3,
                            **{m: float(np.mean(v)) for m, v in per_view.items()}})
     return Curve(name, {"graph": "path_traced", "output": pin, **settings}, timing.frame_ms, points)

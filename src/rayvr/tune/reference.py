@@ -235,24 +235,39 @@ def cached_reference(scene, view_set, settings: ReferenceSettings = ReferenceSet
     if cache_dir is False:
         return render_reference(scene, view_set, settings, first, gpu, tick, eps)
     path = cache_path(scene, view_set, settings, first, cache_dir)
-    if path.exists():
-        try:
-            with np.load(path) as data:
-                meta = json.loads(str(data["meta"]))
-                image, a = data["image"], data["half_a"]
-            from .progressive import split_halves
-
-            _, b = split_halves(a, image)
-            return Reference(image, a, b, settings, first, float(meta["bounce_change"]), 0.0, str(path), eps)
-        except (OSError, ValueError, KeyError):
-            pass   # a damaged cache file: render again and replace it
+    cached = load_halves(path)
+    if cached is not None:
+        image, a, b, meta = cached
+        return Reference(image, a, b, settings, first, float(meta["bounce_change"]), 0.0, str(path), eps)
     ref = render_reference(scene, view_set, settings, first, gpu, tick, eps)
-    meta = json.dumps({"scene": scene.name, "views": len(view_set), "size": list(view_set.size),
-                       "first_frame": first, "bounce_change": ref.bounce_change, "seconds": ref.seconds,
-                       **dataclasses.asdict(settings)})
-    atomic_write(path, lambda tmp: np.savez_compressed(tmp, image=ref.image, half_a=ref.half_a, meta=np.array(meta)))
+    store_halves(path, ref.image, ref.half_a, {"scene": scene.name, "views": len(view_set),
+                                               "size": list(view_set.size), "first_frame": first,
+                                               "bounce_change": ref.bounce_change, "seconds": ref.seconds,
+                                               **dataclasses.asdict(settings)})
     ref.source = str(path)
     return ref
+
+
+def load_halves(path: Path):
+    """(image, half A, half B, meta) from a cache file, or None when it is missing or damaged
+    (then the caller renders again and replaces it)."""
+    if not path.exists():
+        return None
+    from .progressive import split_halves
+
+    try:
+        with np.load(path) as data:
+            meta = json.loads(str(data["meta"]))
+            image, a = data["image"], data["half_a"]
+    except (OSError, ValueError, KeyError):
+        return None
+    return (image, *split_halves(a, image), meta)
+
+
+def store_halves(path: Path, image: np.ndarray, half_a: np.ndarray, meta: dict) -> None:
+    """Write a mean and its first half (the second is derived) with `meta`, atomically."""
+    text = json.dumps(meta)
+    atomic_write(path, lambda tmp: np.savez_compressed(tmp, image=image, half_a=half_a, meta=np.array(text)))
 
 
 def cache_path(scene, view_set, settings, first_frame: int, cache_dir=None) -> Path:

@@ -168,7 +168,7 @@ def sections(results, images: _Images, plots: dict, budget_ms=None, title: str |
         f"**{'Enough' if ref.bounces_enough else 'Too few'} bounces**: one more bounce changes the mean radiance by "
         f"{100 * ref.bounce_change:+.3f}% (tolerance {100 * rs.bounce_tolerance:g}%; rendered over "
         f"{rs.bounce_check_frames} frames with half A's random numbers, so only the extra bounce differs).",
-        f"Half A against half B (each half the paths): " + ", ".join(
+        "Half A against half B (each half the paths): " + ", ".join(
             f"{METRICS[m]} {fmt(v, 3)}" for m, v in s.get("reference_halves", {}).items())
         + ": the smallest error this reference can tell apart from its own noise.",
         f"Source: {ref.source}."])]
