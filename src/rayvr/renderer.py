@@ -100,6 +100,9 @@ class Renderer:
                  jitter: bool | None = None, first_frame: int = 0):
         from .gpu import get_context
 
+        if int(first_frame) != first_frame or not 0 <= first_frame < 2 ** 32:
+            raise OptionError(f"Renderer: first_frame must be an integer in [0, 2^32), got {first_frame!r}")
+
         self.scene = scene
         self.graph = graph
         self.sink = sink
@@ -122,8 +125,6 @@ class Renderer:
         self.gpu_scene = GpuScene(self.gpu, scene)
         self.views_buffer = self.gl.buffer(reserve=HEADER_BYTES + 4 * VIEW_STRUCT_FLOATS * self.view_count)
         self.profiling = profiling
-        if int(first_frame) != first_frame or not 0 <= first_frame < 2 ** 32:
-            raise OptionError(f"Renderer: first_frame must be an integer in [0, 2^32), got {first_frame!r}")
         self.frame_index = int(first_frame)
         self.sample_index = 0   # frames accumulated since the views or materials last changed
         self._accum_key = None
