@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import time
 
-from rayvr.tune.measure import warm_up as measure_warm_up
+from rayvr.tune.timing import GPU_WARM_UP_S
+from rayvr.tune.timing import warm_up as measure_warm_up
 
 
 def wall_ms_per_frame(renderer, frames: int, warmup: int) -> float:
@@ -21,11 +22,11 @@ def wall_ms_per_frame(renderer, frames: int, warmup: int) -> float:
     return (time.perf_counter() - t0) / frames * 1e3
 
 
-WARM_UP_S = 0.5   # an idle H100 clocks at ~345 MHz and needs a moment of load to reach ~1980 MHz
+WARM_UP_S = GPU_WARM_UP_S   # an idle H100 clocks at ~345 MHz and needs a moment of load to reach ~1980 MHz
 
 
 def warm_up(renderer, seconds: float = WARM_UP_S) -> None:
-    """rayvr.tune.measure.warm_up for the benchmarks' WARM_UP_S."""
+    """rayvr.tune.timing.warm_up for the benchmarks' WARM_UP_S."""
     measure_warm_up(renderer, seconds)
 
 

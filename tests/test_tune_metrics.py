@@ -1,4 +1,4 @@
-"""rayvr.tune.metrics against hand-computed values (no GPU)."""
+"""rayvr.tune.metrics and rayvr.tune.display against hand-computed values (no GPU)."""
 import math
 
 import numpy as np
@@ -6,6 +6,7 @@ import pytest
 
 from rayvr.errors import OptionError, RayvrError
 from rayvr.tune import metrics as M
+from rayvr.tune.display import Display, clamp_negative, tonemap
 
 
 def image(value, shape=(2, 8, 8, 4), dtype=np.float32):
@@ -97,8 +98,66 @@ def test_shapes_hw_and_hwc_are_one_view():
     assert M.rel_mse(a, a * 2, eps=1.0) == pytest.approx(0.0625 / 1.25)
 
 
-def test_all_metrics_psnr_is_on_clamped_srgb():
-    ref, test = image(4.0, (1, 8, 8, 3)), image(2.0, (1, 8, 8, 3))   # both clip to white
-    out = M.all_metrics(test, ref)
-    assert out["psnr"] == math.inf and out["relmse"] > 0 and out["flip"] > 0
+def test_srgb_encode_clamps_and_encodes():
     assert M.srgb_encode(np.array([0.0, 0.0031308, 1.0, 5.0])) == pytest.approx([0.0, 0.04045, 1.0, 1.0], abs=1e-4)
+
+
+def test_evaluate_judges_the_displayed_image_and_the_radiance():
+    ref = image(0.5, (2, 16, 16, 3))
+    test = ref.copy()
+    test[1] *= 1.2                                   # view 1 is 20% too bright
+    display = Display("linear", 0.0)
+    per_view, maps = M.evaluate(test, ref, display, ppd=14.0, maps=True)
+    assert set(per_view) == set(M.METRICS) and all(v.shape == (2,) for v in per_view.values())
+    assert per_view["flip"][0] == 0.0 and per_view["flip"][1] > 0.0
+    assert per_view["relmse"][1] == pytest.approx(0.01 / (0.25 + M.DEFAULT_EPS), rel=1e-6)
+    assert per_view["psnr"][0] == math.inf
+    shown = tonemap(np.array([0.6]), "linear") - tonemap(np.array([0.5]), "linear")   # PSNR of the sRGB values
+    assert per_view["psnr"][1] == pytest.approx(-20 * math.log10(abs(float(shown[0]))), rel=1e-6)
+    assert per_view["ssim"][0] == pytest.approx(1.0) and per_view["ssim"][1] < 1.0
+    assert maps["flip"].shape == (2, 16, 16) and maps["flip"][1].mean() == pytest.approx(per_view["flip"][1])
+    # the exposure moves FLIP/PSNR/SSIM, never relMSE (linear radiance)
+    darker, _ = M.evaluate(test, ref, Display("linear", -3.0), ppd=14.0)
+    assert darker["relmse"] == pytest.approx(per_view["relmse"]) and darker["psnr"][1] > per_view["psnr"][1]
+
+
+def test_all_metrics_is_the_mean_over_views_and_ssim_needs_7_pixels():
+    ref = image(0.5, (2, 8, 8, 3))
+    out = M.all_metrics(ref * 1.1, ref, Display("aces", 0.0), which=("relmse", "psnr"))
+    assert set(out) == {"relmse", "psnr"} and out["relmse"] == pytest.approx(0.0025 / 0.26, rel=1e-6)
+    with pytest.raises(OptionError, match="7x7 window"):
+        M.ssim(image(0.5, (1, 6, 6, 3)), image(0.5, (1, 6, 6, 3)))
+    with pytest.raises(OptionError, match="unknown metric 'mse'"):
+        M.all_metrics(ref, ref, Display("aces", 0.0), which=("mse",))
+
+
+def test_cpu_tonemap_follows_tonemap_comp():
+    x = np.array([[0.0, 0.18, 1.0], [4.0, -1.0, np.nan]])
+    aces = tonemap(x, "aces", 0.0)
+    # Narkowicz's fit of 0.6 x, clamped, then sRGB; negative and NaN pixels are black
+    y = 0.6 * 0.18
+    expected = (y * (2.51 * y + 0.03)) / (y * (2.43 * y + 0.59) + 0.14)
+    assert aces[0, 1] == pytest.approx(1.055 * expected ** (1 / 2.4) - 0.055)
+    assert aces[0, 0] == 0.0 and np.all(aces[1] == 0.0)
+    assert tonemap(np.array([1.0]), "reinhard", 1.0)[0] == pytest.approx(1.055 * (2 / 3) ** (1 / 2.4) - 0.055)
+    assert tonemap(np.array([0.25]), "linear", 2.0)[0] == pytest.approx(1.0)
+
+
+def test_negative_radiance_is_judged_as_the_display_shows_it():
+    a = np.array([[[0.5, -0.25, 0.1, -1.0]]])                 # alpha is not radiance
+    clamped, count = clamp_negative(a)
+    assert count == 1 and clamped.tolist() == [[[0.5, 0.0, 0.1, -1.0]]] and a[0, 0, 1] == -0.25
+    same, none = clamp_negative(clamped)
+    assert none == 0 and same is clamped
+
+
+def test_fixed_exposure_comes_from_the_reference_once():
+    ref = np.full((1, 4, 4, 3), 0.045)                       # log2 mean luminance -> 0.18 at +2 stops
+    ref[0, 0, 0] = 0.0                                         # black pixels do not count
+    shown = Display("aces").fixed(ref)
+    assert shown.exposure == pytest.approx(2.0)
+    assert Display("aces", 0.5).fixed(ref).exposure == 0.5
+    with pytest.raises(OptionError, match="not fixed"):
+        Display("aces")(ref)
+    with pytest.raises(OptionError, match="operator"):
+        Display("filmic")

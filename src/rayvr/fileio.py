@@ -6,13 +6,17 @@ several files (stereo L/R, camera-grid views, a quilt beside them, a report fold
 inside one `atomic_group()`: every file goes to a temporary first and the renames happen together
 when the group ends; if any write or rename fails (or Ctrl-C arrives), the temporaries are removed,
 files already renamed are taken back (a file they replaced is put back) and folders the group
-created are removed again. `check_writable` refuses an unwritable target before any work is done.
+created are removed again. `check_writable` refuses an unwritable target before any work is done. A report of many files can also go through
+`atomic_folder`: written into a temporary folder beside the target, which replaces the target
+only once every file is there.
 """
 from __future__ import annotations
 
 import contextlib
 import contextvars
+import io
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -222,6 +226,44 @@ def write_png(path, pixels: np.ndarray, alpha: bool = False) -> Path:
 
     rgb = np.ascontiguousarray(pixels[..., :4 if alpha else 3] if pixels.ndim == 3 else pixels)
     return atomic_write(path, lambda tmp: Image.fromarray(rgb).save(tmp, format="PNG"))
+
+
+def png_bytes(pixels: np.ndarray) -> bytes:
+    """An (h, w, c) uint8 image encoded as PNG bytes (for data URIs)."""
+    from PIL import Image
+
+    out = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(pixels)).save(out, format="PNG")
+    return out.getvalue()
+
+
+def check_folder_target(path, option: str = "--report") -> Path:
+    """`path` for `atomic_folder`: refused now, before any work, if it cannot be one (see
+    check_writable)."""
+    return check_writable(path, option, folder=True)
+
+
+@contextlib.contextmanager
+def atomic_folder(path):
+    """Yield a temporary folder beside `path`; when the block ends normally it becomes `path`
+    (an existing folder there is replaced), and when it raises (Ctrl-C included) it is removed,
+    so `path` is either the old folder or the complete new one, never a half."""
+    path = check_folder_target(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+    try:
+        yield tmp
+        old = None
+        if path.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{path.name}.old.", dir=path.parent))
+            os.replace(path, old / path.name)
+        os.replace(tmp, path)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return path
 
 
 def write_exr(path, pixels: np.ndarray) -> Path:

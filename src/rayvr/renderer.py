@@ -97,12 +97,17 @@ class Renderer:
     `views`: a ViewSet, or an int view count (from the scene's camera); `size`: per-view pixels;
     `jitter`: sub-pixel camera jitter per frame (default: when a pass of the compiled graph asks
     for it in its reflection, as TAA does).
+    `first_frame`: the first frame's index (the renderer's random streams and TAA jitter follow
+    the frame index, so renders started at disjoint frame ranges have independent noise).
     Without a sink the Renderer renders `render(view_set)` calls for its fixed views.
     """
 
     def __init__(self, scene, graph, sink=None, views=None, size=None, gpu=None, profiling: bool = True,
-                 jitter: bool | None = None):
+                 jitter: bool | None = None, first_frame: int = 0):
         from .gpu import get_context
+
+        if int(first_frame) != first_frame or not 0 <= first_frame < 2 ** 32:
+            raise OptionError(f"Renderer: first_frame must be an integer in [0, 2^32), got {first_frame!r}")
 
         self.scene = scene
         self.graph = graph
@@ -126,7 +131,7 @@ class Renderer:
         self.gpu_scene = GpuScene(self.gpu, scene)
         self.views_buffer = self.gl.buffer(reserve=HEADER_BYTES + 4 * VIEW_STRUCT_FLOATS * self.view_count)
         self.profiling = profiling
-        self.frame_index = 0
+        self.frame_index = int(first_frame)
         self.sample_index = 0   # frames accumulated since the views or materials last changed
         self._accum_key = None
         self.compiles = 0

@@ -14,7 +14,7 @@ import sys
 from ..errors import OptionError, RayvrError
 
 # Subcommand modules, in the order `rayvr --help` lists them.
-COMMAND_MODULES = ["info", "render", "graph", "tune", "check", "view"]
+COMMAND_MODULES = ["info", "render", "graph", "converge", "tune", "check", "view"]
 INTERRUPTED = 130   # 128 + SIGINT, as shells report it
 
 

@@ -9,7 +9,8 @@ The choice runs on a `CostModel` (no GPU needed, so it is unit-testable):
 `base_ms` is the all-RASTER frame, `overhead_ms[e]` the passes effect level e brings in whatever
 its pixel count (e.g. the compaction pass; shared passes are counted once, hence the max),
 `ms[m][e]` the GPU time of material m's pixels at level e (0 for RASTER) and `error[m][e]` their
-share of the image error. `rayvr.tune.probe.probe_cost_model` measures one on the GPU.
+share of the image error. `rayvr.tune.probe.probe_cost_model` measures one on the GPU and
+`rayvr.tune.tuner.tune_effects` runs both; this module needs no GPU.
 
 `choose_effects` is the greedy of the multiple-choice knapsack: start from every material at its
 lowest allowed level; repeatedly take the upgrade (one material to any higher level) with the
@@ -210,54 +211,3 @@ def _greedy(model: CostModel, options: dict, current: dict, budget_ms: float, st
             return current, steps
         current[best.material] = best.new
         steps.append(best)
-
-
-def tune_effects(renderer_or_scene, budget_ms: float = 11.1, size=None, views=None, metric: str = "flip",
-                 levels=tuple(Effect), fixed: dict | None = None, graph=None, options: dict | None = None,
-                 frames: int = 10, warmup: int = 3, reference=None, reference_settings=None, cache_dir=None,
-                 ppd: float | None = None, verify: bool = True, apply: bool = True, progress: bool = True,
-                 gpu=None) -> TuneResult:
-    """Measure a CostModel on the GPU (`rayvr.tune.probe.probe_cost_model`: one render per effect
-    level), choose effects with `choose_effects`, then (with `verify`) render the choice and
-    record its measured ms and error. With `apply` the scene's materials get the chosen effects.
-
-    `renderer_or_scene`: a Scene (with `size`, `views`: default 2 views of 1440x1600) or an
-    rv.Renderer (its scene, views and graph; `graph` then defaults to a copy of its graph; with a
-    sink, views from the scene's camera at the sink's view count and size).
-    `graph`: a builder `graph(**options)` (default rayvr.tune.hybrid_graph)."""
-    from .configs import set_effects
-    from .probe import probe_cost_model, render_assignment
-
-    scene, view_set, builder, gpu = _target(renderer_or_scene, size, views, graph, gpu)
-    model, ref, _ = probe_cost_model(scene, view_set, builder, options or {}, metric=metric, levels=levels,
-                                       frames=frames, warmup=warmup, reference=reference,
-                                       reference_settings=reference_settings, cache_dir=cache_dir, ppd=ppd,
-                                       progress=progress, gpu=gpu)
-    result = choose_effects(model, budget_ms, levels, fixed)
-    if verify:
-        result.record_measurement(*render_assignment(scene, view_set, builder, options or {}, result.assignment,
-                                                     ref, metric, frames, warmup, ppd, gpu))
-    if apply:
-        set_effects(scene, result.assignment)
-    return result
-
-
-def _target(renderer_or_scene, size, views, graph, gpu):
-    from ..renderer import Renderer
-    from ..rendergraph.graph import RenderGraph
-    from .configs import hybrid_graph
-    from .measure import make_views
-
-    if isinstance(renderer_or_scene, Renderer):
-        r = renderer_or_scene
-        if size is not None or views is not None:
-            raise OptionError("tune_effects: a Renderer brings its own views; pass size/views only with a Scene")
-        view_set = r.view_set if r.view_set is not None else make_views(r.scene, r.view_count, r.size)
-        if graph is None:
-            data = r.graph.to_dict()
-
-            def graph(**_):
-                return RenderGraph.from_dict(data)
-        return r.scene, view_set, graph, gpu or r.gpu
-    view_set = make_views(renderer_or_scene, 2 if views is None else views, size or (1440, 1600))
-    return renderer_or_scene, view_set, graph or hybrid_graph, gpu

@@ -1,22 +1,44 @@
-"""What `rayvr.tune.measure` renders: a named configuration = graph builder + per-material effects
-+ options (spp, bounces, ...), and the standard set of configurations of the error-vs-time study."""
+"""What the error study renders: a named configuration = graph + per-material effects + settings
+(spp, bounces, light samples, frames accumulated, denoiser, GI), and the standard set of them.
+
+A configuration states its settings in full (`Config.settings(scene)`): the graph builder's
+defaults with the configuration's options over them, so every row of a report says what it ran.
+The PATH_TRACED levels default to the reference's bounces, so that they converge to it.
+
+A denoiser or probe GI is one more option of the graph builder (`denoise=`, `gi=`); the standard
+set includes those rows only when `rv.graphs.hybrid`/`path_traced` accept the option and build
+with it, so they appear once the reconstruction and probe issues add them.
+
+Configurations from a file (`load_configs`): JSON, a list or {"configs": [...]} of
+    {"name": "mirror floor", "effects": {"*": "shadows", "Floor": "reflections"},
+     "graph": "hybrid" | "hybrid_taa" | "path_traced", "options": {"spp": 4}, "accumulate": 1}
+"""
 from __future__ import annotations
 
 import contextlib
 import dataclasses
+import inspect
+import json
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import OptionError, did_you_mean
 from ..materials.effect import Effect
+from .reference import ReferenceSettings
 
 # HDR pins the error is measured on, in order of preference (linear radiance, before tone mapping).
 HDR_OUTPUTS = ("TAA.dst", "Composite.color", "Accumulate.dst")
+DEFAULT_BOUNCES = ReferenceSettings.max_bounces
+DENOISERS = ("svgf", "oidn")
+GI_MODES = ("probes",)
 
 
-def hybrid_graph(spp: int = 1, max_bounces: int = 1, path_bounces: int = 4, light_samples: int = 1, **kw):
-    """`rayvr.graphs.hybrid(...)` with `spp` paths per pixel per frame for PATH_TRACED materials."""
+def hybrid_graph(spp: int = 1, max_bounces: int = 1, path_bounces: int = DEFAULT_BOUNCES, light_samples: int = 1,
+                 **kw):
+    """`rv.graphs.hybrid(...)` with `spp` paths per pixel per frame for PATH_TRACED materials
+    (`path_bounces` bounces; `max_bounces` is the reflections')."""
     from ..graphs import hybrid
 
     g = hybrid(max_bounces=max_bounces, path_bounces=path_bounces, light_samples=light_samples, **kw)
@@ -25,8 +47,19 @@ def hybrid_graph(spp: int = 1, max_bounces: int = 1, path_bounces: int = 4, ligh
     return g
 
 
-def path_traced_graph(spp: int = 1, max_bounces: int = 4, pixel_jitter: bool = False, **kw):
-    """`rayvr.graphs.path_traced(...)`: every pixel path traced from the camera. Without
+def hybrid_taa_graph(spp: int = 1, max_bounces: int = 1, path_bounces: int = DEFAULT_BOUNCES,
+                     light_samples: int = 1, **kw):
+    """`rv.graphs.hybrid_taa(...)` (TAA before tone mapping) with `spp` as in `hybrid_graph`."""
+    from ..graphs import hybrid_taa
+
+    g = hybrid_taa(max_bounces=max_bounces, path_bounces=path_bounces, light_samples=light_samples, **kw)
+    if "PathTracer" in g.passes:
+        g.update_pass("PathTracer", {"samples_per_pixel": int(spp)})
+    return g
+
+
+def path_traced_graph(spp: int = 1, max_bounces: int = DEFAULT_BOUNCES, pixel_jitter: bool = False, **kw):
+    """`rv.graphs.path_traced(...)`: every pixel path traced from the camera. Without
     `pixel_jitter` paths start at pixel centres, as the raster G-buffer samples them."""
     from ..graphs import path_traced
 
@@ -35,23 +68,72 @@ def path_traced_graph(spp: int = 1, max_bounces: int = 4, pixel_jitter: bool = F
     return g
 
 
+GRAPHS = {"hybrid": hybrid_graph, "hybrid_taa": hybrid_taa_graph, "path_traced": path_traced_graph}
+
+
+def _underlying(builder):
+    """The rv.graphs function a study builder wraps (its **kw go there)."""
+    from .. import graphs
+
+    return {hybrid_graph: graphs.hybrid, hybrid_taa_graph: graphs.hybrid, path_traced_graph: graphs.path_traced}.get(
+        builder)
+
+
+def builder_defaults(builder) -> dict:
+    """Every keyword the builder takes and its default: its own, then those of the rv.graphs
+    function it wraps."""
+    out = {}
+    for fn in (_underlying(builder), builder):
+        if fn is None:
+            continue
+        for name, p in inspect.signature(fn).parameters.items():
+            if p.default is not inspect.Parameter.empty:
+                out[name] = p.default
+    return out
+
+
+def accepts(builder, option: str) -> bool:
+    """Whether `builder` (or the rv.graphs function it wraps) takes keyword `option`."""
+    return option in builder_defaults(builder)
+
+
 @dataclasses.dataclass
 class Config:
     """One configuration to measure.
 
     `effects`: one effect for every material, or {material name: effect} ('*' = every material
-    not named). `graph(**options)` builds the render graph (default `hybrid_graph`).
-    `accumulate`: frames an Accumulate pass may average (1 = the error of a single frame, as a
-    moving headset sees it; 0 = no limit, a static view converging). `output`: the HDR pin whose
-    error counts (default: the first of TAA.dst, Composite.color, Accumulate.dst the graph marks).
+    not named). `graph`: a name of GRAPHS or a builder `graph(**options)` (default "hybrid").
+    `accumulate`: frames an Accumulate pass averages before the image is judged (1 = each frame
+    alone, what a moving head sees). `output`: the HDR pin whose error counts (default: the
+    first of TAA.dst, Composite.color, Accumulate.dst the graph marks).
     """
 
     name: str
     effects: object = Effect.SHADOWS
-    graph: Callable | None = None
+    graph: str | Callable | None = None
     options: dict = dataclasses.field(default_factory=dict)
     accumulate: int = 1
     output: str | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.accumulate, int) or isinstance(self.accumulate, bool) or self.accumulate < 1:
+            raise OptionError(f"config '{self.name}': accumulate must be an integer >= 1 (frames averaged "
+                              f"before the image is judged), got {self.accumulate!r}")
+        if isinstance(self.graph, str) and self.graph not in GRAPHS:
+            raise OptionError(f"config '{self.name}': graph {self.graph!r} is unknown"
+                              f"{did_you_mean(self.graph, GRAPHS)}; use one of {', '.join(GRAPHS)}")
+
+    @property
+    def builder(self) -> Callable:
+        if self.graph is None:
+            return hybrid_graph
+        return GRAPHS[self.graph] if isinstance(self.graph, str) else self.graph
+
+    @property
+    def graph_name(self) -> str:
+        if isinstance(self.graph, str):
+            return self.graph
+        return next((k for k, v in GRAPHS.items() if v is self.builder), getattr(self.builder, "__name__", "graph"))
 
     def assignment(self, scene) -> dict[str, Effect]:
         """{material name: effect} this configuration gives `scene`'s materials."""
@@ -75,18 +157,16 @@ class Config:
         return assignment
 
     def build_graph(self):
-        """The render graph, with Accumulate passes limited to `accumulate` frames."""
-        builder = self.graph or hybrid_graph
+        """The render graph; its Accumulate passes average `accumulate` frames (1: each frame
+        passes through)."""
         try:
-            g = builder(**self.options)
+            g = self.builder(**self.options)
         except TypeError as exc:
             raise OptionError(f"config '{self.name}': options {self.options} do not fit its graph builder "
                               f"({exc})") from None
-        if int(self.accumulate) < 0:
-            raise OptionError(f"config '{self.name}': accumulate must be >= 0 (0 = no limit), got {self.accumulate}")
         for name, p in g.passes.items():
             if type(p).__name__ == "Accumulate":
-                g.update_pass(name, {"max_frames": int(self.accumulate)})
+                g.update_pass(name, {"enabled": self.accumulate > 1, "max_frames": int(self.accumulate)})
         return g
 
     def output_pin(self, graph) -> str:
@@ -98,6 +178,30 @@ class Config:
                 return pin
         raise OptionError(f"config '{self.name}': graph '{graph.name}' marks none of {', '.join(HDR_OUTPUTS)}; "
                           f"set Config.output to its linear-radiance output pin")
+
+    def settings(self, scene=None) -> dict:
+        """Everything this configuration renders with, stated: graph, spp, bounces, reflection
+        bounces, light samples, frames accumulated, denoiser, GI (and the effects on `scene`)."""
+        merged = {**builder_defaults(self.builder), **self.options}
+        path_traced = self.builder is path_traced_graph
+        out = {"graph": self.graph_name,
+               "spp": int(merged.get("spp", merged.get("samples_per_pixel", 1))),
+               "bounces": int(merged.get("max_bounces" if path_traced else "path_bounces", 0)),
+               "reflection_bounces": None if path_traced else merged.get("max_bounces"),
+               "light_samples": None if path_traced else merged.get("light_samples"),
+               "frames_accumulated": int(self.accumulate),
+               "denoiser": merged.get("denoise") or "none",
+               "gi": merged.get("gi") or "none",
+               "options": dict(self.options)}
+        if scene is not None:
+            out["effects"] = {k: v.name for k, v in self.assignment(scene).items()}
+        return out
+
+    def key(self, scene) -> str:
+        """What the configuration's converged image depends on (the bias floor's cache key)."""
+        return json.dumps([self.graph_name, sorted(self.options.items()),
+                           sorted((k, v.name) for k, v in self.assignment(scene).items()), self.output],
+                          default=str)
 
 
 def set_effects(scene, assignment: dict) -> None:
@@ -140,13 +244,81 @@ def reflective_material(scene, choice: str = "auto") -> str:
     return names[int(area.argmax())]
 
 
-def standard_configs(scene, reflect: str = "auto", spp=(1, 4, 16), **options) -> list[Config]:
-    """all RASTER, all SHADOWS, SHADOWS + REFLECTIONS on one material, all PATH_TRACED at each spp."""
+def _builds(builder, **options) -> bool:
+    """Whether `builder(**options)` makes a graph (a denoiser value it does not know: no)."""
+    try:
+        builder(**options)
+        return True
+    except (TypeError, ValueError, OptionError):
+        return False
+
+
+def available_denoisers(builder=hybrid_graph) -> list[str]:
+    """The DENOISERS `builder` accepts as `denoise=` (none before the reconstruction issue)."""
+    return [d for d in DENOISERS if accepts(builder, "denoise") and _builds(builder, denoise=d)]
+
+
+def available_gi(builder=hybrid_graph) -> list[str]:
+    """The GI_MODES `builder` accepts as `gi=` (none before the probe issue)."""
+    return [m for m in GI_MODES if accepts(builder, "gi") and _builds(builder, gi=m)]
+
+
+def standard_configs(scene, reference: ReferenceSettings | None = None, reflect: str = "auto", spp=(1, 4, 16),
+                     taa: bool = True, **options) -> list[Config]:
+    """Every effect level alone (all RASTER, all SHADOWS, all REFLECTIONS, all PATH_TRACED at each
+    `spp`) and mixed (SHADOWS with REFLECTIONS on one material); PATH_TRACED 1 spp + TAA (judged in
+    motion); each PATH_TRACED level with every available denoiser, each other level with probe GI
+    where the graphs have it. PATH_TRACED uses the reference's bounces."""
+    bounces = (reference or ReferenceSettings()).max_bounces
+    opts = {"path_bounces": bounces, **options}
     mirror = reflective_material(scene, reflect)
-    configs = [Config("all RASTER", Effect.RASTER, options=dict(options)),
-               Config("all SHADOWS", Effect.SHADOWS, options=dict(options)),
-               Config(f"SHADOWS + REFLECTIONS ({mirror})", {"*": Effect.SHADOWS, mirror: Effect.REFLECTIONS},
-                      options=dict(options))]
-    configs += [Config(f"PATH_TRACED {n} spp", Effect.PATH_TRACED, options={**options, "spp": int(n)})
-                for n in spp]
+    levels = [("all RASTER", Effect.RASTER), ("all SHADOWS", Effect.SHADOWS), ("all REFLECTIONS", Effect.REFLECTIONS),
+              (f"SHADOWS + REFLECTIONS ({mirror})", {"*": Effect.SHADOWS, mirror: Effect.REFLECTIONS})]
+    configs = [Config(name, effects, options=dict(opts)) for name, effects in levels]
+    for mode in available_gi():
+        configs += [Config(f"{name} + {mode} GI", effects, options={**opts, "gi": mode}) for name, effects in levels]
+    traced = [(f"PATH_TRACED {n} spp", {**opts, "spp": int(n)}) for n in spp]
+    configs += [Config(name, Effect.PATH_TRACED, options=o) for name, o in traced]
+    if taa:
+        configs.append(Config(f"PATH_TRACED {min(spp)} spp + TAA", Effect.PATH_TRACED, graph="hybrid_taa",
+                              options={**opts, "spp": int(min(spp))}))
+    for d in available_denoisers():
+        configs += [Config(f"{name} + {d.upper()}", Effect.PATH_TRACED, options={**o, "denoise": d})
+                    for name, o in traced]
+    return configs
+
+
+CONFIG_FIELDS = ("name", "effects", "graph", "options", "accumulate", "output")
+
+
+def load_configs(path) -> list[Config]:
+    """Configurations from a JSON file (see the module docstring); errors name the file and entry."""
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text())
+    except OSError as exc:
+        raise OptionError(f"--configs {path}: cannot read it ({exc.strerror or exc}); check the path") from None
+    except json.JSONDecodeError as exc:
+        raise OptionError(f"--configs {path}: not valid JSON (line {exc.lineno}, column {exc.colno}): "
+                          f"{exc.msg}") from None
+    items = doc.get("configs") if isinstance(doc, dict) else doc
+    if not isinstance(items, list) or not items:
+        raise OptionError(f"--configs {path}: expected a non-empty list of configurations (top level or "
+                          f"under \"configs\")")
+    configs = []
+    for i, item in enumerate(items):
+        where = f"--configs {path}: configs[{i}]"
+        if not isinstance(item, dict) or not isinstance(item.get("name"), str) or not item["name"]:
+            raise OptionError(f"{where}: expected an object with at least a \"name\" string")
+        unknown = sorted(set(item) - set(CONFIG_FIELDS))
+        if unknown:
+            raise OptionError(f"{where}: unknown field '{unknown[0]}'{did_you_mean(unknown[0], CONFIG_FIELDS)}; "
+                              f"fields: {', '.join(CONFIG_FIELDS)}")
+        if not isinstance(item.get("options", {}), dict):
+            raise OptionError(f"{where}.options: expected an object such as {{\"spp\": 4}}")
+        try:
+            configs.append(Config(item["name"], item.get("effects", "shadows"), item.get("graph", "hybrid"),
+                                  dict(item.get("options", {})), item.get("accumulate", 1), item.get("output")))
+        except OptionError as exc:
+            raise OptionError(f"{where}: {exc}") from None
     return configs

@@ -1,169 +1,365 @@
-"""Error against run time: render each configuration, time it, compare it with a converged reference.
+"""The error study: every configuration's GPU time and image error against a trusted reference.
 
-    results = rv.tune.measure(scene, rv.tune.standard_configs(scene), size=(64, 64), views=2)
+    results = rv.tune.measure(scene, rv.tune.standard_configs(scene), views=2, size=(64, 64))
     print(results.table())
-    results.write("out/tune")          # table.md, results.csv, results.json, error_vs_ms_*.png
+    rv.tune.write_report(results, "out/study")   # report.md, report.html, results.json, images
 
-Timing is the render graph's profile (`rayvr.rendergraph.profile`): GPU timer queries where the
-driver has them, else finish + wall clock per pass (llvmpipe); `Results.method` says which. The
-frame time is the sum of the per-pass means over the timed frames (warm-up frames excluded,
-which matters on llvmpipe: it compiles a shader at its first dispatch).
+For each configuration (rayvr.tune.configs.Config):
+- **time**: GPU ms per frame from the graph's profile over `timing_frames` frames after a
+  warm-up (rayvr.tune.timing);
+- **error, static view**: `frames` frames (each after the configuration's own accumulation), every
+  metric of rayvr.tune.metrics.evaluate per frame and view against the reference; reported as the
+  mean and standard deviation over those frames and views;
+- **error in motion**: the views carried along a headset trajectory (rayvr.tune.motion), the
+  sampled frames judged against a reference rendered for each of them;
+- **bias floor**: the configuration converged, against the reference (rayvr.tune.floor).
+Then the progressive-convergence curves (rayvr.tune.progressive.progressive_curve).
+
+The reference (rayvr.tune.reference) is converged and checked; every render has its own seeds
+(rayvr.tune.seeds). The displayed images go through one fixed tone mapping
+(rayvr.tune.display); FLIP uses the headset preset's pixels per degree. The scene's material
+effects are restored afterwards.
 """
 from __future__ import annotations
 
 import dataclasses
-import time
+import math
 
 import numpy as np
 
 from ..errors import OptionError
-from . import metrics as M
-from .configs import Config, effects_restored
-from .reference import ReferenceSettings, reference_image
-from .results import ConfigResult, Results
+from ..materials.effect import Effect
+from . import seeds
+from .configs import Config, effects_restored, path_traced_graph
+from .display import Display, clamp_negative
+from .floor import bias_floor, even_frames, floor_path
+from .metrics import DEFAULT_EPS, METRICS, check_metrics, evaluate
+from .motion import Motion, along, trajectory_views
+from .progress import StudyProgress
+from .reference import Reference, ReferenceSettings, is_cached
+from .reference import cached_reference
+from .results import Results, Row, summarize
+from .timing import default_warmup_s, make_views, timed_frames
+
+MOTION_FIRST_FRAME = seeds.TEST + seeds.RANGE // 2     # inside the test range, apart from the static frames
+PROGRESSIVE_FIRST_FRAME = seeds.TEST + seeds.RANGE // 4
+# Relative CPU cost per pixel of each metric (HDR-FLIP runs LDR-FLIP at several exposures).
+METRIC_COST = {"flip": 1.0, "hdrflip": 6.0, "ssim": 0.5, "psnr": 0.1, "relmse": 0.1}
+# Relative GPU cost per pixel and frame of an effect level, in paths of the reference's length.
+EFFECT_COST = {Effect.RASTER: 0.3, Effect.SHADOWS: 0.5, Effect.REFLECTIONS: 0.8}
 
 
-@dataclasses.dataclass
-class Timing:
-    """GPU ms per frame over the timed frames: total, per pass, and how it was measured."""
+@dataclasses.dataclass(frozen=True)
+class StudySettings:
+    """How much the study renders and how it judges (see the module docstring).
 
-    frame_ms: float
-    pass_ms: dict
-    cpu_ms: float
-    method: str
-    frames: int
+    `frames`: judged frames per configuration (static view); `timing_frames`/`warmup`: timed and
+    untimed frames; `warmup_s`: seconds of untimed frames first (None: 0.5 s on a GPU with timer
+    queries, 0 on llvmpipe); `motion`: the trajectory (None: static only); `floors`: render the
+    bias floors, at `floor_fraction` of the reference's samples per pixel; `progressive_frames`:
+    length of the progressive curves (0: none); `preset`/`ppd`: FLIP's pixels per degree (ppd
+    None: the preset's); `eps`: relMSE's epsilon; `display`: the tone mapping of the displayed
+    images."""
 
+    frames: int = 4
+    timing_frames: int = 20
+    warmup: int = 3
+    warmup_s: float | None = None
+    motion: Motion | None = Motion()
+    floors: bool = True
+    floor_fraction: float = 0.25
+    progressive_frames: int = 64
+    preset: str = "index"
+    ppd: float | None = None
+    eps: float = DEFAULT_EPS
+    display: Display = Display()
+    metrics: tuple = tuple(METRICS)
 
-def warm_up(renderer, seconds: float) -> None:
-    """Render until `seconds` have passed, so that a GPU which idled (an H100 drops to ~345 MHz)
-    has its clocks up before anything is timed."""
-    until = time.perf_counter() + seconds
-    while time.perf_counter() < until:
-        renderer.render()
-        renderer.gl.finish()
+    def __post_init__(self):
+        for key, low in (("frames", 1), ("timing_frames", 1), ("warmup", 0), ("progressive_frames", 0)):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                raise OptionError(f"study {key}: must be an integer >= {low}, got {value!r}")
+        if self.ppd is not None and not self.ppd > 0:
+            raise OptionError(f"study ppd: pixels per degree must be > 0, got {self.ppd!r}")
+        if not 0 < self.floor_fraction <= 1:
+            raise OptionError(f"study floor_fraction: must be in (0, 1], got {self.floor_fraction!r}")
+        if not self.eps > 0:
+            raise OptionError(f"study eps: must be > 0, got {self.eps!r}")
+        check_metrics(self.metrics)
 
+    def pixels_per_degree(self) -> float:
+        from ..xr.presets import get_preset
 
-def timed_frames(renderer, frames: int, warmup: int, warmup_s: float = 0.0) -> Timing:
-    """Render untimed frames for `warmup_s` seconds (warm_up) and then `warmup` more, then
-    `frames` timed frames; the per-pass means of the timed ones."""
-    if frames < 1 or warmup < 0:
-        raise OptionError(f"measure: frames must be >= 1 and warmup >= 0, got frames={frames}, warmup={warmup}")
-    warm_up(renderer, warmup_s)
-    for _ in range(warmup):
-        renderer.render()
-    renderer.gl.finish()
-    compiled = renderer.compiled
-    before = compiled.profile()
-    for _ in range(frames):
-        renderer.render()
-    renderer.gl.finish()
-    if renderer.compiled is not compiled:
-        raise OptionError("measure: the graph recompiled during the timed frames; change materials before timing")
-    after = compiled.profile()
-    pass_ms = {name: _timed_mean(before.passes.get(name), stats, after.window) for name, stats in after.passes.items()}
-    cpu = _timed_mean(before.cpu_ms, after.cpu_ms, after.window) if after.cpu_ms else float("nan")
-    return Timing(float(sum(pass_ms.values())), pass_ms, cpu, after.method, frames)
+        return float(self.ppd) if self.ppd is not None else get_preset(self.preset).pixels_per_degree
 
-
-def _timed_mean(before, after, window: int) -> float:
-    """The mean of the samples added since `before` (rolling stats keep the last `window`)."""
-    if before is None or after.samples >= window:
-        return float(after.mean_ms)
-    added = after.samples - before.samples
-    if added <= 0:
-        return float(after.mean_ms)
-    return float((after.mean_ms * after.samples - before.mean_ms * before.samples) / added)
-
-
-def make_views(scene, views=2, size=(256, 256)):
-    """A ViewSet: `views` as given, or that many views from the scene's camera at `size`."""
-    from ..renderer import default_views
-    from ..xr.views import ViewSet
-
-    if isinstance(views, ViewSet):
-        return views
-    if int(views) < 1:
-        raise OptionError(f"views: need at least 1 view, got {views}")
-    return default_views(scene, int(views), tuple(size))
+    def as_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["motion"] = self.motion.as_dict() if self.motion else None
+        d["display"] = self.display.as_dict()
+        d["metrics"] = list(self.metrics)
+        return d
 
 
-def measure(scene, configs, reference=None, size=(256, 256), views=2, frames: int = 20, warmup: int = 3,
-            reference_settings: ReferenceSettings | None = None, cache_dir=None, ppd: float | None = None,
-            eps: float = 1e-2, metrics=tuple(M.METRICS), keep_images: bool = False, progress: bool = True,
-            gpu=None, warmup_s: float = 0.0) -> Results:
-    """Render every `Config` of `configs` over `scene` and return its GPU ms and image error.
-
-    `reference`: a (views, h, w, c) linear image (row 0 at the top), an .npz file with an
-    'image' array, or None to render the converged reference (cached, see
-    rayvr.tune.reference). `views`: a ViewSet or a view count from the scene's camera, `size`
-    per view. Error metrics: FLIP (HDR, `ppd` pixels per degree), relMSE (`eps`), PSNR of the
-    sRGB-encoded images; `metrics` picks some (HDR-FLIP of a 1440x1600 view takes seconds of CPU).
-    `warmup_s`: seconds of untimed frames before each configuration's `warmup` frames (the GPU
-    idles while the CPU computes the previous configuration's error).
-    The scene's material effects are restored afterwards."""
-    from tqdm import tqdm
-
-    from ..renderer import Renderer
-
-    configs = check_configs(configs)
-    metrics = M.check_metrics(metrics)
-    view_set = make_views(scene, views, size)
-    ref, ref_source = load_reference(scene, view_set, reference, reference_settings, cache_dir, gpu, progress)
-    rows = []
-    with effects_restored(scene):
-        for config in tqdm(configs, desc="configurations", unit="config", disable=not progress, leave=False):
-            assignment = config.apply(scene)
-            graph = config.build_graph()
-            pin = config.output_pin(graph)
-            with Renderer(scene, graph, views=view_set, gpu=gpu) as r:
-                timing = timed_frames(r, frames, warmup, warmup_s)
-                image = r.read_output(pin, flip_y=True)
-            errors = M.all_metrics(image, ref, ppd=ppd, eps=eps, names=(f"config '{config.name}' {pin}", "reference"),
-                                   which=metrics)
-            rows.append(ConfigResult(config.name, {k: v.name for k, v in assignment.items()}, dict(config.options),
-                                     timing.frame_ms, timing.pass_ms, timing.cpu_ms, errors,
-                                     image if keep_images else None))
-    info = {"scene": scene.name, "views": len(view_set), "size": list(view_set.size), "frames": frames,
-            "warmup": warmup, "warmup_s": warmup_s, "method": timing.method, "reference": ref_source, "ppd": ppd, "eps": eps}
-    return Results(rows, info)
+def frame_cost(config: Config, scene) -> float:
+    """Expected GPU cost per pixel of one frame of `config`, in reference-length paths."""
+    spp = config.settings()["spp"]
+    levels = set(config.assignment(scene).values())
+    return max((spp + 0.3) if e == Effect.PATH_TRACED else EFFECT_COST[e] for e in levels)
 
 
-def check_configs(configs) -> list[Config]:
-    """`configs` as a list: at least one, every one a Config, names unique."""
+def floor_frames(config: Config, reference_settings: ReferenceSettings, fraction: float) -> int:
+    """Frames of a configuration's converged render: `fraction` of the reference's paths per
+    pixel, at the configuration's spp (even, at least 2)."""
+    spp = max(1, config.settings()["spp"])
+    return even_frames(math.ceil(reference_settings.samples_per_pixel * fraction / spp))
+
+
+def check_configs(scene, configs) -> list[Config]:
     configs = list(configs)
     if not configs:
         raise OptionError("measure: no configurations; pass e.g. rv.tune.standard_configs(scene)")
-    names = [c.name for c in configs]
-    if len(set(names)) != len(names):
-        raise OptionError(f"measure: configuration names must be unique, got {names}")
     for c in configs:
         if not isinstance(c, Config):
             raise OptionError(f"measure: {c!r} is not a rayvr.tune.Config")
+        c.assignment(scene)          # an unknown material fails now, not after the reference
+    names = [c.name for c in configs]
+    if len(set(names)) != len(names):
+        raise OptionError(f"measure: configuration names must be unique, got {names}")
     return configs
 
 
-def load_reference(scene, view_set, reference, settings, cache_dir, gpu, progress) -> tuple[np.ndarray, str]:
-    """(image, where it came from) for `measure`'s `reference` argument."""
-    from pathlib import Path
+def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings | Reference | None = None,
+            settings: StudySettings = StudySettings(), cache_dir=None, progress: bool = True, gpu=None,
+            curves: bool = True, notes=()) -> Results:
+    """Run the error study (module docstring) and return its Results.
 
-    if reference is None:
-        settings = settings or ReferenceSettings()
-        image, path = reference_image(scene, view_set, settings, cache_dir, gpu, progress)
-        return image, str(path) if path else f"rendered ({settings.frames} frames x {settings.spp} spp)"
-    if isinstance(reference, (str, Path)):
-        path = Path(reference)
-        if not path.exists():
-            raise OptionError(f"reference {path}: no such file; pass an .npz with an 'image' array or None to render one")
-        try:
-            with np.load(path) as data:
-                image = data["image"]
-        except (OSError, ValueError, KeyError) as exc:
-            raise OptionError(f"reference {path}: not an .npz with an 'image' array ({exc})") from None
-        source = str(path)
-    else:
-        image, source = np.asarray(reference), "given array"
-    image = M.as_views(image, "reference")
-    if image.shape[:3] != (len(view_set), view_set.size[1], view_set.size[0]):
-        raise OptionError(f"reference ({source}): {image.shape[0]} view(s) of {image.shape[2]}x{image.shape[1]}, "
-                          f"but the measurement renders {len(view_set)} of {view_set.size[0]}x{view_set.size[1]}")
-    return image, source
+    `views`: a ViewSet, or a view count from the scene's camera at `size` per view.
+    `reference`: ReferenceSettings to render (or load from `cache_dir`; False: no cache) the
+    reference with, or a Reference already made for these views. `curves`: the progressive
+    curves. `notes`: lines for the report (e.g. why these sizes were chosen)."""
+    from ..gpu import get_context
+
+    gpu = gpu or get_context()
+    configs = check_configs(scene, configs)
+    view_set = make_views(scene, views, size)
+    ppd = settings.pixels_per_degree()
+    warmup_s = default_warmup_s(gpu) if settings.warmup_s is None else float(settings.warmup_s)
+    given = reference if isinstance(reference, Reference) else None
+    ref_settings = given.settings if given else (reference or ReferenceSettings())
+    if given is not None and given.image.shape[:3] != (len(view_set), view_set.size[1], view_set.size[0]):
+        raise OptionError(f"measure: the reference has {given.image.shape[0]} view(s) of {given.image.shape[2]}x"
+                          f"{given.image.shape[1]}, the study renders {len(view_set)} of "
+                          f"{view_set.size[0]}x{view_set.size[1]}")
+    motion = settings.motion
+    motion_frames = trajectory_views(view_set, motion) if motion else []
+    study = _Study(scene, view_set, ref_settings, settings, ppd, warmup_s, cache_dir, gpu,
+                   StudyProgress(progress, f"error study {scene.name}"))
+    study.plan(configs, given is None, motion_frames, curves)
+    with effects_restored(scene), study.progress:
+        ref = given or study.reference(0, view_set, "reference")
+        study.display = settings.display.fixed(ref.image)
+        halves, _, _ = study.judge(ref.half_a, ref.half_b, "reference half A")
+        motion_refs = [(i, study.reference(k + 1, _views(motion_frames[i]), f"reference of trajectory frame {i}"))
+                       for k, i in enumerate(motion.sample_frames())] if motion else []
+        rows = [study.row(c, ref, motion_frames, dict(motion_refs)) for c in configs]
+        made = study.curves(ref) if curves and settings.progressive_frames else []
+    info = {"scene": scene.name, "views": len(view_set), "size": list(view_set.size), "preset": settings.preset,
+            "ppd": ppd, "ppd_source": "given" if settings.ppd else f"preset '{settings.preset}' (resolution / fov)",
+            "display": study.display.as_dict(), "display_text": study.display.describe(), "eps": settings.eps,
+            "timing": study.method or "?", "warmup_s": warmup_s, "device": gpu.caps.renderer,
+            "software": bool(gpu.caps.is_software), "settings": settings.as_dict(), "notes": list(notes),
+            "reference_halves": {m: float(np.mean(v)) for m, v in halves.items()},
+            "seconds": study.progress.spent, "metric_descriptions": {m: d for m, d in _descriptions().items()
+                                                                      if m in settings.metrics}}
+    return Results(ref, rows, made, info, motion_refs)
+
+
+def _descriptions() -> dict:
+    from .metrics import DESCRIPTIONS
+
+    return DESCRIPTIONS
+
+
+def _views(views: list):
+    from ..xr.views import ViewSet
+
+    return ViewSet(views)
+
+
+class _Study:
+    """One run of `measure`: shared state, the progress plan, and the steps."""
+
+    def __init__(self, scene, view_set, ref_settings, settings, ppd, warmup_s, cache_dir, gpu, progress):
+        self.scene, self.view_set, self.ref_settings, self.s = scene, view_set, ref_settings, settings
+        self.ppd, self.warmup_s, self.cache_dir, self.gpu, self.progress = ppd, warmup_s, cache_dir, gpu, progress
+        self.pixels = len(view_set) * view_set.size[0] * view_set.size[1]
+        self.metric_units = self.pixels * sum(METRIC_COST[m] for m in settings.metrics)
+        self.display = None
+        self.method = None
+
+    # -- planning ----------------------------------------------------------------------------
+    def _reference_units(self) -> float:
+        r = self.ref_settings
+        return self.pixels * r.spp * (r.frames + r.bounce_check_frames)
+
+    def plan(self, configs, render_reference: bool, motion_frames, curves: bool) -> None:
+        p, s = self.progress, self.s
+        if render_reference and not is_cached(self.scene, self.view_set, self.ref_settings, self.cache_dir):
+            p.plan("render", self._reference_units())
+        if s.motion:
+            for k, i in enumerate(s.motion.sample_frames()):
+                if not is_cached(self.scene, _views(motion_frames[i]), self.ref_settings, self.cache_dir, k + 1):
+                    p.plan("render", self._reference_units())
+        for c in configs:
+            cost = frame_cost(c, self.scene) * self.pixels
+            p.plan("setup", 1)
+            p.plan("render", cost * (s.warmup + s.timing_frames + s.frames * c.accumulate))
+            p.plan("metric", self.metric_units * s.frames)
+            if s.motion:
+                p.plan("setup", 1)
+                p.plan("render", cost * s.motion.frames)
+                p.plan("metric", self.metric_units * s.motion.samples)
+            if s.floors and not self._floor_cached(c):
+                p.plan("render", cost * floor_frames(c, self.ref_settings, s.floor_fraction))
+        if curves and s.progressive_frames:
+            for _ in self._curve_graphs():
+                p.plan("curve", self._curve_units())
+
+    def _curve_units(self) -> float:
+        """A progressive curve renders and judges in one step: its units are prior seconds."""
+        from .progress import PRIOR
+        from .progressive import snapshot_counts
+
+        s = self.s
+        return (PRIOR["render"] * self.pixels * (s.warmup + s.timing_frames + s.progressive_frames)
+                + PRIOR["metric"] * self.metric_units * len(snapshot_counts(s.progressive_frames)))
+
+    def _floor_cached(self, config) -> bool:
+        if self.cache_dir is False:
+            return False
+        frames = floor_frames(config, self.ref_settings, self.s.floor_fraction)
+        return floor_path(self.scene, config, self.view_set, frames, self.cache_dir).exists()
+
+    # -- steps -------------------------------------------------------------------------------
+    def reference(self, sample: int, view_set, label: str) -> Reference:
+        r = self.ref_settings
+        cached = is_cached(self.scene, view_set, r, self.cache_dir, sample)
+        if cached:
+            return cached_reference(self.scene, view_set, r, self.cache_dir, self.gpu, sample=sample, eps=self.s.eps)
+        total = r.frames + r.bounce_check_frames
+        with self.progress.step("render", self._reference_units(), label) as tick:
+            return cached_reference(self.scene, view_set, r, self.cache_dir, self.gpu, tick=lambda n: tick(n / total),
+                                 sample=sample, eps=self.s.eps)
+
+    def judge(self, image, reference_image, name: str, maps: bool = False):
+        """(per-view metrics, maps, negative values) of `image`: negative radiance is judged as
+        the tone mapper shows it (0), and counted."""
+        image, negatives = clamp_negative(image)
+        per_view, maps = evaluate(image, reference_image, self.display, self.ppd, self.s.eps,
+                                  names=(name, "reference"), which=self.s.metrics, maps=maps)
+        return per_view, maps, negatives
+
+    def row(self, config: Config, ref: Reference, motion_frames, motion_refs: dict) -> Row:
+        from ..renderer import Renderer
+
+        s, p = self.s, self.progress
+        cost = frame_cost(config, self.scene) * self.pixels
+        config.apply(self.scene)
+        graph = config.build_graph()
+        pin = config.output_pin(graph)
+        name = f"config '{config.name}' {pin}"
+        samples, first, first_maps, negatives = {m: [] for m in s.metrics}, None, {}, 0
+        with p.step("setup", 1, config.name):
+            r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=seeds.TEST)
+        with r:
+            accumulators = [n for n, q in r.compiled.passes.items() if type(q).__name__ == "Accumulate"]
+            with p.step("render", cost * (s.warmup + s.timing_frames), config.name):
+                timing = timed_frames(r, s.timing_frames, s.warmup, self.warmup_s)
+            self.method = timing.method
+            for k in range(s.frames):
+                with p.step("render", cost * config.accumulate, config.name):
+                    if config.accumulate > 1:
+                        for n in accumulators:
+                            r.compiled.passes[n].reset()
+                    for _ in range(config.accumulate):
+                        r.render()
+                    image = r.read_output(pin, flip_y=True)
+                with p.step("metric", self.metric_units, config.name):
+                    per_view, maps, bad = self.judge(image, ref.image, name, maps=k == 0)
+                negatives += bad
+                for m, v in per_view.items():
+                    samples[m].append(v)
+                if k == 0:
+                    first, first_maps = image, maps
+        row = Row(config.name, config.settings(self.scene), timing.frame_ms, timing.pass_ms, timing.cpu_ms,
+                  s.frames, len(self.view_set), tuple(self.view_set.size), summarize(samples), image=first,
+                  maps=first_maps, negative_values=negatives)
+        if s.motion:
+            row.motion, row.motion_image = self.motion_row(config, motion_frames, motion_refs, cost)
+        if s.floors:
+            row.floor, row.floor_image = self.floor_row(config, ref, cost)
+        return row
+
+    def motion_row(self, config: Config, motion_frames, motion_refs: dict, cost: float):
+        from ..renderer import Renderer
+
+        s, p = self.s, self.progress
+        graph = config.build_graph()
+        pin = config.output_pin(graph)
+        samples, last, negatives = {m: [] for m in s.metrics}, None, 0
+        label = f"{config.name} in motion"
+        with p.step("setup", 1, label):
+            r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=MOTION_FIRST_FRAME)
+        with r:
+            for i, views in enumerate(along(motion_frames)):
+                with p.step("render", cost, label):
+                    r.render(views)
+                    image = r.read_output(pin, flip_y=True) if i in motion_refs else None
+                if image is not None:
+                    with p.step("metric", self.metric_units, label):
+                        per_view, _, bad = self.judge(image, motion_refs[i].image, f"config '{config.name}' frame {i}")
+                    negatives += bad
+                    for m, v in per_view.items():
+                        samples[m].append(v)
+                    last = image
+        return {**s.motion.as_dict(), **summarize(samples), "negative_values": negatives}, last
+
+    def floor_row(self, config: Config, ref: Reference, cost: float):
+        frames = floor_frames(config, self.ref_settings, self.s.floor_fraction)
+        label = f"{config.name} converged (bias floor)"
+        cached = self._floor_cached(config)
+        if cached:
+            floor = bias_floor(self.scene, config, self.view_set, frames, self.cache_dir, self.gpu)
+        else:
+            with self.progress.step("render", cost * frames, label) as tick:
+                floor = bias_floor(self.scene, config, self.view_set, frames, self.cache_dir, self.gpu,
+                                   tick=lambda n: tick(n / frames))
+        out = floor.against(ref)
+        per_view, _, _ = self.judge(floor.image, ref.image, f"floor of '{config.name}'")
+        out.update({m: float(np.mean(v)) for m, v in per_view.items()})
+        return out, floor.image
+
+    # -- progressive curves ------------------------------------------------------------------
+    def _curve_graphs(self):
+        """(name, builder options) of the progressive renders: raw path tracing and, where the
+        path-traced graph takes `denoise=`, each denoiser."""
+        from .configs import available_denoisers
+
+        base = {"spp": 1, "max_bounces": self.ref_settings.max_bounces}
+        yield "path tracing + Accumulate", base
+        for d in available_denoisers(path_traced_graph):
+            yield f"path tracing + Accumulate + {d.upper()}", {**base, "denoise": d}
+
+    def curves(self, ref: Reference) -> list:
+        from .progressive import progressive_curve
+
+        out = []
+        for name, options in self._curve_graphs():
+            s = self.s
+            with self.progress.step("curve", self._curve_units(), name) as tick:
+                out.append(progressive_curve(self.scene, name, path_traced_graph(**options), options, self.view_set,
+                                             s.progressive_frames, ref, self.judge, s.timing_frames, s.warmup,
+                                             self.warmup_s, PROGRESSIVE_FIRST_FRAME, self.gpu,
+                                             tick=lambda n: tick(n / s.progressive_frames)))
+        return out

@@ -1,4 +1,4 @@
-"""Image error metrics against a reference: FLIP, relative MSE and PSNR.
+"""Image error metrics against a reference: FLIP, HDR-FLIP, relative MSE, PSNR and SSIM.
 
 Images are numpy arrays shaped (views, h, w, c) (also accepted: (h, w, c) and (h, w)); only the
 first three channels count (alpha is ignored; one channel is grey). Float images are linear
@@ -8,6 +8,10 @@ an image is an error that names the image and the first bad pixel, never a silen
     flip(test, ref)           mean FLIP (NVIDIA's flip-evaluator), HDR-FLIP for float, LDR-FLIP for integer
     rel_mse(test, ref)        mean over pixels and channels of (t - r)^2 / (r^2 + eps)
     psnr(test, ref, peak)     10 log10(peak^2 / MSE) in dB; inf for identical images
+    ssim(test, ref)           scikit-image's structural similarity of display-encoded images
+
+`evaluate` is the error study's set: FLIP, PSNR and SSIM of the displayed images (see
+rayvr.tune.display), HDR-FLIP and relMSE of the linear radiance.
 
 The `*_map` functions return the per-pixel error (views, h, w) whose mean is the metric: the
 budget tuner sums them over each material's pixels.
@@ -22,6 +26,7 @@ import numpy as np
 from ..errors import OptionError, RayvrError
 
 DYNAMIC_RANGES = ("auto", "ldr", "hdr")
+THREADED_VIEW_PIXELS = 256 * 256   # smaller views: starting threads costs more than it saves
 
 
 def as_views(image, name: str = "image") -> np.ndarray:
@@ -140,8 +145,8 @@ def flip_map(test, reference, dynamic_range: str = "auto", ppd: float | None = N
         tv, rv = (np.ascontiguousarray(a[v], dtype=np.float32) for a in (t, r))
         return _flip_view(flip_evaluator, tv, rv, mode, params)
 
-    if t.shape[0] == 1:
-        return one_view(0)[None]
+    if t.shape[0] == 1 or t.shape[1] * t.shape[2] < THREADED_VIEW_PIXELS:
+        return np.stack([one_view(v) for v in range(t.shape[0])])
     # HDR-FLIP of a 1440x1600 view takes seconds of CPU; views run in threads.
     from concurrent.futures import ThreadPoolExecutor
 
@@ -169,6 +174,24 @@ def flip(test, reference, dynamic_range: str = "auto", ppd: float | None = None,
     return float(flip_map(test, reference, dynamic_range, ppd, names).mean())
 
 
+# -- SSIM ------------------------------------------------------------------------------------
+def ssim(test, reference, names=("test", "reference")) -> float:
+    """Mean structural similarity (scikit-image: uniform 7x7 windows, RGB as channels,
+    data_range 1) of display-encoded images in [0, 1], averaged over views; 1 = identical."""
+    return float(np.mean(ssim_views(test, reference, names)))
+
+
+def ssim_views(test, reference, names=("test", "reference")) -> np.ndarray:
+    """SSIM per view (views,) of display-encoded images in [0, 1]."""
+    from skimage.metrics import structural_similarity
+
+    t, r = pair(test, reference, names)
+    if min(t.shape[1:3]) < 7:
+        raise OptionError(f"ssim: views of {t.shape[2]}x{t.shape[1]} pixels are smaller than SSIM's 7x7 window; "
+                          f"measure at least 7x7 pixels")
+    return np.array([structural_similarity(t[v], r[v], channel_axis=-1, data_range=1.0) for v in range(len(t))])
+
+
 # -- display encoding (for PSNR of display-referred images) -----------------------------------
 def srgb_encode(linear) -> np.ndarray:
     """Linear radiance clamped to [0, 1] and sRGB-encoded (float64): what a display shows at exposure 0."""
@@ -177,8 +200,16 @@ def srgb_encode(linear) -> np.ndarray:
     return encode(np.asarray(linear, dtype=np.float64))
 
 
-METRICS = {"flip": "FLIP (mean, HDR)", "relmse": "relMSE", "psnr": "PSNR dB (sRGB, clamped)"}
-LOWER_IS_BETTER = {"flip": True, "relmse": True, "psnr": False}
+# -- the study's metrics ----------------------------------------------------------------------
+METRICS = {"flip": "FLIP", "hdrflip": "HDR-FLIP", "psnr": "PSNR dB", "ssim": "SSIM", "relmse": "relMSE"}
+DESCRIPTIONS = {"flip": "LDR-FLIP of the displayed images at the headset's pixels per degree",
+                "hdrflip": "HDR-FLIP of the linear radiance at the same pixels per degree",
+                "psnr": "PSNR of the displayed images (peak 1)",
+                "ssim": "SSIM of the displayed images (scikit-image, data_range 1)",
+                "relmse": "relative MSE of the linear radiance, (t - r)^2 / (r^2 + eps), eps stated"}
+LOWER_IS_BETTER = {"flip": True, "hdrflip": True, "psnr": False, "ssim": False, "relmse": True}
+MAP_METRICS = ("flip", "relmse")   # per-pixel maps whose mean is the metric (the tuner sums them)
+DEFAULT_EPS = 1e-2
 
 
 def check_metrics(which) -> tuple[str, ...]:
@@ -192,11 +223,38 @@ def check_metrics(which) -> tuple[str, ...]:
     return which
 
 
-def all_metrics(test, reference, ppd: float | None = None, eps: float = 1e-2, names=("test", "reference"),
-                which=tuple(METRICS)) -> dict:
-    """The metrics `which` (default all) of linear `test` against linear `reference`: "flip" in
-    HDR mode, "relmse" on radiance, "psnr" of the sRGB-encoded images clamped to [0, 1] (peak 1)."""
+def evaluate(test, reference, display, ppd: float | None = None, eps: float = DEFAULT_EPS,
+             names=("test", "reference"), which=tuple(METRICS), maps: bool = False):
+    """The study's metrics of linear `test` against linear `reference`, each per view:
+    ({metric: (views,) array}, {metric: (views, h, w) map} when `maps`).
+
+    `display` (a fixed rayvr.tune.display.Display) makes the displayed images that FLIP, PSNR
+    and SSIM judge; HDR-FLIP and relMSE take the linear radiance. `ppd`: pixels per degree for
+    both FLIPs (None: FLIP's 67)."""
     t, r = pair(test, reference, names)
-    compute = {"flip": lambda: flip(t, r, "hdr", ppd, names), "relmse": lambda: rel_mse(t, r, eps, names),
-               "psnr": lambda: psnr(srgb_encode(t), srgb_encode(r), 1.0, names)}
-    return {m: compute[m]() for m in check_metrics(which)}
+    which = check_metrics(which)
+    need = set(which) | (set(MAP_METRICS) if maps else set())
+    shown = (display(t), display(r)) if need & {"flip", "psnr", "ssim"} else None
+    per_map = {}
+    if "flip" in need:
+        per_map["flip"] = flip_map(*shown, "ldr", ppd, names)
+    if "relmse" in need:
+        per_map["relmse"] = rel_mse_map(t, r, eps, names)
+    out = {}
+    for m in which:
+        if m in per_map:
+            out[m] = per_map[m].reshape(len(t), -1).mean(axis=1).astype(np.float64)
+        elif m == "hdrflip":
+            out[m] = flip_map(t, r, "hdr", ppd, names).reshape(len(t), -1).mean(axis=1).astype(np.float64)
+        elif m == "psnr":
+            out[m] = np.array([psnr(shown[0][v], shown[1][v], 1.0, names) for v in range(len(t))])
+        elif m == "ssim":
+            out[m] = ssim_views(*shown, names)
+    return out, (per_map if maps else {})
+
+
+def all_metrics(test, reference, display, ppd: float | None = None, eps: float = DEFAULT_EPS,
+                names=("test", "reference"), which=tuple(METRICS)) -> dict:
+    """`evaluate`'s metrics as one number each (the mean over views)."""
+    per_view, _ = evaluate(test, reference, display, ppd, eps, names, which)
+    return {m: float(np.mean(v)) for m, v in per_view.items()}

@@ -1,14 +1,17 @@
 """Measure a `rayvr.tune.budget.CostModel` on the GPU with one render per effect level.
 
 Every material is set to one level at a time (RASTER first, as the base). From each render:
-- GPU time per pass (the graph's profile). The passes that dispatch over EffectCompaction's pixel
-  lists (shadows, reflections, path tracing) cost in proportion to their pixels: material m's
-  share of them is its pixel count over all geometry pixels. Passes the level adds that are not
+- GPU time per pass (the graph's profile, after a time-based warm-up on GPUs with timer queries:
+  an idle GPU's clocks are low). The passes that dispatch over EffectCompaction's pixel lists
+  (shadows, reflections, path tracing) cost in proportion to their pixels: material m's share of
+  them is its pixel count over all geometry pixels. Passes the level adds that are not
   list-driven (compaction, accumulation) are the level's fixed overhead. Passes the base already
   has are assumed unchanged (conservative: direct lighting shrinks when rays light a pixel).
-- The per-pixel error map against the reference (FLIP or relMSE), summed over each material's
-  pixels (G-buffer effect ids name the material per pixel) and divided by all pixels, so the
-  shares of a one-level render add up to its metric exactly.
+- The per-pixel error map against the trusted reference (rayvr.tune.reference): FLIP of the
+  displayed images at the headset's pixels per degree, or relMSE of the radiance, averaged over
+  `trials` frames (their seeds differ), summed over each material's pixels (G-buffer effect ids
+  name the material per pixel) and divided by all pixels, so the shares of a one-level render add
+  up to its metric exactly.
 """
 from __future__ import annotations
 
@@ -16,20 +19,12 @@ import numpy as np
 
 from ..errors import OptionError
 from ..materials.effect import Effect
-from . import metrics as M
 from .budget import CostModel
 from .configs import Config, effects_restored
-from .measure import load_reference, timed_frames
+from .timing import default_warmup_s, timed_frames
 
 TUNE_METRICS = ("flip", "relmse")
 NO_GEOMETRY = 0xFF
-
-
-def error_map(image, ref, metric: str, ppd, name: str) -> np.ndarray:
-    """Per-pixel error (views, h, w) whose mean is the metric."""
-    if metric == "flip":
-        return M.flip_map(image, ref, "hdr", ppd, names=(name, "reference"))
-    return M.rel_mse_map(image, ref, names=(name, "reference"))
 
 
 def list_driven_passes(graph) -> set[str]:
@@ -50,23 +45,48 @@ def effect_pin(graph) -> str:
                       f"cannot be told apart by material; tune the hybrid graph (rayvr.tune.hybrid_graph)")
 
 
-def _check_metric(metric: str) -> str:
+def check_metric(metric: str) -> str:
     if metric not in TUNE_METRICS:
         raise OptionError(f"tune: metric {metric!r} cannot be split per pixel; use one of {', '.join(TUNE_METRICS)}")
     return metric
 
 
-def probe_cost_model(scene, view_set, builder, options: dict, metric: str = "flip", levels=tuple(Effect),
-                     frames: int = 10, warmup: int = 3, reference=None, reference_settings=None, cache_dir=None,
-                     ppd=None, progress: bool = True, gpu=None):
-    """(CostModel, reference image, HDR pin) for `scene` seen by `view_set` with graphs from
-    `builder(**options)`; see the module docstring. The scene's effects are restored."""
+class ErrorJudge:
+    """Per-pixel error maps against a reference: `metric` of rayvr.tune.metrics.evaluate."""
+
+    def __init__(self, reference, display, ppd: float, metric: str, eps: float):
+        self.reference, self.display, self.ppd, self.metric, self.eps = reference, display, ppd, metric, eps
+
+    def map(self, image, name: str) -> np.ndarray:
+        from .metrics import evaluate
+
+        _, maps = evaluate(image, self.reference.image, self.display, self.ppd, self.eps, names=(name, "reference"),
+                           which=(self.metric,), maps=True)
+        return maps[self.metric]
+
+    def mean_map(self, renderer, pin: str, trials: int, name: str) -> np.ndarray:
+        """The error map averaged over the next `trials` frames."""
+        total = None
+        for _ in range(trials):
+            renderer.render()
+            m = self.map(renderer.read_output(pin, flip_y=True), name)
+            total = m if total is None else total + m
+        return total / trials
+
+
+def probe_cost_model(scene, view_set, builder, options: dict, judge: ErrorJudge, levels=tuple(Effect),
+                     frames: int = 10, warmup: int = 3, warmup_s: float | None = None, trials: int = 2,
+                     progress: bool = True, gpu=None):
+    """(CostModel, HDR pin) for `scene` seen by `view_set` with graphs from `builder(**options)`
+    (see the module docstring). The scene's effects are restored."""
     from tqdm import tqdm
 
+    from ..gpu import get_context
     from ..renderer import Renderer
 
-    _check_metric(metric)
-    ref, _ = load_reference(scene, view_set, reference, reference_settings, cache_dir, gpu, progress)
+    gpu = gpu or get_context()
+    warmup_s = default_warmup_s(gpu) if warmup_s is None else warmup_s
+    check_metric(judge.metric)
     probe = Config("tune probe", graph=builder, options=dict(options))
     graph = probe.build_graph()
     pin, ids_pin = probe.output_pin(graph), effect_pin(graph)
@@ -80,10 +100,8 @@ def probe_cost_model(scene, view_set, builder, options: dict, metric: str = "fli
         for level in tqdm(probe_levels, desc="effect levels", unit="level", disable=not progress, leave=False):
             for m in scene.materials:
                 m.effect = level
-            timing = timed_frames(r, frames, max(1, warmup))   # >= 1: the level may recompile
-            times[level] = timing
-            image = r.read_output(pin, flip_y=True)
-            errors[level] = error_map(image, ref, metric, ppd, f"all {level.name} {pin}")
+            times[level] = timed_frames(r, frames, max(1, warmup), warmup_s)   # >= 1: the level may recompile
+            errors[level] = judge.mean_map(r, pin, trials, f"all {level.name} {pin}")
             if level == Effect.RASTER:
                 words = r.read_output(ids_pin, flip_y=True)[..., 0]
     geometry = (words & 0xFF) != NO_GEOMETRY
@@ -107,21 +125,24 @@ def probe_cost_model(scene, view_set, builder, options: dict, metric: str = "fli
             err[n][level] = float(per_material[i])
     rest = float(errors[Effect.RASTER][~geometry].sum() / total)
     model = CostModel(base.frame_ms, ms, err, overhead, rest, {n: int(pixels[i]) for i, n in enumerate(names)},
-                      metric, base.method)
-    return model, ref, pin
+                      judge.metric, base.method)
+    return model, pin
 
 
-def render_assignment(scene, view_set, builder, options: dict, assignment: dict, ref, metric: str,
-                      frames: int, warmup: int, ppd, gpu) -> tuple[float, float, str]:
+def render_assignment(scene, view_set, builder, options: dict, assignment: dict, judge: ErrorJudge, frames: int,
+                      warmup: int, warmup_s: float | None, trials: int, gpu) -> tuple[float, float, str]:
     """(GPU ms per frame, error, timing method) of `assignment` rendered; effects restored after."""
+    from ..gpu import get_context
     from ..renderer import Renderer
 
+    gpu = gpu or get_context()
+    warmup_s = default_warmup_s(gpu) if warmup_s is None else warmup_s
     config = Config("tuned", effects=dict(assignment), graph=builder, options=dict(options))
     with effects_restored(scene):
         config.apply(scene)
         graph = config.build_graph()
         pin = config.output_pin(graph)
         with Renderer(scene, graph, views=view_set, gpu=gpu) as r:
-            timing = timed_frames(r, frames, max(1, warmup))
-            image = r.read_output(pin, flip_y=True)
-    return timing.frame_ms, float(error_map(image, ref, metric, ppd, f"tuned {pin}").mean()), timing.method
+            timing = timed_frames(r, frames, max(1, warmup), warmup_s)
+            error = float(judge.mean_map(r, pin, trials, f"tuned {pin}").mean())
+    return timing.frame_ms, error, timing.method

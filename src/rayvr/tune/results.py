@@ -1,181 +1,217 @@
-"""Results of `rayvr.tune.measure`: one row per configuration (GPU ms per frame, per pass, image
-error), as a markdown table, CSV, JSON and error-vs-ms plots (matplotlib, Agg: no display)."""
+"""What the error study found: the reference, one row per configuration, progressive curves.
+
+`Results.as_dict()` is results.json (docs/CONTRACTS.md): {"reference": {...}, "rows": [...],
+"progressive": [...], "study": {...}} and, after `rayvr tune`, "tuned". Each row: `name`,
+`gpu_ms`, every metric as {"mean", "std"} over the judged frames and views, `frames`, `views`,
+`size`, `settings`, and `motion` (the same metrics along the trajectory) and `floor` (the
+configuration's converged image against the reference).
+"""
 from __future__ import annotations
 
-import csv
 import dataclasses
-import io
 import json
 import math
-from pathlib import Path
 
-from ..fileio import atomic_write, write_text
+import numpy as np
+
 from .metrics import LOWER_IS_BETTER, METRICS
 
 
+def summarize(samples: dict) -> dict:
+    """{metric: [per-view arrays, one per judged frame]} -> {metric: {"mean", "std", "per_view"}}:
+    mean and sample standard deviation over every (frame, view) value, and the mean per view."""
+    out = {}
+    for metric, frames in samples.items():
+        a = np.asarray(frames, dtype=np.float64)           # (frames, views)
+        flat = a.ravel()
+        mean = float(flat.mean())          # inf when a PSNR is (identical images)
+        std = float(flat.std(ddof=1)) if flat.size > 1 else 0.0
+        if not np.isfinite(flat).all():
+            std = float("nan")
+        out[metric] = {"mean": mean, "std": std, "per_view": [float(v) for v in a.mean(axis=0)]}
+    return out
+
+
 @dataclasses.dataclass
-class ConfigResult:
+class Row:
     """One measured configuration."""
 
     name: str
-    effects: dict          # material name -> effect name
-    options: dict
-    frame_ms: float        # GPU ms per frame (sum of the per-pass means)
-    pass_ms: dict          # pass -> GPU ms per frame
-    cpu_ms: float          # CPU ms inside the graph's execute() per frame
-    errors: dict           # metric -> value (see rayvr.tune.metrics.METRICS)
-    image: object = None   # the linear image (views, h, w, c) when measure(keep_images=True)
-    timed_on: str | None = None   # the worker (GPU, host) that timed it, when a cluster measured it
+    settings: dict
+    gpu_ms: float                 # GPU ms per frame (sum of the per-pass means)
+    pass_ms: dict                 # pass -> GPU ms per frame
+    cpu_ms: float                 # CPU ms inside the graph's execute() per frame
+    frames: int                   # frames judged (static view)
+    views: int
+    size: tuple
+    errors: dict                  # metric -> {"mean", "std", "per_view"}
+    motion: dict | None = None    # {"frames", "sampled_frames", metric -> {...}}
+    floor: dict | None = None     # see rayvr.tune.floor.Floor.against, plus its metrics
+    tuned: bool = False
+    negative_values: int = 0      # negative radiance values judged as 0 (as the tone mapper shows them)
+    image: object = None          # the first judged frame (views, h, w, 4), for the report
+    maps: dict = dataclasses.field(default_factory=dict)   # its per-pixel error maps
+    floor_image: object = None
+    motion_image: object = None
+
+    def mean(self, metric: str) -> float:
+        return self.errors[metric]["mean"]
 
     def as_dict(self) -> dict:
-        d = dataclasses.asdict(self)
-        d.pop("image")
+        d = {"name": self.name, "gpu_ms": self.gpu_ms, "pass_ms": dict(self.pass_ms), "cpu_ms": self.cpu_ms}
+        d.update({m: {"mean": v["mean"], "std": v["std"]} for m, v in self.errors.items()})
+        d["per_view"] = {m: v["per_view"] for m, v in self.errors.items()}
+        d.update({"frames": self.frames, "views": self.views, "size": list(self.size), "settings": self.settings,
+                  "motion": self.motion, "floor": self.floor, "tuned": self.tuned,
+                  "negative_values": self.negative_values})
         return d
 
 
-def _fmt(value) -> str:
+@dataclasses.dataclass
+class Curve:
+    """Error against accumulated time of one progressive render (raw, or with a denoiser)."""
+
+    name: str
+    settings: dict
+    gpu_ms_per_frame: float
+    points: list                  # {"frames", "wall_s", "gpu_s", metric: value, ...}
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def effects_text(effects: dict) -> str:
+    """The most common effect, then the materials that differ: 'SHADOWS, Floor=REFLECTIONS'."""
+    if not effects:
+        return "-"
+    values = list(effects.values())
+    common = max(set(values), key=values.count)
+    return ", ".join([common] + [f"{m}={e}" for m, e in effects.items() if e != common])
+
+
+def markdown_table(cols: list[str], rows: list[list[str]]) -> str:
+    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    lines += ["| " + " | ".join(str(c).replace("|", "/") for c in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def fmt(value, digits: int = 4) -> str:
+    if value is None:
+        return "-"
     if isinstance(value, float):
-        return "inf" if math.isinf(value) else f"{value:.4g}"
+        if math.isinf(value):
+            return "inf"
+        if math.isnan(value):
+            return "nan"
+        return f"{value:.{digits}g}"
     return str(value)
 
 
+def fmt_stat(stat: dict | None) -> str:
+    """'mean ± std' of a summarized metric."""
+    if not stat:
+        return "-"
+    return f"{fmt(stat['mean'], 3)} ± {fmt(stat['std'], 2)}"
+
+
 class Results:
-    """`rows` (ConfigResult per configuration) and `info` (scene, views, size, frames, timing
-    method, reference)."""
+    """The reference (rayvr.tune.reference.Reference), the rows, the curves and the study's
+    context (scene, views, size, display, ppd, eps, timing method, what was chosen and why)."""
 
-    def __init__(self, rows: list[ConfigResult], info: dict):
+    def __init__(self, reference, rows: list[Row], curves: list[Curve], study: dict, motion_references=()):
+        self.reference = reference
         self.rows = list(rows)
-        self.info = dict(info)
+        self.curves = list(curves)
+        self.study = dict(study)
+        self.motion_references = list(motion_references)
+        self.tuned = None             # rayvr tune adds its TuneResult
 
-    @classmethod
-    def load(cls, path) -> Results:
-        """Results from a results.json that `write()` made (images are not stored)."""
-        from ..errors import OptionError
-
-        try:
-            doc = json.loads(Path(path).read_text())
-            rows = [ConfigResult(**c) for c in doc["configurations"]]
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise OptionError(f"{path}: not a rayvr.tune results.json ({exc})") from None
-        return cls(rows, doc.get("info", {}))
-
-    @property
-    def method(self) -> str:
-        """How the GPU time was measured (the graph profile's method)."""
-        return self.info.get("method", "?")
-
-    def __getitem__(self, name: str) -> ConfigResult:
+    def __getitem__(self, name: str) -> Row:
         for row in self.rows:
             if row.name == name:
                 return row
         raise KeyError(f"no configuration '{name}'; have {', '.join(r.name for r in self.rows)}")
 
+    @property
+    def method(self) -> str:
+        """How GPU time was measured (the graph profile's method)."""
+        return self.study.get("timing", "?")
+
     def metrics(self) -> list[str]:
-        """The metrics any row has, in METRICS' order."""
+        """The metrics the rows have, in METRICS' order."""
         return [m for m in METRICS if any(m in r.errors for r in self.rows)]
 
-    def passes(self) -> list[str]:
-        """Every pass any row timed, in first-seen order."""
-        names = []
-        for row in self.rows:
-            names += [p for p in row.pass_ms if p not in names]
-        return names
-
-    def pareto(self, metric: str = "flip") -> list[ConfigResult]:
-        """The configurations no other one beats in both ms and `metric`, fastest first."""
+    def pareto(self, metric: str = "flip") -> list[Row]:
+        """The rows no other one beats in both GPU ms and `metric`'s mean, fastest first."""
         sign = 1.0 if LOWER_IS_BETTER[metric] else -1.0
         front, best = [], math.inf
-        for row in sorted(self.rows, key=lambda r: (r.frame_ms, sign * r.errors[metric])):
-            if sign * row.errors[metric] < best:
+        for row in sorted(self.rows, key=lambda r: (r.gpu_ms, sign * r.mean(metric))):
+            if sign * row.mean(metric) < best:
                 front.append(row)
-                best = sign * row.errors[metric]
+                best = sign * row.mean(metric)
         return front
 
     # -- text --------------------------------------------------------------------------------
-    def table(self, per_pass: bool = False) -> str:
-        """A markdown table: configuration, GPU ms per frame, each metric (and each pass's ms)."""
-        passes = self.passes() if per_pass else []
-        timed_on = any(r.timed_on for r in self.rows)
-        cols = ["configuration", "GPU ms/frame", *(METRICS[m] for m in self.metrics()), *(f"{p} ms" for p in passes),
-                *(["timed on"] if timed_on else [])]
-        lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    def table_data(self) -> tuple[list[str], list[list[str]]]:
+        """(columns, cells): configuration, GPU ms, each metric as mean ± std over the judged
+        frames and views, FLIP in motion, the floor's relMSE and how much of it is bias."""
+        metrics = self.metrics()
+        cols = ["configuration", "GPU ms", *(METRICS[m] for m in metrics), "FLIP in motion", "floor relMSE",
+                "floor bias"]
+        rows = []
         for r in self.rows:
-            cells = [r.name, _fmt(r.frame_ms), *(_fmt(r.errors[m]) for m in self.metrics()),
-                     *(_fmt(r.pass_ms[p]) if p in r.pass_ms else "-" for p in passes),
-                     *([r.timed_on or "-"] if timed_on else [])]
-            lines.append("| " + " | ".join(c.replace("|", "/") for c in cells) + " |")
-        i = self.info
-        lines.append("")
-        lines.append(f"{i.get('scene')}: {i.get('views')} view(s) of {i.get('size', ['?', '?'])[0]}x"
-                     f"{i.get('size', ['?', '?'])[1]}, {i.get('frames')} timed frames after {i.get('warmup')} "
-                     f"warm-up; timing: {self.method}; reference: {i.get('reference')}")
-        return "\n".join(lines)
+            floor = r.floor or {}
+            bias = "-" if not floor else ("within noise" if floor["within_noise"] else fmt(floor["bias_relmse"], 3))
+            rows.append([r.name, fmt(r.gpu_ms, 4), *(fmt_stat(r.errors.get(m)) for m in metrics),
+                         fmt_stat((r.motion or {}).get("flip")), fmt(floor.get("relmse"), 3), bias])
+        return cols, rows
+
+    def settings_data(self) -> tuple[list[str], list[list[str]]]:
+        """(columns, cells): every row's settings, stated."""
+        keys = ["graph", "spp", "bounces", "reflection_bounces", "light_samples", "frames_accumulated", "denoiser",
+                "gi"]
+        rows = []
+        for r in self.rows:
+            rows.append([r.name, *(fmt(r.settings.get(k)) for k in keys), effects_text(r.settings.get("effects", {}))])
+        return ["configuration", *[k.replace("bounces", "path bounces") if k == "bounces" else k for k in keys],
+                "effects"], rows
+
+    def curve_data(self) -> tuple[list[str], list[list[str]]]:
+        """(columns, cells): each progressive curve's points."""
+        metrics = [m for m in self.metrics() if any(m in p for c in self.curves for p in c.points)]
+        cols = ["render", "frames", "wall s", "GPU s", *(METRICS[m] for m in metrics)]
+        rows = [[c.name, str(p["frames"]), fmt(p["wall_s"], 3), fmt(p["gpu_s"], 3), *(fmt(p[m], 4) for m in metrics)]
+                for c in self.curves for p in c.points]
+        return cols, rows
+
+    def table(self) -> str:
+        """The results table as markdown."""
+        return markdown_table(*self.table_data())
 
     def __str__(self) -> str:
         return self.table()
 
     def as_dict(self) -> dict:
-        return {"info": self.info, "configurations": [r.as_dict() for r in self.rows]}
+        ref = self.reference.as_dict() if self.reference is not None else {}
+        ref["trajectory_references"] = [
+            {"frame": frame, **{k: r.as_dict()[k] for k in ("convergence", "bounces", "seeds", "source")}}
+            for frame, r in self.motion_references]
+        doc = {"reference": ref, "rows": [r.as_dict() for r in self.rows],
+               "progressive": [c.as_dict() for c in self.curves], "study": self.study}
+        if self.tuned is not None:
+            doc["tuned"] = self.tuned.as_dict()
+        return doc
 
     def to_json(self) -> str:
-        return json.dumps(self.as_dict(), indent=2, default=str,
-                          allow_nan=True) + "\n"
+        return json.dumps(_json_safe(self.as_dict()), indent=2, default=str) + "\n"
 
-    def to_csv(self) -> str:
-        passes, metrics = self.passes(), self.metrics()
-        timed_on = any(r.timed_on for r in self.rows)
-        out = io.StringIO()
-        w = csv.writer(out)
-        w.writerow(["configuration", "frame_ms", *metrics, *(f"{p}_ms" for p in passes), "method",
-                    *(["timed_on"] if timed_on else [])])
-        for r in self.rows:
-            w.writerow([r.name, r.frame_ms, *(r.errors[m] for m in metrics),
-                        *(r.pass_ms.get(p, "") for p in passes), self.method, *([r.timed_on or ""] if timed_on else [])])
-        return out.getvalue()
 
-    # -- plots -------------------------------------------------------------------------------
-    def plot(self, metric: str, path, budget_ms: float | None = None) -> Path:
-        """Error (`metric`) against GPU ms per frame, one labelled point per configuration and
-        the Pareto front as a line; a vertical line at `budget_ms`. Written atomically (PNG)."""
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-
-        if metric not in self.metrics():
-            raise KeyError(f"no metric '{metric}' in these results; have {', '.join(self.metrics())}")
-        fig = Figure(figsize=(6.4, 4.4), dpi=110)
-        FigureCanvasAgg(fig)
-        ax = fig.add_subplot()
-        xs = [r.frame_ms for r in self.rows]
-        ys = [r.errors[metric] for r in self.rows]
-        ax.scatter(xs, ys, zorder=3)
-        for i, (r, x, y) in enumerate(zip(self.rows, xs, ys)):
-            # Staggered offsets keep the labels of nearby points apart.
-            ax.annotate(r.name, (x, y), textcoords="offset points", xytext=(5, 4 - 10 * (i % 3)), fontsize=7)
-        front = self.pareto(metric)
-        ax.plot([r.frame_ms for r in front], [r.errors[metric] for r in front], "--", lw=1, color="gray",
-                label="Pareto front", zorder=2)
-        if budget_ms:
-            ax.axvline(budget_ms, color="red", lw=1, label=f"budget {budget_ms:g} ms")
-        if min(xs) > 0 and max(xs) > 20 * min(xs):
-            ax.set_xscale("log")
-        if metric == "relmse" and all(y > 0 for y in ys):
-            ax.set_yscale("log")
-        ax.set_xlabel(f"GPU ms per frame ({self.method})")
-        ax.set_ylabel(METRICS[metric] + ("  (lower is better)" if LOWER_IS_BETTER[metric] else "  (higher is better)"))
-        i = self.info
-        ax.set_title(f"{i.get('scene')}: {i.get('views')} x {i.get('size', ['?'])[0]}x{i.get('size', ['?', '?'])[1]}",
-                     fontsize=9)
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7)
-        fig.tight_layout()
-        return atomic_write(Path(path), lambda tmp: fig.savefig(tmp, format="png"))
-
-    def write(self, folder, budget_ms: float | None = None, stem: str = "error_vs_ms") -> list[Path]:
-        """table.md, results.csv, results.json and one `{stem}_{metric}.png` per metric in
-        `folder`, each written atomically. Returns the paths."""
-        folder = Path(folder)
-        paths = [write_text(folder / "table.md", self.table(per_pass=True) + "\n"),
-                 write_text(folder / "results.csv", self.to_csv()),
-                 write_text(folder / "results.json", self.to_json())]
-        paths += [self.plot(m, folder / f"{stem}_{m}.png", budget_ms) for m in self.metrics()]
-        return paths
+def _json_safe(value):
+    """inf/nan as strings ("inf", "nan"): results.json stays strict JSON."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return "inf" if value > 0 else ("-inf" if value < 0 else "nan")
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    return value

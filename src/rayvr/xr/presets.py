@@ -20,6 +20,7 @@ The right eye mirrors the left eye's horizontal angles (lenses are symmetric abo
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from ..errors import OptionError, did_you_mean
 from .views import Fov
@@ -37,6 +38,16 @@ class HeadsetPreset:
     refresh_rates: tuple[float, ...]   # Hz the panel supports
     default_refresh: float
     approximate: bool = False          # fov derived from total-FOV marketing figures
+
+    @property
+    def pixels_per_degree(self) -> float:
+        """Panel pixels per degree of view: the mean of width / horizontal fov and height /
+        vertical fov (what FLIP's `ppd` asks for; the centre of a planar projection has fewer,
+        its edges more)."""
+        f = self.left_fov
+        horizontal = self.eye_size[0] / math.degrees(f.angle_right - f.angle_left)
+        vertical = self.eye_size[1] / math.degrees(f.angle_up - f.angle_down)
+        return 0.5 * (horizontal + vertical)
 
     @property
     def right_fov(self) -> Fov:

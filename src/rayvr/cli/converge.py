@@ -1,0 +1,209 @@
+"""`rayvr converge [SCENE] --views N --size WxH --report DIR`: error against GPU time that can be
+trusted, for the standard configurations (or a user's list, `--configs FILE.json`).
+
+Renders a converged, checked reference (two independent halves must agree within a tolerance;
+one more bounce must change it by less than another), then every configuration: its GPU ms, its
+error against the reference (FLIP of the displayed image at the headset's pixels per degree,
+HDR-FLIP, PSNR, SSIM, relMSE) as mean and spread over several frames, on a still and a moving
+head, and its bias floor (the configuration converged); then progressive-convergence curves.
+Prints the table; with --report writes report.md, report.html, results.json, the plots and the
+images into DIR, all at once (an interrupted run writes nothing). Unset sizes and frame counts
+are chosen for the machine (rayvr.tune.defaults) and the output says which.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..errors import OptionError
+
+TRAJECTORY_NONE = "none"
+
+
+def add_study_arguments(p: argparse.ArgumentParser) -> None:
+    """The options `rayvr converge` and `rayvr tune` share."""
+    p.add_argument("scene", nargs="?", help="glTF file or built-in scene name (default: the Cornell box)")
+    p.add_argument("--views", type=int, default=2, help="view count: 1 mono, 2 stereo, N a camera grid (default 2)")
+    p.add_argument("--size", help="per-view WIDTHxHEIGHT (default: 32x32 on llvmpipe, 720x800 on a GPU)")
+    p.add_argument("--report", help="folder for report.md, report.html, results.json, plots and images")
+    p.add_argument("--configs", help="JSON file of configurations instead of the standard set")
+    p.add_argument("--spp", default="1,4,16", help="samples per pixel of the PATH_TRACED rows (default 1,4,16)")
+    p.add_argument("--reflect", default="auto", help="material that gets REFLECTIONS in the mixed row (auto: floor)")
+    p.add_argument("--preset", default="index", help="headset whose pixels per degree FLIP uses (default index)")
+    p.add_argument("--ppd", type=float, help="pixels per degree for FLIP instead of the preset's")
+    p.add_argument("--tonemap", default="aces", help="tone mapping of the displayed images: aces, reinhard, linear")
+    p.add_argument("--exposure", default="auto", help="exposure in stops, or 'auto' (from the reference, once)")
+    p.add_argument("--metrics", default="flip,hdrflip,psnr,ssim,relmse", help="metrics, comma-separated")
+    p.add_argument("--frames", type=int, help="judged frames per configuration (default 4)")
+    p.add_argument("--timing-frames", type=int, help="timed frames per configuration (default 10 llvmpipe, 30 GPU)")
+    p.add_argument("--warmup", type=int, help="untimed frames before timing (default 2 llvmpipe, 5 GPU)")
+    p.add_argument("--warmup-s", type=float, help="seconds of untimed frames first (default 0.5 on a GPU, 0 llvmpipe)")
+    p.add_argument("--reference-frames", type=int, help="frames of the reference (default 64 llvmpipe, 256 GPU)")
+    p.add_argument("--reference-spp", type=int, help="paths per pixel per reference frame (default 16)")
+    p.add_argument("--bounces", type=int, default=8, help="bounces of the reference and PATH_TRACED rows (default 8)")
+    p.add_argument("--tolerance", type=float, default=5e-4,
+                   help="largest predicted relMSE of a converged reference (default 5e-4)")
+    p.add_argument("--bounce-tolerance", type=float, default=0.01,
+                   help="largest change of the reference's mean radiance with one more bounce (default 0.01)")
+    p.add_argument("--trajectory", default="turn", help="head motion: turn, walk, still, a pose-log .json, or none")
+    p.add_argument("--motion-frames", type=int, help="frames along the trajectory (default 16 llvmpipe, 32 GPU)")
+    p.add_argument("--motion-samples", type=int, help="trajectory frames judged, each with its own reference "
+                                                       "(default 2 llvmpipe, 3 GPU)")
+    p.add_argument("--no-floors", action="store_true", help="skip the bias floors (converged configurations)")
+    p.add_argument("--progressive-frames", type=int, help="frames of the progressive curves (0: none)")
+    p.add_argument("--cache", help="reference cache folder (default ~/.cache/rayvr/references)")
+    p.add_argument("--no-cache", action="store_true", help="render the reference and floors again, store nothing")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("converge", help="error against GPU time against a converged, checked reference; report")
+    add_study_arguments(p)
+    p.set_defaults(func=run)
+
+
+def parse_list(text: str, option: str, parse) -> list:
+    """The comma-separated items of `text`, each through `parse`; an error names `option`."""
+    items = [s.strip() for s in str(text).split(",") if s.strip()]
+    if not items:
+        raise OptionError(f"{option} {text!r}: give a comma-separated list")
+    return [parse(s) for s in items]
+
+
+def parse_spp(text: str) -> int:
+    """One --spp item: an integer >= 1."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise OptionError(f"--spp {text!r}: samples per pixel must be integers >= 1, e.g. --spp 1,4,16")
+    return n
+
+
+def parse_exposure(text: str) -> float | None:
+    if str(text).strip().lower() == "auto":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise OptionError(f"--exposure {text}: give stops (e.g. 0, 1.5, -1) or 'auto'") from None
+
+
+class StudyPlan:
+    """The validated options: everything `measure` needs, and the note on what was defaulted."""
+
+    def __init__(self, args, gpu):
+        from ..tune import Display, Motion, ReferenceSettings, StudySettings
+        from ..tune.defaults import machine_defaults
+        from ..tune.metrics import METRICS
+        from ..xr.presets import get_preset
+        from .options import parse_size
+
+        d = machine_defaults(gpu)
+        chosen = {}
+
+        def pick(value, option, default):
+            if value is None:
+                chosen[option] = default
+                return default
+            return value
+
+        self.size = parse_size(args.size) if args.size else d.size
+        if not args.size:
+            chosen["--size"] = f"{d.size[0]}x{d.size[1]}"
+        for option, value, low in (("--views", args.views, 1), ("--frames", args.frames, 1),
+                                   ("--timing-frames", args.timing_frames, 1), ("--warmup", args.warmup, 0),
+                                   ("--reference-frames", args.reference_frames, 2),
+                                   ("--reference-spp", args.reference_spp, 1), ("--bounces", args.bounces, 1),
+                                   ("--motion-frames", args.motion_frames, 1), ("--motion-samples", args.motion_samples, 1),
+                                   ("--progressive-frames", args.progressive_frames, 0)):
+            if value is not None and value < low:
+                raise OptionError(f"{option} {value}: must be >= {low}")
+        if args.reference_frames is not None and args.reference_frames % 2:
+            raise OptionError(f"--reference-frames {args.reference_frames}: the reference is two equal halves; "
+                              f"give an even number")
+        for option, value in (("--ppd", args.ppd), ("--tolerance", args.tolerance),
+                              ("--bounce-tolerance", args.bounce_tolerance)):
+            if value is not None and not value > 0:
+                raise OptionError(f"{option} {value}: must be > 0")
+        if args.warmup_s is not None and args.warmup_s < 0:
+            raise OptionError(f"--warmup-s {args.warmup_s}: must be >= 0")
+        get_preset(args.preset)
+        metrics = parse_list(args.metrics, "--metrics", str.lower)
+        for m in metrics:
+            if m not in METRICS:
+                raise OptionError(f"--metrics {args.metrics}: unknown metric '{m}'; use some of {', '.join(METRICS)}")
+        self.spp = parse_list(args.spp, "--spp", parse_spp)
+        self.views = args.views
+        self.display = Display(args.tonemap.lower(), parse_exposure(args.exposure))
+        self.reference = ReferenceSettings(pick(args.reference_frames, "--reference-frames", d.reference_frames),
+                                           pick(args.reference_spp, "--reference-spp", d.reference_spp),
+                                           args.bounces, args.tolerance, args.bounce_tolerance)
+        motion = None
+        if args.trajectory != TRAJECTORY_NONE:
+            frames = pick(args.motion_frames, "--motion-frames", d.motion_frames)
+            samples = pick(args.motion_samples, "--motion-samples", d.motion_samples)
+            motion = Motion(args.trajectory, frames, min(samples, frames), get_preset(args.preset).default_refresh)
+            if not args.trajectory.lower().endswith(".json"):
+                from ..xr.trajectory import TRAJECTORIES
+
+                if args.trajectory not in TRAJECTORIES:
+                    raise OptionError(f"--trajectory {args.trajectory}: use one of {', '.join(TRAJECTORIES)}, "
+                                      f"a pose-log .json or none")
+        self.settings = StudySettings(
+            frames=pick(args.frames, "--frames", d.frames),
+            timing_frames=pick(args.timing_frames, "--timing-frames", d.timing_frames),
+            warmup=pick(args.warmup, "--warmup", d.warmup), warmup_s=args.warmup_s, motion=motion,
+            floors=not args.no_floors,
+            progressive_frames=pick(args.progressive_frames, "--progressive-frames", d.progressive_frames),
+            preset=args.preset, ppd=args.ppd, display=self.display, metrics=tuple(metrics))
+        self.cache = False if args.no_cache else args.cache
+        self.note = d.note(chosen) if chosen else None
+        self.report = Path(args.report) if args.report else None
+        if self.report is not None:
+            from ..fileio import check_folder_target
+
+            check_folder_target(self.report)
+        self.configs_file = args.configs
+        self.reflect = args.reflect
+        self.progress = not args.quiet
+
+    def configs(self, scene) -> list:
+        from ..tune import load_configs, standard_configs
+
+        if self.configs_file:
+            return load_configs(self.configs_file)
+        return standard_configs(scene, self.reference, reflect=self.reflect, spp=self.spp)
+
+    def notes(self) -> list[str]:
+        return [self.note] if self.note else []
+
+
+def run(args) -> int:
+    from ..gpu import get_context
+    from ..tune import measure, write_report
+    from .options import load_scene_arg
+
+    plan = StudyPlan(args, get_context())
+    scene = load_scene_arg(args.scene)
+    configs = plan.configs(scene)
+    if plan.note:
+        print(plan.note)
+    results = measure(scene, configs, views=plan.views, size=plan.size, reference=plan.reference,
+                      settings=plan.settings, cache_dir=plan.cache, progress=plan.progress, notes=plan.notes())
+    print_summary(results)
+    if plan.report is not None:
+        print(f"wrote {write_report(results, plan.report)}")
+    return 0
+
+
+def print_summary(results) -> None:
+    """The reference's verdict and the results table."""
+    s = results.study
+    print(f"{s['scene']}: {s['views']} view(s) of {s['size'][0]}x{s['size'][1]}; FLIP at {s['ppd']:.1f} ppd "
+          f"({s['ppd_source']}); {s['display_text']}; GPU time by {s['timing']}")
+    print(f"reference: {results.reference.verdict()}")
+    for frame, ref in results.motion_references:
+        print(f"reference of trajectory frame {frame}: {ref.verdict()}")
+    print(results.table())

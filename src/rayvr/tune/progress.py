@@ -1,0 +1,104 @@
+"""One progress bar over a whole error study, with an ETA from what each step is expected to cost.
+
+Steps differ by orders of magnitude (a converged reference against one configuration frame) and
+by kind (rendering is GPU work, metrics are CPU work, whose ratio differs between llvmpipe and a
+GPU), so a plain step counter would lie. Every step is planned up front with its kind and its
+cost in units of that kind (paths traced, pixels judged, renderers built). As steps finish, the
+seconds per unit of each kind are learned from the steps themselves; a kind not seen yet is
+assumed to cost like the others in proportion to PRIOR. The bar counts seconds: done = the seconds
+spent, total = those plus the remaining steps' units at the learned rates, so tqdm's
+"remaining" is that estimate.
+"""
+from __future__ import annotations
+
+import contextlib
+import time
+
+# Relative seconds per unit before any step of the kind was timed (llvmpipe's ratios).
+PRIOR = {"render": 2.5e-6, "metric": 1.5e-6, "setup": 0.4, "curve": 1.0}
+
+
+class StudyProgress:
+    """Planned steps and their progress; `step(kind, units)` wraps one as it runs."""
+
+    def __init__(self, enabled: bool = True, desc: str = "error study"):
+        self.enabled = enabled
+        self.desc = desc
+        self.planned: dict[str, float] = {}     # kind -> units still to do
+        self.done_units: dict[str, float] = {}
+        self.done_s: dict[str, float] = {}
+        self.spent = 0.0
+        self.bar = None
+        self._partial = 0.0                      # seconds into the current step
+        self._shown = 0.0
+
+    def plan(self, kind: str, units: float) -> None:
+        """Add a step of `units` of `kind` to the plan."""
+        self.planned[kind] = self.planned.get(kind, 0.0) + float(units)
+
+    def rate(self, kind: str) -> float:
+        """Seconds per unit of `kind`: learned, else the prior scaled like the learned kinds."""
+        if self.done_units.get(kind):
+            return self.done_s[kind] / self.done_units[kind]
+        seen = [k for k in self.done_units if self.done_units[k] and k in PRIOR]
+        scale = sum(self.done_s[k] for k in seen) / sum(PRIOR[k] * self.done_units[k] for k in seen) if seen else 1.0
+        return PRIOR.get(kind, 1e-6) * scale
+
+    def remaining_s(self) -> float:
+        return sum(units * self.rate(kind) for kind, units in self.planned.items())
+
+    def _refresh(self, force: bool = False) -> None:
+        if self.bar is None:
+            return
+        now = time.perf_counter()
+        if not force and now - self._shown < 0.25:
+            return
+        self._shown = now
+        done = self.spent + self._partial
+        # remaining_s still counts the running step in full; its partial seconds are in `done`
+        self.bar.total = max(self.spent + self.remaining_s(), done, 1e-9)
+        self.bar.n = done
+        self.bar.refresh()
+
+    def start(self) -> None:
+        from tqdm import tqdm
+
+        if self.enabled:
+            self.bar = tqdm(total=max(self.remaining_s(), 1e-9), desc=self.desc, unit="s", leave=False,
+                            bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed} elapsed, ~{remaining} left "
+                                       "{postfix}")
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+    @contextlib.contextmanager
+    def step(self, kind: str, units: float, label: str = ""):
+        """Run one planned step; the block may call the yielded `tick(fraction)` as it goes."""
+        t0 = time.perf_counter()
+        expected = units * self.rate(kind)
+        if self.bar is not None and label:
+            self.bar.set_postfix_str(label, refresh=False)
+
+        def tick(fraction: float) -> None:
+            self._partial = min(max(fraction, 0.0), 1.0) * expected
+            self._refresh()
+
+        try:
+            yield tick
+        finally:
+            took = time.perf_counter() - t0
+            self.planned[kind] = max(0.0, self.planned.get(kind, 0.0) - units)
+            self.done_units[kind] = self.done_units.get(kind, 0.0) + units
+            self.done_s[kind] = self.done_s.get(kind, 0.0) + took
+            self.spent += took
+            self._partial = 0.0
+            self._refresh(force=True)
+
+    def __enter__(self):
+        self.start()
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

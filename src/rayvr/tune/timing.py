@@ -1,0 +1,85 @@
+"""GPU time per frame of a render: the graph's profile over timed frames after a warm-up.
+
+Timing is the render graph's profile (`rayvr.rendergraph.profile`): GPU timer queries where the
+driver has them, else finish + wall clock per pass (llvmpipe); `Timing.method` says which. The
+frame time is the sum of the per-pass means over the timed frames (warm-up frames excluded,
+which matters on llvmpipe: it compiles a shader at its first dispatch).
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+
+from ..errors import OptionError
+
+GPU_WARM_UP_S = 0.5    # an idle H100 clocks at ~345 MHz and needs a moment of load to reach ~1980 MHz
+
+
+@dataclasses.dataclass
+class Timing:
+    """GPU ms per frame over the timed frames: total, per pass, and how it was measured."""
+
+    frame_ms: float
+    pass_ms: dict
+    cpu_ms: float
+    method: str
+    frames: int
+
+
+def warm_up(renderer, seconds: float) -> None:
+    """Render until `seconds` have passed, so that a GPU which idled (an H100 drops to ~345 MHz)
+    has its clocks up before anything is timed."""
+    until = time.perf_counter() + seconds
+    while time.perf_counter() < until:
+        renderer.render()
+        renderer.gl.finish()
+
+
+def timed_frames(renderer, frames: int, warmup: int, warmup_s: float = 0.0) -> Timing:
+    """Render untimed frames for `warmup_s` seconds (warm_up) and then `warmup` more, then
+    `frames` timed frames; the per-pass means of the timed ones."""
+    if frames < 1 or warmup < 0:
+        raise OptionError(f"measure: frames must be >= 1 and warmup >= 0, got frames={frames}, warmup={warmup}")
+    warm_up(renderer, warmup_s)
+    for _ in range(warmup):
+        renderer.render()
+    renderer.gl.finish()
+    compiled = renderer.compiled
+    before = compiled.profile()
+    for _ in range(frames):
+        renderer.render()
+    renderer.gl.finish()
+    if renderer.compiled is not compiled:
+        raise OptionError("measure: the graph recompiled during the timed frames; change materials before timing")
+    after = compiled.profile()
+    pass_ms = {name: _timed_mean(before.passes.get(name), stats, after.window) for name, stats in after.passes.items()}
+    cpu = _timed_mean(before.cpu_ms, after.cpu_ms, after.window) if after.cpu_ms else float("nan")
+    return Timing(float(sum(pass_ms.values())), pass_ms, cpu, after.method, frames)
+
+
+def _timed_mean(before, after, window: int) -> float:
+    """The mean of the samples added since `before` (rolling stats keep the last `window`)."""
+    if before is None or after.samples >= window:
+        return float(after.mean_ms)
+    added = after.samples - before.samples
+    if added <= 0:
+        return float(after.mean_ms)
+    return float((after.mean_ms * after.samples - before.mean_ms * before.samples) / added)
+
+
+def default_warmup_s(gpu) -> float:
+    """Seconds of untimed frames before timing: GPU_WARM_UP_S where timer queries time a real
+    GPU (its clocks drop while the CPU computes metrics), none on llvmpipe (no clocks to raise)."""
+    return GPU_WARM_UP_S if gpu.caps.timer_queries and not gpu.caps.is_software else 0.0
+
+
+def make_views(scene, views=2, size=(256, 256)):
+    """A ViewSet: `views` as given, or that many views from the scene's camera at `size`."""
+    from ..renderer import default_views
+    from ..xr.views import ViewSet
+
+    if isinstance(views, ViewSet):
+        return views
+    if int(views) < 1:
+        raise OptionError(f"views: need at least 1 view, got {views}")
+    return default_views(scene, int(views), tuple(size))

@@ -1,0 +1,110 @@
+"""The budget tuner on the GPU: probe a cost model against the trusted reference, choose each
+material's effect (rayvr.tune.budget.choose_effects, which needs no GPU), check the choice.
+
+    tuned = rv.tune.tune_effects(scene, budget_ms=11.1, size=(1440, 1600), views=2)
+    print(tuned.table())
+"""
+from __future__ import annotations
+
+from ..errors import OptionError
+from ..materials.effect import Effect
+from .budget import TuneResult, choose_effects
+from .configs import accepts, hybrid_graph, set_effects
+from .display import Display
+from .metrics import DEFAULT_EPS
+from .probe import ErrorJudge, probe_cost_model, render_assignment
+from .reference import Reference, ReferenceSettings, cached_reference
+from .timing import make_views
+
+
+def make_judge(scene, view_set, metric: str, reference=None, cache_dir=None, display: Display = Display(),
+               preset: str = "index", ppd: float | None = None, eps: float = DEFAULT_EPS, gpu=None) -> ErrorJudge:
+    """The tuner's error maps: against `reference` (a Reference, or ReferenceSettings to load or
+    render one), displayed with `display` (its exposure fixed from the reference), FLIP at the
+    preset's pixels per degree unless `ppd` is given."""
+    from ..xr.presets import get_preset
+
+    if not isinstance(reference, Reference):
+        reference = cached_reference(scene, view_set, reference or ReferenceSettings(), cache_dir, gpu, eps=eps)
+    return ErrorJudge(reference, display.fixed(reference.image), ppd or get_preset(preset).pixels_per_degree,
+                      metric, eps)
+
+
+def tune_effects(renderer_or_scene, budget_ms: float = 11.1, size=None, views=None, metric: str = "flip",
+                 levels=tuple(Effect), fixed: dict | None = None, graph=None, options: dict | None = None,
+                 frames: int = 10, warmup: int = 3, warmup_s: float | None = None, trials: int = 2,
+                 reference=None, cache_dir=None, display: Display = Display(), preset: str = "index",
+                 ppd: float | None = None, verify: bool = True, apply: bool = True, progress: bool = True,
+                 gpu=None) -> TuneResult:
+    """Measure a CostModel on the GPU (`rayvr.tune.probe.probe_cost_model`: one render per effect
+    level, timed after `warmup_s` seconds of warm-up, default 0.5 s on GPUs with timer queries),
+    choose effects with `choose_effects`, then (with `verify`) render the choice and record its
+    measured ms and error. With `apply` the scene's materials get the chosen effects.
+
+    `renderer_or_scene`: a Scene (with `size`, `views`: default 2 views of 1440x1600) or an
+    rv.Renderer (its scene, views and graph; `graph` then defaults to a copy of its graph; with a
+    sink, views from the scene's camera at the sink's view count and size).
+    `graph`: a builder `graph(**options)` (default rayvr.tune.hybrid_graph; its PATH_TRACED
+    materials get the reference's bounces). `reference`: a Reference or ReferenceSettings."""
+    scene, view_set, builder, gpu = _target(renderer_or_scene, size, views, graph, gpu)
+    judge = make_judge(scene, view_set, metric, reference, cache_dir, display, preset, ppd, gpu=gpu)
+    options = dict(options or {})
+    if accepts(builder, "path_bounces"):
+        options.setdefault("path_bounces", judge.reference.settings.max_bounces)
+    model, _ = probe_cost_model(scene, view_set, builder, options, judge, levels, frames, warmup, warmup_s, trials,
+                                progress, gpu)
+    result = choose_effects(model, budget_ms, levels, fixed)
+    if verify:
+        result.record_measurement(*render_assignment(scene, view_set, builder, options, result.assignment, judge,
+                                                     frames, warmup, warmup_s, trials, gpu))
+    if apply:
+        set_effects(scene, result.assignment)
+    return result
+
+
+def _target(renderer_or_scene, size, views, graph, gpu):
+    from ..renderer import Renderer
+    from ..rendergraph.graph import RenderGraph
+
+    if isinstance(renderer_or_scene, Renderer):
+        r = renderer_or_scene
+        if size is not None or views is not None:
+            raise OptionError("tune_effects: a Renderer brings its own views; pass size/views only with a Scene")
+        view_set = r.view_set if r.view_set is not None else make_views(r.scene, r.view_count, r.size)
+        if graph is None:
+            data = r.graph.to_dict()
+
+            def graph(**_):
+                return RenderGraph.from_dict(data)
+        return r.scene, view_set, graph, gpu or r.gpu
+    view_set = make_views(renderer_or_scene, 2 if views is None else views, size or (1440, 1600))
+    return renderer_or_scene, view_set, graph or hybrid_graph, gpu
+
+
+def tuned_study(scene, view_set, reference: Reference, settings, configs, budgets=(11.1,), metric: str = "flip",
+                levels=tuple(Effect), trials: int = 2, cache_dir=None, progress: bool = True, gpu=None,
+                notes=(), budget_option: str = "budget_ms"):
+    """The error study with the tuner on top: probe a cost model against `reference` (judged as
+    the study judges), choose effects for each of `budgets`, and measure `configs` plus one
+    "tuned for B ms" row per budget alike. Returns (Results, {budget: TuneResult}); each
+    TuneResult records its row's measured ms and error (a note names `budget_option` when the
+    row runs over), and Results.tuned is the first."""
+    from .configs import Config
+    from .measure import measure
+
+    judge = ErrorJudge(reference, settings.display.fixed(reference.image), settings.pixels_per_degree(), metric,
+                       settings.eps)
+    options = {"path_bounces": reference.settings.max_bounces}
+    model, _ = probe_cost_model(scene, view_set, hybrid_graph, options, judge, levels, settings.timing_frames,
+                                settings.warmup, settings.warmup_s, trials, progress, gpu)
+    tuned = {float(b): choose_effects(model, b, levels) for b in budgets}
+    names = {b: f"tuned for {b:g} ms" for b in tuned}
+    rows = list(configs) + [Config(names[b], dict(t.assignment), options=dict(options)) for b, t in tuned.items()]
+    results = measure(scene, rows, views=view_set, reference=reference, settings=settings, cache_dir=cache_dir,
+                      progress=progress, gpu=gpu, notes=notes)
+    for b, t in tuned.items():
+        row = results[names[b]]
+        row.tuned = True
+        t.record_measurement(row.gpu_ms, row.mean(metric), results.method, budget_option)
+    results.tuned = next(iter(tuned.values()))
+    return results, tuned
