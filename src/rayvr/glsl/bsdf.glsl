@@ -138,6 +138,15 @@ float bsdf_pdf(BsdfParams m, vec3 n, vec3 v, vec3 l) {
     return p_spec * bsdf_pdf_specular(m, n, v, l) + (1.0 - p_spec) * n_l / RAYVR_PI;
 }
 
+// The directional albedos of the BSDF's diffuse and specular parts seen from v: what each reflects
+// of uniform incident radiance (for demodulating radiance by albedo, and for irradiance probes:
+// indirect diffuse = diffuse * irradiance / pi). (Being rewritten with the glTF BSDF: the
+// signature stays.)
+void bsdf_albedo(BsdfParams b, vec3 n, vec3 v, out vec3 diffuse, out vec3 specular) {
+    diffuse = bsdf_diffuse_albedo(b);
+    specular = fresnel_schlick(bsdf_f0(b), clamp(dot(n, v), 0.0, 1.0));
+}
+
 struct BsdfSample {
     vec3 l;          // sampled direction
     vec3 weight;     // f cos / pdf

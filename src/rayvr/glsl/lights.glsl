@@ -165,6 +165,10 @@ float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p) {
 }
 #endif
 
+// Radiance arriving from direction `dir` (render space, unit) from the scene's environment, for
+// rays that leave the scene. (Being rewritten with the environment light: the signature stays.)
+vec3 environment_radiance(vec3 dir) { return vec3(0.0); }
+
 LightSample sample_light(vec3 p, vec3 u) {
     LightSample s = no_light_sample();
 #if SCENE_HAS_PUNCTUAL_LIGHTS && SCENE_HAS_EMISSIVE_TRIANGLES
