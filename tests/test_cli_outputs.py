@@ -82,6 +82,7 @@ MISUSES = [
     (["tune", "--reference-spp", "0"], ["--reference-spp 0", "from 1 to 1024"]),
     (["tune", "--ppd", "inf"], ["--ppd inf", "finite number > 0"]),
     (["tune", "--views", "100"], ["--views 100", "from 1 to 64"]),
+    (["tune", "--workers", "0"], ["--workers 0", "from 1 to 1024"]),
     (["converge", "--bounces", "0"], ["--bounces 0", "from 1 to 64"]),
     (["converge", "--tolerance", "nan"], ["--tolerance nan", "finite number > 0"]),
     (["converge", "--warmup-s", "-1"], ["--warmup-s -1", ">= 0 and <= 3600 s"]),
@@ -257,7 +258,7 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_nothing(gpu, tmp_path, capsys, m
         _fail_on(monkeypatch, os, "replace", 2, KeyboardInterrupt())
     elif target == "tune":
         monkeypatch.setattr(rayvr.tune.probe, "probe_cost_model", _interrupt)
-        argv = ["tune", *TINY, "--quiet", "--report", str(out / "report"), "--cache", str(out / "cache")]
+        argv = ["tune", *TINY, "--quiet", "--report", str(out / "report"), "--no-cache"]   # Ctrl-C in the probe
     elif target == "graph":
         monkeypatch.setattr(RenderGraph, "compile", _interrupt)
         argv = ["graph", "show", str(graph), "--scene", "cornell_box", "--png", str(out / "g.png")]

@@ -10,6 +10,8 @@ Prints the table; with --report writes report.md, report.html, results.json, the
 images into DIR, all at once (an interrupted run writes nothing). Unset sizes and frame counts
 are chosen for the machine (rayvr.tune.defaults) and the output says which. Every option is
 checked, and the --report and --cache folders are checked for writing, before any rendering.
+With --workers N (or --address) the study runs on a Ray cluster (rayvr.cluster.study): the
+references split by samples, each configuration on one worker, the same cache.
 """
 from __future__ import annotations
 
@@ -30,6 +32,8 @@ MAX_EXPOSURE = 64.0
 
 def add_study_arguments(p: argparse.ArgumentParser) -> None:
     """The options `rayvr converge` and `rayvr tune` share (numbers checked as they are parsed)."""
+    from ..cluster import cli as cluster_cli
+
     frames = integer("--frames", 1, MAX_FRAMES)
     p.add_argument("scene", nargs="?", help="glTF file or built-in scene name (default: the Cornell box)")
     p.add_argument("--views", type=views_count(), default=2,
@@ -76,6 +80,7 @@ def add_study_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--cache", help="reference cache folder (default ~/.cache/rayvr/references)")
     p.add_argument("--no-cache", action="store_true", help="render the reference and floors again, store nothing")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    cluster_cli.add_arguments(p)
 
 
 def register(sub) -> None:
@@ -201,6 +206,7 @@ class StudyPlan:
 
 
 def run(args) -> int:
+    from ..cluster.cli import study_runner
     from ..gpu import get_context
     from ..tune import measure, write_report
     from .options import load_scene_arg
@@ -210,8 +216,10 @@ def run(args) -> int:
     configs = plan.configs(scene)
     if plan.note:
         print(plan.note)
-    results = measure(scene, configs, views=plan.views, size=plan.size, reference=plan.reference,
-                      settings=plan.settings, cache_dir=plan.cache, progress=plan.progress, notes=plan.notes())
+    with study_runner(args, args.scene, scene, plan.progress) as runner:
+        results = measure(scene, configs, views=plan.views, size=plan.size, reference=plan.reference,
+                          settings=plan.settings, cache_dir=plan.cache, progress=plan.progress, notes=plan.notes(),
+                          runner=runner)
     print_summary(results)
     if plan.report is not None:
         print(f"wrote {write_report(results, plan.report)}")

@@ -8,7 +8,8 @@ error against the converged, checked reference, split by material), chooses gree
 the tuned assignment alike. Prints the table and the assignment; with --report writes the study's
 report (report.md, report.html, results.json, plots, images) plus tune.json into DIR, all at
 once (a failure or Ctrl-C leaves none of it). Options are checked before any rendering, as
-`rayvr converge` checks them. The budget holds for the size and views given: tune at the headset's
+`rayvr converge` checks them; --workers N (or --address) runs the reference, the probe and the
+rows on a Ray cluster. The budget holds for the size and views given: tune at the headset's
 resolution on the GPU that will render it.
 """
 from __future__ import annotations
@@ -35,9 +36,10 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    from ..cluster.cli import study_runner
     from ..gpu import get_context
     from ..materials.effect import Effect
-    from ..tune import cached_reference, make_views, write_report
+    from ..tune import make_views, write_report
     from ..tune.tuner import tuned_study
     from .options import load_scene_arg
 
@@ -51,10 +53,12 @@ def run(args) -> int:
     if plan.note:
         print(plan.note)
     view_set = make_views(scene, plan.views, plan.size)
-    ref = cached_reference(scene, view_set, plan.reference, plan.cache, gpu, tick=_reference_bar(plan, scene))
-    results, by_budget = tuned_study(scene, view_set, ref, plan.settings, configs, [args.budget_ms], args.metric,
-                                     levels, cache_dir=plan.cache, progress=plan.progress, gpu=gpu,
-                                     notes=plan.notes(), budget_option="--budget-ms")
+    with study_runner(args, args.scene, scene, plan.progress) as runner:
+        tick = None if runner.shows_progress else _reference_bar(plan, scene)
+        ref = runner.reference(scene, view_set, plan.reference, plan.cache, eps=plan.settings.eps, gpu=gpu, tick=tick)
+        results, by_budget = tuned_study(scene, view_set, ref, plan.settings, configs, [args.budget_ms], args.metric,
+                                         levels, cache_dir=plan.cache, progress=plan.progress, gpu=gpu,
+                                         notes=plan.notes(), budget_option="--budget-ms", runner=runner)
     tuned = by_budget[float(args.budget_ms)]
     print_summary(results)
     print()
