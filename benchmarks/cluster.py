@@ -4,15 +4,17 @@ Measurements (`--measure`, comma-separated):
 - `overhead`: one worker against two workers sharing the one GPU (half a GPU each), for a
   reference split by samples and a light-field frame split by views; with one GPU the speed-up
   can only be <= 1, and how far below 1 it is is the cluster's overhead.
-- `reference`: a reference render (issue 18: tauray/test.glb, 2 x 1440x1600, 4096 spp) over
-  --workers N workers: wall time, speed-up and parallel efficiency against 1 worker.
+- `reference`: the error study's reference (issue 18: tauray/test.glb, 2 x 1440x1600, 4096 spp,
+  its two halves and the bounce check's 25% more frames) over --workers N workers: wall time,
+  speed-up and parallel efficiency against 1 worker.
 - `sequence`: a 48-view light-field sequence of 120 frames (512x683 per view, hybrid graph)
   split by frames: frames per second.
 - `host-split`: one frame of 64 views of 512x683 over this host's GPUs (HostFrameSplitter):
   latency (frame start to the primary's array complete, copies included) and time per frame,
   against one worker and against one process rendering every view itself.
-- `error-study`: the error-against-time study (rayvr.tune standard configurations) split over
-  the workers: wall time, and how far the table moves (errors, GPU ms) from the 1-worker table.
+- `error-study`: the error-against-time study (rayvr.tune standard configurations, static
+  frames only: motion, floors and curves off) split over the workers: wall time, and how far the
+  table moves (errors, GPU ms) from the 1-worker table.
 
 Every row's wall time is a warm run: each Cluster first runs a small job of the same kind so
 that every worker has loaded the scene and compiled its graph; `startup s` is the Cluster's
@@ -20,6 +22,7 @@ start (workers up, contexts made). `--quick`: tiny sizes for llvmpipe, workers 1
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 
@@ -101,6 +104,10 @@ def run(args) -> dict:
         return rc.converge_reference(scene, ref_views, frames=frames, spp=spf, cluster=c, payload=payload,
                                      progress=False)
 
+    def reference_frames(frames):
+        """Frames a reference of `frames` renders: its own and the bounce check's."""
+        return frames + rv.tune.ReferenceSettings(frames, spf).bounce_check_frames
+
     def views_job(c):
         return rc.render_views(scene, rv.graphs.hybrid(), lf_views, cluster=c, payload=payload, progress=False)
 
@@ -114,7 +121,7 @@ def run(args) -> dict:
         with rc.Cluster(n, gpus_per_worker=share, same_node=same_node) as c:
             return body(c, time.perf_counter() - t0)
 
-    ref_frames = max(1, spp // spf)
+    ref_frames = max(2, spp // spf // 2 * 2)      # two equal halves
     try:
         if "overhead" in measures:
             one_gpu = 1.0 if gpus >= 1 else 0.0
@@ -133,7 +140,8 @@ def run(args) -> dict:
                 base.setdefault("ref", t_ref)
                 base.setdefault("views", t_views)
                 rows.append(_row("overhead: reference", n, share, f"2x{ref_size[0]}x{ref_size[1]} {spp} spp",
-                                 startup, t_ref, base["ref"], f"{ref_frames / t_ref:.3g} frames/s", "one GPU shared"))
+                                 startup, t_ref, base["ref"], f"{reference_frames(ref_frames) / t_ref:.3g} frames/s",
+                                 "one GPU shared"))
                 rows.append(_row("overhead: views", n, share, f"{seq_views}x{lf_size[0]}x{lf_size[1]}", startup,
                                  t_views, base["views"], f"{1e3 * t_views:.4g} ms/frame", "one GPU shared"))
             notes.append("overhead rows: every worker count shares one GPU (or the CPU), so speed-up 1.0 = no "
@@ -147,9 +155,10 @@ def run(args) -> dict:
 
                 startup, wall = with_cluster(n, None, body)
                 base = base or wall
+                samples = 2 * ref_size[0] * ref_size[1] * spf * reference_frames(ref_frames)
                 rows.append(_row("reference", n, 1.0 if gpus >= n else gpus / n,
                                  f"2x{ref_size[0]}x{ref_size[1]} {spp} spp", startup, wall, base,
-                                 f"{2 * ref_size[0] * ref_size[1] * spp / wall / 1e6:.4g} Msamples/s"))
+                                 f"{samples / wall / 1e6:.4g} Msamples/s", "bounce check included"))
         if "sequence" in measures:
             seq = rc.TrajectoryViews(lf_views, "turn", frames=seq_frames)
             base = None
@@ -193,32 +202,35 @@ def run(args) -> dict:
             notes.append("host-split speed-up is against one process rendering every view (no Ray, no copies)")
         if "error-study" in measures:
             study_views = default_views(scene, 2, study_size)
-            configs = rv.tune.standard_configs(scene, spp=(1, 4) if quick else (1, 4, 16))
-            settings = rv.tune.ReferenceSettings(8 if quick else 256, 1 if quick else 4)
-            frames, warmup = (2, 1) if quick else (50, 10)
+            ref_settings = rv.tune.ReferenceSettings(8 if quick else 256, 1 if quick else 4)
+            configs = rv.tune.standard_configs(scene, ref_settings, spp=(1, 4) if quick else (1, 4, 16))
+            frames, timing, warmup = (2, 2, 1) if quick else (4, 50, 10)
+            settings = rv.tune.StudySettings(frames=frames, timing_frames=timing, warmup=warmup,
+                                             warmup_s=0.0 if quick else None, motion=None, floors=False,
+                                             progressive_frames=0, metrics=("relmse", "psnr"))
+            warm = dataclasses.replace(settings, frames=1, timing_frames=1, warmup=0, metrics=("relmse",))
             base, base_rows = None, None
             reference = None
             for n in counts:
                 def body(c, startup):
                     nonlocal reference
+                    study = {"reference": None, "views": study_views, "cache_dir": False, "curves": False,
+                             "cluster": c, "payload": payload, "progress": False}
                     if reference is None:
-                        reference = rc.converge_reference(scene, study_views, frames=settings.frames,
-                                                          spp=settings.spp, cluster=c, payload=payload,
-                                                          progress=False).image
-                    rc.measure(scene, configs[:c.size], reference=reference, views=study_views, frames=1, warmup=0,
-                               metrics=("relmse",), cluster=c, payload=payload, progress=False)
+                        reference = rc.converge_reference(scene, study_views, settings=ref_settings, cluster=c,
+                                                          payload=payload, progress=False)
+                    study["reference"] = reference
+                    rc.measure(scene, configs[:c.size], settings=warm, **study)
                     t0 = time.perf_counter()
-                    res = rc.measure(scene, configs, reference=reference, views=study_views, frames=frames,
-                                     warmup=warmup, metrics=("relmse", "psnr"), warmup_s=0.0 if quick else 0.5,
-                                     cluster=c, payload=payload, progress=False)
+                    res = rc.measure(scene, configs, settings=settings, **study)
                     return startup, time.perf_counter() - t0, res
 
                 startup, wall, res = with_cluster(n, None, body)
                 base = base or wall
                 base_rows = base_rows or res.rows
-                d_err = max(abs(a.errors["relmse"] - b.errors["relmse"]) / max(abs(b.errors["relmse"]), 1e-12)
+                d_err = max(abs(a.mean("relmse") - b.mean("relmse")) / max(abs(b.mean("relmse")), 1e-12)
                             for a, b in zip(res.rows, base_rows))
-                d_ms = max(a.frame_ms / b.frame_ms for a, b in zip(res.rows, base_rows))
+                d_ms = max(a.gpu_ms / b.gpu_ms for a, b in zip(res.rows, base_rows))
                 rows.append(_row("error-study", n, 1.0 if gpus >= n else gpus / n,
                                  f"{len(configs)} configs 2x{study_size[0]}x{study_size[1]}", startup, wall, base,
                                  f"{len(configs) / wall:.3g} configs/s",

@@ -82,6 +82,14 @@ MISUSES = [
     (["tune", "--reference-spp", "0"], ["--reference-spp 0", "from 1 to 1024"]),
     (["tune", "--ppd", "inf"], ["--ppd inf", "finite number > 0"]),
     (["tune", "--views", "100"], ["--views 100", "from 1 to 64"]),
+    (["tune", "--workers", "0"], ["--workers 0", "from 1 to 1024"]),
+    (["converge", "--bounces", "0"], ["--bounces 0", "from 1 to 64"]),
+    (["converge", "--tolerance", "nan"], ["--tolerance nan", "finite number > 0"]),
+    (["converge", "--warmup-s", "-1"], ["--warmup-s -1", ">= 0 and <= 3600 s"]),
+    (["converge", "--motion-samples", "300"], ["--motion-samples 300", "from 1 to 255"]),
+    (["converge", "--reference-frames", "0"], ["--reference-frames 0", "from 2 to 1048576"]),
+    (["converge", "--exposure", "inf"], ["--exposure inf", "-64 to 64"]),
+    (["converge", "--size", "4096x4096", "--views", "64"], ["--size 4096x4096 with --views 64", "fewer views"]),
     (["graph", "show", "g.json", "--views", "0"], ["--views 0", "from 1 to 64"]),
     (["graph", "show", "g.json", "--png", "g.gif"], ["g.gif", ".png, .svg or .pdf"]),
     (["graph", "show", "missing.json"], ["missing.json"]),
@@ -96,6 +104,7 @@ def test_misuse_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, monkeypa
     monkeypatch.chdir(tmp_path)
     out_args = {"render": ["--out", str(tmp_path / "out" / "x.png")] if "--out" not in argv else [],
                 "tune": ["--report", str(tmp_path / "out" / "report")],
+                "converge": ["--report", str(tmp_path / "out" / "report")],
                 "check": ["--masks", str(tmp_path / "out" / "masks")]}.get(argv[0], [])
     code, out, err = run(capsys, *argv, *out_args)
     assert code == 2, (out, err)
@@ -114,7 +123,8 @@ def _under_a_file(tmp_path):
 
 
 @pytest.mark.parametrize("where", ["proc", "under a file", "read-only"])
-@pytest.mark.parametrize("command", ["render", "render --quilt", "tune --report", "graph --png", "check --masks"])
+@pytest.mark.parametrize("command", ["render", "render --quilt", "tune --report", "tune --cache", "converge --report",
+                                     "graph --png", "check --masks"])
 def test_unwritable_output_is_refused_before_rendering(tmp_path, capsys, monkeypatch, no_rendering, command, where):
     if where == "proc" and not Path("/proc/self").exists():
         pytest.skip("no /proc here")
@@ -129,13 +139,15 @@ def test_unwritable_output_is_refused_before_rendering(tmp_path, capsys, monkeyp
             "render --quilt": ["render", *TINY, "--views", "4", "--out", str(tmp_path / "ok" / "x.png"),
                                "--quilt", str(base / "q.png")],
             "tune --report": ["tune", *TINY, "--quiet", "--report", str(base / "report")],
+            "tune --cache": ["tune", *TINY, "--quiet", "--cache", str(base / "cache")],
+            "converge --report": ["converge", *TINY, "--quiet", "--report", str(base / "report")],
             "graph --png": ["graph", "show", str(graph), "--png", str(base / "g.png")],
             "check --masks": ["check", "--masks", str(base / "masks")]}[command]
     before = files(tmp_path)
     code, out, err = run(capsys, *argv)
     assert code == 2, (out, err)
-    option = {"render": "--out", "render --quilt": "--quilt", "tune --report": "--report", "graph --png": "--png",
-              "check --masks": "--masks"}[command]
+    option = {"render": "--out", "render --quilt": "--quilt", "tune --report": "--report", "tune --cache": "--cache",
+              "converge --report": "--report", "graph --png": "--png", "check --masks": "--masks"}[command]
     if where == "read-only" and command == "render --quilt":
         option = "--out"   # the whole file system refuses: the first output checked is named
     reason = {"proc": "cannot create files in /proc", "under a file": "is a file, not a folder",
@@ -214,9 +226,9 @@ def test_atomic_group_undoes_renames_and_restores_replaced_files(tmp_path, monke
 
 def test_a_tune_report_that_fails_half_way_leaves_no_report(gpu, tmp_path, capsys, monkeypatch):
     report = tmp_path / "report"
-    _fail_on(monkeypatch, Path, "write_text", 3, OSError(errno.EIO, "Input/output error"))   # results.json
+    _fail_on(monkeypatch, Path, "write_text", 1, OSError(errno.EIO, "Input/output error"))   # results.json
     code, _, err = run(capsys, "tune", "--size", "8x8", "--views", "1", "--frames", "1", "--warmup", "0", "--spp", "1",
-                       "--reference-frames", "1", "--reference-spp", "1", "--levels", "raster", "--metrics", "relmse",
+                       "--reference-frames", "2", "--reference-spp", "1", "--levels", "raster", "--metrics", "relmse",
                        "--metric", "relmse", "--quiet", "--cache", str(tmp_path / "cache"), "--report", str(report))
     assert code == 2, err
     one_error_line(err, "results.json", "Input/output error")
@@ -246,7 +258,7 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_nothing(gpu, tmp_path, capsys, m
         _fail_on(monkeypatch, os, "replace", 2, KeyboardInterrupt())
     elif target == "tune":
         monkeypatch.setattr(rayvr.tune.probe, "probe_cost_model", _interrupt)
-        argv = ["tune", *TINY, "--quiet", "--report", str(out / "report"), "--cache", str(out / "cache")]
+        argv = ["tune", *TINY, "--quiet", "--report", str(out / "report"), "--no-cache"]   # Ctrl-C in the probe
     elif target == "graph":
         monkeypatch.setattr(RenderGraph, "compile", _interrupt)
         argv = ["graph", "show", str(graph), "--scene", "cornell_box", "--png", str(out / "g.png")]

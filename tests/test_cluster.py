@@ -34,8 +34,7 @@ def one_process(scene, graph, views, pins, frames=1):
         return {pin: r.read_output(pin, flip_y=True) for pin in pins}
 
 
-def pt_graph():
-    return rv.tune.path_traced_graph(spp=1, max_bounces=3)
+PT = {"spp": 1, "max_bounces": 3}        # the reference graph of these tests: rv.tune.path_traced_graph(**PT)
 
 
 # -- split by views ----------------------------------------------------------------------------------
@@ -73,12 +72,35 @@ def test_random_passes_split_by_views_first_share_exact_others_another_sample(cl
 def test_reference_split_by_samples_is_one_process_paths_and_reruns_identically(cluster, gpu):
     scene = rv.scenes.cornell_box()
     views = default_views(scene, 2, SIZE)
-    one = rv.tune.render_reference(scene, views, rv.tune.ReferenceSettings(8, 1, 3), gpu=gpu, progress=False)
+    one = rv.tune.render_reference(scene, views, rv.tune.ReferenceSettings(8, 1, 3), gpu=gpu)
     ref = rc.converge_reference(scene, views, frames=8, spp=1, max_bounces=3, cluster=cluster, progress=False)
     assert ref.shares == 8 and ref.samples_per_pixel == 8 and len(set(ref.workers)) == 2
-    assert np.allclose(ref.image, one, rtol=1e-5, atol=1e-6)
+    assert np.allclose(ref.image, one.image, rtol=1e-5, atol=1e-6)
+    # the study's halves and checks: the same frames as one process, so the same verdict
+    assert np.allclose(ref.half_a, one.half_a, rtol=1e-5, atol=1e-6)
+    assert np.allclose(ref.half_b, one.half_b, rtol=1e-4, atol=1e-5)
+    assert ref.first_frame == one.first_frame == rv.tune.seeds.reference_first_frame()
+    assert ref.noise_relmse == pytest.approx(one.noise_relmse, rel=1e-3)
+    assert ref.bounce_change == pytest.approx(one.bounce_change, rel=1e-3, abs=1e-6) and ref.bounce_change > 0
+    assert ref.verdict() == one.verdict()
     again = rc.converge_reference(scene, views, frames=8, spp=1, max_bounces=3, cluster=cluster, progress=False)
     assert np.array_equal(again.image, ref.image)
+
+
+def test_split_reference_shares_the_study_cache(cluster, gpu, tmp_path):
+    scene = rv.scenes.cornell_box()
+    views = default_views(scene, 1, SIZE)
+    settings = rv.tune.ReferenceSettings(4, 1, 3)
+    split = rc.converge_reference(scene, views, settings=settings, cache_dir=tmp_path, cluster=cluster,
+                                  progress=False)
+    cached = list(tmp_path.glob("*.npz"))
+    assert len(cached) == 1 and split.source == str(cached[0])
+    here = rv.tune.cached_reference(scene, views, settings, tmp_path, gpu)    # one process finds it
+    assert here.source == str(cached[0]) and here.seconds == 0.0
+    assert np.array_equal(here.image, split.image) and np.allclose(here.half_b, split.half_b, atol=1e-6)
+    again = rc.converge_reference(scene, views, settings=settings, cache_dir=tmp_path, cluster=cluster,
+                                  progress=False)
+    assert again.shares == 0 and np.array_equal(again.image, split.image)   # from the cache, no render
 
 
 def test_independent_seeds_agree_within_standard_errors_and_variance_falls_as_one_over_n(cluster):
@@ -86,8 +108,7 @@ def test_independent_seeds_agree_within_standard_errors_and_variance_falls_as_on
     views = default_views(scene, 2, SIZE)
 
     def run(seed, frames):
-        return rc.converge_reference(scene, views, frames=frames, spp=1, graph=pt_graph(), seed=seed,
-                                     cluster=cluster, progress=False)
+        return rc.converge_reference(scene, views, frames=frames, **PT, seed=seed, cluster=cluster, progress=False)
 
     a8, b8, a32, b32 = run(1, 8), run(2, 8), run(3, 32), run(4, 32)
     d8 = (a8.image - b8.image)[..., :3].astype(np.float64)
@@ -116,19 +137,38 @@ def test_sequence_split_into_chunks_equals_one_chunk(cluster):
     assert not np.array_equal(a[0], a[4])          # the head turned
 
 
-def test_error_study_split_by_configuration_matches_one_process(cluster, gpu):
+def test_error_study_split_by_configuration_matches_one_process(cluster, gpu, tmp_path):
     scene = rv.scenes.cornell_box()
     views = default_views(scene, 2, SIZE)
-    ref = rv.tune.render_reference(scene, views, rv.tune.ReferenceSettings(4, 1, 3), gpu=gpu, progress=False)
-    configs = rv.tune.standard_configs(scene, spp=(1,))
-    kw = {"reference": ref, "views": views, "frames": 1, "warmup": 1, "metrics": ("relmse", "psnr")}
-    split = rc.measure(scene, configs, cluster=cluster, progress=False, **kw)
-    here = rv.tune.measure(scene, configs, progress=False, gpu=gpu, **kw)
+    ref_settings = rv.tune.ReferenceSettings(4, 1, 3)
+    ref = rv.tune.render_reference(scene, views, ref_settings, gpu=gpu)
+    configs = rv.tune.standard_configs(scene, ref_settings, spp=(1,))
+    settings = rv.tune.StudySettings(frames=1, timing_frames=1, warmup=1, metrics=("relmse", "psnr"),
+                                     motion=rv.tune.Motion(frames=2, samples=1), progressive_frames=2)
+    kw = {"reference": ref, "views": views, "settings": settings}
+    split = rc.measure(scene, configs, cluster=cluster, progress=False, cache_dir=tmp_path / "split", **kw)
+    here = rv.tune.measure(scene, configs, progress=False, gpu=gpu, cache_dir=tmp_path / "here", **kw)
     assert [r.name for r in split.rows] == [c.name for c in configs]
+
+    def stats(errors):
+        return {(m, k): v[k] for m, v in errors.items() for k in ("mean", "std")}
+
     for a, b in zip(split.rows, here.rows):
-        assert a.errors == pytest.approx(b.errors, rel=1e-12), a.name
-        assert a.timed_on and a.timed_on.startswith("worker") and a.frame_ms > 0
-    assert "timed on" in split.table() and len(split.info["workers"]) == 2
+        # the study's seeds: the same frames, judged against the same reference
+        assert stats(a.errors) == pytest.approx(stats(b.errors), rel=1e-12), a.name
+        assert a.floor["relmse"] == pytest.approx(b.floor["relmse"], rel=1e-12)
+        assert a.floor["within_noise"] == b.floor["within_noise"]
+        # in motion each is judged against its own trajectory reference: the split one's frames are
+        # one process's, merged in another order (float rounding only, far inside the noise)
+        assert a.motion["relmse"]["mean"] == pytest.approx(b.motion["relmse"]["mean"], rel=1e-3)
+        assert a.timed_on and a.timed_on.startswith("worker") and a.gpu_ms > 0 and b.timed_on is None
+    assert "timed on" in split.table() and len(split.study["workers"]) == 2
+    assert "timed on" not in here.table() and here.study["workers"] == []
+    assert [c.name for c in split.curves] == [c.name for c in here.curves] and split.curves[0].timed_on
+    # the floors rendered on the workers went into the driver's cache, as one process stores them
+    assert sorted(p.name for p in (tmp_path / "split").glob("floor-*.npz")) == \
+        sorted(p.name for p in (tmp_path / "here").glob("floor-*.npz")) != []
+    assert split.as_dict()["rows"][0]["timed_on"] == split.rows[0].timed_on
 
 
 # -- one frame over the host's GPUs -------------------------------------------------------------------------
@@ -150,9 +190,9 @@ def test_host_split_gathers_exact_pixels_and_balances_a_skewed_start(cluster):
 def test_worker_exiting_mid_share_is_rerun_with_the_same_result(cluster):
     scene = rv.scenes.cornell_box()
     views = default_views(scene, 2, SIZE)
-    clean = rc.converge_reference(scene, views, frames=8, spp=1, graph=pt_graph(), cluster=cluster, progress=False)
+    clean = rc.converge_reference(scene, views, frames=8, **PT, cluster=cluster, progress=False)
     ray.get(cluster.handles[0].fail_after.remote(1))     # os._exit in its next share's first frame
-    faulty = rc.converge_reference(scene, views, frames=8, spp=1, graph=pt_graph(), cluster=cluster, progress=False)
+    faulty = rc.converge_reference(scene, views, frames=8, **PT, cluster=cluster, progress=False)
     assert np.array_equal(faulty.image, clean.image)
     assert cluster.size == 2                              # replaced
 
@@ -178,14 +218,13 @@ def test_ctrl_c_stops_the_busy_workers_and_the_next_job_runs(cluster):
     timer.start()
     try:
         with pytest.raises(KeyboardInterrupt):
-            rc.converge_reference(scene, views, frames=20000, spp=1, graph=pt_graph(), cluster=cluster,
-                                  progress=False)
+            rc.converge_reference(scene, views, frames=20000, **PT, cluster=cluster, progress=False)
     finally:
         timer.cancel()
     for handle in busy:
         with pytest.raises(ray.exceptions.RayActorError):
             ray.get(handle.ping.remote(), timeout=30)
-    ref = rc.converge_reference(scene, views, frames=2, spp=1, graph=pt_graph(), cluster=cluster, progress=False)
+    ref = rc.converge_reference(scene, views, frames=2, **PT, cluster=cluster, progress=False)
     assert np.isfinite(ref.image).all() and cluster.size == 2
 
 
@@ -211,6 +250,31 @@ def test_render_with_workers_writes_one_process_images_and_quilt(cluster, tmp_pa
     split_q = [p for p in tmp_path.iterdir() if p.name.startswith("qs")]
     assert len(here_q) == len(split_q) == 1
     assert np.array_equal(np.asarray(Image.open(here_q[0])), np.asarray(Image.open(split_q[0])))
+
+
+def test_converge_with_and_without_workers_share_the_cache_and_the_table(cluster, tmp_path, capsys):
+    import json
+
+    tiny = ["--size", "12x12", "--views", "1", "--frames", "1", "--timing-frames", "1", "--warmup", "1",
+            "--reference-frames", "4", "--reference-spp", "1", "--bounces", "2", "--motion-frames", "2",
+            "--motion-samples", "1", "--progressive-frames", "2", "--spp", "1", "--quiet",
+            "--cache", str(tmp_path / "cache")]
+    assert main(["converge", *tiny, "--workers", "2", "--report", str(tmp_path / "split")]) == 0
+    out = capsys.readouterr().out
+    assert "timed on" in out and out.count("| worker ") == 6
+    cached = sorted((tmp_path / "cache").iterdir())
+    assert len(cached) == 2 + 6                          # the static and trajectory references, six floors
+    assert main(["converge", *tiny, "--report", str(tmp_path / "here")]) == 0
+    assert "timed on" not in capsys.readouterr().out
+    assert sorted((tmp_path / "cache").iterdir()) == cached          # nothing rendered again
+    split, here = (json.loads((tmp_path / d / "results.json").read_text()) for d in ("split", "here"))
+    assert here["reference"]["source"] == split["reference"]["source"] in map(str, cached)
+    for a, b in zip(split["rows"], here["rows"]):
+        assert a["name"] == b["name"] and a["timed_on"].startswith("worker") and b["timed_on"] is None
+        for m in ("flip", "relmse"):
+            assert a[m]["mean"] == pytest.approx(b[m]["mean"], rel=1e-12)
+            assert a["motion"][m]["mean"] == pytest.approx(b["motion"][m]["mean"], rel=1e-12)
+        assert a["floor"]["relmse"] == pytest.approx(b["floor"]["relmse"], rel=1e-12)
 
 
 def test_tune_with_workers_names_the_worker_of_each_row(cluster, tmp_path, capsys):

@@ -11,8 +11,10 @@ from rayvr.cluster import PinnedViews, RenderWorker, ScenePayload, TrajectoryVie
 from rayvr.cluster.host_split import WorkerSpeed, rebalanced
 from rayvr.cluster.progress import ProgressCounter
 from rayvr.cluster.shares import split_by_weights, split_evenly, view_range
+from rayvr.cluster.study import _cut
 from rayvr.errors import ClusterError
 from rayvr.renderer import default_views
+from rayvr.tune import seeds
 from test_scene_gltf import base_doc, write
 
 
@@ -23,6 +25,17 @@ def test_split_evenly_covers_in_order_and_differs_by_at_most_one():
         assert all(a[1] == b[0] for a, b in zip(ranges, ranges[1:]))
         sizes = [b - a for a, b in ranges]
         assert max(sizes) - min(sizes) <= 1 and min(sizes) >= 1 and len(ranges) == min(total, parts)
+
+
+def test_reference_shares_cover_the_frames_and_never_straddle_a_half_or_the_bounce_check():
+    for frames, check, pieces in [(8, 2, 8), (32, 8, 8), (2, 1, 8), (256, 64, 3), (10, 5, 4), (64, 16, 1)]:
+        bounds = [0, check, frames // 2, frames]
+        ranges = _cut(bounds, pieces)
+        assert ranges[0][0] == 0 and ranges[-1][1] == frames
+        assert all(a[1] == b[0] and a[0] < a[1] for a, b in zip(ranges, ranges[1:]))
+        assert not any(a < bound < b for a, b in ranges for bound in bounds)
+        assert len({*bounds}) - 1 <= len(ranges) <= pieces + 3      # about `pieces`, one per segment at least
+    assert _cut([0, 2, 4, 8], 8) == [(i, i + 1) for i in range(8)]
 
 
 def test_split_by_weights_is_proportional_and_keeps_everyone_busy():
@@ -110,13 +123,15 @@ def test_worker_views_and_samples_in_this_process_equal_a_renderer(gpu):
     assert np.array_equal(got["pixels"]["Composite.color"], whole[1:3])
     pt = rv.tune.path_traced_graph(spp=1, max_bounces=2)
     two = default_views(scene, 1, (16, 16))
-    first = worker.run("samples", (payload.key, [payload]), None, graph=pt.to_dict(), views=two, first_frame=0,
+    start = seeds.reference_first_frame()                     # the study's reference seeds
+    first = worker.run("samples", (payload.key, [payload]), None, graph=pt.to_dict(), views=two, first_frame=start,
                        frames=2, pin="Accumulate.dst")
-    second = worker.run("samples", (payload.key, [payload]), None, graph=pt.to_dict(), views=two, first_frame=2,
-                        frames=2, pin="Accumulate.dst")
-    one = rv.tune.render_reference(scene, two, rv.tune.ReferenceSettings(4, 1, 2), gpu=gpu, progress=False)
+    second = worker.run("samples", (payload.key, [payload]), None, graph=pt.to_dict(), views=two,
+                        first_frame=start + 2, frames=2, pin="Accumulate.dst")
+    one = rv.tune.render_reference(scene, two, rv.tune.ReferenceSettings(4, 1, 2), gpu=gpu)
     merged = (first["mean"] * 2 + second["mean"] * 2) / 4     # the shares' frames are one process's frames
-    assert np.allclose(merged, one, rtol=1e-5, atol=1e-6)
+    assert np.allclose(merged, one.image, rtol=1e-5, atol=1e-6)
+    assert np.allclose(first["mean"], one.half_a, rtol=1e-5, atol=1e-6)   # half A: the first share's frames
     worker.close()
 
 

@@ -60,11 +60,11 @@ def test_tune_sets_the_tuned_assignment_beside_the_uniform_rows(gpu, tmp_path, c
 @pytest.mark.parametrize("command", ["converge", "tune"])
 @pytest.mark.parametrize("args, message", [
     (["--size", "12"], "--size 12: expected WIDTHxHEIGHT"),
-    (["--views", "0"], "--views 0: must be >= 1"),
+    (["--views", "0"], "--views 0: out of range; give an integer from 1 to 64"),
     (["--reference-frames", "7"], "--reference-frames 7: the reference is two equal halves"),
     (["--spp", "1,x"], "--spp 'x': samples per pixel must be integers"),
     (["--metrics", "flip,mse"], "--metrics flip,mse: unknown metric 'mse'"),
-    (["--ppd", "-3"], "--ppd -3.0: must be > 0"),
+    (["--ppd", "-3"], "--ppd -3: out of range; give a finite number > 0 and <= 1000"),
     (["--exposure", "bright"], "--exposure bright: give stops"),
     (["--preset", "vive"], "unknown headset preset 'vive'"),
     (["--trajectory", "spin"], "--trajectory spin: use one of"),
@@ -80,7 +80,7 @@ def test_bad_options_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, co
 
 def test_tune_refuses_a_bad_budget_and_levels(tmp_path, capsys):
     assert main(["tune", "--budget-ms", "0"]) == 2
-    assert "--budget-ms 0.0: the budget must be > 0" in capsys.readouterr().err
+    assert "--budget-ms 0: out of range; give a finite number > 0 and <= 1e+06 ms" in capsys.readouterr().err
     assert main(["tune", "--levels", "raster,mirrors"]) == 2
     assert "--levels: unknown effect 'mirrors'" in capsys.readouterr().err
 

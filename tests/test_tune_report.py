@@ -103,5 +103,5 @@ def test_ctrl_c_during_the_study_exits_130_and_writes_nothing(tmp_path, monkeypa
 
 def test_report_refuses_a_file_in_its_place(results, tmp_path):
     (tmp_path / "taken").write_text("x")
-    with pytest.raises(rv.OptionError, match="exists and is not a folder"):
+    with pytest.raises(rv.OutputError, match="exists and is not a folder"):
         write_report(results, tmp_path / "taken")

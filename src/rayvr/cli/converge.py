@@ -8,52 +8,79 @@ HDR-FLIP, PSNR, SSIM, relMSE) as mean and spread over several frames, on a still
 head, and its bias floor (the configuration converged); then progressive-convergence curves.
 Prints the table; with --report writes report.md, report.html, results.json, the plots and the
 images into DIR, all at once (an interrupted run writes nothing). Unset sizes and frame counts
-are chosen for the machine (rayvr.tune.defaults) and the output says which.
+are chosen for the machine (rayvr.tune.defaults) and the output says which. Every option is
+checked, and the --report and --cache folders are checked for writing, before any rendering.
+With --workers N (or --address) the study runs on a Ray cluster (rayvr.cluster.study): the
+references split by samples, each configuration on one worker, the same cache.
 """
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from ..errors import OptionError
+from ..tune import seeds
+from .options import MAX_VIEWS, integer, number, views_count
 
 TRAJECTORY_NONE = "none"
+MAX_FRAMES = 100_000
+MAX_SPP = 1024
+MAX_BOUNCES = 64
+MAX_EXPOSURE = 64.0
 
 
 def add_study_arguments(p: argparse.ArgumentParser) -> None:
-    """The options `rayvr converge` and `rayvr tune` share."""
+    """The options `rayvr converge` and `rayvr tune` share (numbers checked as they are parsed)."""
+    from ..cluster import cli as cluster_cli
+
+    frames = integer("--frames", 1, MAX_FRAMES)
     p.add_argument("scene", nargs="?", help="glTF file or built-in scene name (default: the Cornell box)")
-    p.add_argument("--views", type=int, default=2, help="view count: 1 mono, 2 stereo, N a camera grid (default 2)")
+    p.add_argument("--views", type=views_count(), default=2,
+                   help=f"view count: 1 mono, 2 stereo, N a camera grid (1 to {MAX_VIEWS}; default 2)")
     p.add_argument("--size", help="per-view WIDTHxHEIGHT (default: 32x32 on llvmpipe, 720x800 on a GPU)")
     p.add_argument("--report", help="folder for report.md, report.html, results.json, plots and images")
     p.add_argument("--configs", help="JSON file of configurations instead of the standard set")
-    p.add_argument("--spp", default="1,4,16", help="samples per pixel of the PATH_TRACED rows (default 1,4,16)")
+    p.add_argument("--spp", default="1,4,16",
+                   help=f"samples per pixel of the PATH_TRACED rows, each 1 to {MAX_SPP} (default 1,4,16)")
     p.add_argument("--reflect", default="auto", help="material that gets REFLECTIONS in the mixed row (auto: floor)")
     p.add_argument("--preset", default="index", help="headset whose pixels per degree FLIP uses (default index)")
-    p.add_argument("--ppd", type=float, help="pixels per degree for FLIP instead of the preset's")
+    p.add_argument("--ppd", type=number("--ppd", 0, 1000, low_open=True),
+                   help="pixels per degree for FLIP instead of the preset's (> 0)")
     p.add_argument("--tonemap", default="aces", help="tone mapping of the displayed images: aces, reinhard, linear")
-    p.add_argument("--exposure", default="auto", help="exposure in stops, or 'auto' (from the reference, once)")
+    p.add_argument("--exposure", default="auto",
+                   help=f"exposure in stops (-{MAX_EXPOSURE:g} to {MAX_EXPOSURE:g}), or 'auto' (from the reference, "
+                        f"once)")
     p.add_argument("--metrics", default="flip,hdrflip,psnr,ssim,relmse", help="metrics, comma-separated")
-    p.add_argument("--frames", type=int, help="judged frames per configuration (default 4)")
-    p.add_argument("--timing-frames", type=int, help="timed frames per configuration (default 10 llvmpipe, 30 GPU)")
-    p.add_argument("--warmup", type=int, help="untimed frames before timing (default 2 llvmpipe, 5 GPU)")
-    p.add_argument("--warmup-s", type=float, help="seconds of untimed frames first (default 0.5 on a GPU, 0 llvmpipe)")
-    p.add_argument("--reference-frames", type=int, help="frames of the reference (default 64 llvmpipe, 256 GPU)")
-    p.add_argument("--reference-spp", type=int, help="paths per pixel per reference frame (default 16)")
-    p.add_argument("--bounces", type=int, default=8, help="bounces of the reference and PATH_TRACED rows (default 8)")
-    p.add_argument("--tolerance", type=float, default=5e-4,
+    p.add_argument("--frames", type=frames, help=f"judged frames per configuration, 1 to {MAX_FRAMES} (default 4)")
+    p.add_argument("--timing-frames", type=integer("--timing-frames", 1, MAX_FRAMES),
+                   help="timed frames per configuration (default 10 llvmpipe, 30 GPU)")
+    p.add_argument("--warmup", type=integer("--warmup", 0, MAX_FRAMES),
+                   help="untimed frames before timing (default 2 llvmpipe, 5 GPU)")
+    p.add_argument("--warmup-s", type=number("--warmup-s", 0, 3600, unit=" s"),
+                   help="seconds of untimed frames first (default 0.5 on a GPU, 0 llvmpipe)")
+    p.add_argument("--reference-frames", type=integer("--reference-frames", 2, seeds.RANGE),
+                   help="frames of the reference, even (default 64 llvmpipe, 256 GPU)")
+    p.add_argument("--reference-spp", type=integer("--reference-spp", 1, MAX_SPP),
+                   help=f"paths per pixel per reference frame, 1 to {MAX_SPP} (default 16)")
+    p.add_argument("--bounces", type=integer("--bounces", 1, MAX_BOUNCES), default=8,
+                   help="bounces of the reference and PATH_TRACED rows (default 8)")
+    p.add_argument("--tolerance", type=number("--tolerance", 0, 1, low_open=True), default=5e-4,
                    help="largest predicted relMSE of a converged reference (default 5e-4)")
-    p.add_argument("--bounce-tolerance", type=float, default=0.01,
+    p.add_argument("--bounce-tolerance", type=number("--bounce-tolerance", 0, 1, low_open=True), default=0.01,
                    help="largest change of the reference's mean radiance with one more bounce (default 0.01)")
     p.add_argument("--trajectory", default="turn", help="head motion: turn, walk, still, a pose-log .json, or none")
-    p.add_argument("--motion-frames", type=int, help="frames along the trajectory (default 16 llvmpipe, 32 GPU)")
-    p.add_argument("--motion-samples", type=int, help="trajectory frames judged, each with its own reference "
-                                                       "(default 2 llvmpipe, 3 GPU)")
+    p.add_argument("--motion-frames", type=integer("--motion-frames", 1, MAX_FRAMES),
+                   help="frames along the trajectory (default 16 llvmpipe, 32 GPU)")
+    p.add_argument("--motion-samples", type=integer("--motion-samples", 1, seeds.SLOTS - 1),
+                   help="trajectory frames judged, each with its own reference (default 2 llvmpipe, 3 GPU)")
     p.add_argument("--no-floors", action="store_true", help="skip the bias floors (converged configurations)")
-    p.add_argument("--progressive-frames", type=int, help="frames of the progressive curves (0: none)")
+    p.add_argument("--progressive-frames", type=integer("--progressive-frames", 0, MAX_FRAMES),
+                   help="frames of the progressive curves (0: none)")
     p.add_argument("--cache", help="reference cache folder (default ~/.cache/rayvr/references)")
     p.add_argument("--no-cache", action="store_true", help="render the reference and floors again, store nothing")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    cluster_cli.add_arguments(p)
 
 
 def register(sub) -> None:
@@ -71,27 +98,34 @@ def parse_list(text: str, option: str, parse) -> list:
 
 
 def parse_spp(text: str) -> int:
-    """One --spp item: an integer >= 1."""
+    """One --spp item: an integer from 1 to MAX_SPP."""
     try:
         n = int(text)
     except ValueError:
         n = 0
-    if n < 1:
-        raise OptionError(f"--spp {text!r}: samples per pixel must be integers >= 1, e.g. --spp 1,4,16")
+    if not 1 <= n <= MAX_SPP:
+        raise OptionError(f"--spp {text!r}: samples per pixel must be integers from 1 to {MAX_SPP}, "
+                          f"e.g. --spp 1,4,16")
     return n
 
 
 def parse_exposure(text: str) -> float | None:
+    """--exposure: 'auto' (None) or finite stops within +-MAX_EXPOSURE."""
     if str(text).strip().lower() == "auto":
         return None
     try:
-        return float(text)
+        stops = float(text)
     except ValueError:
         raise OptionError(f"--exposure {text}: give stops (e.g. 0, 1.5, -1) or 'auto'") from None
+    if not (math.isfinite(stops) and abs(stops) <= MAX_EXPOSURE):
+        raise OptionError(f"--exposure {text}: out of range; give stops from -{MAX_EXPOSURE:g} to "
+                          f"{MAX_EXPOSURE:g} or 'auto'")
+    return stops
 
 
 class StudyPlan:
-    """The validated options: everything `measure` needs, and the note on what was defaulted."""
+    """The validated options: everything `measure` needs, and the note on what was defaulted.
+    Refuses (OptionError, OutputError) before anything is rendered or written."""
 
     def __init__(self, args, gpu):
         from ..tune import Display, Motion, ReferenceSettings, StudySettings
@@ -109,26 +143,13 @@ class StudyPlan:
                 return default
             return value
 
-        self.size = parse_size(args.size) if args.size else d.size
+        self.size = parse_size(args.size, views=args.views) if args.size else parse_size(
+            f"{d.size[0]}x{d.size[1]}", "the default --size", views=args.views)
         if not args.size:
             chosen["--size"] = f"{d.size[0]}x{d.size[1]}"
-        for option, value, low in (("--views", args.views, 1), ("--frames", args.frames, 1),
-                                   ("--timing-frames", args.timing_frames, 1), ("--warmup", args.warmup, 0),
-                                   ("--reference-frames", args.reference_frames, 2),
-                                   ("--reference-spp", args.reference_spp, 1), ("--bounces", args.bounces, 1),
-                                   ("--motion-frames", args.motion_frames, 1), ("--motion-samples", args.motion_samples, 1),
-                                   ("--progressive-frames", args.progressive_frames, 0)):
-            if value is not None and value < low:
-                raise OptionError(f"{option} {value}: must be >= {low}")
         if args.reference_frames is not None and args.reference_frames % 2:
             raise OptionError(f"--reference-frames {args.reference_frames}: the reference is two equal halves; "
                               f"give an even number")
-        for option, value in (("--ppd", args.ppd), ("--tolerance", args.tolerance),
-                              ("--bounce-tolerance", args.bounce_tolerance)):
-            if value is not None and not value > 0:
-                raise OptionError(f"{option} {value}: must be > 0")
-        if args.warmup_s is not None and args.warmup_s < 0:
-            raise OptionError(f"--warmup-s {args.warmup_s}: must be >= 0")
         get_preset(args.preset)
         metrics = parse_list(args.metrics, "--metrics", str.lower)
         for m in metrics:
@@ -161,10 +182,14 @@ class StudyPlan:
         self.cache = False if args.no_cache else args.cache
         self.note = d.note(chosen) if chosen else None
         self.report = Path(args.report) if args.report else None
-        if self.report is not None:
-            from ..fileio import check_folder_target
+        from ..fileio import check_writable
 
-            check_folder_target(self.report)
+        if self.report is not None:
+            check_writable(self.report, "--report", folder=True)
+        if self.cache is not False:
+            from ..tune.reference import default_cache_dir
+
+            check_writable(self.cache or default_cache_dir(), "--cache", folder=True)
         self.configs_file = args.configs
         self.reflect = args.reflect
         self.progress = not args.quiet
@@ -181,6 +206,7 @@ class StudyPlan:
 
 
 def run(args) -> int:
+    from ..cluster.cli import study_runner
     from ..gpu import get_context
     from ..tune import measure, write_report
     from .options import load_scene_arg
@@ -190,8 +216,10 @@ def run(args) -> int:
     configs = plan.configs(scene)
     if plan.note:
         print(plan.note)
-    results = measure(scene, configs, views=plan.views, size=plan.size, reference=plan.reference,
-                      settings=plan.settings, cache_dir=plan.cache, progress=plan.progress, notes=plan.notes())
+    with study_runner(args, args.scene, scene, plan.progress) as runner:
+        results = measure(scene, configs, views=plan.views, size=plan.size, reference=plan.reference,
+                          settings=plan.settings, cache_dir=plan.cache, progress=plan.progress, notes=plan.notes(),
+                          runner=runner)
     print_summary(results)
     if plan.report is not None:
         print(f"wrote {write_report(results, plan.report)}")

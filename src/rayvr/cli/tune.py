@@ -7,8 +7,10 @@ error against the converged, checked reference, split by material), chooses gree
 (rayvr.tune.budget), then the study (`rayvr converge`) measures the standard configurations and
 the tuned assignment alike. Prints the table and the assignment; with --report writes the study's
 report (report.md, report.html, results.json, plots, images) plus tune.json into DIR, all at
-once. The budget holds for the size and views given: tune at the headset's resolution on the GPU
-that will render it.
+once (a failure or Ctrl-C leaves none of it). Options are checked before any rendering, as
+`rayvr converge` checks them; --workers N (or --address) runs the reference, the probe and the
+rows on a Ray cluster. The budget holds for the size and views given: tune at the headset's
+resolution on the GPU that will render it.
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ import json
 
 from ..errors import OptionError
 from .converge import StudyPlan, add_study_arguments, parse_list, print_summary
+from .options import number
 
 TUNE_METRICS = ("flip", "relmse")          # the tuner's: per-pixel error maps
 
@@ -23,7 +26,8 @@ TUNE_METRICS = ("flip", "relmse")          # the tuner's: per-pixel error maps
 def register(sub) -> None:
     p = sub.add_parser("tune", help="fit per-material effects to a GPU frame budget, beside the error study")
     add_study_arguments(p)
-    p.add_argument("--budget-ms", type=float, default=11.1, help="GPU ms per frame (default 11.1: 90 Hz)")
+    p.add_argument("--budget-ms", type=number("--budget-ms", 0, 1e6, low_open=True, unit=" ms"), default=11.1,
+                   help="GPU ms per frame, > 0 (default 11.1: 90 Hz)")
     p.add_argument("--metric", default="flip", choices=TUNE_METRICS,
                    help="error the tuner minimises (default flip: displayed-image FLIP)")
     p.add_argument("--levels", default="raster,shadows,reflections,path_traced",
@@ -32,14 +36,13 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    from ..cluster.cli import study_runner
     from ..gpu import get_context
     from ..materials.effect import Effect
-    from ..tune import cached_reference, make_views, write_report
+    from ..tune import make_views, write_report
     from ..tune.tuner import tuned_study
     from .options import load_scene_arg
 
-    if not args.budget_ms > 0:
-        raise OptionError(f"--budget-ms {args.budget_ms}: the budget must be > 0 ms (11.1 at 90 Hz)")
     levels = parse_list(args.levels, "--levels", lambda s: Effect.parse(s, where="--levels"))
     gpu = get_context()
     plan = StudyPlan(args, gpu)
@@ -50,10 +53,12 @@ def run(args) -> int:
     if plan.note:
         print(plan.note)
     view_set = make_views(scene, plan.views, plan.size)
-    ref = cached_reference(scene, view_set, plan.reference, plan.cache, gpu, tick=_reference_bar(plan, scene))
-    results, by_budget = tuned_study(scene, view_set, ref, plan.settings, configs, [args.budget_ms], args.metric,
-                                     levels, cache_dir=plan.cache, progress=plan.progress, gpu=gpu,
-                                     notes=plan.notes(), budget_option="--budget-ms")
+    with study_runner(args, args.scene, scene, plan.progress) as runner:
+        tick = None if runner.shows_progress else _reference_bar(plan, scene)
+        ref = runner.reference(scene, view_set, plan.reference, plan.cache, eps=plan.settings.eps, gpu=gpu, tick=tick)
+        results, by_budget = tuned_study(scene, view_set, ref, plan.settings, configs, [args.budget_ms], args.metric,
+                                         levels, cache_dir=plan.cache, progress=plan.progress, gpu=gpu,
+                                         notes=plan.notes(), budget_option="--budget-ms", runner=runner)
     tuned = by_budget[float(args.budget_ms)]
     print_summary(results)
     print()

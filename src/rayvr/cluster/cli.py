@@ -1,18 +1,19 @@
-"""`--workers N` / `--address ADDR` for the rayvr subcommands (render, tune; converge can use the
-same three functions): the options, the Cluster they ask for, and the subcommands' cluster paths.
-Nothing here imports Ray unless the options ask for a cluster."""
+"""`--workers N` / `--address ADDR` for the rayvr subcommands (render, converge, tune): the
+options, the Cluster they ask for, and the subcommands' cluster paths. Nothing here imports Ray
+unless the options ask for a cluster."""
 from __future__ import annotations
 
 import contextlib
-import functools
 
-from ..errors import OptionError
+MAX_WORKERS = 1024
 
 
 def add_arguments(parser) -> None:
     """Add --workers and --address to a subcommand's parser."""
+    from ..cli.options import integer
+
     group = parser.add_argument_group("cluster (needs the cluster extra: pip install 'rayvr[cluster]')")
-    group.add_argument("--workers", type=int, metavar="N",
+    group.add_argument("--workers", type=integer("--workers", 1, MAX_WORKERS), metavar="N",
                        help="split the work over N Ray workers, one GPU each (llvmpipe without GPUs)")
     group.add_argument("--address", metavar="ADDR",
                        help="an existing Ray cluster ('auto', host:6379, ray://host:10001); default: a local one")
@@ -27,8 +28,6 @@ def open_cluster(args):
     """The Cluster the options ask for (ClusterError with the install hint without Ray)."""
     from .ray_support import require_ray
 
-    if args.workers is not None and args.workers < 1:
-        raise OptionError(f"--workers {args.workers}: need at least 1 worker")
     require_ray("--workers" if args.workers is not None else "--address")
     from .pool import Cluster
 
@@ -76,20 +75,20 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
 
 
 @contextlib.contextmanager
-def tune_functions(args, spec, scene):
-    """(probe_cost_model, measure) for `rayvr tune`: rayvr.tune's own, or with --workers the
-    cluster's (the reference split by samples, the probe on one worker, the configurations
-    split over all, each row naming the worker that timed it)."""
+def study_runner(args, spec, scene, progress: bool = True):
+    """Where `rayvr converge` and `rayvr tune` run the error study: here
+    (rayvr.tune.runner.LocalRunner), or with --workers/--address on the cluster
+    (rayvr.cluster.StudyRunner: references split by samples, the probe on one worker, the
+    configurations over all, each row naming the worker that timed it). `spec`: the scene as
+    given on the command line (a glTF file travels as its bytes)."""
     if not requested(args):
-        from ..tune import measure
-        from ..tune.probe import probe_cost_model
+        from ..tune.runner import LocalRunner
 
-        yield probe_cost_model, measure
+        yield LocalRunner()
         return
-    from . import jobs
     from .payload import ScenePayload, effects_of
+    from .study import StudyRunner
 
     payload = ScenePayload.of(spec, effects_of(scene))
     with open_cluster(args) as cluster:
-        yield (functools.partial(jobs.probe_cost_model, cluster=cluster, payload=payload),
-               functools.partial(jobs.measure, cluster=cluster, payload=payload))
+        yield StudyRunner(cluster, payload, progress)

@@ -8,8 +8,9 @@ size), each with its own copy of the graph, and their temporal state (Accumulate
 at the start of every share.
 
 Job methods (called through `run`): `samples` (a frame range of a progressive render),
-`views` (some views of a frame), `frames` (a frame range of a trajectory sequence), `measure`
-(rayvr.tune.measure of one configuration), `probe` (rayvr.tune.probe_cost_model).
+`views` (some views of a frame), `frames` (a frame range of a trajectory sequence), and the
+error study's (rayvr.cluster.study): `measure` (one configuration's row), `curve` (one
+progressive curve), `probe` (rayvr.tune.probe.probe_cost_model).
 """
 from __future__ import annotations
 
@@ -204,23 +205,34 @@ class RenderWorker:
                 "seconds": time.perf_counter() - t0, "rendered": int(first) + int(count) - start,
                 "worker": self.describe()}
 
-    def job_measure(self, scene, config, reference, views, **kwargs) -> dict:
-        """rayvr.tune.measure of one configuration on this worker's GPU; the row names it."""
-        from ..tune import measure
+    def job_measure(self, scene, study: dict, config, reference, motion_references: dict, floor=None) -> dict:
+        """One configuration's row of the error study (rayvr.tune.measure.Study.row, `study` its
+        spec) on this worker's GPU, naming this worker (`timed_on`); a floor rendered here (none
+        was given: a worker has no cache) comes back for the driver's cache."""
+        from ..tune.configs import effects_restored
+        from ..tune.measure import Study
 
-        self._tick(0)
-        results = measure(scene[1], [config], reference=reference, views=views, progress=False, gpu=self.gpu,
-                          **kwargs)
-        row = results.rows[0]
+        s = Study.from_spec(scene[1], study, self.gpu)
+        with effects_restored(scene[1]):
+            row = s.row(config, reference, motion_references, floor)
         row.timed_on = self.describe()
         self._tick()
-        return {"row": row, "info": results.info}
+        return {"row": row, "method": s.method, "floor": s.new_floors.get(config.name)}
 
-    def job_probe(self, scene, views, builder, options: dict, reference, **kwargs) -> dict:
-        """rayvr.tune.probe_cost_model on this worker's GPU."""
+    def job_curve(self, scene, study: dict, name: str, options: dict, reference) -> dict:
+        """One progressive curve of the error study (rayvr.tune.measure.Study.curve) on this GPU."""
+        from ..tune.measure import Study
+
+        curve = Study.from_spec(scene[1], study, self.gpu).curve(name, options, reference)
+        curve.timed_on = self.describe()
+        self._tick()
+        return {"curve": curve}
+
+    def job_probe(self, scene, views, builder, options: dict, judge, **kwargs) -> dict:
+        """rayvr.tune.probe.probe_cost_model (its keywords) on this worker's GPU."""
         from ..tune.probe import probe_cost_model
 
-        model, _, pin = probe_cost_model(scene[1], views, builder, options, reference=reference, progress=False,
-                                         gpu=self.gpu, **kwargs)
+        model, pin = probe_cost_model(scene[1], views, builder, options, judge, progress=False, gpu=self.gpu,
+                                      **kwargs)
         self._tick()
         return {"model": model, "pin": pin, "worker": self.describe()}

@@ -91,16 +91,29 @@ def bias_floor(scene, config, view_set, frames: int, cache_dir=None, gpu=None, t
     frames = even_frames(frames)
     if cache_dir is False:
         return render_floor(scene, config, view_set, frames, gpu, tick)
-    path = floor_path(scene, config, view_set, frames, cache_dir)
+    floor = load_floor(scene, config, view_set, frames, cache_dir)
+    if floor is None:
+        floor = render_floor(scene, config, view_set, frames, gpu, tick)
+        store_floor(scene, config, view_set, floor, cache_dir)
+    return floor
+
+
+def load_floor(scene, config, view_set, frames: int, cache_dir=None) -> Floor | None:
+    """The cached floor of `config` over `frames` frames, or None when it is not in the cache."""
+    path = floor_path(scene, config, view_set, even_frames(frames), cache_dir)
     cached = load_halves(path)
-    if cached is not None:
-        image, a, b, meta = cached
-        return Floor(config.name, image, a, b, int(meta["frames"]), int(meta["first_frame"]), 0.0, str(path))
-    floor = render_floor(scene, config, view_set, frames, gpu, tick)
+    if cached is None:
+        return None
+    image, a, b, meta = cached
+    return Floor(config.name, image, a, b, int(meta["frames"]), int(meta["first_frame"]), 0.0, str(path))
+
+
+def store_floor(scene, config, view_set, floor: Floor, cache_dir=None) -> None:
+    """Put a rendered floor into the cache (atomically); its `source` becomes the cache file."""
+    path = floor_path(scene, config, view_set, floor.frames, cache_dir)
     store_halves(path, floor.image, floor.half_a, {"config": config.name, "frames": floor.frames,
                                                     "first_frame": floor.first_frame, "seconds": floor.seconds})
     floor.source = str(path)
-    return floor
 
 
 def floor_path(scene, config, view_set, frames: int, cache_dir=None) -> Path:

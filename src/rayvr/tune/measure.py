@@ -18,12 +18,14 @@ Then the progressive-convergence curves (rayvr.tune.progressive.progressive_curv
 The reference (rayvr.tune.reference) is converged and checked; every render has its own seeds
 (rayvr.tune.seeds). The displayed images go through one fixed tone mapping
 (rayvr.tune.display); FLIP uses the headset preset's pixels per degree. The scene's material
-effects are restored afterwards.
+effects are restored afterwards. A runner (rayvr.tune.runner) says where the steps run: here, or
+with rayvr.cluster's StudyRunner on Ray workers (each row then names the worker that timed it).
 """
 from __future__ import annotations
 
 import dataclasses
 import math
+import time
 
 import numpy as np
 
@@ -32,13 +34,13 @@ from ..materials.effect import Effect
 from . import seeds
 from .configs import Config, effects_restored, path_traced_graph
 from .display import Display, clamp_negative
-from .floor import bias_floor, even_frames, floor_path
+from .floor import bias_floor, even_frames, floor_path, load_floor, store_floor
 from .metrics import DEFAULT_EPS, METRICS, check_metrics, evaluate
 from .motion import Motion, along, trajectory_views
 from .progress import StudyProgress
 from .reference import Reference, ReferenceSettings, is_cached
-from .reference import cached_reference
 from .results import Results, Row, summarize
+from .runner import LocalRunner
 from .timing import default_warmup_s, make_views, timed_frames
 
 MOTION_FIRST_FRAME = seeds.TEST + seeds.RANGE // 2     # inside the test range, apart from the static frames
@@ -131,16 +133,19 @@ def check_configs(scene, configs) -> list[Config]:
 
 def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings | Reference | None = None,
             settings: StudySettings = StudySettings(), cache_dir=None, progress: bool = True, gpu=None,
-            curves: bool = True, notes=()) -> Results:
+            curves: bool = True, notes=(), runner=None) -> Results:
     """Run the error study (module docstring) and return its Results.
 
     `views`: a ViewSet, or a view count from the scene's camera at `size` per view.
     `reference`: ReferenceSettings to render (or load from `cache_dir`; False: no cache) the
     reference with, or a Reference already made for these views. `curves`: the progressive
-    curves. `notes`: lines for the report (e.g. why these sizes were chosen)."""
+    curves. `notes`: lines for the report (e.g. why these sizes were chosen). `runner`: where
+    the steps run (default rayvr.tune.runner.LocalRunner: here, on `gpu`)."""
     from ..gpu import get_context
 
+    t0 = time.perf_counter()
     gpu = gpu or get_context()
+    runner = runner or LocalRunner()
     configs = check_configs(scene, configs)
     view_set = make_views(scene, views, size)
     ppd = settings.pixels_per_degree()
@@ -152,25 +157,26 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
                           f"{given.image.shape[1]}, the study renders {len(view_set)} of "
                           f"{view_set.size[0]}x{view_set.size[1]}")
     motion = settings.motion
-    motion_frames = trajectory_views(view_set, motion) if motion else []
-    study = _Study(scene, view_set, ref_settings, settings, ppd, warmup_s, cache_dir, gpu,
-                   StudyProgress(progress, f"error study {scene.name}"))
-    study.plan(configs, given is None, motion_frames, curves)
+    study = Study(scene, view_set, ref_settings, settings, ppd, warmup_s, cache_dir, gpu,
+                  StudyProgress(progress and not runner.shows_progress, f"error study {scene.name}"), runner)
+    study.plan(configs, given is None, curves)
     with effects_restored(scene), study.progress:
         ref = given or study.reference(0, view_set, "reference")
         study.display = settings.display.fixed(ref.image)
         halves, _, _ = study.judge(ref.half_a, ref.half_b, "reference half A")
-        motion_refs = [(i, study.reference(k + 1, _views(motion_frames[i]), f"reference of trajectory frame {i}"))
+        motion_refs = [(i, study.reference(k + 1, _views(study.motion_frames[i]),
+                                           f"reference of trajectory frame {i}"))
                        for k, i in enumerate(motion.sample_frames())] if motion else []
-        rows = [study.row(c, ref, motion_frames, dict(motion_refs)) for c in configs]
-        made = study.curves(ref) if curves and settings.progressive_frames else []
+        rows = runner.rows(study, configs, ref, dict(motion_refs))
+        made = runner.curves(study, ref) if curves and settings.progressive_frames else []
     info = {"scene": scene.name, "views": len(view_set), "size": list(view_set.size), "preset": settings.preset,
             "ppd": ppd, "ppd_source": "given" if settings.ppd else f"preset '{settings.preset}' (resolution / fov)",
             "display": study.display.as_dict(), "display_text": study.display.describe(), "eps": settings.eps,
             "timing": study.method or "?", "warmup_s": warmup_s, "device": gpu.caps.renderer,
-            "software": bool(gpu.caps.is_software), "settings": settings.as_dict(), "notes": list(notes),
+            "software": bool(gpu.caps.is_software), "workers": sorted({r.timed_on for r in rows if r.timed_on}),
+            "settings": settings.as_dict(), "notes": list(notes),
             "reference_halves": {m: float(np.mean(v)) for m, v in halves.items()},
-            "seconds": study.progress.spent, "metric_descriptions": {m: d for m, d in _descriptions().items()
+            "seconds": time.perf_counter() - t0, "metric_descriptions": {m: d for m, d in _descriptions().items()
                                                                       if m in settings.metrics}}
     return Results(ref, rows, made, info, motion_refs)
 
@@ -187,29 +193,55 @@ def _views(views: list):
     return ViewSet(views)
 
 
-class _Study:
-    """One run of `measure`: shared state, the progress plan, and the steps."""
+class Study:
+    """One run of `measure`: shared state, the progress plan, and the steps. A cluster worker
+    makes its own from `spec()` (`Study.from_spec`) to run `row` and `curve` on its GPU; floors
+    it renders without a cache are kept in `new_floors` for the driver's cache."""
 
-    def __init__(self, scene, view_set, ref_settings, settings, ppd, warmup_s, cache_dir, gpu, progress):
+    def __init__(self, scene, view_set, ref_settings, settings, ppd, warmup_s, cache_dir, gpu, progress,
+                 runner=None, motion_frames=None):
         self.scene, self.view_set, self.ref_settings, self.s = scene, view_set, ref_settings, settings
         self.ppd, self.warmup_s, self.cache_dir, self.gpu, self.progress = ppd, warmup_s, cache_dir, gpu, progress
+        self.runner = runner or LocalRunner()
         self.pixels = len(view_set) * view_set.size[0] * view_set.size[1]
         self.metric_units = self.pixels * sum(METRIC_COST[m] for m in settings.metrics)
+        if motion_frames is None:
+            motion_frames = trajectory_views(view_set, settings.motion) if settings.motion else []
+        self.motion_frames = motion_frames          # the views of every trajectory frame
         self.display = None
         self.method = None
+        self.keep_floors = False        # keep floors rendered without a cache in new_floors
+        self.new_floors: dict = {}      # configuration name -> Floor
+
+    def spec(self) -> dict:
+        """What a worker needs to run this study's rows and curves (after the display is fixed;
+        the trajectory's views travel made, as a pose log may exist only on this machine)."""
+        return {"view_set": self.view_set, "ref_settings": self.ref_settings, "settings": self.s, "ppd": self.ppd,
+                "display": self.display, "motion_frames": self.motion_frames}
+
+    @classmethod
+    def from_spec(cls, scene, spec: dict, gpu) -> "Study":
+        """A study of `spec` on `gpu` (its own warm-up default, no cache, no progress bar)."""
+        s = spec["settings"]
+        warmup_s = default_warmup_s(gpu) if s.warmup_s is None else float(s.warmup_s)
+        study = cls(scene, spec["view_set"], spec["ref_settings"], s, spec["ppd"], warmup_s, False, gpu,
+                    StudyProgress(False), motion_frames=spec["motion_frames"])
+        study.display = spec["display"]
+        study.keep_floors = True
+        return study
 
     # -- planning ----------------------------------------------------------------------------
     def _reference_units(self) -> float:
         r = self.ref_settings
         return self.pixels * r.spp * (r.frames + r.bounce_check_frames)
 
-    def plan(self, configs, render_reference: bool, motion_frames, curves: bool) -> None:
+    def plan(self, configs, render_reference: bool, curves: bool) -> None:
         p, s = self.progress, self.s
         if render_reference and not is_cached(self.scene, self.view_set, self.ref_settings, self.cache_dir):
             p.plan("render", self._reference_units())
         if s.motion:
             for k, i in enumerate(s.motion.sample_frames()):
-                if not is_cached(self.scene, _views(motion_frames[i]), self.ref_settings, self.cache_dir, k + 1):
+                if not is_cached(self.scene, _views(self.motion_frames[i]), self.ref_settings, self.cache_dir, k + 1):
                     p.plan("render", self._reference_units())
         for c in configs:
             cost = frame_cost(c, self.scene) * self.pixels
@@ -223,7 +255,7 @@ class _Study:
             if s.floors and not self._floor_cached(c):
                 p.plan("render", cost * floor_frames(c, self.ref_settings, s.floor_fraction))
         if curves and s.progressive_frames:
-            for _ in self._curve_graphs():
+            for _ in self.curve_graphs():
                 p.plan("curve", self._curve_units())
 
     def _curve_units(self) -> float:
@@ -235,22 +267,34 @@ class _Study:
         return (PRIOR["render"] * self.pixels * (s.warmup + s.timing_frames + s.progressive_frames)
                 + PRIOR["metric"] * self.metric_units * len(snapshot_counts(s.progressive_frames)))
 
+    def _floor_frames(self, config) -> int:
+        return floor_frames(config, self.ref_settings, self.s.floor_fraction)
+
     def _floor_cached(self, config) -> bool:
         if self.cache_dir is False:
             return False
-        frames = floor_frames(config, self.ref_settings, self.s.floor_fraction)
-        return floor_path(self.scene, config, self.view_set, frames, self.cache_dir).exists()
+        return floor_path(self.scene, config, self.view_set, self._floor_frames(config), self.cache_dir).exists()
+
+    def cached_floor(self, config):
+        """`config`'s floor from the cache, or None (not there, or no cache)."""
+        if self.cache_dir is False:
+            return None
+        return load_floor(self.scene, config, self.view_set, self._floor_frames(config), self.cache_dir)
+
+    def store_floor(self, config, floor) -> None:
+        """Put a floor rendered elsewhere (a worker) into this study's cache."""
+        if self.cache_dir is not False:
+            store_floor(self.scene, config, self.view_set, floor, self.cache_dir)
 
     # -- steps -------------------------------------------------------------------------------
     def reference(self, sample: int, view_set, label: str) -> Reference:
         r = self.ref_settings
-        cached = is_cached(self.scene, view_set, r, self.cache_dir, sample)
-        if cached:
-            return cached_reference(self.scene, view_set, r, self.cache_dir, self.gpu, sample=sample, eps=self.s.eps)
+        if is_cached(self.scene, view_set, r, self.cache_dir, sample):
+            return self.runner.reference(self.scene, view_set, r, self.cache_dir, sample, self.s.eps, self.gpu)
         total = r.frames + r.bounce_check_frames
         with self.progress.step("render", self._reference_units(), label) as tick:
-            return cached_reference(self.scene, view_set, r, self.cache_dir, self.gpu, tick=lambda n: tick(n / total),
-                                 sample=sample, eps=self.s.eps)
+            return self.runner.reference(self.scene, view_set, r, self.cache_dir, sample, self.s.eps, self.gpu,
+                                         tick=lambda n: tick(n / total))
 
     def judge(self, image, reference_image, name: str, maps: bool = False):
         """(per-view metrics, maps, negative values) of `image`: negative radiance is judged as
@@ -260,7 +304,9 @@ class _Study:
                                   names=(name, "reference"), which=self.s.metrics, maps=maps)
         return per_view, maps, negatives
 
-    def row(self, config: Config, ref: Reference, motion_frames, motion_refs: dict) -> Row:
+    def row(self, config: Config, ref: Reference, motion_refs: dict, floor=None) -> Row:
+        """`config` measured: timing, the judged frames, in motion, its bias floor (`floor`: one
+        already loaded, else from the cache or rendered)."""
         from ..renderer import Renderer
 
         s, p = self.s, self.progress
@@ -296,12 +342,12 @@ class _Study:
                   s.frames, len(self.view_set), tuple(self.view_set.size), summarize(samples), image=first,
                   maps=first_maps, negative_values=negatives)
         if s.motion:
-            row.motion, row.motion_image = self.motion_row(config, motion_frames, motion_refs, cost)
+            row.motion, row.motion_image = self.motion_row(config, motion_refs, cost)
         if s.floors:
-            row.floor, row.floor_image = self.floor_row(config, ref, cost)
+            row.floor, row.floor_image = self.floor_row(config, ref, cost, floor)
         return row
 
-    def motion_row(self, config: Config, motion_frames, motion_refs: dict, cost: float):
+    def motion_row(self, config: Config, motion_refs: dict, cost: float):
         from ..renderer import Renderer
 
         s, p = self.s, self.progress
@@ -312,7 +358,7 @@ class _Study:
         with p.step("setup", 1, label):
             r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=MOTION_FIRST_FRAME)
         with r:
-            for i, views in enumerate(along(motion_frames)):
+            for i, views in enumerate(along(self.motion_frames)):
                 with p.step("render", cost, label):
                     r.render(views)
                     image = r.read_output(pin, flip_y=True) if i in motion_refs else None
@@ -325,41 +371,40 @@ class _Study:
                     last = image
         return {**s.motion.as_dict(), **summarize(samples), "negative_values": negatives}, last
 
-    def floor_row(self, config: Config, ref: Reference, cost: float):
-        frames = floor_frames(config, self.ref_settings, self.s.floor_fraction)
+    def floor_row(self, config: Config, ref: Reference, cost: float, floor=None):
+        frames = self._floor_frames(config)
         label = f"{config.name} converged (bias floor)"
-        cached = self._floor_cached(config)
-        if cached:
+        if floor is None and self._floor_cached(config):
             floor = bias_floor(self.scene, config, self.view_set, frames, self.cache_dir, self.gpu)
-        else:
+        elif floor is None:
             with self.progress.step("render", cost * frames, label) as tick:
                 floor = bias_floor(self.scene, config, self.view_set, frames, self.cache_dir, self.gpu,
                                    tick=lambda n: tick(n / frames))
+            if self.keep_floors and self.cache_dir is False:
+                self.new_floors[config.name] = floor
         out = floor.against(ref)
         per_view, _, _ = self.judge(floor.image, ref.image, f"floor of '{config.name}'")
         out.update({m: float(np.mean(v)) for m, v in per_view.items()})
         return out, floor.image
 
     # -- progressive curves ------------------------------------------------------------------
-    def _curve_graphs(self):
+    def curve_graphs(self) -> list:
         """(name, builder options) of the progressive renders: raw path tracing and, where the
         path-traced graph takes `denoise=`, each denoiser."""
         from .configs import available_denoisers
 
         base = {"spp": 1, "max_bounces": self.ref_settings.max_bounces}
-        yield "path tracing + Accumulate", base
-        for d in available_denoisers(path_traced_graph):
-            yield f"path tracing + Accumulate + {d.upper()}", {**base, "denoise": d}
+        return [("path tracing + Accumulate", base)] + [
+            (f"path tracing + Accumulate + {d.upper()}", {**base, "denoise": d})
+            for d in available_denoisers(path_traced_graph)]
 
-    def curves(self, ref: Reference) -> list:
+    def curve(self, name: str, options: dict, ref: Reference):
+        """The progressive curve of `path_traced_graph(**options)` (rayvr.tune.progressive)."""
         from .progressive import progressive_curve
 
-        out = []
-        for name, options in self._curve_graphs():
-            s = self.s
-            with self.progress.step("curve", self._curve_units(), name) as tick:
-                out.append(progressive_curve(self.scene, name, path_traced_graph(**options), options, self.view_set,
-                                             s.progressive_frames, ref, self.judge, s.timing_frames, s.warmup,
-                                             self.warmup_s, PROGRESSIVE_FIRST_FRAME, self.gpu,
-                                             tick=lambda n: tick(n / s.progressive_frames)))
-        return out
+        s = self.s
+        with self.progress.step("curve", self._curve_units(), name) as tick:
+            return progressive_curve(self.scene, name, path_traced_graph(**options), options, self.view_set,
+                                     s.progressive_frames, ref, self.judge, s.timing_frames, s.warmup,
+                                     self.warmup_s, PROGRESSIVE_FIRST_FRAME, self.gpu,
+                                     tick=lambda n: tick(n / s.progressive_frames))

@@ -36,6 +36,7 @@ from .display import LUMINANCE
 
 CACHE_VERSION = 2          # bump when a change to the renderer changes what a reference shows
 NAME = "path-traced reference"
+PIN = "Accumulate.dst"     # the reference graph's running mean
 
 
 @dataclasses.dataclass(frozen=True)
@@ -207,11 +208,11 @@ def render_reference(scene, view_set, settings: ReferenceSettings = ReferenceSet
     first = seeds.reference_first_frame() if first_frame is None else int(first_frame)
     half, check = settings.frames // 2, settings.bounce_check_frames
     t0 = time.perf_counter()
-    shots = render_mean(scene, reference_graph(settings), "Accumulate.dst", view_set, settings.frames, first,
+    shots = render_mean(scene, reference_graph(settings), PIN, view_set, settings.frames, first,
                         snapshots=(check, half), gpu=gpu, tick=tick)
     by_frames = {s.frames: s.image for s in shots}
     a, b = split_halves(by_frames[half], by_frames[settings.frames])
-    more = render_mean(scene, reference_graph(settings, settings.max_bounces + 1), "Accumulate.dst", view_set,
+    more = render_mean(scene, reference_graph(settings, settings.max_bounces + 1), PIN, view_set,
                        check, first, gpu=gpu,
                        tick=None if tick is None else (lambda n: tick(settings.frames + n)))[-1].image
     change = relative_change(more, by_frames[check])
@@ -227,19 +228,23 @@ def relative_change(image: np.ndarray, base: np.ndarray) -> float:
 
 
 def cached_reference(scene, view_set, settings: ReferenceSettings = ReferenceSettings(), cache_dir=None, gpu=None,
-                     tick=None, sample: int = 0, eps: float = 1e-2) -> Reference:
+                     tick=None, sample: int = 0, eps: float = 1e-2, render=None) -> Reference:
     """The reference of `scene` seen by `view_set`: from the cache when there, else rendered
     and stored (`cache_dir=False` disables the cache). `sample` picks the seed range (0 for the
-    static view, k for trajectory sample k)."""
+    static view, k for trajectory sample k). `render(first_frame) -> Reference` renders a
+    missing one (default: `render_reference` on `gpu`; rayvr.cluster splits it over workers)."""
     first = seeds.reference_first_frame(sample)
+    if render is None:
+        def render(first_frame: int) -> Reference:
+            return render_reference(scene, view_set, settings, first_frame, gpu, tick, eps)
     if cache_dir is False:
-        return render_reference(scene, view_set, settings, first, gpu, tick, eps)
+        return render(first)
     path = cache_path(scene, view_set, settings, first, cache_dir)
     cached = load_halves(path)
     if cached is not None:
         image, a, b, meta = cached
         return Reference(image, a, b, settings, first, float(meta["bounce_change"]), 0.0, str(path), eps)
-    ref = render_reference(scene, view_set, settings, first, gpu, tick, eps)
+    ref = render(first)
     store_halves(path, ref.image, ref.half_a, {"scene": scene.name, "views": len(view_set),
                                                "size": list(view_set.size), "first_frame": first,
                                                "bounce_change": ref.bounce_change, "seconds": ref.seconds,

@@ -3,8 +3,9 @@
 `Results.as_dict()` is results.json (docs/CONTRACTS.md): {"reference": {...}, "rows": [...],
 "progressive": [...], "study": {...}} and, after `rayvr tune`, "tuned". Each row: `name`,
 `gpu_ms`, every metric as {"mean", "std"} over the judged frames and views, `frames`, `views`,
-`size`, `settings`, and `motion` (the same metrics along the trajectory) and `floor` (the
-configuration's converged image against the reference).
+`size`, `settings`, and `motion` (the same metrics along the trajectory), `floor` (the
+configuration's converged image against the reference) and `timed_on` (the cluster worker that
+measured it; None in one process).
 """
 from __future__ import annotations
 
@@ -49,6 +50,7 @@ class Row:
     floor: dict | None = None     # see rayvr.tune.floor.Floor.against, plus its metrics
     tuned: bool = False
     negative_values: int = 0      # negative radiance values judged as 0 (as the tone mapper shows them)
+    timed_on: str | None = None   # the worker (label, GPU, renderer, host) that measured it on a cluster
     image: object = None          # the first judged frame (views, h, w, 4), for the report
     maps: dict = dataclasses.field(default_factory=dict)   # its per-pixel error maps
     floor_image: object = None
@@ -63,7 +65,7 @@ class Row:
         d["per_view"] = {m: v["per_view"] for m, v in self.errors.items()}
         d.update({"frames": self.frames, "views": self.views, "size": list(self.size), "settings": self.settings,
                   "motion": self.motion, "floor": self.floor, "tuned": self.tuned,
-                  "negative_values": self.negative_values})
+                  "negative_values": self.negative_values, "timed_on": self.timed_on})
         return d
 
 
@@ -75,6 +77,7 @@ class Curve:
     settings: dict
     gpu_ms_per_frame: float
     points: list                  # {"frames", "wall_s", "gpu_s", metric: value, ...}
+    timed_on: str | None = None   # the cluster worker that rendered it (None in one process)
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -154,16 +157,19 @@ class Results:
     # -- text --------------------------------------------------------------------------------
     def table_data(self) -> tuple[list[str], list[list[str]]]:
         """(columns, cells): configuration, GPU ms, each metric as mean ± std over the judged
-        frames and views, FLIP in motion, the floor's relMSE and how much of it is bias."""
+        frames and views, FLIP in motion, the floor's relMSE and how much of it is bias, and the
+        worker that timed it when a cluster did."""
         metrics = self.metrics()
+        timed_on = any(r.timed_on for r in self.rows)
         cols = ["configuration", "GPU ms", *(METRICS[m] for m in metrics), "FLIP in motion", "floor relMSE",
-                "floor bias"]
+                "floor bias", *(["timed on"] if timed_on else [])]
         rows = []
         for r in self.rows:
             floor = r.floor or {}
             bias = "-" if not floor else ("within noise" if floor["within_noise"] else fmt(floor["bias_relmse"], 3))
             rows.append([r.name, fmt(r.gpu_ms, 4), *(fmt_stat(r.errors.get(m)) for m in metrics),
-                         fmt_stat((r.motion or {}).get("flip")), fmt(floor.get("relmse"), 3), bias])
+                         fmt_stat((r.motion or {}).get("flip")), fmt(floor.get("relmse"), 3), bias,
+                         *([fmt(r.timed_on)] if timed_on else [])])
         return cols, rows
 
     def settings_data(self) -> tuple[list[str], list[list[str]]]:

@@ -83,25 +83,29 @@ def _target(renderer_or_scene, size, views, graph, gpu):
 
 def tuned_study(scene, view_set, reference: Reference, settings, configs, budgets=(11.1,), metric: str = "flip",
                 levels=tuple(Effect), trials: int = 2, cache_dir=None, progress: bool = True, gpu=None,
-                notes=(), budget_option: str = "budget_ms"):
+                notes=(), budget_option: str = "budget_ms", runner=None):
     """The error study with the tuner on top: probe a cost model against `reference` (judged as
     the study judges), choose effects for each of `budgets`, and measure `configs` plus one
     "tuned for B ms" row per budget alike. Returns (Results, {budget: TuneResult}); each
     TuneResult records its row's measured ms and error (a note names `budget_option` when the
-    row runs over), and Results.tuned is the first."""
+    row runs over), and Results.tuned is the first. `runner`: where the probe and the study run
+    (default here; rayvr.cluster.StudyRunner: the probe on one worker, the rows over all)."""
     from .configs import Config
     from .measure import measure
+    from .runner import LocalRunner
 
+    runner = runner or LocalRunner()
     judge = ErrorJudge(reference, settings.display.fixed(reference.image), settings.pixels_per_degree(), metric,
                        settings.eps)
     options = {"path_bounces": reference.settings.max_bounces}
-    model, _ = probe_cost_model(scene, view_set, hybrid_graph, options, judge, levels, settings.timing_frames,
-                                settings.warmup, settings.warmup_s, trials, progress, gpu)
+    model, _ = runner.probe(scene, view_set, hybrid_graph, options, judge, levels=levels, frames=settings.timing_frames,
+                            warmup=settings.warmup, warmup_s=settings.warmup_s, trials=trials, progress=progress,
+                            gpu=gpu)
     tuned = {float(b): choose_effects(model, b, levels) for b in budgets}
     names = {b: f"tuned for {b:g} ms" for b in tuned}
     rows = list(configs) + [Config(names[b], dict(t.assignment), options=dict(options)) for b, t in tuned.items()]
     results = measure(scene, rows, views=view_set, reference=reference, settings=settings, cache_dir=cache_dir,
-                      progress=progress, gpu=gpu, notes=notes)
+                      progress=progress, gpu=gpu, notes=notes, runner=runner)
     for b, t in tuned.items():
         row = results[names[b]]
         row.tuned = True

@@ -1,0 +1,39 @@
+"""Where the error study's steps run.
+
+`rv.tune.measure` and the tuner (`tuner.tuned_study`) hand four kinds of step to a runner:
+the references (`reference`: cached or rendered), the cost-model probe (`probe`), the
+configurations' rows (`rows`) and the progressive curves (`curves`). `LocalRunner` runs them all
+in this process on one GPU; `rayvr.cluster.StudyRunner` has the same methods and runs them on
+Ray workers (references split by samples, each configuration and curve on one worker), with the
+same seeds and the same cache, so that both give the same study.
+"""
+from __future__ import annotations
+
+from .metrics import DEFAULT_EPS
+
+
+class LocalRunner:
+    """Every step in this process, on `gpu` (the study's context)."""
+
+    shows_progress = False      # the study's own progress bar covers every step
+
+    def reference(self, scene, view_set, settings, cache_dir=None, sample: int = 0, eps: float = DEFAULT_EPS,
+                  gpu=None, tick=None):
+        """rayvr.tune.reference.cached_reference: from the cache, else rendered and stored."""
+        from .reference import cached_reference
+
+        return cached_reference(scene, view_set, settings, cache_dir, gpu, tick, sample=sample, eps=eps)
+
+    def probe(self, scene, view_set, builder, options: dict, judge, **kwargs):
+        """rayvr.tune.probe.probe_cost_model: (CostModel, HDR pin)."""
+        from . import probe
+
+        return probe.probe_cost_model(scene, view_set, builder, options, judge, **kwargs)
+
+    def rows(self, study, configs, reference, motion_references: dict) -> list:
+        """One Row per configuration, in order (rayvr.tune.measure.Study.row)."""
+        return [study.row(c, reference, motion_references) for c in configs]
+
+    def curves(self, study, reference) -> list:
+        """The progressive curves (rayvr.tune.measure.Study.curve), in order."""
+        return [study.curve(name, options, reference) for name, options in study.curve_graphs()]
