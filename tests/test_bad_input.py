@@ -465,9 +465,9 @@ def test_sparse_accessors_are_applied(tmp_path):
 def test_warnings_print_once_one_line_each_and_do_not_fail(tmp_path, capsys):
     def mutate(doc, folder):
         doc["asset"]["version"] = "2.1"
-        doc["extensionsUsed"] = ["KHR_materials_volume"]
+        doc["extensionsUsed"] = ["KHR_materials_sheen"]
         doc["materials"].append({"name": "Red"})
-        doc["materials"][0]["extensions"] = {"KHR_materials_volume": {"thicknessFactor": 0.1}}
+        doc["materials"][0]["extensions"] = {"KHR_materials_sheen": {"sheenRoughnessFactor": 0.5}}
 
     path = _build(tmp_path, mutate)
     code = main(["render", str(path), "--views", "1", "--size", "8x8", "--out", str(tmp_path / "out" / "x.png")])
@@ -476,7 +476,7 @@ def test_warnings_print_once_one_line_each_and_do_not_fail(tmp_path, capsys):
     lines = err.strip().splitlines()
     assert len(lines) == 3 and all(line.startswith("rayvr: warning: ") and "scene.gltf" in line for line in lines)
     assert any("asset.version" in line for line in lines)
-    assert any("KHR_materials_volume" in line and "not implemented" in line for line in lines)
+    assert any("KHR_materials_sheen" in line and "not implemented" in line for line in lines)
     assert any("materials: names repeat ('Red' x2)" in line for line in lines)
     # library users get the same lines through the warnings module
     import rayvr as rv

@@ -36,20 +36,18 @@ def render_pt(scene, frames=1, size=(16, 16), **props):
 
 def sphere_furnace_radiance(albedo, emission, n=128):
     """Radiance leaving the inside of a uniformly emitting sphere along its normal, for the glTF
-    BSDF with metallic 0 and roughness 1 (Lambert + GGX alpha 1, F0 0.04, height-correlated Smith).
-    A chord meets the sphere at equal angles at both ends, so the radiance depends only on the
-    angle t to the normal: L(t) = E + integral f(t, t') cos t' L(t') dw'; solved by quadrature."""
+    BSDF with metallic 0 and roughness 1 (bsdf_reference: the compensated GGX layer over the
+    albedo-scaled Lambert base). A chord meets the sphere at equal angles at both ends, so the
+    radiance depends only on the angle t to the normal: L(t) = E + integral f(t, t') cos t' L(t') dw';
+    solved by quadrature."""
+    from bsdf_reference import Bsdf
+
     t = (np.arange(n) + 0.5) * (np.pi / 2) / n
     phi = (np.arange(n) + 0.5) * 2 * np.pi / n
     to, ti, ph = np.meshgrid(t, t, phi, indexing="ij")
     v = np.stack([np.sin(to), np.zeros_like(to), np.cos(to)], -1)
     l = np.stack([np.sin(ti) * np.cos(ph), np.sin(ti) * np.sin(ph), np.cos(ti)], -1)
-    h = v + l
-    h /= np.linalg.norm(h, axis=-1, keepdims=True)
-    fresnel = 0.04 + 0.96 * (1 - np.clip((v * h).sum(-1), 0, 1)) ** 5
-    smith_lambda = lambda c: 0.5 * (1 / c - 1)   # alpha = 1
-    spec = fresnel / np.pi / (1 + smith_lambda(np.cos(to)) + smith_lambda(np.cos(ti))) / (4 * np.cos(to))
-    fcos = albedo * np.cos(ti) / np.pi + spec
+    fcos = Bsdf((albedo,) * 3, metallic=0.0, roughness=1.0).eval(v, l)[..., 0]
     k = (fcos * np.sin(ti)).sum(-1) * (np.pi / 2 / n) * (2 * np.pi / n)
     return np.linalg.solve(np.eye(n) - k, np.full(n, emission))[0]
 
@@ -73,7 +71,8 @@ def test_furnace_converges_to_the_integral_equation(gpu, albedo):
     color = render_pt(furnace_scene(albedo, 1.0), frames=2, size=(16, 16), samples_per_pixel=4, max_bounces=64)
     assert np.isfinite(color).all()
     assert color.mean() == pytest.approx(want, rel=0.015)
-    # the naive E / (1 - albedo) ignores the specular lobe; the render must see it
+    # the naive E / (1 - albedo) ignores the specular layer and the base's albedo scaling; the
+    # render must see them
     if albedo:
         assert abs(color.mean() - 1.0 / (1.0 - albedo)) > 0.02
 

@@ -30,28 +30,15 @@ def material_ids(r):
     return np.where((e & 0xFF) == 0xFF, -1, (e >> 8).astype(np.int64))
 
 
-def lambert_point(p, light, intensity, albedo, normal=(0, 1, 0), eye=None, roughness=1.0):
-    """Radiance of a glTF dielectric (metallic 0) under a point light: albedo/pi * E, plus the
-    GGX specular lobe (F0 = 0.04, height-correlated Smith) when `eye` is given."""
+def lambert_point(p, light, intensity, albedo, normal=(0, 1, 0), eye=None):
+    """Radiance of a Lambertian surface (rayvr.scenes' lambert materials: no specular layer) under
+    a point light: albedo / pi * I cos / r^2, whatever the eye (`eye` kept for the callers' record)."""
     n = np.asarray(normal, dtype=np.float64)
     to = light - p
     d2 = (to ** 2).sum(-1)
     l = to / np.sqrt(d2)[..., None]
     cos = np.clip((l * n).sum(-1), 0, None)
-    radiance = albedo / np.pi * intensity * cos / d2
-    if eye is not None:
-        v = eye - p
-        v /= np.linalg.norm(v, axis=-1, keepdims=True)
-        h = v + l
-        h /= np.linalg.norm(h, axis=-1, keepdims=True)
-        a2 = roughness ** 4
-        nh, nv, vh = (h * n).sum(-1), (v * n).sum(-1), (v * h).sum(-1)
-        d = a2 / (np.pi * (nh * nh * (a2 - 1) + 1) ** 2)
-        lam = lambda c: 0.5 * (np.sqrt(1 + a2 * (1 - c * c) / (c * c)) - 1)
-        g = 1 / (1 + lam(nv) + lam(cos))
-        f = 0.04 + 0.96 * (1 - vh) ** 5
-        radiance = radiance + d * g * f / (4 * nv) * intensity / d2
-    return radiance
+    return albedo / np.pi * intensity * cos / d2
 
 
 @pytest.mark.parametrize("effect", [rv.Effect.RASTER, rv.Effect.SHADOWS])

@@ -63,11 +63,11 @@ def view_pixels(path) -> np.ndarray:
 
 
 def red(img):
-    return (img[..., 0] > 1.8 * img[..., 1]) & (img[..., 0] > 25)
+    return (img[..., 0] > 1.8 * img[..., 1]) & (img[..., 0] > 12)
 
 
 def green(img):
-    return (img[..., 1] > 1.5 * img[..., 0]) & (img[..., 1] > 25)
+    return (img[..., 1] > 1.5 * img[..., 0]) & (img[..., 1] > 12)
 
 
 def wall_back_edge(scene, name, y):

@@ -24,7 +24,7 @@ TAA_HDR_OUTPUT = "TAA.dst"         # hybrid_taa(): anti-aliased linear radiance 
 
 
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
-           auto_exposure: bool = False, light_samples: int = 1, background=(0.0, 0.0, 0.0),
+           auto_exposure: bool = False, light_samples: int = 1,
            multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid",
            gbuffer: str = "auto") -> RenderGraph:
     """The hybrid raster + ray-traced graph: multiview G-buffer, direct light for every pixel,
@@ -39,13 +39,12 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
 
     g = RenderGraph(name)
     g.add_pass(P.GBufferAuto(mode=gbuffer, multiview=multiview), "GBuffer")
-    g.add_pass(P.DirectLighting(light_samples=light_samples, background=list(background), raster_only=True),
+    g.add_pass(P.DirectLighting(light_samples=light_samples, raster_only=True),
                "Direct")
     g.add_pass(P.EffectCompaction(path_list=True), "Compaction")
     g.add_pass(P.RTShadows(light_samples=light_samples), "Shadows")
-    g.add_pass(P.RTReflections(max_bounces=max_bounces, light_samples=light_samples,
-                               background=list(background)), "Reflections")
-    g.add_pass(P.PathTracer(mode="gbuffer", max_bounces=path_bounces, background=list(background)), "PathTracer")
+    g.add_pass(P.RTReflections(max_bounces=max_bounces, light_samples=light_samples), "Reflections")
+    g.add_pass(P.PathTracer(mode="gbuffer", max_bounces=path_bounces), "PathTracer")
     g.add_pass(P.Accumulate(), "Accumulate")
     g.add_pass(P.HybridComposite(), "Composite")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
@@ -68,7 +67,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
 
 
 def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int = 3, clamp: float = 0.0,
-                background=(0.0, 0.0, 0.0), max_frames: int = 0, tonemap: str = "aces",
+                max_frames: int = 0, tonemap: str = "aces",
                 exposure: float = 0.0, auto_exposure: bool = False, name: str = "PathTraced") -> RenderGraph:
     """Every pixel path traced from the camera (PathTracer in "full" mode), averaged over frames
     by Accumulate (restarts when the views or the scene change; `max_frames` > 0 stops it), tone
@@ -77,7 +76,7 @@ def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int 
 
     g = RenderGraph(name)
     g.add_pass(P.PathTracer(mode="full", samples_per_pixel=samples_per_pixel, max_bounces=max_bounces,
-                            rr_start=rr_start, clamp=clamp, background=list(background)), "PathTracer")
+                            rr_start=rr_start, clamp=clamp), "PathTracer")
     g.add_pass(P.Accumulate(max_frames=max_frames), "Accumulate")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
     g.add_edge("PathTracer.color", "Accumulate.src")

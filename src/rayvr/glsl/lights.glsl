@@ -1,11 +1,14 @@
-// Lights of rayvr.scene.GpuScene: KHR_lights_punctual (point, spot, directional) and the table of
-// emissive triangles, sampled by power (area x luminance of emission; degenerate ones left out).
+// The lights of rayvr.scene.GpuScene, all in one table sampled by power (rayvr/scene/light_table.py:
+// an alias table, O(1) per sample): KHR_lights_punctual lights (point, spot, directional), emissive
+// triangles, and the environment (a uniform radiance or an equirectangular map, importance-sampled
+// by luminance x sin(theta) through a marginal and per-row conditional CDF).
 //
-//   LightSample sample_light(vec3 p, vec3 u)        one light sample for shading point p, u in [0,1)^3
-//   uint punctual_light_count()                     (SCENE_HAS_PUNCTUAL_LIGHTS)
-//   LightSample eval_punctual_light(uint i, vec3 p) light i alone, weight without selection pdf
-//   float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p)  solid-angle pdf with which
-//       sample_light would pick point q on an emissive triangle (for MIS)
+//   LightSample sample_light(vec3 p, vec3 u)   one light sample for shading point p, u in [0,1)^3
+//   vec3  environment_radiance(vec3 dir)       radiance of rays that leave the scene along dir
+//   float environment_light_pdf(vec3 dir)      solid-angle pdf with which sample_light picks dir (MIS)
+//   float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p)   the same for point q on an
+//         emissive triangle seen from p
+//   LightSample eval_punctual_light(uint i, vec3 p)   light i alone, weight without selection
 //
 // A LightSample's `weight` is the incident radiance divided by the sample's pdf (solid angle,
 // selection included) so a shader adds bsdf(wi = direction) * cos * weight, after a shadow ray
@@ -19,14 +22,24 @@
 #ifndef SCENE_HAS_EMISSIVE_TRIANGLES
 #define SCENE_HAS_EMISSIVE_TRIANGLES 0
 #endif
+#ifndef SCENE_HAS_ENVIRONMENT
+#define SCENE_HAS_ENVIRONMENT 0
+#endif
+#ifndef SCENE_HAS_ENVIRONMENT_MAP
+#define SCENE_HAS_ENVIRONMENT_MAP 0
+#endif
+#define SCENE_HAS_LIGHTS (SCENE_HAS_PUNCTUAL_LIGHTS || SCENE_HAS_EMISSIVE_TRIANGLES || SCENE_HAS_ENVIRONMENT)
 
 #define LIGHT_POINT 0u
 #define LIGHT_SPOT 1u
 #define LIGHT_DIRECTIONAL 2u
+#define LIGHT_KIND_PUNCTUAL 0u
+#define LIGHT_KIND_EMISSIVE 1u
+#define LIGHT_KIND_ENVIRONMENT 2u
 
 struct LightSample {
     vec3 direction;   // unit, from p towards the light
-    float distance;   // to the light point (1e30 for directional)
+    float distance;   // to the light point (1e30 for directional lights and the environment)
     vec3 weight;      // radiance / pdf
     float pdf;        // solid angle (0 for punctual lights)
     bool valid;
@@ -36,6 +49,20 @@ LightSample no_light_sample() {
     return LightSample(vec3(0.0, 1.0, 0.0), 0.0, vec3(0.0), 0.0, false);
 }
 
+#if SCENE_HAS_LIGHTS
+struct LightEntry {
+    uvec4 ids;        // kind, index within the kind, alias entry
+    vec4 select;      // alias threshold, selection probability
+};
+layout(std430, binding = RAYVR_LIGHT_TABLE_SSBO) readonly buffer LightTable {
+    vec4 light_table_info;   // x: count (uint bits), y: total power, z: environment probability, w: 1 / total
+    LightEntry light_entries[];
+};
+
+uint light_count() { return floatBitsToUint(light_table_info.x); }
+#endif
+
+// ---- punctual lights ----------------------------------------------------------------------------
 #if SCENE_HAS_PUNCTUAL_LIGHTS
 struct PunctualLight {
     vec4 position_type;    // anchor-space position (scene.glsl render_shift), type (uint bits)
@@ -63,7 +90,7 @@ LightSample eval_punctual_light(uint i, vec3 p) {
         return s;
     }
     vec3 to = (L.position_type.xyz + render_shift()) - p;
-    float d2 = max(dot(to, to), 1e-12);
+    float d2 = max(dot(to, to), 1e-30);
     s.distance = sqrt(d2);
     s.direction = to / s.distance;
     float att = 1.0 / d2;
@@ -84,26 +111,14 @@ LightSample eval_punctual_light(uint i, vec3 p) {
 }
 #endif
 
+// ---- emissive triangles ---------------------------------------------------------------------------
 #if SCENE_HAS_EMISSIVE_TRIANGLES
 struct EmissiveTriangle {
     uvec4 ids;        // instance, mesh-local triangle, material
-    vec4 cdf_power;   // inclusive CDF, power / total, world area
 };
 layout(std430, binding = RAYVR_EMISSIVE_TRIANGLE_SSBO) readonly buffer EmissiveTriangles {
-    vec4 emissive_info;   // x: count (uint bits), y: total power
-    vec4 emissive_info2;
     EmissiveTriangle emissive_triangles[];
 };
-
-uint emissive_triangle_count() { return floatBitsToUint(emissive_info.x); }
-
-float emissive_strategy_probability() {
-#if SCENE_HAS_PUNCTUAL_LIGHTS
-    return punctual_light_count() > 0u ? 0.5 : 1.0;
-#else
-    return 1.0;
-#endif
-}
 
 // Render-space vertices of scene triangle tri placed by instance inst.
 void emissive_vertices(uint inst, uint tri, out vec3 a, out vec3 b, out vec3 c) {
@@ -112,81 +127,161 @@ void emissive_vertices(uint inst, uint tri, out vec3 a, out vec3 b, out vec3 c) 
     c = instance_point_to_render(inst, scene_vertices[scene_indices[3u * tri + 2u]].position_u.xyz);
 }
 
-uint emissive_find(float u) {   // first entry whose CDF exceeds u
-    uint lo = 0u, hi = emissive_triangle_count() - 1u;
-    while (lo < hi) {
-        uint mid = (lo + hi) >> 1;
-        if (emissive_triangles[mid].cdf_power.x <= u) lo = mid + 1u; else hi = mid;
-    }
-    return lo;
+// Selection probability per unit area of a point on an emissive triangle of material m: its power
+// pi L A (x 2 double-sided) over the total, over its area A, which cancels (light_table.py).
+float emissive_area_pdf(uint m) {
+    float sides = scene_materials[m].flags.z != 0u ? 2.0 : 1.0;
+    return RAYVR_PI * sides * luminance(scene_materials[m].emission_cutoff.rgb) * light_table_info.w;
 }
 
-LightSample sample_emissive(vec3 p, vec3 u, float p_strategy) {
+LightSample sample_emissive(uint k, vec3 p, vec2 u) {
     LightSample s = no_light_sample();
-    uint k = emissive_find(u.x);
     EmissiveTriangle e = emissive_triangles[k];
     uint inst = e.ids.x;
     uint tri = scene_triangle(inst, e.ids.y);
     vec3 a, b, c;
     emissive_vertices(inst, tri, a, b, c);
-    float su = sqrt(u.y);
-    vec2 bary = vec2(1.0 - su, u.z * su);   // weights of b and c: uniform over the triangle
+    float su = sqrt(u.x);
+    vec2 bary = vec2(1.0 - su, u.y * su);   // weights of b and c: uniform over the triangle
     vec3 q = a + bary.x * (b - a) + bary.y * (c - a);
     vec3 cr = cross(b - a, c - a);
-    float area = 0.5 * length(cr);
-    if (area <= 0.0) return s;
-    vec3 nl = cr / (2.0 * area);
+    float cl = length(cr);
+    if (!(cl > 0.0)) return s;
+    vec3 nl = cr / cl;
     vec3 to = q - p;
     float d2 = dot(to, to);
-    if (d2 <= 0.0) return s;
+    if (!(d2 > 0.0)) return s;
     s.distance = sqrt(d2);
     s.direction = to / s.distance;
     float cos_l = dot(nl, -s.direction);
     MaterialParams m = material_params(e.ids.z, triangle_uv(tri, bary));
-    if (cos_l <= 0.0 && !m.double_sided) return s;
-    float pdf = p_strategy * e.cdf_power.y / area * d2 / max(abs(cos_l), 1e-8);
-    s.pdf = pdf;
-    s.weight = m.emissive / pdf;
-    s.valid = pdf > 0.0;
+    if (cos_l <= 0.0 && !m.double_sided) return s;   // the back of a single-sided emitter is dark
+    s.pdf = emissive_area_pdf(e.ids.z) * d2 / max(abs(cos_l), 1e-12);
+    s.weight = m.emissive / s.pdf;
+    s.valid = s.pdf > 0.0;
     return s;
 }
 
 float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p) {
-    vec3 a, b, c;
-    emissive_vertices(instance, q.triangle, a, b, c);
-    float area = 0.5 * length(cross(b - a, c - a));
-    float total = emissive_info.y;
-    if (area <= 0.0 || total <= 0.0) return 0.0;
-    float power = area * luminance(scene_materials[q.material].emission_cutoff.rgb);
     vec3 to = q.position - p;
     float d2 = dot(to, to);
-    float cos_l = abs(dot(q.geometric_normal, normalize(to)));
-    return emissive_strategy_probability() * (power / total) / area * d2 / max(cos_l, 1e-8);
+    float cos_l = abs(dot(q.geometric_normal, to)) * inversesqrt(max(d2, 1e-30));
+    return emissive_area_pdf(q.material) * d2 / max(cos_l, 1e-12);
 }
 #endif
 
-// Radiance arriving from direction `dir` (render space, unit) from the scene's environment, for
-// rays that leave the scene. (Being rewritten with the environment light: the signature stays.)
-vec3 environment_radiance(vec3 dir) { return vec3(0.0); }
+// ---- the environment ------------------------------------------------------------------------------
+#if SCENE_HAS_ENVIRONMENT
+layout(std430, binding = RAYVR_ENVIRONMENT_SSBO) readonly buffer EnvironmentData {
+    vec4 env_color;    // rgb: uniform radiance, or the map's multiplier
+    vec4 env_info;     // x: width, y: height (uint bits), z: mean of luminance x sin(theta) over the texels
+    float env_cdf[];   // the map: marginal CDF over rows (height), then per row a CDF over columns (width)
+};
+#if SCENE_HAS_ENVIRONMENT_MAP
+uniform sampler2D scene_environment;   // bound by GpuScene.bind() at RAYVR_ENVIRONMENT_TEXTURE_UNIT
 
-LightSample sample_light(vec3 p, vec3 u) {
-    LightSample s = no_light_sample();
-#if SCENE_HAS_PUNCTUAL_LIGHTS && SCENE_HAS_EMISSIVE_TRIANGLES
-    float pe = emissive_strategy_probability();
-    if (u.x < pe) return sample_emissive(p, vec3(u.x / pe, u.yz), pe);
-    u.x = (u.x - pe) / (1.0 - pe);
-    float pp = 1.0 - pe;
-#elif SCENE_HAS_EMISSIVE_TRIANGLES
-    return sample_emissive(p, u, 1.0);
+// (u, v) of the equirectangular map for a direction: u = 0.5 looks down -Z, v = 0 up (+Y).
+vec2 environment_uv(vec3 d) {
+    return vec2(0.5 + atan(d.x, -d.z) * (0.5 / RAYVR_PI), acos(clamp(d.y, -1.0, 1.0)) / RAYVR_PI);
+}
+
+vec3 environment_direction(vec2 uv) {
+    float phi = (uv.x - 0.5) * 2.0 * RAYVR_PI, theta = uv.y * RAYVR_PI;
+    float st = sin(theta);
+    return vec3(st * sin(phi), cos(theta), -st * cos(phi));
+}
+
+uint env_find(uint first, uint count, float u) {   // first entry of cdf[first..first+count) above u
+    uint lo = 0u, hi = count - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) >> 1;
+        if (env_cdf[first + mid] <= u) lo = mid + 1u; else hi = mid;
+    }
+    return lo;
+}
+
+// Solid-angle pdf of the map's importance sampling for direction d.
+float environment_map_pdf(vec3 d) {
+    uint w = floatBitsToUint(env_info.x), h = floatBitsToUint(env_info.y);
+    vec2 uv = environment_uv(d);
+    ivec2 t = ivec2(min(uint(uv.x * float(w)), w - 1u), min(uint(uv.y * float(h)), h - 1u));
+    float row_sin = sin((float(t.y) + 0.5) / float(h) * RAYVR_PI);
+    float density = luminance(texelFetch(scene_environment, ivec2(t.x, t.y), 0).rgb) * row_sin / env_info.z;
+    float st = sqrt(max(1.0 - d.y * d.y, 0.0));
+    return density / max(2.0 * RAYVR_PI * RAYVR_PI * st, 1e-12);
+}
+#endif
+
+vec3 environment_radiance(vec3 dir) {
+#if SCENE_HAS_ENVIRONMENT_MAP
+    return env_color.rgb * textureLod(scene_environment, environment_uv(dir), 0.0).rgb;
 #else
-    float pp = 1.0;
+    return env_color.rgb;
 #endif
-#if SCENE_HAS_PUNCTUAL_LIGHTS
-    uint n = punctual_light_count();
-    if (n == 0u) return s;
-    uint i = min(uint(u.x * float(n)), n - 1u);
-    s = eval_punctual_light(i, p);
-    s.weight *= float(n) / pp;
+}
+
+// The environment's own direction pdf (uniform over the sphere, or the map's).
+float environment_direction_pdf(vec3 dir) {
+#if SCENE_HAS_ENVIRONMENT_MAP
+    return environment_map_pdf(dir);
+#else
+    return 1.0 / (4.0 * RAYVR_PI);
 #endif
+}
+
+float environment_light_pdf(vec3 dir) { return light_table_info.z * environment_direction_pdf(dir); }
+
+LightSample sample_environment(vec2 u) {
+    LightSample s;
+#if SCENE_HAS_ENVIRONMENT_MAP
+    uint w = floatBitsToUint(env_info.x), h = floatBitsToUint(env_info.y);
+    uint row = env_find(0u, h, u.y);
+    float r0 = row > 0u ? env_cdf[row - 1u] : 0.0;
+    float fy = (u.y - r0) / max(env_cdf[row] - r0, 1e-30);
+    uint first = h + row * w;
+    uint col = env_find(first, w, u.x);
+    float c0 = col > 0u ? env_cdf[first + col - 1u] : 0.0;
+    float fx = (u.x - c0) / max(env_cdf[first + col] - c0, 1e-30);
+    s.direction = environment_direction(vec2((float(col) + clamp(fx, 0.0, 1.0)) / float(w),
+                                             (float(row) + clamp(fy, 0.0, 1.0)) / float(h)));
+#else
+    float z = 1.0 - 2.0 * u.x, r = sqrt(max(0.0, 1.0 - z * z)), phi = 2.0 * RAYVR_PI * u.y;
+    s.direction = vec3(r * cos(phi), z, r * sin(phi));
+#endif
+    s.distance = 1e30;
+    s.pdf = environment_light_pdf(s.direction);
+    s.weight = environment_radiance(s.direction) / max(s.pdf, 1e-30);
+    s.valid = s.pdf > 0.0;
     return s;
+}
+#else
+vec3 environment_radiance(vec3 dir) { return vec3(0.0); }
+float environment_light_pdf(vec3 dir) { return 0.0; }
+#endif
+
+// ---- one sample of all of them ------------------------------------------------------------------
+LightSample sample_light(vec3 p, vec3 u) {
+#if SCENE_HAS_LIGHTS
+    uint n = light_count();
+    if (n == 0u) return no_light_sample();
+    float x = u.x * float(n);
+    uint k = min(uint(x), n - 1u);
+    LightEntry e = light_entries[k];
+    if (x - float(k) >= e.select.x) e = light_entries[e.ids.z];   // the alias
+    float p_select = e.select.y;
+#if SCENE_HAS_PUNCTUAL_LIGHTS
+    if (e.ids.x == LIGHT_KIND_PUNCTUAL) {
+        LightSample s = eval_punctual_light(e.ids.y, p);
+        s.weight /= p_select;
+        return s;
+    }
+#endif
+#if SCENE_HAS_EMISSIVE_TRIANGLES
+    if (e.ids.x == LIGHT_KIND_EMISSIVE) return sample_emissive(e.ids.y, p, u.yz);
+#endif
+#if SCENE_HAS_ENVIRONMENT
+    if (e.ids.x == LIGHT_KIND_ENVIRONMENT) return sample_environment(u.yz);
+#endif
+#endif
+    return no_light_sample();
 }

@@ -1,8 +1,10 @@
 // Unidirectional path tracing from a path vertex: next-event estimation (lights.glsl) combined
-// with BSDF sampling (bsdf.glsl) by the power heuristic, Russian roulette, delta (mirror) lobes.
+// with BSDF sampling (bsdf.glsl) by the power heuristic, Russian roulette, delta lobes, and
+// transmission: refraction through volumes (Beer-Lambert absorption inside them, the medium
+// tracked by which face a refracted path enters or leaves) and thin-walled surfaces.
 // Bounce k does NEE at vertex k and continues with a BSDF sample whose hit adds MIS-weighted
 // emission, so max_bounces = 1 is complete direct light and 0 is emission only.
-// Uniforms: pt_max_bounces, pt_rr_start, pt_background.
+// Uniforms: pt_max_bounces, pt_rr_start.
 #pragma once
 #include "path_vertex.glsl"
 #include "lights.glsl"
@@ -10,19 +12,19 @@
 
 uniform int pt_max_bounces;
 uniform int pt_rr_start;
-uniform vec3 pt_background;
 
-// Radiance arriving at the previous vertex from s (emission of s itself excluded).
+// Radiance arriving at the previous vertex from s (emission of s itself excluded). `medium`:
+// the absorption of the medium s's incoming ray travelled through (0: air).
 vec3 pt_trace_from(PathVertex s, inout Rng rng) {
     vec3 radiance = vec3(0.0);
     vec3 beta = vec3(1.0);
+    vec3 medium = vec3(0.0);
     for (int bounce = 0; bounce < pt_max_bounces; ++bounce) {
-        vec3 origin = offset_ray_origin(s.pos, s.ng);
-#if SCENE_HAS_PUNCTUAL_LIGHTS || SCENE_HAS_EMISSIVE_TRIANGLES
+#if SCENE_HAS_PUNCTUAL_LIGHTS || SCENE_HAS_EMISSIVE_TRIANGLES || SCENE_HAS_ENVIRONMENT
         LightSample ls = sample_light(s.pos, rng_next3(rng));
         if (ls.valid && dot(ls.direction, s.ng) > 0.0) {
             vec3 f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
-            if (max3(f) > 0.0 && !trace_occluded(origin, ls.direction, ls.distance * (1.0 - 1e-4))) {
+            if (max3(f) > 0.0 && !trace_occluded(offset_ray_origin(s.pos, s.ng), ls.direction, ls.distance * (1.0 - 1e-4))) {
                 float w = ls.pdf > 0.0 ? power_heuristic(ls.pdf, bsdf_pdf(s.bsdf, s.n, s.v, ls.direction)) : 1.0;
                 radiance += beta * f * ls.weight * w;
             }
@@ -30,7 +32,9 @@ vec3 pt_trace_from(PathVertex s, inout Rng rng) {
 #endif
         BsdfSample bs;
         if (!bsdf_sample(s.bsdf, s.n, s.v, rng_next3(rng), bs)) break;
-        if (dot(bs.l, s.ng) <= 0.0) break;   // below the geometric surface: no transmission
+        // the sampled side must agree with the geometric surface (shading normals may not)
+        float side = dot(bs.l, s.ng);
+        if (bs.transmitted ? side >= 0.0 : side <= 0.0) break;
         beta *= bs.weight;
         if (!(max3(beta) > 0.0)) break;
         if (bounce >= pt_rr_start) {
@@ -38,11 +42,14 @@ vec3 pt_trace_from(PathVertex s, inout Rng rng) {
             if (rng_next(rng) >= q) break;
             beta /= q;
         }
+        if (bs.transmitted && !s.bsdf.thin) medium = s.bsdf.inside ? vec3(0.0) : s.attenuation;
         Hit hit;
-        if (!trace_closest(origin, bs.l, 1e30, hit)) {
-            radiance += beta * pt_background;
+        if (!trace_closest(offset_ray_origin(s.pos, bs.transmitted ? -s.ng : s.ng), bs.l, 1e30, hit)) {
+            float w = bs.delta ? 1.0 : power_heuristic(bs.pdf, environment_light_pdf(bs.l));
+            radiance += beta * environment_radiance(bs.l) * w;
             break;
         }
+        if (max3(medium) > 0.0) beta *= exp(-medium * hit.t);
         float spread = cone_spread_after_bounce(s.cone_spread, bs.pdf, bs.delta);
         vec3 from = s.pos;
         SurfacePoint sp;

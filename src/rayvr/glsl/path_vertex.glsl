@@ -11,6 +11,7 @@ struct PathVertex {
     vec3 ng;             // geometric normal facing v
     vec3 v;              // towards the previous vertex (the viewer)
     BsdfParams bsdf;
+    vec3 attenuation;    // absorption per metre inside the material's volume (transmission)
     float cone_width;    // the path's ray cone at pos (texture level of detail)
     float cone_spread;   // and its spread angle
 };
@@ -27,6 +28,9 @@ PathVertex path_vertex_at_hit(Hit hit, vec3 dir, float cone_width, float cone_sp
     s.ng = sp.geometric_normal;
     s.v = -dir;
     s.bsdf = bsdf_params(mp);
+    // a back face of a volume: the ray comes from inside it (refraction goes out, TIR possible)
+    bsdf_set_side(s.bsdf, !sp.front_face && mp.volume);
+    s.attenuation = mp.attenuation;
     s.cone_width = cone_width;
     s.cone_spread = cone_spread;
     return s;
@@ -55,7 +59,9 @@ PathVertex path_vertex_at_gbuffer(GSurface g, uint view) {
     s.n = g.n;
     s.ng = g.ng;
     s.v = normalize(views[view].eye.xyz - g.pos);
-    s.bsdf = bsdf_params(gbuf_material_params(g));
+    MaterialParams m = gbuf_material_params(g);
+    s.bsdf = bsdf_params(m);
+    s.attenuation = m.attenuation;
     s.cone_spread = view_pixel_spread(view);
     s.cone_width = distance(views[view].eye.xyz, g.pos) * s.cone_spread;
     return s;

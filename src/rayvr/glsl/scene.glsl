@@ -24,6 +24,10 @@
 #pragma once
 #include "color.glsl"
 
+#ifndef RAYVR_PI
+#define RAYVR_PI 3.14159265358979323846
+#endif
+
 #ifndef SCENE_HAS_TEXTURES
 #define SCENE_HAS_TEXTURES 0
 #endif
@@ -52,6 +56,9 @@
 #define TEX_OCCLUSION 3
 #define TEX_EMISSIVE 4
 #define TEX_TRANSMISSION 5
+#define TEX_SPECULAR 6
+#define TEX_SPECULAR_COLOR 7
+#define TEX_THICKNESS 8
 
 struct VertexData {
     vec4 position_u;   // object-space position, uv.x
@@ -71,9 +78,12 @@ struct InstanceData {
 struct MaterialData {
     vec4 base_color;
     vec4 emission_cutoff;  // rgb: emissive * emissive_strength, a: alpha cutoff
-    vec4 pbr;              // metallic, roughness, transmission, ior
-    uvec4 flags;           // x: Effect id, y: alpha mode, z: double sided
-    vec4 tex[12];          // per slot: (m00, m01, m02, layer or -1), (m10, m11, m12, scale/strength)
+    vec4 pbr;              // metallic, roughness, transmission, ior (1e30: Fresnel 1 everywhere)
+    uvec4 flags;           // x: Effect id, y: alpha mode, z: double sided, w: a volume (thickness > 0)
+    vec4 specular;         // rgb: specular colour (F0 tint), a: specular factor (KHR_materials_specular)
+    vec4 volume;           // rgb: attenuation colour, a: attenuation distance (KHR_materials_volume)
+    vec4 extra;            // x: thickness
+    vec4 tex[18];          // per slot: (m00, m01, m02, layer or -1), (m10, m11, m12, scale/strength)
 };
 
 layout(std430, binding = RAYVR_VERTEX_SSBO) readonly buffer SceneVertices { VertexData scene_vertices[]; };
@@ -136,6 +146,10 @@ struct MaterialParams {
     float occlusion;
     float transmission;
     float ior;
+    float specular;       // dielectric specular strength (f90), KHR_materials_specular
+    vec3 specular_color;  // dielectric F0 tint
+    bool volume;          // a volume boundary (KHR_materials_volume thickness > 0), else thin-walled
+    vec3 attenuation;     // absorption coefficient inside the volume, per metre (0: clear)
     uint effect;          // rayvr.Effect id
     uint alpha_mode;
     bool double_sided;
@@ -173,11 +187,18 @@ MaterialParams material_factors(uint m) {
     p.occlusion = 1.0;
     p.transmission = 0.0;
     p.ior = d.pbr.w;
+    p.specular = d.specular.a;
+    p.specular_color = d.specular.rgb;
+    p.volume = false;
+    p.attenuation = vec3(0.0);
     p.effect = d.flags.x;
     p.alpha_mode = d.flags.y;
     p.double_sided = d.flags.z != 0u;
 #if SCENE_HAS_TRANSMISSION
     p.transmission = d.pbr.z;
+    p.volume = d.flags.w != 0u;
+    // Beer-Lambert: white light turns attenuation colour after the attenuation distance
+    p.attenuation = -log(max(d.volume.rgb, vec3(1e-30))) / d.volume.a;
 #endif
     return p;
 }
@@ -201,6 +222,10 @@ MaterialParams material_params_at(uint m, vec2 uv, float uv_lod) {
         p.emissive *= srgb_to_linear(material_texture(m, TEX_EMISSIVE, uv, uv_lod).rgb);
     if (d.tex[2 * TEX_OCCLUSION].w >= 0.0)
         p.occlusion = mix(1.0, material_texture(m, TEX_OCCLUSION, uv, uv_lod).r, d.tex[2 * TEX_OCCLUSION + 1].w);
+    if (d.tex[2 * TEX_SPECULAR].w >= 0.0)
+        p.specular *= material_texture(m, TEX_SPECULAR, uv, uv_lod).a;
+    if (d.tex[2 * TEX_SPECULAR_COLOR].w >= 0.0)
+        p.specular_color *= srgb_to_linear(material_texture(m, TEX_SPECULAR_COLOR, uv, uv_lod).rgb);
 #if SCENE_HAS_TRANSMISSION
     if (d.tex[2 * TEX_TRANSMISSION].w >= 0.0)
         p.transmission *= material_texture(m, TEX_TRANSMISSION, uv, uv_lod).r;

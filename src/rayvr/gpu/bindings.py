@@ -1,5 +1,5 @@
 """Binding points of the frame-wide resources, injected into every shader as `#define`s so Python
-and GLSL agree: SSBO 0 the views, 2-13 the GPU scene, one texture unit for the scene's textures.
+and GLSL agree: SSBO 0 the views, 1-15 the GPU scene, two texture units for the scene's textures and environment.
 
 A pass's own textures, images and buffers get their units and points from the program's
 reflection by name (`rayvr.gpu.program_resources`), never from numbers in its code: they are
@@ -9,6 +9,7 @@ The BVH builders (`rayvr.scene.bvh_gpu`), which are not passes, use RAYVR_PASS_S
 
 BINDINGS = {
     "RAYVR_VIEWS_SSBO": 0,
+    "RAYVR_ENVIRONMENT_SSBO": 1,
     # scene (rayvr.scene.GpuScene)
     "RAYVR_VERTEX_SSBO": 2,
     "RAYVR_INDEX_SSBO": 3,
@@ -22,6 +23,8 @@ BINDINGS = {
     "RAYVR_MESH_SSBO": 11,
     "RAYVR_TRIANGLE_MATERIAL_SSBO": 12,
     "RAYVR_TANGENT_SSBO": 13,
+    "RAYVR_BSDF_TABLE_SSBO": 14,
+    "RAYVR_LIGHT_TABLE_SSBO": 15,
     # a pass's own buffers start here
     "RAYVR_PASS_SSBO_0": 16,
     "RAYVR_PASS_SSBO_1": 17,
@@ -29,10 +32,12 @@ BINDINGS = {
     "RAYVR_PASS_SSBO_3": 19,
     "RAYVR_PASS_SSBO_4": 20,
     "RAYVR_SCENE_TEXTURE_UNIT": 8,
+    "RAYVR_ENVIRONMENT_TEXTURE_UNIT": 9,
     "RAYVR_MAX_VIEWS": 64,
 }
 
 FIRST_PASS_SSBO = BINDINGS["RAYVR_PASS_SSBO_0"]
+SCENE_TEXTURE_UNITS = (BINDINGS["RAYVR_SCENE_TEXTURE_UNIT"], BINDINGS["RAYVR_ENVIRONMENT_TEXTURE_UNIT"])
 
 # GLSL storage blocks and samplers bound frame-wide (views, GpuScene.bind()), by name: a pass's
 # program resources leave them at their fixed points.
@@ -50,5 +55,8 @@ SHARED_BLOCKS = {
     "SceneMeshes": "RAYVR_MESH_SSBO",
     "SceneTriangleMaterials": "RAYVR_TRIANGLE_MATERIAL_SSBO",
     "SceneTangents": "RAYVR_TANGENT_SSBO",
+    "BsdfTables": "RAYVR_BSDF_TABLE_SSBO",
+    "LightTable": "RAYVR_LIGHT_TABLE_SSBO",
+    "EnvironmentData": "RAYVR_ENVIRONMENT_SSBO",
 }
-SHARED_SAMPLERS = {"scene_textures": "RAYVR_SCENE_TEXTURE_UNIT"}
+SHARED_SAMPLERS = {"scene_textures": "RAYVR_SCENE_TEXTURE_UNIT", "scene_environment": "RAYVR_ENVIRONMENT_TEXTURE_UNIT"}

@@ -19,7 +19,7 @@ from __future__ import annotations
 import ctypes
 
 from ..errors import ShaderError
-from .bindings import BINDINGS, FIRST_PASS_SSBO, SHARED_BLOCKS, SHARED_SAMPLERS
+from .bindings import FIRST_PASS_SSBO, SCENE_TEXTURE_UNITS, SHARED_BLOCKS, SHARED_SAMPLERS
 
 # GL type enums of sampler and image uniforms (glGetActiveUniform), the ones rayvr's GLSL uses.
 _SAMPLER_TYPES = {
@@ -59,7 +59,7 @@ class ProgramResources:
                     samplers.append(name)
                 elif member.gl_type in _IMAGE_TYPES:
                     images.append(name)
-        reserved = {BINDINGS["RAYVR_SCENE_TEXTURE_UNIT"]}
+        reserved = set(SCENE_TEXTURE_UNITS)
         free_units = [u for u in range(MAX_PASS_TEXTURE_UNITS + len(reserved)) if u not in reserved]
         where = getattr(prog, "rayvr_name", "program")
         for kind, names, limit in (("sampler", samplers, len(free_units)), ("image", images, MAX_PASS_IMAGE_UNITS),

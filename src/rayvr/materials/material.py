@@ -1,5 +1,5 @@
-"""The glTF 2.0 metallic-roughness material (+ emissive strength, transmission, ior) and the
-versioned table a scene keeps them in."""
+"""The glTF 2.0 metallic-roughness material (+ KHR_materials_emissive_strength, _transmission,
+_ior, _volume and _specular) and the versioned table a scene keeps them in."""
 from __future__ import annotations
 
 import dataclasses
@@ -42,11 +42,13 @@ class TextureRef:
 
 # The texture fields of a Material, in the order of MaterialData.tex in scene.glsl (TEX_* ids).
 TEXTURE_SLOTS = ("base_color_texture", "metallic_roughness_texture", "normal_texture",
-                 "occlusion_texture", "emissive_texture", "transmission_texture")
+                 "occlusion_texture", "emissive_texture", "transmission_texture",
+                 "specular_texture", "specular_color_texture", "thickness_texture")
 
 # Fields whose change the GPU's material table must follow (every one pack_materials reads).
 _VERSIONED = {"effect", "base_color", "metallic", "roughness", "emissive", "emissive_strength",
-              "transmission", "ior", "alpha_mode", "alpha_cutoff", "double_sided", *TEXTURE_SLOTS}
+              "transmission", "ior", "alpha_mode", "alpha_cutoff", "double_sided", "specular",
+              "specular_color", "thickness", "attenuation_color", "attenuation_distance", *TEXTURE_SLOTS}
 
 
 @dataclasses.dataclass(eq=False)
@@ -60,7 +62,12 @@ class Material:
     emissive: tuple[float, float, float] = (0.0, 0.0, 0.0)
     emissive_strength: float = 1.0
     transmission: float = 0.0
-    ior: float = 1.5
+    ior: float = 1.5                      # inf: glTF's ior 0, the Fresnel term is 1 everywhere
+    specular: float = 1.0                 # KHR_materials_specular: strength of the dielectric's specular layer
+    specular_color: tuple[float, float, float] = (1.0, 1.0, 1.0)   # its F0 colour
+    thickness: float = 0.0                # KHR_materials_volume: 0 thin-walled, > 0 a volume boundary
+    attenuation_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    attenuation_distance: float = math.inf   # metres in which white light turns attenuation_color
     alpha_mode: AlphaMode = AlphaMode.OPAQUE
     alpha_cutoff: float = 0.5
     double_sided: bool = False
@@ -70,11 +77,16 @@ class Material:
     occlusion_texture: TextureRef | None = None
     emissive_texture: TextureRef | None = None
     transmission_texture: TextureRef | None = None
+    specular_texture: TextureRef | None = None         # A channel x specular
+    specular_color_texture: TextureRef | None = None   # RGB (sRGB) x specular_color
+    thickness_texture: TextureRef | None = None        # G channel x thickness
     effect: Effect = Effect.SHADOWS
 
     def __setattr__(self, key, value):
         if key == "effect":
             value = Effect.parse(value, f"material '{self.__dict__.get('name', '?')}'.effect")
+        elif key in _CHECKS:
+            value = _CHECKS[key](self.__dict__.get("name", "?"), key, value)
         elif key == "alpha_mode" and not isinstance(value, AlphaMode):
             try:
                 value = AlphaMode[str(value).upper()] if isinstance(value, str) else AlphaMode(value)
@@ -85,6 +97,11 @@ class Material:
         table = self.__dict__.get("_table")
         if table is not None and key in _VERSIONED:
             table.version += 1
+
+    @property
+    def is_volume(self) -> bool:
+        """A closed volume (KHR_materials_volume thickness > 0) rather than a thin-walled surface."""
+        return self.thickness > 0
 
     @property
     def emission(self) -> np.ndarray:
@@ -99,6 +116,46 @@ class Material:
     def textures(self) -> dict[str, TextureRef]:
         """The texture slots in use, by field name."""
         return {n: getattr(self, n) for n in TEXTURE_SLOTS if getattr(self, n) is not None}
+
+
+def _number(name: str, key: str, value, low: float = -math.inf, high: float = math.inf,
+            low_open: bool = False, allow_inf: bool = False) -> float:
+    where = f"material '{name}'.{key}"
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise SceneError(f"{where}: {value!r} is not a number") from None
+    if math.isnan(v) or (math.isinf(v) and not allow_inf):
+        raise SceneError(f"{where}: {value!r} is not a finite number")
+    if v < low or (low_open and v == low) or v > high:
+        lo = f"({low:g}" if low_open else f"[{low:g}"
+        raise SceneError(f"{where}: {v:g} is out of range {lo}, {high:g}]; fix the material")
+    return v
+
+
+def _color(name: str, key: str, value) -> tuple[float, float, float]:
+    try:
+        c = tuple(float(x) for x in value)
+    except (TypeError, ValueError):
+        c = ()
+    if len(c) != 3 or not all(math.isfinite(x) and x >= 0 for x in c):
+        raise SceneError(f"material '{name}'.{key}: {value!r} is not three non-negative numbers (linear RGB)")
+    return c
+
+
+# Field checks: every value a material may hold is physical (one SceneError naming the field).
+_CHECKS = {
+    "ior": lambda n, k, v: _number(n, k, v, low=0.0, low_open=True, allow_inf=True),
+    "attenuation_distance": lambda n, k, v: _number(n, k, v, low=0.0, low_open=True, allow_inf=True),
+    "thickness": lambda n, k, v: _number(n, k, v, low=0.0),
+    "metallic": lambda n, k, v: _number(n, k, v, 0.0, 1.0),
+    "roughness": lambda n, k, v: _number(n, k, v, 0.0, 1.0),
+    "transmission": lambda n, k, v: _number(n, k, v, 0.0, 1.0),
+    "specular": lambda n, k, v: _number(n, k, v, 0.0, 1.0),
+    "emissive_strength": lambda n, k, v: _number(n, k, v, low=0.0),
+    "specular_color": _color,
+    "attenuation_color": _color,
+}
 
 
 class MaterialTable:

@@ -55,8 +55,9 @@ def prism(footprint_xz, y0, y1):
 
 
 def lambert(name, rgb, **kw) -> Material:
-    """A non-metallic, fully rough material of linear colour rgb."""
-    return Material(name, base_color=(*rgb, 1.0), metallic=0.0, roughness=1.0, **kw)
+    """A Lambertian material of linear colour rgb: non-metallic, fully rough, and without the
+    dielectric's specular layer (KHR_materials_specular's factor 0), so f = rgb / pi exactly."""
+    return Material(name, base_color=(*rgb, 1.0), metallic=0.0, roughness=1.0, specular=0.0, **kw)
 
 
 def _cornell(x, z):

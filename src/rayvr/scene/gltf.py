@@ -40,7 +40,7 @@ from .model import Camera, Light, Mesh, Scene, Texture
 # other required extension is refused, any other used one is ignored with a warning.
 SUPPORTED_EXTENSIONS = frozenset({
     "KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
-    "KHR_texture_transform", "KHR_lights_punctual"})
+    "KHR_materials_specular", "KHR_materials_volume", "KHR_texture_transform", "KHR_lights_punctual"})
 
 _COMPONENT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
@@ -312,7 +312,26 @@ class _Loader:
                     m.transmission_texture = self._texref(_Info(tr["transmissionTexture"]),
                                                           f"{f}.extensions.KHR_materials_transmission.transmissionTexture")
             if "KHR_materials_ior" in ext:
-                m.ior = float(ext["KHR_materials_ior"].get("ior", 1.5))
+                ior = float(ext["KHR_materials_ior"].get("ior", 1.5))
+                m.ior = math.inf if ior == 0 else ior   # 0: the specification's "Fresnel 1" mode
+            if "KHR_materials_specular" in ext:
+                sp = ext["KHR_materials_specular"]
+                where = f"{f}.extensions.KHR_materials_specular"
+                m.specular = float(sp.get("specularFactor", 1.0))
+                m.specular_color = tuple(float(c) for c in sp.get("specularColorFactor", (1.0, 1.0, 1.0)))
+                if "specularTexture" in sp:
+                    m.specular_texture = self._texref(_Info(sp["specularTexture"]), f"{where}.specularTexture")
+                if "specularColorTexture" in sp:
+                    m.specular_color_texture = self._texref(_Info(sp["specularColorTexture"]),
+                                                            f"{where}.specularColorTexture")
+            if "KHR_materials_volume" in ext:
+                vol = ext["KHR_materials_volume"]
+                where = f"{f}.extensions.KHR_materials_volume"
+                m.thickness = float(vol.get("thicknessFactor", 0.0))
+                m.attenuation_color = tuple(float(c) for c in vol.get("attenuationColor", (1.0, 1.0, 1.0)))
+                m.attenuation_distance = float(vol.get("attenuationDistance", math.inf))
+                if "thicknessTexture" in vol:
+                    m.thickness_texture = self._texref(_Info(vol["thicknessTexture"]), f"{where}.thicknessTexture")
             extras = gm.extras or {}
             if isinstance(extras, dict) and "rayvr_effect" in extras:
                 try:

@@ -37,7 +37,7 @@ class SceneFrame:
         self.origin = np.zeros(3)
         self.rebuilds = 0            # TLAS builds (instances moved, or the anchor recentred)
         self._uploaded = None        # (transforms, mesh ids) the TLAS was built from
-        self._lights = None          # the light rows last uploaded
+        self._lights = None          # (LightList.version, anchor) of the lights last uploaded
         self._shift = None
 
     @property
@@ -119,8 +119,11 @@ class SceneFrame:
 
     # ---- punctual lights ---------------------------------------------------------------------
     def _upload_lights(self) -> bool:
+        """The punctual lights in anchor space, when they changed (LightList.version) or the anchor
+        moved: no work per light on other frames."""
         lights = self.gs.scene.lights
-        if not lights:
+        key = (lights.version, tuple(self.anchor))
+        if not lights or key == self._lights:
             return False
         out = np.zeros((1 + LIGHT_ROWS * len(lights), 4), np.float32)
         out.view(np.uint32)[0, 0] = len(lights)
@@ -134,8 +137,6 @@ class SceneFrame:
             cos_outer, cos_inner = np.cos(L.outer_cone_angle), np.cos(L.inner_cone_angle)
             out[r + 3, 0] = cos_outer
             out[r + 3, 1] = 1.0 / max(cos_inner - cos_outer, 1e-4)
-        if self._lights is not None and np.array_equal(out, self._lights):
-            return False
         self.gs.upload("punctual_lights", out)
-        self._lights = out
+        self._lights = key
         return True

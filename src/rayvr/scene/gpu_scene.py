@@ -20,25 +20,23 @@ import numpy as np
 
 from ..errors import GpuError, SceneError
 from ..gpu.bindings import BINDINGS
+from ..materials import bsdf_tables
 from ..materials.material import TEXTURE_SLOTS, Material
 from . import bvh as bvh_mod
-from . import bvh_wide
+from . import bvh_wide, light_table
 from .gpu_frame import SceneFrame
 from .model import FEATURES, Scene
 
-MATERIAL_FLOATS = 64          # 256 B, see MaterialData
+MATERIAL_FLOATS = 100         # 400 B, see MaterialData: 7 vec4 + 2 per texture slot
+MATERIAL_TEX_ROW = 28         # float offset of MaterialData.tex
 MAX_TEXTURE_SIZE = 2048
+MAX_ENVIRONMENT_HEIGHT = 1024   # environment maps above 2048x1024 are box-filtered down to it
 GPU_BVH_MIN = 200_000         # 'auto' builds meshes this big on the GPU (hardware drivers only)
 BVH_LAYOUTS = bvh_wide.LAYOUTS
 _NODE_FLOATS = {"bvh2": bvh_mod.NODE_FLOATS, "bvh4": bvh_wide.NODE_FLOATS, "bvh4q": bvh_wide.QUANTIZED_NODE_FLOATS}
 _LAYOUT_DEFINES = {"bvh2": {"RQ_BVH_WIDTH": 2, "RQ_BVH_QUANTIZED": 0},
                    "bvh4": {"RQ_BVH_WIDTH": 4, "RQ_BVH_QUANTIZED": 0},
                    "bvh4q": {"RQ_BVH_WIDTH": 4, "RQ_BVH_QUANTIZED": 1}}
-
-
-def _luminance(rgb) -> np.ndarray:
-    rgb = np.asarray(rgb, dtype=np.float64)
-    return rgb[..., 0] * 0.2126 + rgb[..., 1] * 0.7152 + rgb[..., 2] * 0.0722
 
 
 def scene_scale(scene: Scene) -> float:
@@ -59,10 +57,13 @@ def pack_materials(materials, texture_layers: dict[int, int] | None = None) -> n
         out[i, 0:4] = m.base_color
         out[i, 4:7] = m.emission
         out[i, 7] = m.alpha_cutoff
-        out[i, 8:12] = (m.metallic, m.roughness, m.transmission, m.ior)
-        bits[i, 12:16] = (int(m.effect), int(m.alpha_mode), int(bool(m.double_sided)), 0)
+        out[i, 8:12] = (m.metallic, m.roughness, m.transmission, min(m.ior, 1e30))
+        bits[i, 12:16] = (int(m.effect), int(m.alpha_mode), int(bool(m.double_sided)), int(m.is_volume))
+        out[i, 16:19], out[i, 19] = m.specular_color, m.specular
+        out[i, 20:23], out[i, 23] = m.attenuation_color, min(m.attenuation_distance, 3e38)
+        out[i, 24] = m.thickness
         for s, slot in enumerate(TEXTURE_SLOTS):
-            row = 16 + 8 * s
+            row = MATERIAL_TEX_ROW + 8 * s
             ref = getattr(m, slot)
             layer = -1.0
             if ref is not None and texture_layers is not None and ref.texture in texture_layers:
@@ -95,7 +96,9 @@ class GpuScene:
         self._build_textures()
         self._material_version = None
         self._upload_materials()
-        self._build_emissive_table()
+        self._buffer("bsdf_tables", bsdf_tables.table_floats())   # glsl/bsdf.glsl's energy tables
+        self.environment_texture = None
+        self._build_lights()
         self._draws: dict[tuple, tuple | None] = {}   # (program id, instances per draw) -> (vao, commands, count, ids)
         self.frame = SceneFrame(self)
         self.update(np.zeros(3))
@@ -263,15 +266,16 @@ class GpuScene:
         self._buffer("materials", pack_materials(self.scene.materials, self.texture_layers))
         self._material_version = self.scene.materials.version
 
-    def _build_emissive_table(self) -> None:
-        """Emissive triangles of every instance with their power (area x luminance of emission),
-        as a CDF for sampling by power. Degenerate (zero-area) triangles are left out."""
+    def _build_emissive_triangles(self) -> np.ndarray:
+        """The emissive triangles of every instance (world-space areas in float64) and their powers;
+        degenerate (zero-area) triangles are left out. Uploads their ids; returns the powers."""
         self.emissive_count = 0
-        self.emissive_power = 0.0
         if "SCENE_HAS_EMISSIVE_TRIANGLES" not in self.features:
-            return
-        lum = np.array([_luminance(m.emission) for m in self.scene.materials], np.float64)
-        inst_ids, prims, mats, power, area_all = [], [], [], [], []
+            return np.zeros(0)
+        mats = list(self.scene.materials)
+        lum = np.array([light_table.luminance(m.emission) for m in mats], np.float64)
+        sides = np.array([2.0 if m.double_sided else 1.0 for m in mats])
+        ids, power = [], []
         for i, inst in enumerate(self.scene.instances):
             mesh = self.scene.meshes[inst.mesh]
             m = mesh.material_ids
@@ -280,28 +284,64 @@ class GpuScene:
                 continue
             tri = mesh.triangles()[sel].astype(np.float64) @ inst.transform[:3, :3].T
             area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-            p = area * lum[m[sel]]
+            p = np.pi * area * lum[m[sel]] * sides[m[sel]]
             keep = p > 0
-            inst_ids.append(np.full(int(keep.sum()), i, np.uint32))
-            prims.append(sel[keep].astype(np.uint32))
-            mats.append(m[sel][keep])
+            ids.append(np.stack([np.full(int(keep.sum()), i), sel[keep], m[sel][keep],
+                                 np.zeros(int(keep.sum()))], axis=1).astype(np.uint32))
             power.append(p[keep])
-            area_all.append(area[keep])
-        if not power or not sum(len(p) for p in power):
+        power = np.concatenate(power) if power else np.zeros(0)
+        if len(power):
+            self._buffer("emissive_triangles", np.concatenate(ids))
+        self.emissive_count = len(power)
+        return power
+
+    def _build_lights(self) -> None:
+        """The light table over every light (light_table.py), the emissive triangles and the
+        environment; rebuilt when materials, punctual lights or the environment change."""
+        radius = 0.5 * self.scale
+        emissive = self._build_emissive_triangles()
+        env = self.scene.lighting_environment()
+        if env is not None and env.is_black:
+            env = None
+        self.environment = env
+        self.lights = light_table.build_light_table(light_table.punctual_powers(self.scene.lights, radius),
+                                                    emissive, light_table.environment_power(env, radius))
+        self._buffer("light_table", self.lights.packed())
+        self._upload_environment(env)
+        self._lights_key = (self.scene.lights.version, self.scene.materials.version, id(self.scene.environment))
+
+    def _upload_environment(self, env) -> None:
+        """The environment's colour, and for a map its texture and the CDFs of its importance
+        sampling (luminance x sin(theta) per texel, as glsl/lights.glsl samples and evaluates it)."""
+        if self.environment_texture is not None:
+            self.environment_texture.release()
+            self.environment_texture = None
+        if env is None:
             return
-        power = np.concatenate(power)
-        total = float(power.sum())
-        table = np.zeros((len(power), 8), np.float32)
-        bits = table.view(np.uint32)
-        bits[:, 0], bits[:, 1], bits[:, 2] = np.concatenate(inst_ids), np.concatenate(prims), np.concatenate(mats)
-        table[:, 4] = np.cumsum(power) / total
-        table[:, 5] = power / total
-        table[:, 6] = np.concatenate(area_all)
         header = np.zeros(8, np.float32)
-        header.view(np.uint32)[0] = len(power)
-        header[1] = total
-        self._buffer("emissive_triangles", np.concatenate([header, table.reshape(-1)]))
-        self.emissive_count, self.emissive_power = len(power), total
+        header[0:3] = env.color
+        cdf = np.zeros(1, np.float32)
+        if env.image is not None:
+            im = env.image
+            if im.shape[0] > MAX_ENVIRONMENT_HEIGHT:   # a box filter down to the map's size
+                k = int(np.ceil(im.shape[0] / MAX_ENVIRONMENT_HEIGHT))
+                h2, w2 = im.shape[0] // k, im.shape[1] // k
+                im = im[:h2 * k, :w2 * k].reshape(h2, k, w2, k, 3).mean(axis=(1, 3))
+            im = np.ascontiguousarray(im, np.float32)
+            h, w = im.shape[:2]
+            sin_theta = np.sin((np.arange(h) + 0.5) / h * np.pi)
+            weight = light_table.luminance(im.astype(np.float64)) * sin_theta[:, None]
+            mean = float(weight.mean())
+            rows = weight.sum(axis=1)
+            marginal = np.cumsum(rows) / max(rows.sum(), 1e-300)
+            conditional = np.cumsum(weight, axis=1) / np.maximum(rows[:, None], 1e-300)
+            cdf = np.concatenate([marginal, conditional.reshape(-1)]).astype(np.float32)
+            header.view(np.uint32)[4:6] = (w, h)
+            header[6] = mean
+            rgba = np.concatenate([im, np.ones((h, w, 1), np.float32)], axis=2)
+            self.environment_texture = self.gl.texture((w, h), 4, rgba.tobytes(), dtype="f4")
+            self.environment_texture.repeat_x, self.environment_texture.repeat_y = True, False
+        self._buffer("environment", np.concatenate([header, cdf]))
 
     # ---- per frame --------------------------------------------------------------------------
     def update(self, origin=None) -> None:
@@ -312,6 +352,9 @@ class GpuScene:
         t0 = time.perf_counter()
         if self.scene.materials.version != self._material_version:
             self._upload_materials()
+            self.version += 1
+        if self._lights_key != (self.scene.lights.version, self.scene.materials.version, id(self.scene.environment)):
+            self._build_lights()
             self.version += 1
         if self.frame.update(origin):
             self.version += 1
@@ -334,7 +377,8 @@ class GpuScene:
                 "punctual_lights": "RAYVR_PUNCTUAL_LIGHT_SSBO",
                 "emissive_triangles": "RAYVR_EMISSIVE_TRIANGLE_SSBO", "triangles": "RAYVR_TRIANGLE_SSBO",
                 "meshes": "RAYVR_MESH_SSBO", "triangle_materials": "RAYVR_TRIANGLE_MATERIAL_SSBO",
-                "tangents": "RAYVR_TANGENT_SSBO"}
+                "tangents": "RAYVR_TANGENT_SSBO", "bsdf_tables": "RAYVR_BSDF_TABLE_SSBO",
+                "light_table": "RAYVR_LIGHT_TABLE_SSBO", "environment": "RAYVR_ENVIRONMENT_SSBO"}
 
     def bind(self) -> None:
         """Bind every scene buffer to its SSBO point and the textures to the scene's unit."""
@@ -342,12 +386,19 @@ class GpuScene:
             buf.bind_to_storage_buffer(BINDINGS[self._BINDING[name]])
         if self.texture_array is not None:
             self.texture_array.use(BINDINGS["RAYVR_SCENE_TEXTURE_UNIT"])
+        if self.environment_texture is not None:
+            self.environment_texture.use(BINDINGS["RAYVR_ENVIRONMENT_TEXTURE_UNIT"])
 
     def defines(self) -> dict[str, int | str]:
         """The #defines every shader that includes the scene library is built with: the feature
         flags (0 or 1), SCENE_SCALE, the scene's extent in metres (ray offsets scale with it), and
         RQ_BVH_WIDTH and RQ_BVH_QUANTIZED, the node layout of the uploaded BVHs."""
-        return {**{f: int(f in self.features) for f in FEATURES}, "SCENE_SCALE": repr(self.scale),
+        have = set(self.features)
+        if not self.emissive_count:   # every emissive triangle degenerate: no code samples an empty table
+            have.discard("SCENE_HAS_EMISSIVE_TRIANGLES")
+        if self.environment is None:
+            have -= {"SCENE_HAS_ENVIRONMENT", "SCENE_HAS_ENVIRONMENT_MAP"}
+        return {**{f: int(f in have) for f in FEATURES}, "SCENE_SCALE": repr(self.scale),
                 **_LAYOUT_DEFINES[self.bvh_layout]}
 
     @property
@@ -448,6 +499,8 @@ class GpuScene:
             "blas_node_bytes_per_triangle": sum(b.nbytes for b in self._blas_gpu if b is not None)
                                             / max(self.triangle_count, 1),
             "emissive_triangles": self.emissive_count,
+            "lights": {"table_entries": self.lights.count, "environment": self.environment.name if self.environment
+                       else "none", "environment_probability": self.lights.probability_of(light_table.KIND_ENVIRONMENT)},
             "punctual_light_kinds": sorted({("point", "spot", "directional")[L.type] for L in self.scene.lights}),
             "timings_ms": dict(self.timings),
         }
@@ -465,3 +518,6 @@ class GpuScene:
         if self.texture_array is not None:
             self.texture_array.release()
             self.texture_array = None
+        if self.environment_texture is not None:
+            self.environment_texture.release()
+            self.environment_texture = None

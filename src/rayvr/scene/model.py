@@ -10,9 +10,9 @@ from ..errors import SceneError
 from ..materials.effect import Effect
 from ..materials.material import AlphaMode, Material, MaterialTable
 
-FEATURES = ("SCENE_HAS_PUNCTUAL_LIGHTS", "SCENE_HAS_EMISSIVE_TRIANGLES", "SCENE_HAS_TEXTURES",
-            "SCENE_HAS_NORMAL_MAPS", "SCENE_HAS_ALPHA_MASK", "SCENE_HAS_TRANSMISSION",
-            "SCENE_HAS_INSTANCING")
+FEATURES = ("SCENE_HAS_PUNCTUAL_LIGHTS", "SCENE_HAS_EMISSIVE_TRIANGLES", "SCENE_HAS_ENVIRONMENT",
+            "SCENE_HAS_ENVIRONMENT_MAP", "SCENE_HAS_TEXTURES", "SCENE_HAS_NORMAL_MAPS", "SCENE_HAS_ALPHA_MASK",
+            "SCENE_HAS_ALPHA_BLEND", "SCENE_HAS_TRANSMISSION", "SCENE_HAS_INSTANCING")
 
 
 @dataclasses.dataclass(eq=False)
@@ -160,9 +160,13 @@ class LightType:
     NAMES = {"point": 0, "spot": 1, "directional": 2}
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(eq=False)
 class Light:
-    """A KHR_lights_punctual light placed in world space (intensity in candela or lux)."""
+    """A KHR_lights_punctual light placed in world space (intensity in candela or lux).
+
+    A light in a scene's `lights` tells it when it changes (so the GPU re-uploads the lights only
+    then): assign fields (`light.position = p`); the arrays are read-only so that in-place edits
+    cannot slip past unseen."""
 
     type: int = LightType.POINT
     position: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
@@ -174,12 +178,114 @@ class Light:
     outer_cone_angle: float = math.pi / 4
     name: str = ""
 
+    def __setattr__(self, key, value):
+        if key == "type" and isinstance(value, str):
+            value = LightType.NAMES[value]
+        elif key == "position":
+            value = _frozen(np.asarray(value, dtype=np.float64).reshape(3))
+        elif key == "direction":
+            d = np.asarray(value, dtype=np.float64).reshape(3)
+            value = _frozen(d / max(np.linalg.norm(d), 1e-30))
+        elif key == "color":
+            value = tuple(float(c) for c in value)
+        super().__setattr__(key, value)
+        owner = self.__dict__.get("_owner")
+        if owner is not None:
+            owner.version += 1
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a = a.copy()
+    a.flags.writeable = False
+    return a
+
+
+class LightList(list):
+    """A scene's punctual lights; `version` grows whenever the list or one of its lights changes."""
+
+    def __init__(self, lights=()):
+        super().__init__()
+        self.version = 0
+        self.extend(lights)
+
+    def __reduce__(self):   # pickling rebuilds through __init__ (the list's own protocol skips it)
+        return (LightList, (list(self),))
+
+    def _adopt(self, light) -> Light:
+        if not isinstance(light, Light):
+            raise SceneError(f"lights: {light!r} is not a rayvr.scene.Light")
+        object.__setattr__(light, "_owner", self)
+        self.version += 1
+        return light
+
+    def append(self, light) -> None:
+        super().append(self._adopt(light))
+
+    def extend(self, lights) -> None:
+        for light in lights:
+            self.append(light)
+
+    def __iadd__(self, lights):
+        self.extend(lights)
+        return self
+
+    def insert(self, i, light) -> None:
+        super().insert(i, self._adopt(light))
+
+    def __setitem__(self, i, light) -> None:
+        if isinstance(i, slice):
+            super().__setitem__(i, [self._adopt(x) for x in light])
+        else:
+            super().__setitem__(i, self._adopt(light))
+
+    def _changed(self, result=None):
+        self.version += 1
+        return result
+
+    def __delitem__(self, i):
+        return self._changed(super().__delitem__(i))
+
+    def pop(self, *args):
+        return self._changed(super().pop(*args))
+
+    def remove(self, light):
+        return self._changed(super().remove(light))
+
+    def clear(self):
+        return self._changed(super().clear())
+
+
+@dataclasses.dataclass(eq=False)
+class Environment:
+    """Light from every direction that no surface blocks: a uniform radiance `color`, or an
+    equirectangular `image` of linear radiance (H, W, 3), W = 2 H, row 0 looking up (+Y), its
+    centre column looking down -Z, scaled by `color`. `rayvr.scene.environment` loads files."""
+
+    color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    image: np.ndarray | None = None
+    name: str = "environment"
+
     def __post_init__(self):
-        if isinstance(self.type, str):
-            self.type = LightType.NAMES[self.type]
-        self.position = np.asarray(self.position, dtype=np.float64)
-        d = np.asarray(self.direction, dtype=np.float64)
-        self.direction = d / max(np.linalg.norm(d), 1e-30)
+        c = tuple(float(x) for x in self.color)
+        if len(c) != 3 or not all(math.isfinite(x) and x >= 0 for x in c):
+            raise SceneError(f"environment '{self.name}'.color: {self.color!r} is not three non-negative numbers")
+        self.color = c
+        if self.image is not None:
+            im = np.ascontiguousarray(self.image, dtype=np.float32)
+            if im.ndim != 3 or im.shape[2] < 3 or im.shape[1] != 2 * im.shape[0]:
+                raise SceneError(f"environment '{self.name}'.image: shape {im.shape} is not an equirectangular "
+                                 f"(H, 2H, 3) image; give a 2:1 panorama")
+            im = im[..., :3]
+            if not np.isfinite(im).all() or (im < 0).any():
+                raise SceneError(f"environment '{self.name}'.image: NaN, Inf or negative radiance; fix the file")
+            self.image = im
+
+    @property
+    def is_black(self) -> bool:
+        return not any(self.color) or (self.image is not None and not self.image.any())
+
+
+DEFAULT_ENVIRONMENT = Environment((1.0, 1.0, 1.0), name="neutral default (the scene has no light)")
 
 
 @dataclasses.dataclass
@@ -233,9 +339,32 @@ class Scene:
         self.instances = InstanceTable()
         self.materials = MaterialTable()
         self.textures: list[Texture] = []
-        self.lights: list[Light] = []
+        self.lights = LightList()
+        self.environment: Environment | None = None
         self.cameras: list[Camera] = []
         self.warnings: list[str] = []          # what a loader skipped (e.g. line primitives)
+
+    @property
+    def lights(self) -> LightList:
+        """The punctual lights (KHR_lights_punctual), a LightList."""
+        return self._lights
+
+    @lights.setter
+    def lights(self, lights) -> None:
+        self._lights = lights if isinstance(lights, LightList) else LightList(lights)
+
+    def has_light(self) -> bool:
+        """Whether anything lights the scene: a punctual light, an emissive material, an environment."""
+        mats = [self.materials[i] for i in self.used_materials() if i < len(self.materials)]
+        return bool(self.lights) or any(m.is_emissive for m in mats) or (
+            self.environment is not None and not self.environment.is_black)
+
+    def lighting_environment(self) -> Environment | None:
+        """The environment the scene is rendered with: its own, or DEFAULT_ENVIRONMENT when nothing
+        at all lights it (a black image would tell nothing)."""
+        if self.environment is not None:
+            return self.environment
+        return None if self.has_light() else DEFAULT_ENVIRONMENT
 
     # building -------------------------------------------------------------------------------
     def add_material(self, material: Material) -> int:
@@ -319,10 +448,17 @@ class Scene:
             f.add("SCENE_HAS_NORMAL_MAPS")
         if any(m.alpha_mode == AlphaMode.MASK for m in mats):
             f.add("SCENE_HAS_ALPHA_MASK")
+        if any(m.alpha_mode == AlphaMode.BLEND for m in mats):
+            f.add("SCENE_HAS_ALPHA_BLEND")
         if any(m.transmission > 0 for m in mats):
             f.add("SCENE_HAS_TRANSMISSION")
         if len(self.instances) > len(np.unique(self.instances.meshes)):
             f.add("SCENE_HAS_INSTANCING")
+        env = self.lighting_environment()
+        if env is not None and not env.is_black:
+            f.add("SCENE_HAS_ENVIRONMENT")
+            if env.image is not None:
+                f.add("SCENE_HAS_ENVIRONMENT_MAP")
         return f
 
     def __repr__(self) -> str:

@@ -1,5 +1,6 @@
-// Emission + unshadowed direct light for every pixel of every view (RASTER materials use it as is;
-// with RASTER_ONLY the pixels the ray passes light are skipped).
+// Emission + unshadowed direct light for every pixel of every view, the environment where the
+// view sees no surface (RASTER materials use it as is; with RASTER_ONLY the pixels the ray passes
+// light are skipped).
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
@@ -7,14 +8,15 @@
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 layout(rgba16f) writeonly uniform image2DArray dst;
-uniform vec3 background;
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(p, imageSize(dst)))) return;
     uint effect = gbuf_effect_at(p);
-    if (effect == GBUF_NO_GEOMETRY) {
-        imageStore(dst, p, vec4(background, 1.0));
+    if (effect == GBUF_NO_GEOMETRY) {   // the sky: the environment through this pixel
+        vec3 o, d;
+        view_primary_ray(uint(p.z), vec2(p.xy) + 0.5 + views[p.z].jitter.xy, o, d);
+        imageStore(dst, p, vec4(to_half_range(environment_radiance(d)), 1.0));
         return;
     }
 #if RASTER_ONLY

@@ -2,24 +2,21 @@
 from __future__ import annotations
 
 from ...rendergraph.registry import register_pass
-from ..gbuffer.lighting_pass import GBufferLightingPass, background
+from ..gbuffer.lighting_pass import GBufferLightingPass
 
 
 @register_pass
 class DirectLighting(GBufferLightingPass):
     """Emission + unshadowed direct light (punctual and emissive-triangle lights) for every pixel;
-    the sky gets `background`. RASTER materials use it as is. With `raster_only` the pixels whose
+    the sky gets the scene's environment. RASTER materials use it as is. With `raster_only` the pixels whose
     effect is SHADOWS or above are left unwritten (a ray pass lights them: the hybrid graph)."""
 
     SHADER = "direct_lighting.comp"
     OUTPUT = "direct"
-    OUTPUT_DESC = "emission + unshadowed direct light; background where nothing was drawn"
+    OUTPUT_DESC = "emission + unshadowed direct light; the environment where nothing was drawn"
     SALT = 1
-    PROPERTIES = {"light_samples": 1, "background": [0.0, 0.0, 0.0], "raster_only": False}
+    PROPERTIES = {"light_samples": 1, "raster_only": False}
 
     def shader_defines(self):
         return {"LIGHT_SAMPLES": max(1, int(self.light_samples)), "SHADE_SHADOWS": 0,
                 "RASTER_ONLY": int(bool(self.raster_only))}
-
-    def set_uniforms(self, res):
-        res.set("background", background(self.background))

@@ -82,7 +82,3 @@ class GBufferLightingPass(RenderPass):
         else:   # the shader declares no list (the compaction pass was pruned)
             self._prog.run(*self._groups)
 
-
-def background(value) -> tuple[float, float, float]:
-    """A `background` property as linear RGB."""
-    return tuple(float(v) for v in value)[:3]

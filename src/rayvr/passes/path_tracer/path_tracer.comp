@@ -44,7 +44,7 @@ vec3 pt_sample(ivec3 p, inout Rng rng) {
     vec3 o, d;
     view_primary_ray(uint(p.z), vec2(p.xy) + offset, o, d);
     Hit hit;
-    if (!trace_closest(o, d, 1e30, hit)) return pt_background;
+    if (!trace_closest(o, d, 1e30, hit)) return environment_radiance(d);
     float spread = view_pixel_spread(uint(p.z));
     SurfacePoint sp;
     MaterialParams mp;

@@ -35,14 +35,14 @@ class PathTracer(RenderPass):
     Properties: `samples_per_pixel` (paths per pixel per frame), `max_bounces` (scattering events;
     1 = direct light only, 0 = emission only), `rr_start` (bounce from which Russian roulette
     may end a path), `clamp` (0 = off; > 0 caps each sample's radiance per channel, biased),
-    `background` (radiance of rays that escape), `pixel_jitter` (random sub-pixel offsets in
+    `pixel_jitter` (random sub-pixel offsets in
     "full" mode: anti-aliasing once accumulated; off: pixel centres moved by the views' TAA
     jitter), `mode` ("full" or "gbuffer")."""
 
     COLOR = "color"
     PIXELS = "pixels"
     PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
-                  "clamp": 0.0, "background": [0.0, 0.0, 0.0], "pixel_jitter": True}
+                  "clamp": 0.0, "pixel_jitter": True}
     USES_SCENE = True
 
     def validate_property(self, key, value):
@@ -55,13 +55,6 @@ class PathTracer(RenderPass):
             raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= 0, got {value!r}")
         if key == "clamp" and value < 0:
             raise OptionError(f"pass {self.name}: property 'clamp' must be >= 0 (0 = off), got {value!r}")
-        if key == "background":
-            try:
-                value = [float(v) for v in value]
-            except (TypeError, ValueError):
-                value = []
-            if len(value) != 3:
-                raise OptionError(f"pass {self.name}: property 'background' must be three numbers (linear RGB)")
         return value
 
     def reflect(self, cd):
@@ -95,7 +88,7 @@ class PathTracer(RenderPass):
     def _set_uniforms(self, res) -> None:
         values = {"pt_samples": int(self.samples_per_pixel), "pt_max_bounces": int(self.max_bounces),
                   "pt_rr_start": int(self.rr_start), "pt_clamp": float(self.clamp),
-                  "pt_background": tuple(self.background), "pt_pixel_jitter": bool(self.pixel_jitter)}
+                  "pt_pixel_jitter": bool(self.pixel_jitter)}
         for key, value in values.items():
             res.set(key, value)   # skipped where the GLSL compiler dropped the uniform
 

@@ -1,8 +1,10 @@
-// Mirror / glossy reflections for the pixels whose effect is REFLECTIONS or above (those on the
-// reflection list, dispatched indirectly, or with PIXELS_2D the whole image in tiles): sample the
-// specular lobe (GGX VNDF; exact mirror at roughness 0), trace, shade the hit with emission and
-// shadowed direct light, continue up to MAX_BOUNCES. Output: reflected radiance weighted by the
-// specular BSDF, so the composite adds it to the direct light.
+// Mirror, glossy and refracted light for the pixels whose effect is REFLECTIONS or above (those on
+// the reflection list, dispatched indirectly, or with PIXELS_2D the whole image in tiles): sample
+// the BSDF's specular lobes (GGX VNDF reflection, and for transmissive materials refraction or a
+// thin wall's pass-through; exact deltas at roughness 0), trace, shade the hit with emission and
+// shadowed direct light, continue up to MAX_BOUNCES through reflective hits (absorbing inside
+// volumes). Output: that radiance weighted by the specular lobes, which the composite adds to the
+// direct light (the diffuse part is the direct-light passes').
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
@@ -15,7 +17,6 @@ layout(local_size_x = RAY_GROUP_SIZE) in;
 layout(local_size_x = PIXEL_LIST_GROUP) in;
 #endif
 layout(rgba16f) writeonly uniform image2DArray dst;
-uniform vec3 background;
 
 void main() {
     ivec3 p;
@@ -24,24 +25,30 @@ void main() {
     PathVertex s = path_vertex_at_gbuffer(gbuf_load(p), uint(p.z));
     vec3 throughput = vec3(1.0);
     vec3 radiance = vec3(0.0);
+    vec3 medium = vec3(0.0);
     for (int bounce = 0; bounce < MAX_BOUNCES; ++bounce) {
-        vec3 l;
-        bool valid;
-        // A rough lobe already gets emitters through light sampling (specular term of shade_direct);
-        // only a mirror, whose direct specular is zero, sees them through the reflection ray.
-        bool mirror = bsdf_is_mirror(s.bsdf);
-        throughput *= bsdf_sample_specular(s.bsdf, s.n, s.v, rng_next2(rng), l, valid);
-        if (!valid || dot(l, s.ng) <= 0.0 || max3(throughput) <= 0.0) break;
+        BsdfSample bs;
+        if (!bsdf_sample_specular(s.bsdf, s.n, s.v, rng_next3(rng), bs)) break;
+        float side = dot(bs.l, s.ng);
+        if (bs.transmitted ? side >= 0.0 : side <= 0.0) break;
+        throughput *= bs.weight;
+        if (!(max3(throughput) > 0.0)) break;
+        if (bs.transmitted && !s.bsdf.thin) medium = s.bsdf.inside ? vec3(0.0) : s.attenuation;
         Hit hit;
-        if (!trace_closest(offset_ray_origin(s.pos, s.ng), l, 1e30, hit)) {
-            radiance += throughput * background;
+        if (!trace_closest(offset_ray_origin(s.pos, bs.transmitted ? -s.ng : s.ng), bs.l, 1e30, hit)) {
+            // a rough lobe already gets the environment through light sampling; a delta only here
+            if (bs.delta || bs.transmitted) radiance += throughput * environment_radiance(bs.l);
             break;
         }
-        float spread = cone_spread_after_bounce(s.cone_spread, mirror ? 0.0 : bsdf_pdf_specular(s.bsdf, s.n, s.v, l), mirror);
+        if (max3(medium) > 0.0) throughput *= exp(-medium * hit.t);
+        float spread = cone_spread_after_bounce(s.cone_spread, bs.pdf, bs.delta);
         SurfacePoint sp;
         MaterialParams mp;
-        s = path_vertex_at_hit(hit, l, s.cone_width + hit.t * spread, spread, sp, mp);
-        radiance += throughput * ((mirror ? mp.emissive : vec3(0.0)) + shade_direct(s, rng));
+        s = path_vertex_at_hit(hit, bs.l, s.cone_width + hit.t * spread, spread, sp, mp);
+        // Emitters reach a rough reflection through light sampling (shade_direct at the pixel);
+        // a delta lobe or a transmission sees them only through its ray.
+        bool sees_emission = (bs.delta || bs.transmitted) && (sp.front_face || mp.double_sided);
+        radiance += throughput * ((sees_emission ? mp.emissive : vec3(0.0)) + shade_direct(s, rng));
         // Only surfaces that are themselves reflective carry the path further.
         if (mp.effect < EFFECT_REFLECTIONS) break;
     }

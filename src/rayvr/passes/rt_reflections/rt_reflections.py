@@ -4,7 +4,7 @@ from __future__ import annotations
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ..effects import unused_effect_reason
-from ..gbuffer.lighting_pass import GBufferLightingPass, background
+from ..gbuffer.lighting_pass import GBufferLightingPass
 
 
 @register_pass
@@ -20,7 +20,7 @@ class RTReflections(GBufferLightingPass):
     OUTPUT_DESC = "specular-weighted reflected radiance (listed pixels only)"
     PIXEL_LIST = "pixels"
     SALT = 3
-    PROPERTIES = {"max_bounces": 1, "light_samples": 1, "background": [0.0, 0.0, 0.0]}
+    PROPERTIES = {"max_bounces": 1, "light_samples": 1}
 
     def skip_reason(self, cd):
         return unused_effect_reason(cd, Effect.REFLECTIONS)
@@ -28,6 +28,3 @@ class RTReflections(GBufferLightingPass):
     def shader_defines(self):
         return {"MAX_BOUNCES": max(1, int(self.max_bounces)), "LIGHT_SAMPLES": max(1, int(self.light_samples)),
                 "SHADE_SHADOWS": 1}
-
-    def set_uniforms(self, res):
-        res.set("background", background(self.background))

@@ -1,0 +1,140 @@
+"""Every light of a scene in one table, sampled by power through an alias table (Walker 1977,
+Vose's construction): O(1) per sample whatever the number of lights.
+
+Powers (watts up to a common constant; only ratios matter):
+- point light: 4 pi I (I: luminance of colour x intensity, candela);
+- spot light: 2 pi I (1 - (cos inner + cos outer) / 2), its cone as glTF's smooth falloff spans it;
+- directional light: E pi R^2 (E lux on the disc of the scene's bounding sphere, radius R);
+- emissive triangle: pi L A (x 2 when double-sided), L the luminance of its emission (the
+  material factor: textures are not in the power), A its world-space area in float64;
+- environment: 4 pi^2 R^2 L_mean (pbrt's infinite light), L_mean its mean luminance over the
+  sphere.
+
+The GPU side (glsl/lights.glsl) picks entry k with probability power_k / total, then a point or
+direction within it. An emissive triangle's selection probability over its area is
+L / (pi total) x (pi, or 2 pi double-sided) — its area cancels — so the pdf of a point on a
+light never needs the area recomputed (in float32, from render-space vertices).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+POINT, SPOT, DIRECTIONAL = 0, 1, 2
+KIND_PUNCTUAL, KIND_EMISSIVE, KIND_ENVIRONMENT = 0, 1, 2
+
+
+def luminance(rgb) -> np.ndarray:
+    rgb = np.asarray(rgb, dtype=np.float64)
+    return rgb[..., 0] * 0.2126 + rgb[..., 1] * 0.7152 + rgb[..., 2] * 0.0722
+
+
+def alias_table(weights) -> tuple[np.ndarray, np.ndarray]:
+    """(threshold, alias) of Vose's alias method for `weights` (>= 0, not all 0): draw k uniform
+    in [0, n) and x in [0, 1); take k if x < threshold[k], else alias[k]. Entry k is drawn with
+    probability weights[k] / sum."""
+    w = np.asarray(weights, dtype=np.float64)
+    n = len(w)
+    scaled = w * (n / w.sum())
+    threshold = np.ones(n)
+    alias = np.arange(n, dtype=np.int64)
+    small = [i for i in range(n) if scaled[i] < 1.0]
+    large = [i for i in range(n) if scaled[i] >= 1.0]
+    while small and large:
+        s, g = small.pop(), large[-1]
+        threshold[s], alias[s] = scaled[s], g
+        scaled[g] -= 1.0 - scaled[s]
+        if scaled[g] < 1.0:
+            large.pop()
+            small.append(g)
+    return threshold, alias   # left-over entries (rounding) keep threshold 1: themselves
+
+
+def alias_probabilities(threshold: np.ndarray, alias: np.ndarray) -> np.ndarray:
+    """The probability of each entry under an alias table (for tests: it must equal weights / sum)."""
+    n = len(threshold)
+    p = threshold / n
+    np.add.at(p, alias, (1.0 - threshold) / n)
+    return p
+
+
+def punctual_powers(lights, scene_radius: float) -> np.ndarray:
+    """Power of each KHR_lights_punctual light (see the module docstring)."""
+    out = np.zeros(len(lights))
+    for k, L in enumerate(lights):
+        i = float(luminance(L.color)) * float(L.intensity)
+        if L.type == DIRECTIONAL:
+            out[k] = i * math.pi * scene_radius ** 2
+        elif L.type == SPOT:
+            out[k] = 2 * math.pi * i * (1.0 - 0.5 * (math.cos(L.inner_cone_angle) + math.cos(L.outer_cone_angle)))
+        else:
+            out[k] = 4 * math.pi * i
+    return np.maximum(out, 0.0)
+
+
+def environment_power(environment, scene_radius: float) -> float:
+    """Power of the environment as the scene receives it (pbrt's 4 pi^2 R^2 L_mean)."""
+    if environment is None:
+        return 0.0
+    mean = float(luminance(environment.color))
+    if environment.image is not None:
+        h = environment.image.shape[0]
+        sin_theta = np.sin((np.arange(h) + 0.5) / h * math.pi)
+        lum = luminance(environment.image)
+        mean *= float((lum * sin_theta[:, None]).sum() / (sin_theta.sum() * environment.image.shape[1]))
+    return 4 * math.pi ** 2 * scene_radius ** 2 * mean
+
+
+@dataclasses.dataclass
+class LightTable:
+    """The alias table over every light: kind (punctual, emissive triangle, environment), the
+    index within its kind, selection probability, and the alias pair."""
+
+    kinds: np.ndarray          # (n,) KIND_*
+    indices: np.ndarray        # (n,) index within the kind's own buffer
+    probabilities: np.ndarray  # (n,) power / total
+    threshold: np.ndarray
+    alias: np.ndarray
+    total_power: float
+
+    @property
+    def count(self) -> int:
+        return len(self.kinds)
+
+    def probability_of(self, kind: int) -> float:
+        """Summed selection probability of one kind (e.g. the environment's)."""
+        return float(self.probabilities[self.kinds == kind].sum())
+
+    def packed(self) -> np.ndarray:
+        """The SSBO rows of glsl/lights.glsl: header vec4 (count bits, total power, environment
+        probability, 1 / total), then per entry uvec4 (kind, index, alias, -) and vec4 (threshold,
+        probability, -, -), as float32 with uint fields as bits."""
+        out = np.zeros((1 + 2 * max(self.count, 1), 4), np.float32)
+        bits = out.view(np.uint32)
+        bits[0, 0] = self.count
+        out[0, 1] = self.total_power
+        out[0, 2] = self.probability_of(KIND_ENVIRONMENT)
+        out[0, 3] = 1.0 / self.total_power if self.total_power > 0 else 0.0
+        rows = 1 + 2 * np.arange(self.count)
+        bits[rows, 0], bits[rows, 1], bits[rows, 2] = self.kinds, self.indices, self.alias
+        out[rows + 1, 0], out[rows + 1, 1] = self.threshold, self.probabilities
+        return out
+
+
+def build_light_table(punctual: np.ndarray, emissive: np.ndarray, environment: float) -> LightTable:
+    """The table over punctual lights, emissive triangles and the environment, by their powers
+    (entries of power 0 are left out)."""
+    kinds = np.concatenate([np.full(len(punctual), KIND_PUNCTUAL), np.full(len(emissive), KIND_EMISSIVE),
+                            np.full(1 if environment > 0 else 0, KIND_ENVIRONMENT)]).astype(np.uint32)
+    indices = np.concatenate([np.arange(len(punctual)), np.arange(len(emissive)),
+                              np.zeros(1 if environment > 0 else 0)]).astype(np.uint32)
+    power = np.concatenate([punctual, emissive, [environment] if environment > 0 else []]).astype(np.float64)
+    keep = power > 0
+    kinds, indices, power = kinds[keep], indices[keep], power[keep]
+    total = float(power.sum())
+    if not len(power):
+        return LightTable(kinds, indices, power, np.ones(0), np.zeros(0, np.int64), 0.0)
+    threshold, alias = alias_table(power)
+    return LightTable(kinds, indices, power / total, threshold, alias, total)
