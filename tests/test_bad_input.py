@@ -474,7 +474,8 @@ def test_warnings_print_once_one_line_each_and_do_not_fail(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 0, err
     lines = err.strip().splitlines()
-    assert len(lines) == 3 and all(line.startswith("rayvr: warning: ") and "scene.gltf" in line for line in lines)
+    assert len(lines) == 4 and all(line.startswith("rayvr: warning: ") and "scene.gltf" in line for line in lines)
+    assert any("no light" in line and "neutral uniform environment" in line for line in lines)
     assert any("asset.version" in line for line in lines)
     assert any("KHR_materials_sheen" in line and "not implemented" in line for line in lines)
     assert any("materials: names repeat ('Red' x2)" in line for line in lines)

@@ -10,8 +10,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 
-from ..errors import OptionError, RayvrError
+from ..errors import OptionError, RayvrError, SceneWarning
 
 # Subcommand modules, in the order `rayvr --help` lists them.
 COMMAND_MODULES = ["info", "render", "graph", "converge", "tune", "check", "view"]
@@ -38,6 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run the `rayvr` command; a RayvrError is printed to stderr (on one line unless it has
     several, as shader compile logs do) and gives exit code 2; Ctrl-C prints one line and gives 130."""
     try:
+        warnings.simplefilter("ignore", SceneWarning)   # the CLI prints scene warnings as one line each
         parser = build_parser()
         args = parser.parse_args(argv)
         if not getattr(args, "func", None):

@@ -113,3 +113,26 @@ def _load_file(path: Path, print_warnings: bool):
     for line in scene.warnings if print_warnings else ():
         print(f"rayvr: warning: {line}", file=sys.stderr)
     return scene
+
+
+def add_lighting_arguments(p) -> None:
+    """--environment / --environment-strength (render, converge, tune, view, check)."""
+    p.add_argument("--environment", metavar="RGB|FILE",
+                   help="light from every direction: a radiance r,g,b (e.g. 1,1,1) or an equirectangular "
+                        "EXR/HDR panorama (2:1); a scene with no light at all gets a neutral 1,1,1")
+    p.add_argument("--environment-strength", type=number("--environment-strength", 0, 1e9), default=1.0,
+                   help="multiplier of --environment (default 1)")
+
+
+def apply_lighting(scene, args) -> None:
+    """Give `scene` the --environment of `args` (if any), and say on one line of stderr when the
+    scene has no light at all and renders with the neutral default environment."""
+    from ..scene import DEFAULT_ENVIRONMENT, load_environment
+
+    spec = getattr(args, "environment", None)
+    if spec is not None:
+        scene.environment = load_environment(spec, "--environment", getattr(args, "environment_strength", 1.0))
+    elif scene.lighting_environment() is DEFAULT_ENVIRONMENT:
+        print(f"rayvr: warning: {scene.path or scene.name}: no light (no punctual light, emissive material or environment); "
+              f"lighting it with a neutral uniform environment of radiance 1 (--environment to choose one)",
+              file=sys.stderr)

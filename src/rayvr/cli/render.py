@@ -25,16 +25,19 @@ import numpy as np
 from ..cluster import cli as cluster_cli
 from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
-from .options import MAX_VIEWS, integer, load_scene_arg, number, parse_size, views_count
+from .options import (MAX_VIEWS, add_lighting_arguments, apply_lighting, integer, load_scene_arg, number,
+                      parse_size, views_count)
 
 LAYOUTS = ("per-view", "side-by-side")
+GRAPHS = ("hybrid", "path_traced")
+PT_SPP_PER_FRAME = 8   # the most paths per pixel one path-traced frame traces
 OUT_SUFFIXES = (".png", ".jpg", ".jpeg", ".exr")
 MAX_IPD_M = 1.0   # metres: eyes are 0.05-0.08 apart; a light-field grid's spacing stays below a metre
 
 
 def register(sub) -> None:
     """Add the `render` subcommand to the CLI's subparsers."""
-    p = sub.add_parser("render", help="render a scene with the hybrid graph and write images")
+    p = sub.add_parser("render", help="render a scene (the hybrid graph, or path traced) and write images")
     p.add_argument("scene", nargs="?", help="glTF file or built-in scene name (default: the Cornell box)")
     p.add_argument("--views", type=views_count(), default=2,
                    help=f"view count: 1 mono, 2 stereo, N a camera grid (1 to {MAX_VIEWS}; default 2)")
@@ -67,6 +70,17 @@ def register(sub) -> None:
     p.add_argument("--multiview", default="auto", choices=("auto", "on", "off"), help="G-buffer multiview")
     p.add_argument("--gbuffer", default="auto", choices=("auto", "raster", "rt"),
                    help="G-buffer: raster, ray-traced, or auto (ray-traced on GPUs with weak raster units)")
+    p.add_argument("--graph", default="hybrid", choices=GRAPHS,
+                   help="hybrid (per-material effects; default) or path_traced (every pixel, accumulated: "
+                        "reference renders)")
+    p.add_argument("--spp", type=integer("--spp", 1, 1 << 20),
+                   help="path_traced: samples per pixel accumulated in all (default: --frames x 1); hybrid: "
+                        "paths per frame for PATH_TRACED materials (default 1)")
+    p.add_argument("--bounces", type=integer("--bounces", 1, 1024),
+                   help="path tracing bounces B: the longest path has B scattering vertices, each sampling a "
+                        "light, so B = 1 is direct light only; Mitsuba 3's max_depth is B + 1, Tauray's "
+                        "'2 bounces + NEE' is B = 3 (default: 8 path_traced, 4 hybrid)")
+    add_lighting_arguments(p)
     p.add_argument("--report", action="store_true", help="print the graph's compile report")
     cluster_cli.add_arguments(p)
     p.add_argument("--camera-path", metavar="FILE",
@@ -157,7 +171,6 @@ def quilt_path(args, grid, size) -> Path | None:
 def run(args) -> int:
     """`rayvr render`: validate the options and outputs, render with the hybrid graph (here, or
     over the workers of a cluster with --workers), write every image at once."""
-    from ..graphs import hybrid
     from ..passes.tonemap import OPERATORS
     from ..renderer import default_views
 
@@ -188,8 +201,12 @@ def run(args) -> int:
         if cluster_cli.requested(args):
             raise OptionError("--camera-path renders in this process; leave out --workers")
         camera_path = CameraPath.load(args.camera_path)
+    if args.graph == "path_traced" and args.spp is not None and args.frames != 1:
+        raise OptionError(f"--spp {args.spp} and --frames {args.frames}: path_traced accumulates --spp samples "
+                          f"over as many frames as it needs; give one of them")
     scene = load_scene_arg(args.scene)
     apply_effects(scene, args.effect)
+    apply_lighting(scene, args)
 
     if quilt is not None:
         from ..xr.quilt import quilt_views
@@ -197,9 +214,7 @@ def run(args) -> int:
         views = quilt_views(scene, grid[0], grid[1], size, args.view_cone)
     else:
         views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
-    graph = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
-                   auto_exposure=auto_exposure, light_samples=args.light_samples,
-                   multiview=args.multiview, gbuffer=args.gbuffer)
+    graph = build_graph(args, exposure, auto_exposure)
     hdr = out.suffix.lower() == ".exr"
     if camera_path is not None:
         with atomic_group():   # every frame's files, or none
@@ -226,21 +241,52 @@ def run(args) -> int:
     return 0
 
 
+def path_traced_frames(args) -> tuple[int, int]:
+    """(frames, samples per pixel per frame) of a path_traced render: --spp in all (exactly), or
+    --frames of one sample each."""
+    if args.spp is None:
+        return args.frames, 1
+    per_frame = max(d for d in range(1, PT_SPP_PER_FRAME + 1) if args.spp % d == 0)
+    return args.spp // per_frame, per_frame
+
+
+def build_graph(args, exposure: float, auto_exposure: bool):
+    """The graph --graph names, with the path tracing options."""
+    from ..graphs import hybrid, path_traced
+
+    if args.graph == "path_traced":
+        _, per_frame = path_traced_frames(args)
+        return path_traced(samples_per_pixel=per_frame, max_bounces=args.bounces or 8, tonemap=args.tonemap.lower(),
+                           exposure=exposure, auto_exposure=auto_exposure)
+    g = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
+               auto_exposure=auto_exposure, light_samples=args.light_samples, multiview=args.multiview,
+               gbuffer=args.gbuffer, path_bounces=args.bounces or 4)
+    if args.spp is not None:
+        g.update_pass("PathTracer", {"samples_per_pixel": args.spp})
+    return g
+
+
 def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
     """Render in this process: (pixels (views, h, w, c) rows top-down, the quilt's pixels when
     `quilt_grid` (cols, rows) is given, else None)."""
-    from ..graphs import HDR_OUTPUT, OUTPUT
+    from tqdm import tqdm
+
+    from ..graphs import HDR_OUTPUT, OUTPUT, PT_HDR_OUTPUT
     from ..renderer import Renderer
 
     size = views.size
     quilt_pixels = None
+    frames = path_traced_frames(args)[0] if args.graph == "path_traced" else args.frames
     with Renderer(scene, graph, views=views) as r:
-        for _ in range(args.frames):
+        for _ in tqdm(range(frames), desc=f"render {scene.name}", unit="frame", leave=False,
+                      disable=frames < 8):
             r.render()
-        pixels = r.read_output(HDR_OUTPUT if hdr else OUTPUT, flip_y=True)
+        hdr_pin = PT_HDR_OUTPUT if args.graph == "path_traced" else HDR_OUTPUT
+        pixels = r.read_output(hdr_pin if hdr else OUTPUT, flip_y=True)
         if args.report:
             print(r.report())
-        print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {args.frames} frame(s)")
+        spp = f", {frames * graph.get_pass('PathTracer').samples_per_pixel} spp" if args.graph == "path_traced" else ""
+        print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {frames} frame(s){spp}")
         print(r.profile())
         if quilt_grid is not None:
             from ..xr.quilt import compose_quilt, read_quilt

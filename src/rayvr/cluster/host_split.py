@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from .jobs import VIEW_STREAM_STRIDE, _graph_for, _scene_and_payload
+from .jobs import _graph_for, _scene_and_payload
 from .shares import Share, split_evenly, view_range
 
 
@@ -151,7 +151,7 @@ class HostFrameSplitter:
         for k, count in enumerate(self.counts):
             if count:
                 kwargs = {"graph": self._graph, "views": view_range(views, first, first + count), "pins": [self.pin],
-                          "frame_index": self.frame_index + first * VIEW_STREAM_STRIDE, "flip_y": False}
+                          "frame_index": self.frame_index, "flip_y": False}
                 shares.append(Share(k, "views", kwargs, work=count, slot=slots[k], meta={"first": first}))
             first += count
         render_ms, readback_ms, arrival_ms = [0.0] * n, [0.0] * n, [0.0] * n

@@ -6,9 +6,9 @@ Every job takes `cluster=` (a rayvr.cluster.Cluster) or makes one from `workers=
 for its own duration. `scene` is a Scene, a glTF path or a built-in name; `payload=` (a
 ScenePayload) says how it travels when that differs (the CLI sends the glTF file's bytes).
 
-Seeds: every random stream in rayvr's passes follows the frame index (glsl/sampling.glsl:
-pixel, view layer, frame index, salt); a view share's frames are offset by VIEW_STREAM_STRIDE
-per first view, a sequence's frame i renders frame index `frame_index_base + i`.
+Seeds: every random stream in rayvr's passes follows (pixel, the view's index in the whole
+frame, frame index, salt) (glsl/sampling.glsl): a view share renders its views with their
+global indices (PinnedViews), a sequence's frame i renders frame index `frame_index_base + i`.
 """
 from __future__ import annotations
 
@@ -23,8 +23,6 @@ from . import pool
 from .payload import ScenePayload
 from .shares import Share, split_evenly, view_range
 
-VIEW_STREAM_STRIDE = 1 << 16   # frame-index offset per view of a view share's first view (a
-#                                multiple of the TAA jitter sequence: jitter is unchanged)
 SHARES_PER_WORKER = 4          # sample and sequence shares per worker: balance and cheap re-runs
 
 
@@ -71,11 +69,10 @@ def render_views(scene, graph, views, pins=None, frames: int = 1, frame_index: i
     """Render `graph` over the ViewSet `views` split into contiguous view ranges (default one
     per worker), `frames` frames each, and stitch `pins` (default the graph's first output).
 
-    A view's pixels equal one process's when nothing random depends on its layer: each share
-    renders its views as layers 0..k-1, and the passes seed random numbers by layer (so random
-    passes give another, equally valid sample there; shares' streams are decorrelated through
-    the frame index, VIEW_STREAM_STRIDE). Nothing may couple views either: auto exposure over
-    the frame belongs after the gather (rayvr.cluster.gather.tone_map)."""
+    A view's pixels equal one process's: each share renders its views as layers 0..k-1, but the
+    passes seed random numbers by the view's index in the whole frame (PinnedViews'
+    first_view_index, views.glsl view_global_index). Nothing may couple views: auto exposure
+    over the frame belongs after the gather (rayvr.cluster.gather.tone_map)."""
     from ..xr.views import ViewSet
 
     if not isinstance(views, ViewSet):
@@ -98,7 +95,7 @@ def render_views(scene, graph, views, pins=None, frames: int = 1, frame_index: i
         jobs = []
         for i, (a, b) in enumerate(split_evenly(len(views), shares or c.size)):
             kwargs = {"graph": graph_dict, "views": view_range(views, a, b), "pins": pins, "frames": int(frames),
-                      "frame_index": int(frame_index) + a * VIEW_STREAM_STRIDE, "flip_y": flip_y,
+                      "frame_index": int(frame_index), "flip_y": flip_y,
                       "profiling": profiling}
             jobs.append(Share(i, "views", kwargs, work=(b - a) * int(frames), meta={"first_view": a}))
         c.run(jobs, c.scene_ref(payload), on_result=gather, desc=f"views {scene.name}", unit="view",

@@ -32,9 +32,10 @@ class PinnedViews(ViewSet):
     """Some views of a frame, in the frame's render space: `origin` is the whole frame's, so each
     view's float32 matrices (and so its pixels) are those the whole frame packs."""
 
-    def __init__(self, views, origin, previous: ViewSet | None = None):
+    def __init__(self, views, origin, previous: ViewSet | None = None, first_view_index: int = 0):
         super().__init__(list(views), previous)
         self._origin = np.asarray(origin, dtype=np.float64).copy()
+        self.first_view_index = int(first_view_index)
 
     def origin(self) -> np.ndarray:
         return self._origin.copy()
@@ -42,7 +43,8 @@ class PinnedViews(ViewSet):
 
 def view_range(view_set: ViewSet, start: int, stop: int, previous: ViewSet | None = None) -> PinnedViews:
     """Views [start, stop) of `view_set`, pinned to its origin."""
-    return PinnedViews(view_set.views[start:stop], view_set.origin(), previous)
+    return PinnedViews(view_set.views[start:stop], view_set.origin(), previous,
+                       view_set.first_view_index + start)
 
 
 def split_evenly(total: int, parts: int) -> list[tuple[int, int]]:

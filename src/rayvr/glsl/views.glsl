@@ -12,7 +12,8 @@ struct ViewData {
     vec4 eye;             // xyz eye position in render space
     vec4 fov_tan;         // tan(angleLeft), tan(angleRight), tan(angleDown), tan(angleUp): left/down < 0
     vec4 clip;            // near, far, width px, height px
-    vec4 jitter;          // xy sub-pixel jitter in pixels (TAA), zw unused
+    vec4 jitter;          // xy sub-pixel jitter in pixels (TAA), z the view's index in its whole frame (uint
+                          // bits: random streams follow it, so a frame split by views draws the same numbers), w unused
 };
 
 layout(std430, binding = RAYVR_VIEWS_SSBO) readonly buffer ViewsBlock {
@@ -23,6 +24,7 @@ layout(std430, binding = RAYVR_VIEWS_SSBO) readonly buffer ViewsBlock {
 #define RAYVR_VIEWS_FLAG_REVERSED_Z 1u   // projections are reversed-Z with an infinite far plane
 
 uint view_count() { return frame_info.x; }
+uint view_global_index(uint v) { return floatBitsToUint(views[v].jitter.z); }
 uint frame_index() { return frame_info.y; }
 bool views_reversed_z() { return (frame_info.w & RAYVR_VIEWS_FLAG_REVERSED_Z) != 0u; }
 

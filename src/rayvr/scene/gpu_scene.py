@@ -25,7 +25,7 @@ from ..materials.material import TEXTURE_SLOTS, Material
 from . import bvh as bvh_mod
 from . import bvh_wide, light_table
 from .gpu_frame import SceneFrame
-from .model import FEATURES, Scene
+from .model import DEFAULT_ENVIRONMENT, FEATURES, Scene
 
 MATERIAL_FLOATS = 100         # 400 B, see MaterialData: 7 vec4 + 2 per texture slot
 MATERIAL_TEX_ROW = 28         # float offset of MaterialData.tex
@@ -303,6 +303,14 @@ class GpuScene:
         env = self.scene.lighting_environment()
         if env is not None and env.is_black:
             env = None
+        if env is not None and env is DEFAULT_ENVIRONMENT and not getattr(self.scene, "_default_environment_noted", False):
+            import warnings
+
+            from ..errors import SceneWarning
+
+            self.scene._default_environment_noted = True
+            warnings.warn(f"{self.scene.name} has no light; lit by a neutral uniform environment of radiance 1 "
+                          f"(set scene.environment to choose one)", SceneWarning, stacklevel=3)
         self.environment = env
         self.lights = light_table.build_light_table(light_table.punctual_powers(self.scene.lights, radius),
                                                     emissive, light_table.environment_power(env, radius))

@@ -190,6 +190,9 @@ class ViewSet:
                           f"{sorted(sizes)}; give every View the same width and height")
         self.views = list(views)
         self._prev_view_proj = previous._prev_view_proj if previous is not None else None
+        # the index of views[0] in its whole frame (a share of a frame split by views): the
+        # shaders' random streams follow the global index (views.glsl view_global_index)
+        self.first_view_index = 0
 
     def __len__(self) -> int:
         return len(self.views)
@@ -264,4 +267,5 @@ class ViewSet:
         body[:, 84:88] = c[:, 7:11]
         body[:, 88:92] = c[:, 11:15]
         body[:, 92:94] = jitter
+        body.view(np.uint32)[:, 94] = self.first_view_index + np.arange(n, dtype=np.uint32)
         return header.tobytes() + body.tobytes()

@@ -6,83 +6,25 @@ it to `dst` on the GPU (so `dst` may alias with other transients).
 """
 from __future__ import annotations
 
-import functools
 from pathlib import Path
 
 import moderngl
 import numpy as np
 
+from ... import images
 from ...errors import OptionError
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import RenderPass, Reflection
 from .compute import program, run_over, storable_format
 
-FLOAT_SUFFIXES = {".exr", ".hdr", ".pfm"}
-
-
-def _require_file(path: Path, where: str) -> None:
-    if not path.is_file():
-        raise OptionError(f"{where}: file '{path}' not found; give an existing PNG, JPEG or EXR path")
-
-
-def _read_image(path: Path, where: str) -> np.ndarray:
-    """(h, w, 4) uint8 for 8-bit files, float32 for HDR files; rows top-down as in the file.
-    Decoded once per file version (reflect and compile both ask); do not modify the result."""
-    _require_file(path, where)
-    st = path.stat()
-    return _decode(path.resolve(), st.st_mtime_ns, st.st_size, where)
-
-
-@functools.lru_cache(maxsize=8)
-def _decode(path: Path, mtime_ns: int, size: int, where: str) -> np.ndarray:
-    try:
-        if path.suffix.lower() == ".exr":
-            a = _read_exr(path, where)
-        elif path.suffix.lower() in FLOAT_SUFFIXES:
-            import imageio.v3 as iio
-
-            a = np.asarray(iio.imread(path), dtype=np.float32)
-        else:
-            from PIL import Image
-
-            with Image.open(path) as im:
-                a = np.asarray(im.convert("RGBA"))
-    except OptionError:
-        raise
-    except Exception as exc:
-        raise OptionError(f"{where}: cannot read '{path}': {exc}") from exc
-    if a.dtype not in (np.uint8, np.float32):
-        a = a.astype(np.float32)
-    if a.ndim == 2:
-        a = a[:, :, None]
-    if a.shape[2] < 4:   # grey -> rgb, rgb -> rgba with alpha 1
-        rgb = np.repeat(a[:, :, :1], 3, axis=2) if a.shape[2] < 3 else a[:, :, :3]
-        one = np.full(a.shape[:2] + (1,), 1.0 if a.dtype == np.float32 else 255, a.dtype)
-        a = np.concatenate([rgb, one], axis=2)
-    return np.ascontiguousarray(a[:, :, :4])
-
-
-def _read_exr(path: Path, where: str) -> np.ndarray:
-    try:
-        import OpenEXR
-    except ImportError:
-        raise OptionError(f"{where}: reading '{path}' needs the OpenEXR bindings: pip install openexr") from None
-    with OpenEXR.File(str(path)) as f:   # pixels must be read while the file is open
-        channels = {k: np.array(c.pixels, dtype=np.float32) for k, c in f.channels().items()}
-    for group in ("RGBA", "RGB"):
-        if group in channels:
-            return channels[group]
-    names = [c for c in ("R", "G", "B", "A", "Y") if c in channels]
-    if not names:
-        raise OptionError(f"{where}: '{path}' has no R/G/B/A/Y channels (it has {', '.join(channels)})")
-    return np.stack([channels[c] for c in names], axis=2)
+FLOAT_SUFFIXES = images.FLOAT_SUFFIXES
 
 
 def _image_size(path: Path, where: str) -> tuple[int, int]:
     if path.suffix.lower() in FLOAT_SUFFIXES:
-        h, w = _read_image(path, where).shape[:2]
+        h, w = images.read_image(path, where).shape[:2]
         return w, h
-    _require_file(path, where)
+    images.require_file(path, where)
     from PIL import Image
 
     try:
@@ -147,7 +89,7 @@ class ImageLoader(RenderPass):
         kinds = {f.suffix.lower() in FLOAT_SUFFIXES for f in self.files()}
         if len(kinds) > 1:
             raise OptionError(f"{where}: mix of 8-bit and HDR files; give files of one kind")
-        layers = [_read_image(f, where)[::-1] for f in self.files()]   # GL rows are bottom-up
+        layers = [images.read_image(f, where)[::-1] for f in self.files()]   # GL rows are bottom-up
         self._pixels = np.ascontiguousarray(np.stack(layers)).tobytes()
         self._uploaded_to = None
         self._prog = program(ctx.gl, "blit.comp", self.format or self._natural_format())

@@ -23,7 +23,7 @@ void main() {
     if (effect >= EFFECT_SHADOWS) return;   // lit by the ray passes instead
 #endif
     GSurface g = gbuf_load(p);
-    Rng rng = rng_init(uvec2(p.xy), uint(p.z), frame_index(), RNG_SALT);
+    Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
     vec3 c = g.emissive + shade_direct(path_vertex_at_gbuffer(g, uint(p.z)), rng);
     imageStore(dst, p, vec4(c, 1.0));
 }

@@ -22,7 +22,8 @@ uniform float pt_clamp;
 uniform bool pt_pixel_jitter;
 
 Rng pt_rng(ivec3 p, int sample_index) {
-    return rng_init(uvec2(p.xy), uint(p.z), frame_index(), RNG_SALT + 0x9E3779B9u * uint(sample_index));
+    return rng_init_sample(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT, uint(sample_index),
+                           uint(pt_samples));
 }
 
 #if PT_FROM_GBUFFER

@@ -25,6 +25,7 @@ from ..effects import effect_defines, scene_defines, unused_effect_reason
 from ..gbuffer import channels
 
 MODES = ("full", "gbuffer")
+SAMPLERS = {"sobol": 1, "pcg": 0}   # glsl/sampling.glsl RAYVR_SAMPLER
 RNG_SALT = 7
 
 
@@ -37,16 +38,20 @@ class PathTracer(RenderPass):
     may end a path), `clamp` (0 = off; > 0 caps each sample's radiance per channel, biased),
     `pixel_jitter` (random sub-pixel offsets in
     "full" mode: anti-aliasing once accumulated; off: pixel centres moved by the views' TAA
-    jitter), `mode` ("full" or "gbuffer")."""
+    jitter), `mode` ("full" or "gbuffer"), `sampler` ("sobol": hash-based Owen-scrambled Sobol,
+    the default; "pcg": independent PCG hash samples, for comparisons)."""
 
     COLOR = "color"
     PIXELS = "pixels"
     PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
-                  "clamp": 0.0, "pixel_jitter": True}
+                  "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol"}
     USES_SCENE = True
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
+        if key == "sampler" and value not in SAMPLERS:
+            raise OptionError(f"pass {self.name}: property 'sampler' is {value!r}; use 'sobol' (Owen-scrambled "
+                              f"Sobol, the default) or 'pcg'")
         if key == "mode" and value not in MODES:
             raise OptionError(f"pass {self.name}: property 'mode' is {value!r}; use 'full' or 'gbuffer'")
         if key == "samples_per_pixel" and (int(value) != value or value < 1):
@@ -74,7 +79,8 @@ class PathTracer(RenderPass):
     def compile(self, ctx, cd):
         listed = self.mode == "gbuffer" and self.PIXELS in cd.input_formats
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALT,
-                         "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PIXEL_LIST_INPUT": int(listed)}
+                         "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PIXEL_LIST_INPUT": int(listed),
+                         "RAYVR_SAMPLER": SAMPLERS[self.sampler]}
         self._listed = listed
         self._group = ray_group(cd.views)
         self._defines.update(ray_group_defines(self._group))

@@ -21,7 +21,7 @@ layout(rgba16f) writeonly uniform image2DArray dst;
 void main() {
     ivec3 p;
     if (!ray_pass_pixel(EFFECT_REFLECTIONS, imageSize(dst), p)) return;
-    Rng rng = rng_init(uvec2(p.xy), uint(p.z), frame_index(), RNG_SALT);
+    Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
     PathVertex s = path_vertex_at_gbuffer(gbuf_load(p), uint(p.z));
     vec3 throughput = vec3(1.0);
     vec3 radiance = vec3(0.0);
