@@ -15,6 +15,9 @@ written under temporary names and renamed together at the end, so a failure or C
 none of them.
 `--camera-path FILE` (a path `rayvr view` recorded) renders one frame per recorded pose into
 out_0000, out_0001, ...
+`--denoise svgf` filters the light with SVGF and TAA (shadows, reflections and path-traced pixels
+then converge over --frames); `--denoise oidn` runs Intel Open Image Denoise on the last frame
+(the `oidn` extra: pip install 'rayvr[oidn]').
 """
 from __future__ import annotations
 
@@ -28,6 +31,7 @@ from ..fileio import atomic_group, check_writable, image_format, write_exr, writ
 from .options import MAX_VIEWS, integer, load_scene_arg, number, parse_size, views_count
 
 LAYOUTS = ("per-view", "side-by-side")
+DENOISE_CHOICES = ("none", "svgf", "oidn")
 OUT_SUFFIXES = (".png", ".jpg", ".jpeg", ".exr")
 MAX_IPD_M = 1.0   # metres: eyes are 0.05-0.08 apart; a light-field grid's spacing stays below a metre
 
@@ -67,6 +71,9 @@ def register(sub) -> None:
     p.add_argument("--multiview", default="auto", choices=("auto", "on", "off"), help="G-buffer multiview")
     p.add_argument("--gbuffer", default="auto", choices=("auto", "raster", "rt"),
                    help="G-buffer: raster, ray-traced, or auto (ray-traced on GPUs with weak raster units)")
+    p.add_argument("--denoise", default="none", choices=DENOISE_CHOICES,
+                   help="none; svgf (SVGF + TAA over the frames, real time); oidn (Intel Open Image Denoise on "
+                        "the last frame, offline: needs rayvr[oidn]); default none")
     p.add_argument("--report", action="store_true", help="print the graph's compile report")
     cluster_cli.add_arguments(p)
     p.add_argument("--camera-path", metavar="FILE",
@@ -188,6 +195,13 @@ def run(args) -> int:
         if cluster_cli.requested(args):
             raise OptionError("--camera-path renders in this process; leave out --workers")
         camera_path = CameraPath.load(args.camera_path)
+    if args.denoise == "oidn":
+        from ..passes.oidn import require_pyoidn
+
+        require_pyoidn("--denoise oidn")
+    graph = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
+                   auto_exposure=auto_exposure, light_samples=args.light_samples,
+                   multiview=args.multiview, gbuffer=args.gbuffer, denoise=args.denoise)
     scene = load_scene_arg(args.scene)
     apply_effects(scene, args.effect)
 
@@ -197,9 +211,6 @@ def run(args) -> int:
         views = quilt_views(scene, grid[0], grid[1], size, args.view_cone)
     else:
         views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
-    graph = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
-                   auto_exposure=auto_exposure, light_samples=args.light_samples,
-                   multiview=args.multiview, gbuffer=args.gbuffer)
     hdr = out.suffix.lower() == ".exr"
     if camera_path is not None:
         with atomic_group():   # every frame's files, or none
@@ -229,15 +240,18 @@ def run(args) -> int:
 def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
     """Render in this process: (pixels (views, h, w, c) rows top-down, the quilt's pixels when
     `quilt_grid` (cols, rows) is given, else None)."""
-    from ..graphs import HDR_OUTPUT, OUTPUT
+    from ..graphs import OUTPUT, hdr_output
     from ..renderer import Renderer
 
     size = views.size
     quilt_pixels = None
     with Renderer(scene, graph, views=views) as r:
-        for _ in range(args.frames):
+        oidn = r.compiled.passes.get("Denoise")
+        for i in range(args.frames):
+            if oidn is not None:   # OIDN is offline work: only the frame that is written
+                oidn.set_properties({"enabled": i == args.frames - 1})
             r.render()
-        pixels = r.read_output(HDR_OUTPUT if hdr else OUTPUT, flip_y=True)
+        pixels = r.read_output(hdr_output(graph) if hdr else OUTPUT, flip_y=True)
         if args.report:
             print(r.report())
         print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {args.frames} frame(s)")
@@ -252,14 +266,14 @@ def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
 def render_path(args, scene, graph, views, hdr: bool, camera_path, out: Path) -> list[Path]:
     """Replay `camera_path`: one frame per pose, its views written as out_0000..., (inside the
     caller's atomic group: the files appear together at its end)."""
-    from ..graphs import HDR_OUTPUT, OUTPUT
+    from ..graphs import OUTPUT, hdr_output
     from ..renderer import Renderer
 
     written = []
     with Renderer(scene, graph, views=views) as r:
         for i in range(len(camera_path)):
             r.render(camera_path.view_set(i, views))
-            pixels = r.read_output(HDR_OUTPUT if hdr else OUTPUT, flip_y=True)
+            pixels = r.read_output(hdr_output(graph) if hdr else OUTPUT, flip_y=True)
             images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
             for path, img in zip(output_paths(frame_path(out, i), len(views), args.layout), images):
                 written.append(write_exr(path, img) if hdr else write_image(path, img))

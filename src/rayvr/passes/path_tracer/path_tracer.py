@@ -11,6 +11,10 @@ Two modes (property `mode`):
 
 The output is the mean of `samples_per_pixel` paths (rgba32f); feed it to Accumulate for a
 progressive render. Paths are seeded by pixel, view, frame index and sample index (PCG).
+With `lobes` the pass also writes what the first vertex's diffuse and specular lobes reflect
+(`diffuse`, `specular`, rgba16f, emission excluded; where a camera ray escapes, `diffuse` is the
+background) for a denoiser that demodulates them apart (rayvr.passes.SVGF); without it those
+pins do not exist and nothing is allocated for them.
 """
 from __future__ import annotations
 
@@ -37,12 +41,15 @@ class PathTracer(RenderPass):
     may end a path), `clamp` (0 = off; > 0 caps each sample's radiance per channel, biased),
     `background` (radiance of rays that escape), `pixel_jitter` (random sub-pixel offsets in
     "full" mode: anti-aliasing once accumulated; off: pixel centres moved by the views' TAA
-    jitter), `mode` ("full" or "gbuffer")."""
+    jitter), `mode` ("full" or "gbuffer"), `lobes` (also the `diffuse` and `specular` outputs;
+    then Russian roulette never ends a path at its first vertex, and `clamp` caps each lobe of a
+    sample on its own)."""
 
     COLOR = "color"
+    DIFFUSE, SPECULAR = "diffuse", "specular"
     PIXELS = "pixels"
     PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
-                  "clamp": 0.0, "background": [0.0, 0.0, 0.0], "pixel_jitter": True}
+                  "clamp": 0.0, "background": [0.0, 0.0, 0.0], "pixel_jitter": True, "lobes": False}
     USES_SCENE = True
 
     def validate_property(self, key, value):
@@ -71,6 +78,10 @@ class PathTracer(RenderPass):
             r.add_input(self.PIXELS, "PATH_TRACED pixels (EffectCompaction); absent: whole screen").buffer(
                 pixel_list_bytes(cd.size, cd.views)).optional().indirect()
         r.add_output(self.COLOR, "path-traced radiance, mean of samples_per_pixel paths").format("rgba32f")
+        if self.lobes:
+            r.add_output(self.DIFFUSE, "what the first vertex's diffuse lobe reflects (emission excluded; "
+                                       "the background where a camera ray escapes)").format("rgba16f")
+            r.add_output(self.SPECULAR, "what its specular lobe reflects").format("rgba16f")
         return r
 
     def skip_reason(self, cd):
@@ -81,7 +92,8 @@ class PathTracer(RenderPass):
     def compile(self, ctx, cd):
         listed = self.mode == "gbuffer" and self.PIXELS in cd.input_formats
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALT,
-                         "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PIXEL_LIST_INPUT": int(listed)}
+                         "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PIXEL_LIST_INPUT": int(listed),
+                         "PT_LOBES": int(bool(self.lobes))}
         self._listed = listed
         self._group = ray_group(cd.views)
         self._defines.update(ray_group_defines(self._group))
@@ -93,9 +105,14 @@ class PathTracer(RenderPass):
         return dict(getattr(self, "_defines", {}))
 
     def _set_uniforms(self, res) -> None:
-        values = {"pt_samples": int(self.samples_per_pixel), "pt_max_bounces": int(self.max_bounces),
-                  "pt_rr_start": int(self.rr_start), "pt_clamp": float(self.clamp),
-                  "pt_background": tuple(self.background), "pt_pixel_jitter": bool(self.pixel_jitter)}
+        # with lobes the shader scatters at the first vertex itself (path_lobes.glsl) and
+        # pt_trace_from continues from the second: one bounce fewer for it
+        first = 1 if self.lobes else 0
+        values = {"pt_samples": int(self.samples_per_pixel),
+                  "pt_max_bounces": max(int(self.max_bounces) - first, 0),
+                  "pt_rr_start": max(int(self.rr_start) - first, 0), "pt_clamp": float(self.clamp),
+                  "pt_background": tuple(self.background), "pt_pixel_jitter": bool(self.pixel_jitter),
+                  "pt_lobes_first": int(self.max_bounces) > 0}
         for key, value in values.items():
             res.set(key, value)   # skipped where the GLSL compiler dropped the uniform
 
@@ -105,6 +122,9 @@ class PathTracer(RenderPass):
         if self.mode == "gbuffer":
             channels.bind_inputs(res, data)
         res.image("dst", data[self.COLOR])
+        if self.lobes:
+            res.image("dst_diffuse", data[self.DIFFUSE])
+            res.image("dst_specular", data[self.SPECULAR])
         pixels = data.get(self.PIXELS) if self._listed else None
         if pixels is not None:
             res.buffer("PixelList", pixels)
