@@ -79,6 +79,7 @@ class SVGF(RenderPass):
         self._history_valid = False
         self._scene_version = None
         self._scene_key = None
+        self.resets = 0   # histories dropped by scene edits (lighting changed) since compile
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -136,6 +137,7 @@ class SVGF(RenderPass):
         self._frames = 0
         self._scene_version = None
         self._scene_key = None
+        self.resets = 0
         self.reset()
 
     def defines(self) -> dict:
@@ -166,7 +168,8 @@ class SVGF(RenderPass):
         res.set("svgf_phi_color", float(self.phi_color))
 
     def execute(self, ctx, data):
-        if self._lighting_edited(ctx):
+        if self._lighting_edited(ctx) and self._history_valid:
+            self.resets += 1
             self.reset()
         prev, cur = self._frames % 2, (self._frames + 1) % 2
         scratch = [(self.FILTER_DIFFUSE[k], self.FILTER_SPECULAR[k]) for k in (0, 1)]

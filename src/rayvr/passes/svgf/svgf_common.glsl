@@ -98,5 +98,7 @@ float svgf_weight_depth(float zp, float zq, vec2 gradient, vec2 offset) {
     return exp(-abs(zp - zq) / (svgf_phi_depth * abs(dot(gradient, offset)) + 1e-3 * zp + 1e-8));
 }
 
-// w_n: normals that agree.
-float svgf_weight_normal(vec3 np, vec3 nq) { return pow(max(dot(np, nq), 0.0), svgf_phi_normal); }
+// w_n: normals that agree (phi 0: any normal).
+float svgf_weight_normal(vec3 np, vec3 nq) {
+    return svgf_phi_normal > 0.0 ? pow(max(dot(np, nq), 0.0), svgf_phi_normal) : 1.0;
+}

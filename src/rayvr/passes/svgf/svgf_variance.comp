@@ -1,7 +1,7 @@
 // SVGF stage 2, variance estimation: pixels with a history of SVGF_MIN_HISTORY frames or more keep
 // the temporal variance of their moments; younger ones (disoccluded, or the first frames) take
-// the moments and illumination of a 7x7 neighbourhood weighted by depth and normal, their
-// variance boosted by 4 / history (section 4.2). With `svgf_write_history` (no feedback from
+// the variance of the moments of a 7x7 neighbourhood weighted by depth and normal, boosted by
+// 4 / history (section 4.2). Their illumination stays their own: the a-trous stage filters it. With `svgf_write_history` (no feedback from
 // an a-trous iteration) the temporal mean is also next frame's colour history.
 #include "svgf_common.glsl"
 
@@ -54,7 +54,6 @@ void main() {
         svgf_depth_slope(c.depth, depth_at(p + ivec3(-1, 0, 0), size.xy), depth_at(p + ivec3(1, 0, 0), size.xy)),
         svgf_depth_slope(c.depth, depth_at(p + ivec3(0, -1, 0), size.xy), depth_at(p + ivec3(0, 1, 0), size.xy)));
     float sum_w = 0.0;
-    vec3 sum_d = vec3(0.0), sum_s = vec3(0.0);
     vec4 sum_m = vec4(0.0);
     for (int dy = -3; dy <= 3; ++dy)
         for (int dx = -3; dx <= 3; ++dx) {
@@ -64,10 +63,6 @@ void main() {
             if (!svgf_has_geometry(t.word)) continue;
             float w = svgf_weight_depth(c.depth, t.depth, gradient, vec2(dx, dy)) * svgf_weight_normal(c.n, t.n);
             sum_w += w;
-            sum_d += w * texelFetch(src_diffuse, q, 0).rgb;
-#if SVGF_SPECULAR
-            sum_s += w * texelFetch(src_specular, q, 0).rgb;
-#endif
             sum_m += w * texelFetch(moments_cur, q, 0);
         }
     // the centre tap has weight 1, so sum_w >= 1
@@ -75,5 +70,5 @@ void main() {
     // one sample's variance, boosted for the young history (x 4 / history) and divided as the
     // temporal estimate is by the frames averaged
     vec2 variance = max(vec2(m.y - m.x * m.x, m.w - m.z * m.z), 0.0) * (SVGF_MIN_HISTORY / (c.history * c.history));
-    store(p, vec4(sum_d / sum_w, variance.x), vec4(sum_s / sum_w, variance.y));
+    store(p, vec4(d.rgb, variance.x), vec4(s.rgb, variance.y));
 }
