@@ -95,8 +95,8 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     and named in the compile report); the pass is "GBuffer" either way. `denoise`: None, 'svgf'
     (the composite's diffuse and specular light through SVGF and TAA: shadows, reflections and
     path-traced pixels converge over frames) or 'oidn' (offline; see the module docstring).
-    Outputs: `ToneMap.dst` (rgba8 sRGB), then `Composite.color` (HDR), or with a denoiser its HDR
-    output (`TAA.dst`, `Denoise.dst`; `hdr_output(graph)` names it) and `Composite.color`."""
+    Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR), with a denoiser then its HDR
+    output (`TAA.dst` or `Denoise.dst`; `hdr_output(graph)` names a graph's)."""
     from . import passes as P
     from .passes.gbuffer import channels
 
@@ -135,8 +135,8 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_edge("Shadows.shadowed", "Composite.shadowed")
     g.add_edge("Reflections.reflection", "Composite.reflection")
     g.mark_output(OUTPUT)
-    _denoised(g, denoise, HDR_OUTPUT, ("Composite.diffuse", "Composite.specular"))
     g.mark_output(HDR_OUTPUT)
+    _denoised(g, denoise, HDR_OUTPUT, ("Composite.diffuse", "Composite.specular"))
     return g
 
 
@@ -149,8 +149,8 @@ def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int 
     mapped. Outputs: `ToneMap.dst` (rgba8 sRGB) and `Accumulate.dst` (HDR mean, rgba32f).
     `denoise`: 'svgf' (no Accumulate: a ray-traced G-buffer, the path tracer's lobes at pixel
     centres plus the views' jitter, SVGF and TAA; HDR output `TAA.dst`) or 'oidn' (the mean
-    denoised with a ray-traced G-buffer's albedo and normal; HDR output `Denoise.dst`, then
-    `Accumulate.dst`)."""
+    denoised with a ray-traced G-buffer's albedo and normal; HDR output `Denoise.dst`, marked
+    after `Accumulate.dst`)."""
     from . import passes as P
 
     denoise = denoiser(denoise)
@@ -165,9 +165,9 @@ def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int 
         g.add_edge("PathTracer.color", "Accumulate.src")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
     g.mark_output(PT_OUTPUT)
-    _denoised(g, denoise, PT_HDR_OUTPUT, ("PathTracer.diffuse", "PathTracer.specular"))
     if denoise != "svgf":
         g.mark_output(PT_HDR_OUTPUT)
+    _denoised(g, denoise, PT_HDR_OUTPUT, ("PathTracer.diffuse", "PathTracer.specular"))
     return g
 
 
