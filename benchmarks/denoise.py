@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._study import add_figure_options, resolve_figures, stat_cell
+
 DEFAULT_SCENES = [str(Path(__file__).resolve().parents[2] / "shared" / "scenes" / "tauray" / "test.glb"), "cornell_box"]
 TIME_SIZES = ("2x1440x1600", "64x512x683")
 QUICK_TIME_SIZES = ("2x64x64", "8x32x43")
@@ -41,8 +43,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--parts", default="time,error", help="time, error or both (default)")
     parser.add_argument("--preset", default="index", help="headset whose pixels per degree FLIP uses")
     parser.add_argument("--views", type=int, default=2, help="views of the error part (default 2)")
-    for name, (full, quick) in FIGURES.items():
-        parser.add_argument("--" + name.replace("_", "-"), type=type(full), help=f"default {full} (quick: {quick})")
+    add_figure_options(parser, FIGURES)
     parser.add_argument("--cache", help="reference cache folder (default ~/.cache/rayvr/references)")
 
 
@@ -74,7 +75,7 @@ def time_rows(scene_spec: str, entries, frames: int, warmup: int) -> list[list]:
             svgf, taa = prof.passes["SVGF"].mean_ms, prof.passes["TAA"].mean_ms
             total = sum(p.mean_ms for p in prof.passes.values())
         rows.append(["time", scene.name, "1 spp + SVGF + TAA (1 bounce)", f"{views}x{size[0]}x{size[1]}",
-                     round(total, 3), round(svgf, 3), round(taa, 3), round(svgf_bytes / 2 ** 20, 1),
+                     round(total, 3), round(svgf, 3), round(taa, 3), float(f"{svgf_bytes / 2 ** 20:.3g}"),
                      _oidn_ms(size, views), "-", "-", "-", "-", "-"])
     return rows
 
@@ -136,8 +137,8 @@ def error_rows(scene_spec: str, args, f: dict, quick: bool) -> tuple[list[list],
         motion_stats = r.motion or {}
         rows.append(["error", scene.name, r.name, f"{len(view_set)}x{size[0]}x{size[1]}", round(r.gpu_ms, 3),
                      _ms(r.pass_ms.get("SVGF")), _ms(r.pass_ms.get("TAA")), "-", _ms(r.pass_ms.get("Denoise")),
-                     _stat(r.errors.get("flip")), _stat(r.errors.get("psnr")), _stat(r.errors.get("relmse")),
-                     _stat(motion_stats.get("flip")), _stat(motion_stats.get("psnr"))])
+                     stat_cell(r.errors.get("flip")), stat_cell(r.errors.get("psnr")), stat_cell(r.errors.get("relmse")),
+                     stat_cell(motion_stats.get("flip")), stat_cell(motion_stats.get("psnr"))])
     notes = [f"{scene.name}: reference {ref.verdict()}"]
     return rows, notes
 
@@ -146,18 +147,11 @@ def _ms(value):
     return "-" if value is None else round(value, 3)
 
 
-def _stat(stat) -> str:
-    if not stat:
-        return "-"
-    return f"{stat['mean']:.4g} ± {stat['std']:.2g}"
-
-
 def run(args) -> dict:
     from rayvr.cli.converge import parse_list
 
     quick = args.quick
-    f = {name: getattr(args, name) if getattr(args, name) is not None else pair[1 if quick else 0]
-         for name, pair in FIGURES.items()}
+    f = resolve_figures(args, FIGURES)
     parts = set(parse_list(args.parts, "--parts", str))
     scenes = parse_list(args.scenes, "--scenes", str) if args.scenes else DEFAULT_SCENES
     entries = [_entry(e) for e in parse_list(args.time_sizes, "--time-sizes", str)] if args.time_sizes else \

@@ -106,3 +106,25 @@ def test_the_error_study_gets_denoiser_rows(gpu):
         row = res[config.name]
         assert row.gpu_ms > 0 and np.isfinite(row.errors["relmse"]["mean"])
     assert "SVGF" in res[svgf.name].pass_ms and "Denoise" in res[oidn.name].pass_ms
+
+
+def test_denoise_benchmark_smoke_run(gpu, tmp_path):
+    import argparse
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))   # the repository root holds benchmarks/
+    from benchmarks import denoise
+
+    parser = argparse.ArgumentParser()
+    denoise.add_arguments(parser)
+    args = parser.parse_args(["--scenes", "cornell_box", "--time-sizes", "2x8x8", "--size", "8x8",
+                              "--reference-frames", "2", "--reference-spp", "1", "--motion-frames", "2",
+                              "--motion-samples", "1", "--frames", "1", "--timing-frames", "1", "--warmup", "0",
+                              "--cache", str(tmp_path)])
+    args.quick = True
+    result = denoise.run(args)
+    rows = [dict(zip(result["columns"], row)) for row in result["rows"]]
+    assert [r["part"] for r in rows] == ["time"] + ["error"] * 6
+    assert rows[0]["SVGF ms"] > 0 and rows[0]["SVGF MB"] > 0
+    svgf = next(r for r in rows if r["config"] == "PATH_TRACED 1 spp + SVGF")
+    assert svgf["SVGF ms"] > 0 and svgf["FLIP"] != "-" and svgf["FLIP in motion"] != "-"
