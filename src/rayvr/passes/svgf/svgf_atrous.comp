@@ -2,6 +2,7 @@
 // B3-spline kernel with taps `svgf_step` pixels apart, each weighted by depth (against the depth
 // gradient), normal and luminance (against the 3x3 Gaussian of the variance); the variance is
 // filtered with the squared weights. With `svgf_write_history` the result is next frame's history.
+#define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
@@ -14,15 +15,10 @@ uniform sampler2DArray src_specular;
 layout(rgba16f) writeonly uniform image2DArray dst_specular;
 layout(rgba16f) writeonly uniform image2DArray history_specular;
 #endif
-uniform usampler2DArray surface_cur;
 uniform int svgf_step;
 uniform bool svgf_write_history;
 
 const float KERNEL[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
-
-float depth_at(ivec3 q, ivec2 size) {
-    return svgf_inside(q.xy, size) ? uintBitsToFloat(texelFetch(surface_cur, q, 0).x) : 0.0;
-}
 
 // The variance at p blurred by a 3x3 Gaussian (x diffuse, y specular): a steadier luminance scale.
 vec2 blurred_variance(ivec3 p, ivec2 size) {
@@ -54,9 +50,7 @@ void main() {
 #endif
     if (svgf_has_geometry(c.word)) {
         vec2 phi = svgf_phi_color * sqrt(max(blurred_variance(p, size.xy), 0.0) + 1e-10);
-        vec2 gradient = vec2(
-            svgf_depth_slope(c.depth, depth_at(p + ivec3(-1, 0, 0), size.xy), depth_at(p + ivec3(1, 0, 0), size.xy)),
-            svgf_depth_slope(c.depth, depth_at(p + ivec3(0, -1, 0), size.xy), depth_at(p + ivec3(0, 1, 0), size.xy)));
+        vec2 gradient = svgf_depth_gradient(p, c.depth, size.xy);
         float ld = luminance(d.rgb), ls = luminance(s.rgb);
         float centre = KERNEL[0] * KERNEL[0];
         vec2 sum_w = vec2(centre);

@@ -102,3 +102,18 @@ float svgf_weight_depth(float zp, float zq, vec2 gradient, vec2 offset) {
 float svgf_weight_normal(vec3 np, vec3 nq) {
     return svgf_phi_normal > 0.0 ? pow(max(dot(np, nq), 0.0), svgf_phi_normal) : 1.0;
 }
+
+#ifdef SVGF_READS_SURFACE
+// This frame's surfaces (the reprojection stage's output), for the stages after it.
+uniform usampler2DArray surface_cur;
+
+float svgf_depth_at(ivec3 q, ivec2 size) {
+    return svgf_inside(q.xy, size) ? uintBitsToFloat(texelFetch(surface_cur, q, 0).x) : 0.0;
+}
+
+// The depth gradient (per pixel) at p, whose depth is z.
+vec2 svgf_depth_gradient(ivec3 p, float z, ivec2 size) {
+    return vec2(svgf_depth_slope(z, svgf_depth_at(p + ivec3(-1, 0, 0), size), svgf_depth_at(p + ivec3(1, 0, 0), size)),
+                svgf_depth_slope(z, svgf_depth_at(p + ivec3(0, -1, 0), size), svgf_depth_at(p + ivec3(0, 1, 0), size)));
+}
+#endif

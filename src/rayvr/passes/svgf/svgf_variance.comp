@@ -3,6 +3,7 @@
 // the variance of the moments of a 7x7 neighbourhood weighted by depth and normal, boosted by
 // 4 / history (section 4.2). Their illumination stays their own: the a-trous stage filters it. With `svgf_write_history` (no feedback from
 // an a-trous iteration) the temporal mean is also next frame's colour history.
+#define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
@@ -16,12 +17,7 @@ layout(rgba16f) writeonly uniform image2DArray dst_specular;
 layout(rgba16f) writeonly uniform image2DArray history_specular;
 #endif
 uniform sampler2DArray moments_cur;
-uniform usampler2DArray surface_cur;
 uniform bool svgf_write_history;
-
-float depth_at(ivec3 q, ivec2 size) {
-    return svgf_inside(q.xy, size) ? uintBitsToFloat(texelFetch(surface_cur, q, 0).x) : 0.0;
-}
 
 void store(ivec3 p, vec4 d, vec4 s) {
     imageStore(dst_diffuse, p, d);
@@ -50,9 +46,7 @@ void main() {
         store(p, d, s);
         return;
     }
-    vec2 gradient = vec2(
-        svgf_depth_slope(c.depth, depth_at(p + ivec3(-1, 0, 0), size.xy), depth_at(p + ivec3(1, 0, 0), size.xy)),
-        svgf_depth_slope(c.depth, depth_at(p + ivec3(0, -1, 0), size.xy), depth_at(p + ivec3(0, 1, 0), size.xy)));
+    vec2 gradient = svgf_depth_gradient(p, c.depth, size.xy);
     float sum_w = 0.0;
     vec4 sum_m = vec4(0.0);
     for (int dy = -3; dy <= 3; ++dy)
