@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ._study import add_figure_options, resolve_figures, stat_cell
+
 DEFAULT_SCENES = [str(Path(__file__).resolve().parents[2] / "shared" / "scenes" / "tauray" / "test.glb"), "cornell_box"]
 
 
@@ -30,8 +32,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--preset", default="index", help="headset whose pixels per degree FLIP uses")
     parser.add_argument("--budgets", default="11.1,5.5", help="tuner budgets in GPU ms, comma-separated")
     parser.add_argument("--frames", type=int, default=4, help="judged frames per configuration")
-    for name, (full, quick) in FIGURES.items():
-        parser.add_argument("--" + name.replace("_", "-"), type=type(full), help=f"default {full} (quick: {quick})")
+    add_figure_options(parser, FIGURES)
     parser.add_argument("--cache", help="reference cache folder (default ~/.cache/rayvr/references)")
 
 
@@ -47,8 +48,7 @@ def run(args) -> dict:
     from rayvr.xr.presets import get_preset
 
     quick = args.quick
-    f = {name: getattr(args, name) if getattr(args, name) is not None else pair[1 if quick else 0]
-         for name, pair in FIGURES.items()}
+    f = resolve_figures(args, FIGURES)
     scenes = parse_list(args.scenes, "--scenes", str) if args.scenes else (["cornell_box"] if quick else DEFAULT_SCENES)
     size = parse_size(f["size"])
     budgets = parse_list(args.budgets, "--budgets", float)
@@ -74,8 +74,8 @@ def run(args) -> dict:
         for r in results.rows:
             floor = r.floor or {}
             rows.append([scene.name, r.name, f"{len(view_set)}x{size[0]}x{size[1]}", round(r.gpu_ms, 3),
-                         *(_stat(r.errors[m]) for m in ("flip", "hdrflip", "psnr", "ssim", "relmse")),
-                         _stat((r.motion or {}).get("flip")), _round(floor.get("relmse")),
+                         *(stat_cell(r.errors[m]) for m in ("flip", "hdrflip", "psnr", "ssim", "relmse")),
+                         stat_cell((r.motion or {}).get("flip")), _round(floor.get("relmse")),
                          "within noise" if floor.get("within_noise") else _round(floor.get("bias_relmse"))])
     notes.append(f"FLIP of the displayed image at {settings.pixels_per_degree():.1f} ppd ({args.preset}); "
                  f"mean ± std over {settings.frames} frames x {args.views} views; in motion: '{motion.trajectory}', "
@@ -86,9 +86,3 @@ def run(args) -> dict:
 
 def _round(value, digits: int = 4):
     return "-" if value is None else float(f"{value:.{digits}g}")
-
-
-def _stat(stat) -> str:
-    if not stat:
-        return "-"
-    return f"{stat['mean']:.4g} ± {stat['std']:.2g}"

@@ -106,12 +106,16 @@ def nonfinite_by_pass(compiled, config: str, findings: dict):
 def configurations() -> list[tuple[str, object, Effect | None]]:
     """(name, graph factory, effect for every material or None) of every ready-made graph at
     every effect level (the path tracer ignores effects: once)."""
+    import functools
+
     from . import graphs
 
     out = []
-    for name, factory in (("hybrid", graphs.hybrid), ("hybrid_taa", graphs.hybrid_taa)):
+    svgf = functools.partial(graphs.hybrid, denoise="svgf")
+    for name, factory in (("hybrid", graphs.hybrid), ("hybrid_taa", graphs.hybrid_taa), ("hybrid svgf", svgf)):
         out += [(f"{name} {e.name}", factory, e) for e in Effect]
     out.append(("path_traced", graphs.path_traced, None))
+    out.append(("path_traced svgf", functools.partial(graphs.path_traced, denoise="svgf"), None))
     return out
 
 

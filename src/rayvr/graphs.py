@@ -10,33 +10,98 @@
     path_traced():  PathTracer ─> Accumulate ─> ToneMap      (progressive reference renders)
     hybrid_taa():   hybrid() with TAA between Composite and ToneMap, fed GBuffer.motion
 
+    denoise="svgf" (hybrid and path_traced): the light as two lobes (Composite or PathTracer
+    `diffuse`/`specular`) ─> SVGF ─> TAA ─> ToneMap, with the G-buffer's surfaces and motion;
+    the hybrid's PATH_TRACED pixels skip Accumulate (SVGF's history accumulates them), and
+    path_traced() gets a ray-traced G-buffer registered with its primary rays.
+    denoise="oidn": the HDR radiance ─> OIDNDenoise ("Denoise", albedo and normal from the
+    G-buffer) ─> ToneMap; offline work, the `oidn` extra.
+
 Passes that no material needs are pruned at compile time (see the compile report).
 """
 from __future__ import annotations
 
+from .errors import OptionError
 from .rendergraph.graph import RenderGraph
 
 OUTPUT = "ToneMap.dst"        # display-referred rgba8, sRGB encoded
 HDR_OUTPUT = "Composite.color"  # linear radiance (rgba16f), for EXR
 PT_OUTPUT = "ToneMap.dst"          # path_traced(): display-referred rgba8, sRGB encoded
 PT_HDR_OUTPUT = "Accumulate.dst"   # path_traced(): linear radiance, mean over the accumulated frames (rgba32f)
-TAA_HDR_OUTPUT = "TAA.dst"         # hybrid_taa(): anti-aliased linear radiance (rgba16f)
+TAA_HDR_OUTPUT = "TAA.dst"         # hybrid_taa() and denoise="svgf": anti-aliased linear radiance (rgba16f)
+DENOISED_OUTPUT = "Denoise.dst"    # denoise="oidn": the denoised linear radiance (rgba32f)
+# A graph's linear-radiance output: the first of these it marks (hdr_output()).
+HDR_OUTPUTS = (DENOISED_OUTPUT, TAA_HDR_OUTPUT, HDR_OUTPUT, PT_HDR_OUTPUT)
+DENOISERS = ("svgf", "oidn")
+
+
+def denoiser(denoise) -> str | None:
+    """`denoise` checked: None (or 'none'), 'svgf' or 'oidn' (which needs pyoidn, the oidn extra)."""
+    if denoise is None or denoise == "none":
+        return None
+    if denoise not in DENOISERS:
+        raise OptionError(f"denoise={denoise!r}: use None ('none'), 'svgf' or 'oidn'")
+    if denoise == "oidn":
+        from .passes.oidn import require_pyoidn
+
+        require_pyoidn()
+    return denoise
+
+
+def hdr_output(graph) -> str:
+    """The linear-radiance output of `graph`: the first of HDR_OUTPUTS it marks."""
+    for pin in HDR_OUTPUTS:
+        if pin in graph.outputs:
+            return pin
+    raise OptionError(f"graph '{graph.name}' marks none of {', '.join(HDR_OUTPUTS)} (its linear-radiance output)")
+
+
+def _denoised(g: RenderGraph, denoise: str | None, color: str, lobes: tuple[str, str] | None = None) -> None:
+    """Feed ToneMap from `color` (HDR radiance), through the denoiser: SVGF on `lobes` (diffuse,
+    specular pins) then TAA, or OIDN on `color`; marks the denoised HDR output."""
+    from . import passes as P
+    from .passes.gbuffer import channels
+    from .passes.svgf.svgf import GBUFFER
+
+    if denoise == "svgf":
+        g.add_pass(P.SVGF(), "SVGF")
+        g.add_pass(P.TAA(), "TAA")
+        channels.wire(g, "GBuffer", "SVGF", GBUFFER)
+        g.add_edge(lobes[0], "SVGF.diffuse")
+        g.add_edge(lobes[1], "SVGF.specular")
+        g.add_edge("SVGF.color", "TAA.color")
+        g.add_edge("GBuffer.motion", "TAA.motion")
+        g.add_edge("TAA.dst", "ToneMap.src")
+        g.mark_output(TAA_HDR_OUTPUT)
+    elif denoise == "oidn":
+        g.add_pass(P.OIDNDenoise(), "Denoise")
+        channels.wire(g, "GBuffer", "Denoise")
+        g.add_edge(color, "Denoise.color")
+        g.add_edge("Denoise.dst", "ToneMap.src")
+        g.mark_output(DENOISED_OUTPUT)
+    else:
+        g.add_edge(color, "ToneMap.src")
 
 
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
            auto_exposure: bool = False, light_samples: int = 1,
            multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid",
-           gbuffer: str = "auto") -> RenderGraph:
+           gbuffer: str = "auto", denoise: str | None = None) -> RenderGraph:
     """The hybrid raster + ray-traced graph: multiview G-buffer, direct light for every pixel,
     ray-traced shadows and reflections only for the pixels whose material's effect asks for them,
     path tracing (rayvr.passes.PathTracer in G-buffer mode) for PATH_TRACED materials, composite
     and tone map. `gbuffer`: 'raster', 'rt' (ray-traced, rayvr.passes.GBufferRT) or 'auto' (raster
     unless the GPU's raster is weak against its compute: Capabilities.weak_raster, chosen at compile
-    and named in the compile report); the pass is "GBuffer" either way.
-    Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR)."""
+    and named in the compile report); the pass is "GBuffer" either way. `denoise`: None, 'svgf'
+    (the composite's diffuse and specular light through SVGF and TAA: shadows, reflections and
+    path-traced pixels converge over frames) or 'oidn' (offline; see the module docstring).
+    Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR), with a denoiser then its HDR
+    output (`TAA.dst` or `Denoise.dst`; `hdr_output(graph)` names a graph's)."""
     from . import passes as P
     from .passes.gbuffer import channels
 
+    denoise = denoiser(denoise)
+    svgf = denoise == "svgf"
     g = RenderGraph(name)
     g.add_pass(P.GBufferAuto(mode=gbuffer, multiview=multiview), "GBuffer")
     g.add_pass(P.DirectLighting(light_samples=light_samples, raster_only=True),
@@ -44,9 +109,10 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_pass(P.EffectCompaction(path_list=True), "Compaction")
     g.add_pass(P.RTShadows(light_samples=light_samples), "Shadows")
     g.add_pass(P.RTReflections(max_bounces=max_bounces, light_samples=light_samples), "Reflections")
-    g.add_pass(P.PathTracer(mode="gbuffer", max_bounces=path_bounces), "PathTracer")
-    g.add_pass(P.Accumulate(), "Accumulate")
-    g.add_pass(P.HybridComposite(), "Composite")
+    g.add_pass(P.PathTracer(mode="gbuffer", max_bounces=path_bounces, lobes=svgf), "PathTracer")
+    if not svgf:
+        g.add_pass(P.Accumulate(), "Accumulate")
+    g.add_pass(P.HybridComposite(lobes=svgf), "Composite")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
     for lighting in ("Direct", "Shadows", "Reflections", "PathTracer"):
         channels.wire(g, "GBuffer", lighting)
@@ -54,50 +120,72 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_edge("Compaction.shadowPixels", "Shadows.pixels")
     g.add_edge("Compaction.reflectionPixels", "Reflections.pixels")
     g.add_edge("Compaction.pathPixels", "PathTracer.pixels")
-    g.add_edge("PathTracer.color", "Accumulate.src")
-    g.add_edge("Accumulate.dst", "Composite.pathTraced")
+    if svgf:
+        g.add_edge("PathTracer.color", "Composite.pathTraced")
+        g.add_edge("PathTracer.diffuse", "Composite.pathDiffuse")
+        g.add_edge("PathTracer.specular", "Composite.pathSpecular")
+        g.add_edge("GBuffer.emissive", "Composite.emissive")
+    else:
+        g.add_edge("PathTracer.color", "Accumulate.src")
+        g.add_edge("Accumulate.dst", "Composite.pathTraced")
     g.add_edge("GBuffer.effect", "Composite.effect")
     g.add_edge("Direct.direct", "Composite.direct")
     g.add_edge("Shadows.shadowed", "Composite.shadowed")
     g.add_edge("Reflections.reflection", "Composite.reflection")
-    g.add_edge("Composite.color", "ToneMap.src")
     g.mark_output(OUTPUT)
     g.mark_output(HDR_OUTPUT)
+    _denoised(g, denoise, HDR_OUTPUT, ("Composite.diffuse", "Composite.specular"))
     return g
 
 
 def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int = 3, clamp: float = 0.0,
                 max_frames: int = 0, tonemap: str = "aces",
-                exposure: float = 0.0, auto_exposure: bool = False, name: str = "PathTraced") -> RenderGraph:
+                exposure: float = 0.0, auto_exposure: bool = False, name: str = "PathTraced",
+                denoise: str | None = None) -> RenderGraph:
     """Every pixel path traced from the camera (PathTracer in "full" mode), averaged over frames
     by Accumulate (restarts when the views or the scene change; `max_frames` > 0 stops it), tone
-    mapped. Outputs: `ToneMap.dst` (rgba8 sRGB) and `Accumulate.dst` (HDR mean, rgba32f)."""
+    mapped. Outputs: `ToneMap.dst` (rgba8 sRGB) and `Accumulate.dst` (HDR mean, rgba32f).
+    `denoise`: 'svgf' (no Accumulate: a ray-traced G-buffer, the path tracer's lobes at pixel
+    centres plus the views' jitter, SVGF and TAA; HDR output `TAA.dst`) or 'oidn' (the mean
+    denoised with a ray-traced G-buffer's albedo and normal; HDR output `Denoise.dst`, marked
+    after `Accumulate.dst`)."""
     from . import passes as P
 
+    denoise = denoiser(denoise)
     g = RenderGraph(name)
+    if denoise:
+        g.add_pass(P.GBufferAuto(mode="rt"), "GBuffer")   # the path tracer's own primary rays
     g.add_pass(P.PathTracer(mode="full", samples_per_pixel=samples_per_pixel, max_bounces=max_bounces,
-                            rr_start=rr_start, clamp=clamp), "PathTracer")
-    g.add_pass(P.Accumulate(max_frames=max_frames), "Accumulate")
+                            rr_start=rr_start, clamp=clamp,
+                            **({"lobes": True, "pixel_jitter": False} if denoise == "svgf" else {})), "PathTracer")
+    if denoise != "svgf":
+        g.add_pass(P.Accumulate(max_frames=max_frames), "Accumulate")
+        g.add_edge("PathTracer.color", "Accumulate.src")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
-    g.add_edge("PathTracer.color", "Accumulate.src")
-    g.add_edge("Accumulate.dst", "ToneMap.src")
     g.mark_output(PT_OUTPUT)
-    g.mark_output(PT_HDR_OUTPUT)
+    if denoise != "svgf":
+        g.mark_output(PT_HDR_OUTPUT)
+    _denoised(g, denoise, PT_HDR_OUTPUT, ("PathTracer.diffuse", "PathTracer.specular"))
     return g
 
 
 def hybrid_taa(alpha: float = 0.1, sigma: float = 1.0, name: str = "HybridTAA", **hybrid_kw) -> RenderGraph:
     """`rayvr.graphs.hybrid(**hybrid_kw)` with TAA on the composited radiance (motion vectors from
-    the G-buffer) before tone mapping. Outputs: `ToneMap.dst`, `Composite.color` and `TAA.dst`.
-    TAA asks for sub-pixel camera jitter in its reflection; the Renderer packs
-    `rayvr.passes.taa.halton_jitter(frame)` into the views and the G-buffer applies it."""
+    the G-buffer) before tone mapping (and before OIDN with denoise='oidn'; with 'svgf' the
+    hybrid's own TAA after SVGF takes `alpha` and `sigma`). Outputs: `ToneMap.dst`,
+    `Composite.color` and `TAA.dst`. TAA asks for sub-pixel camera jitter in its reflection; the
+    Renderer packs `rayvr.passes.taa.halton_jitter(frame)` into the views and the G-buffer applies it."""
     from .passes import TAA
 
     g = hybrid(name=name, **hybrid_kw)
+    if "TAA" in g.passes:
+        g.update_pass("TAA", {"alpha": alpha, "sigma": sigma})
+        return g
+    reader = next(e.dst for e in g.edges if e.src == HDR_OUTPUT and e.dst_pass in ("ToneMap", "Denoise"))
     g.add_pass(TAA(alpha=alpha, sigma=sigma), "TAA")
-    g.remove_edge("Composite.color", "ToneMap.src")
+    g.remove_edge(HDR_OUTPUT, reader)
     g.add_edge("Composite.color", "TAA.color")
     g.add_edge("GBuffer.motion", "TAA.motion")
-    g.add_edge("TAA.dst", "ToneMap.src")
+    g.add_edge("TAA.dst", reader)
     g.mark_output(TAA_HDR_OUTPUT)
     return g

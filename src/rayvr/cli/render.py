@@ -15,6 +15,9 @@ written under temporary names and renamed together at the end, so a failure or C
 none of them.
 `--camera-path FILE` (a path `rayvr view` recorded) renders one frame per recorded pose into
 out_0000, out_0001, ...
+`--denoise svgf` filters the light with SVGF and TAA (shadows, reflections and path-traced pixels
+then converge over --frames); `--denoise oidn` runs Intel Open Image Denoise on the last frame
+(the `oidn` extra: pip install 'rayvr[oidn]').
 """
 from __future__ import annotations
 
@@ -31,6 +34,7 @@ from .options import (MAX_VIEWS, add_lighting_arguments, apply_lighting, integer
 LAYOUTS = ("per-view", "side-by-side")
 GRAPHS = ("hybrid", "path_traced")
 PT_SPP_PER_FRAME = 8   # the most paths per pixel one path-traced frame traces
+DENOISE_CHOICES = ("none", "svgf", "oidn")
 OUT_SUFFIXES = (".png", ".jpg", ".jpeg", ".exr")
 MAX_IPD_M = 1.0   # metres: eyes are 0.05-0.08 apart; a light-field grid's spacing stays below a metre
 
@@ -81,6 +85,9 @@ def register(sub) -> None:
                         "light, so B = 1 is direct light only; Mitsuba 3's max_depth is B + 1, Tauray's "
                         "'2 bounces + NEE' is B = 3 (default: 8 path_traced, 4 hybrid)")
     add_lighting_arguments(p)
+    p.add_argument("--denoise", default="none", choices=DENOISE_CHOICES,
+                   help="none; svgf (SVGF + TAA over the frames, real time); oidn (Intel Open Image Denoise on "
+                        "the last frame, offline: needs rayvr[oidn]); default none")
     p.add_argument("--report", action="store_true", help="print the graph's compile report")
     cluster_cli.add_arguments(p)
     p.add_argument("--camera-path", metavar="FILE",
@@ -204,6 +211,10 @@ def run(args) -> int:
     if args.graph == "path_traced" and args.spp is not None and args.frames != 1:
         raise OptionError(f"--spp {args.spp} and --frames {args.frames}: path_traced accumulates --spp samples "
                           f"over as many frames as it needs; give one of them")
+    if args.denoise == "oidn":
+        from ..passes.oidn import require_pyoidn
+
+        require_pyoidn("--denoise oidn")
     scene = load_scene_arg(args.scene)
     apply_effects(scene, args.effect)
     apply_lighting(scene, args)
@@ -257,10 +268,10 @@ def build_graph(args, exposure: float, auto_exposure: bool):
     if args.graph == "path_traced":
         _, per_frame = path_traced_frames(args)
         return path_traced(samples_per_pixel=per_frame, max_bounces=args.bounces or 8, tonemap=args.tonemap.lower(),
-                           exposure=exposure, auto_exposure=auto_exposure)
+                           exposure=exposure, auto_exposure=auto_exposure, denoise=args.denoise)
     g = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
                auto_exposure=auto_exposure, light_samples=args.light_samples, multiview=args.multiview,
-               gbuffer=args.gbuffer, path_bounces=args.bounces or 4)
+               gbuffer=args.gbuffer, path_bounces=args.bounces or 4, denoise=args.denoise)
     if args.spp is not None:
         g.update_pass("PathTracer", {"samples_per_pixel": args.spp})
     return g
@@ -271,18 +282,20 @@ def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
     `quilt_grid` (cols, rows) is given, else None)."""
     from tqdm import tqdm
 
-    from ..graphs import HDR_OUTPUT, OUTPUT, PT_HDR_OUTPUT
+    from ..graphs import OUTPUT, hdr_output
     from ..renderer import Renderer
 
     size = views.size
     quilt_pixels = None
     frames = path_traced_frames(args)[0] if args.graph == "path_traced" else args.frames
     with Renderer(scene, graph, views=views) as r:
-        for _ in tqdm(range(frames), desc=f"render {scene.name}", unit="frame", leave=False,
+        oidn = r.compiled.passes.get("Denoise")
+        for i in tqdm(range(frames), desc=f"render {scene.name}", unit="frame", leave=False,
                       disable=frames < 8):
+            if oidn is not None:   # OIDN is offline work: only the frame that is written
+                oidn.set_properties({"enabled": i == frames - 1})
             r.render()
-        hdr_pin = PT_HDR_OUTPUT if args.graph == "path_traced" else HDR_OUTPUT
-        pixels = r.read_output(hdr_pin if hdr else OUTPUT, flip_y=True)
+        pixels = r.read_output(hdr_output(graph) if hdr else OUTPUT, flip_y=True)
         if args.report:
             print(r.report())
         spp = f", {frames * graph.get_pass('PathTracer').samples_per_pixel} spp" if args.graph == "path_traced" else ""
@@ -298,14 +311,14 @@ def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
 def render_path(args, scene, graph, views, hdr: bool, camera_path, out: Path) -> list[Path]:
     """Replay `camera_path`: one frame per pose, its views written as out_0000..., (inside the
     caller's atomic group: the files appear together at its end)."""
-    from ..graphs import HDR_OUTPUT, OUTPUT
+    from ..graphs import OUTPUT, hdr_output
     from ..renderer import Renderer
 
     written = []
     with Renderer(scene, graph, views=views) as r:
         for i in range(len(camera_path)):
             r.render(camera_path.view_set(i, views))
-            pixels = r.read_output(HDR_OUTPUT if hdr else OUTPUT, flip_y=True)
+            pixels = r.read_output(hdr_output(graph) if hdr else OUTPUT, flip_y=True)
             images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
             for path, img in zip(output_paths(frame_path(out, i), len(views), args.layout), images):
                 written.append(write_exr(path, img) if hdr else write_image(path, img))

@@ -39,14 +39,15 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
     frames; linear radiance gathered and tone mapped here (auto exposure sees every view).
     Returns (pixels (views, h, w, c) rows top-down, the quilt's pixels when `grid` is given, else
     None) and prints what ran where; rayvr render writes them (all or nothing)."""
-    from ..graphs import HDR_OUTPUT
+    from ..graphs import hdr_output
     from .gather import tone_map
     from .jobs import render_views
     from .payload import ScenePayload, effects_of
 
     payload = ScenePayload.of(spec, effects_of(scene))
+    pin = hdr_output(graph)   # the denoiser's, with --denoise
     with open_cluster(args) as cluster:
-        result = render_views(scene, graph, views, pins=[HDR_OUTPUT], frames=args.frames, cluster=cluster,
+        result = render_views(scene, graph, views, pins=[pin], frames=args.frames, cluster=cluster,
                               payload=payload, progress=True)
     size = views.size
     print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {args.frames} frame(s) "
@@ -57,7 +58,7 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
               f"{share['worker']}")
     if getattr(args, "report", False):
         print("--report: each worker compiles its own graph; run without --workers for the compile report")
-    radiance = result.pixels[HDR_OUTPUT]
+    radiance = result.pixels[pin]
     if hdr and grid is None:
         return radiance, None
     tm = graph.get_pass("ToneMap")

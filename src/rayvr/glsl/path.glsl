@@ -13,12 +13,19 @@
 uniform int pt_max_bounces;
 uniform int pt_rr_start;
 
-// Radiance arriving at the previous vertex from s (emission of s itself excluded). `medium`:
-// the absorption of the medium s's incoming ray travelled through (0: air).
-vec3 pt_trace_from(PathVertex s, inout Rng rng) {
+// Radiance arriving at the previous vertex from s (emission of s itself excluded), as the part
+// s's diffuse lobe reflects and the rest (its specular lobes; with `split` false all of it is in
+// `specular`, and the compiler drops the split). The diffuse part of what is found past s is
+// the share of the first BSDF sample's weight that its diffuse lobe carries (f_d / pdf over
+// f / pdf): what denoisers that demodulate the two lobes by their albedos need (SVGF).
+// `medium`: the absorption of the medium the path travels through (0: air).
+void pt_trace_parts(PathVertex s, inout Rng rng, const bool split, out vec3 diffuse, out vec3 specular) {
     vec3 radiance = vec3(0.0);
     vec3 beta = vec3(1.0);
     vec3 medium = vec3(0.0);
+    vec3 first_diffuse = vec3(0.0);   // split: the diffuse part of the first vertex's light sample
+    vec3 first_total = vec3(0.0);     // split: all the first vertex's light sample added
+    vec3 share = vec3(0.0);           // split: the diffuse share of the first BSDF sample's weight
     for (int bounce = 0; bounce < pt_max_bounces; ++bounce) {
 #if SCENE_HAS_PUNCTUAL_LIGHTS || SCENE_HAS_EMISSIVE_TRIANGLES || SCENE_HAS_ENVIRONMENT
         LightSample ls = sample_light(s.pos, rng_next3(rng));
@@ -27,14 +34,20 @@ vec3 pt_trace_from(PathVertex s, inout Rng rng) {
             if (max3(f) > 0.0 && !trace_occluded(offset_ray_origin(s.pos, s.ng), ls.direction, ls.distance * (1.0 - 1e-4))) {
                 float w = ls.pdf > 0.0 ? power_heuristic(ls.pdf, bsdf_pdf(s.bsdf, s.n, s.v, ls.direction)) : 1.0;
                 radiance += beta * f * ls.weight * w;
+                if (split && bounce == 0)
+                    first_diffuse = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction) * ls.weight * w;
             }
         }
 #endif
+        if (split && bounce == 0) first_total = radiance;
         BsdfSample bs;
         if (!bsdf_sample(s.bsdf, s.n, s.v, rng_next3(rng), bs)) break;
         // the sampled side must agree with the geometric surface (shading normals may not)
         float side = dot(bs.l, s.ng);
         if (bs.transmitted ? side >= 0.0 : side <= 0.0) break;
+        if (split && bounce == 0 && !bs.delta && !bs.transmitted)
+            share = clamp(bsdf_eval_diffuse(s.bsdf, s.n, s.v, bs.l) / (bs.pdf * max(bs.weight, vec3(1e-30))),
+                          vec3(0.0), vec3(1.0));
         beta *= bs.weight;
         if (!(max3(beta) > 0.0)) break;
         if (bounce >= pt_rr_start) {
@@ -62,7 +75,14 @@ vec3 pt_trace_from(PathVertex s, inout Rng rng) {
         }
 #endif
     }
-    return radiance;
+    diffuse = split ? first_diffuse + share * (radiance - first_total) : vec3(0.0);
+    specular = radiance - diffuse;
+}
+
+vec3 pt_trace_from(PathVertex s, inout Rng rng) {
+    vec3 diffuse, specular;
+    pt_trace_parts(s, rng, false, diffuse, specular);
+    return specular;
 }
 
 // A sample's radiance made safe: NaN/Inf dropped (returns 0), optional clamp (> 0) per channel.

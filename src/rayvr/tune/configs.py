@@ -25,11 +25,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import OptionError, did_you_mean
+from ..graphs import HDR_OUTPUTS  # noqa: F401  (the HDR pins the error is measured on, in order of preference)
 from ..materials.effect import Effect
 from .reference import ReferenceSettings
 
-# HDR pins the error is measured on, in order of preference (linear radiance, before tone mapping).
-HDR_OUTPUTS = ("TAA.dst", "Composite.color", "Accumulate.dst")
 DEFAULT_BOUNCES = ReferenceSettings.max_bounces
 DENOISERS = ("svgf", "oidn")
 GI_MODES = ("probes",)

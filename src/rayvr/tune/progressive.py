@@ -116,7 +116,7 @@ def progressive_curve(scene, name: str, graph, settings: dict, view_set, frames:
     output read after 1, 2, 4, ... `frames` frames and judged by `judge(image, reference_image,
     name)` (-> per-view metrics first). Wall seconds are measured (GPU finished, readback and metrics
     not counted); GPU seconds are frames x the GPU ms per frame timed first (`timing_frames`
-    after the warm-up), after which the accumulation restarts."""
+    after the warm-up), after which the accumulation and every history (TAA, SVGF) restart."""
     from ..renderer import Renderer
     from .results import Curve
     from .timing import timed_frames
@@ -126,8 +126,8 @@ def progressive_curve(scene, name: str, graph, settings: dict, view_set, frames:
     points = []
     with Renderer(scene, graph, views=view_set, gpu=gpu, first_frame=first_frame) as r:
         timing = timed_frames(r, timing_frames, warmup, warmup_s)
-        for n, p in r.compiled.passes.items():
-            if type(p).__name__ == "Accumulate":
+        for p in r.compiled.passes.values():
+            if hasattr(p, "reset"):   # Accumulate, and the history of TAA and SVGF
                 p.reset()
         for shot in read_after(r, pin, counts, tick):
             per_view = judge(shot.image, reference.image, f"{name} after {shot.frames} frames")[0]

@@ -2,6 +2,11 @@
 // direct light; SHADOWS and above take the ray-traced shadowed light; REFLECTIONS and above add
 // the reflected radiance (already weighted by the specular BSDF); PATH_TRACED pixels take the
 // path tracer's (accumulated) radiance when the graph has one.
+// With SPLIT_LOBES the same light is also written as the two lobes a denoiser demodulates apart
+// (rayvr.passes.SVGF), emission excluded: `dst_diffuse` the direct (shadowed) light, or the path
+// tracer's diffuse part, and the background where nothing was drawn; `dst_specular` the
+// reflections, or the path tracer's specular part. (Direct light's specular highlights stay in
+// the diffuse lobe: the lighting passes return them summed.)
 #define GBUF_READER 1
 #include "gbuffer.glsl"
 
@@ -18,22 +23,44 @@ uniform sampler2DArray reflection_tex;
 uniform sampler2DArray path_tex;
 #endif
 layout(rgba16f) writeonly uniform image2DArray dst;
+#if SPLIT_LOBES
+#if HAS_PATH_LOBES
+uniform sampler2DArray path_diffuse_tex;
+uniform sampler2DArray path_specular_tex;
+#endif
+layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
+layout(rgba16f) writeonly uniform image2DArray dst_specular;
+#endif
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(p, imageSize(dst)))) return;
     uint effect = gbuf_effect_at(p);
     vec3 c = texelFetch(direct_tex, p, 0).rgb;
+    vec3 reflected = vec3(0.0);
     if (effect != GBUF_NO_GEOMETRY) {
 #if HAS_SHADOWS
         if (effect >= EFFECT_SHADOWS) c = texelFetch(shadowed_tex, p, 0).rgb;
 #endif
 #if HAS_REFLECTIONS
-        if (effect >= EFFECT_REFLECTIONS) c += texelFetch(reflection_tex, p, 0).rgb;
-#endif
-#if HAS_PATHS
-        if (effect == EFFECT_PATH_TRACED) c = texelFetch(path_tex, p, 0).rgb;
+        if (effect >= EFFECT_REFLECTIONS) reflected = texelFetch(reflection_tex, p, 0).rgb;
 #endif
     }
+#if SPLIT_LOBES
+    vec3 diffuse = effect == GBUF_NO_GEOMETRY ? c : max(c - gbuf_fetch_emissive(p).rgb, 0.0);
+    vec3 specular = reflected;
+#if HAS_PATH_LOBES
+    if (effect == EFFECT_PATH_TRACED) {
+        diffuse = texelFetch(path_diffuse_tex, p, 0).rgb;
+        specular = texelFetch(path_specular_tex, p, 0).rgb;
+    }
+#endif
+    imageStore(dst_diffuse, p, vec4(to_half_range(diffuse), 1.0));
+    imageStore(dst_specular, p, vec4(to_half_range(specular), 1.0));
+#endif
+    c += reflected;
+#if HAS_PATHS
+    if (effect == EFFECT_PATH_TRACED) c = texelFetch(path_tex, p, 0).rgb;
+#endif
     imageStore(dst, p, vec4(to_half_range(c), 1.0));
 }

@@ -6,10 +6,12 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..dispatch import groups_2d
 from ..effects import effect_defines
+from ..gbuffer import channels
 
 # input pin -> the sampler uniform composite.comp reads it through
-SAMPLERS = {"effect": "gbuf_effect", "direct": "direct_tex", "shadowed": "shadowed_tex",
-            "reflection": "reflection_tex", "pathTraced": "path_tex"}
+SAMPLERS = {"effect": "gbuf_effect", "emissive": "gbuf_emissive", "direct": "direct_tex", "shadowed": "shadowed_tex",
+            "reflection": "reflection_tex", "pathTraced": "path_tex", "pathDiffuse": "path_diffuse_tex",
+            "pathSpecular": "path_specular_tex"}
 
 
 @register_pass
@@ -17,11 +19,17 @@ class HybridComposite(RenderPass):
     """`direct` for RASTER pixels, `shadowed` (optional) for SHADOWS and above, plus `reflection`
     (optional) for REFLECTIONS and above, `pathTraced` (optional) instead of all of them for
     PATH_TRACED pixels -> `color` (rgba16f radiance). A missing optional input
-    (its pass pruned because no material needs it) compiles its code out."""
+    (its pass pruned because no material needs it) compiles its code out.
+
+    With `lobes` the pass also writes the light as a denoiser demodulates it (rayvr.passes.SVGF):
+    `diffuse` (direct or shadowed light minus the G-buffer's `emissive`, or the path tracer's
+    `pathDiffuse`; the background where nothing was drawn) and `specular` (reflections, or
+    `pathSpecular`)."""
 
     EFFECT, DIRECT, SHADOWED, REFLECTION, PATH_TRACED = "effect", "direct", "shadowed", "reflection", "pathTraced"
-    COLOR = "color"
-    PROPERTIES = {}
+    EMISSIVE, PATH_DIFFUSE, PATH_SPECULAR = "emissive", "pathDiffuse", "pathSpecular"
+    COLOR, DIFFUSE, SPECULAR = "color", "diffuse", "specular"
+    PROPERTIES = {"lobes": False}
 
     def reflect(self, cd):
         r = Reflection()
@@ -31,13 +39,22 @@ class HybridComposite(RenderPass):
         r.add_input(self.REFLECTION, "ray-traced reflected radiance").optional()
         r.add_input(self.PATH_TRACED, "path-traced radiance for PATH_TRACED pixels").optional()
         r.add_output(self.COLOR, "composited HDR radiance").format("rgba16f")
+        if self.lobes:
+            channels.add_inputs(r, (self.EMISSIVE,))
+            r.add_input(self.PATH_DIFFUSE, "the path tracer's diffuse lobe (PathTracer lobes)").optional()
+            r.add_input(self.PATH_SPECULAR, "the path tracer's specular lobe").optional()
+            r.add_output(self.DIFFUSE, "diffuse light, emission excluded (background where nothing was drawn)"
+                         ).format("rgba16f")
+            r.add_output(self.SPECULAR, "specular light").format("rgba16f")
         return r
 
     def compile(self, ctx, cd):
         # cd.input_formats holds only the inputs that will be bound: one variant is all it needs.
-        has = {"HAS_SHADOWS": self.SHADOWED, "HAS_REFLECTIONS": self.REFLECTION, "HAS_PATHS": self.PATH_TRACED}
+        has = {"HAS_SHADOWS": self.SHADOWED, "HAS_REFLECTIONS": self.REFLECTION, "HAS_PATHS": self.PATH_TRACED,
+               "HAS_PATH_LOBES": self.PATH_DIFFUSE}
+        defines = {d: int(pin in cd.input_formats) for d, pin in has.items()}
         self._prog = self.compute_program(ctx.gl, "composite.comp",
-                                          {**effect_defines(), **{d: int(pin in cd.input_formats) for d, pin in has.items()}})
+                                          {**effect_defines(), **defines, "SPLIT_LOBES": int(bool(self.lobes))})
         self._res = program_resources(self._prog)
         self._groups = groups_2d(cd.size, cd.views)
 
@@ -47,4 +64,7 @@ class HybridComposite(RenderPass):
             if tex is not None:
                 self._res.texture(sampler, tex)
         self._res.image("dst", data[self.COLOR])
+        if self.lobes:
+            self._res.image("dst_diffuse", data[self.DIFFUSE])
+            self._res.image("dst_specular", data[self.SPECULAR])
         self._prog.run(*self._groups)

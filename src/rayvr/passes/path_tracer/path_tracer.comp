@@ -2,6 +2,9 @@
 //   PT_FROM_GBUFFER 0: full screen from the camera (view_primary_ray, random sub-pixel offsets).
 //   PT_FROM_GBUFFER 1: only PATH_TRACED pixels, starting at the G-buffer surface; with
 //     PIXEL_LIST_INPUT 1 the dispatch is indirect over the compaction pass's pixel list.
+//   PT_LOBES 1: also the first vertex's diffuse and specular parts (path.glsl pt_trace_parts) into
+//     dst_diffuse / dst_specular, emission excluded (where a camera ray escapes, the background
+//     is in dst_diffuse); dst is still their sum with the emission.
 #if PT_FROM_GBUFFER
 #define GBUF_READER 1
 #endif
@@ -20,6 +23,10 @@ layout(rgba32f) writeonly uniform image2DArray dst;
 uniform int pt_samples;
 uniform float pt_clamp;
 uniform bool pt_pixel_jitter;
+#if PT_LOBES
+layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
+layout(rgba16f) writeonly uniform image2DArray dst_specular;
+#endif
 
 Rng pt_rng(ivec3 p, int sample_index) {
     return rng_init_sample(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT, uint(sample_index),
@@ -38,20 +45,30 @@ vec3 pt_pixel(ivec3 p) {
     return sum / float(max(pt_samples, 1));
 }
 #else
-vec3 pt_sample(ivec3 p, inout Rng rng) {
+// The first vertex of a camera path through pixel p and the radiance it emits towards the eye;
+// false (`emitted` = the background) when the ray escapes.
+bool pt_camera_vertex(ivec3 p, inout Rng rng, out PathVertex s, out vec3 emitted) {
     // random sub-pixel positions (anti-aliasing once accumulated), else the centre moved by the
     // views' TAA jitter so the rays register with a jittered raster
     vec2 offset = pt_pixel_jitter ? rng_next2(rng) : vec2(0.5) + views[p.z].jitter.xy;
     vec3 o, d;
     view_primary_ray(uint(p.z), vec2(p.xy) + offset, o, d);
     Hit hit;
-    if (!trace_closest(o, d, 1e30, hit)) return environment_radiance(d);
+    emitted = environment_radiance(d);
+    if (!trace_closest(o, d, 1e30, hit)) return false;
     float spread = view_pixel_spread(uint(p.z));
     SurfacePoint sp;
     MaterialParams mp;
-    PathVertex s = path_vertex_at_hit(hit, d, hit.t * spread, spread, sp, mp);
-    vec3 radiance = (sp.front_face || mp.double_sided) ? mp.emissive : vec3(0.0);
-    return radiance + pt_trace_from(s, rng);
+    s = path_vertex_at_hit(hit, d, hit.t * spread, spread, sp, mp);
+    emitted = (sp.front_face || mp.double_sided) ? mp.emissive : vec3(0.0);
+    return true;
+}
+
+vec3 pt_sample(ivec3 p, inout Rng rng) {
+    PathVertex s;
+    vec3 emitted;
+    if (!pt_camera_vertex(p, rng, s, emitted)) return emitted;
+    return emitted + pt_trace_from(s, rng);
 }
 
 vec3 pt_pixel(ivec3 p) {
@@ -61,6 +78,43 @@ vec3 pt_pixel(ivec3 p) {
         sum += pt_finite(pt_sample(p, rng), pt_clamp);
     }
     return sum / float(max(pt_samples, 1));
+}
+#endif
+
+#if PT_LOBES
+// The mean of pt_samples paths as emission + diffuse + specular (each sample's parts made finite
+// and clamped on their own); returns the sum.
+vec3 pt_pixel_lobes(ivec3 p, out vec3 diffuse, out vec3 specular) {
+    diffuse = vec3(0.0);
+    specular = vec3(0.0);
+    vec3 emitted = vec3(0.0);
+#if PT_FROM_GBUFFER
+    GSurface g = gbuf_load(p);
+    PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
+#endif
+    for (int k = 0; k < pt_samples; ++k) {
+        Rng rng = pt_rng(p, k);
+        vec3 d = vec3(0.0), r = vec3(0.0), e;
+#if PT_FROM_GBUFFER
+        e = g.emissive;
+        pt_trace_parts(s, rng, true, d, r);
+#else
+        PathVertex s;
+        if (pt_camera_vertex(p, rng, s, e)) {
+            pt_trace_parts(s, rng, true, d, r);
+        } else {   // the background travels as diffuse light
+            d = e;
+            e = vec3(0.0);
+        }
+#endif
+        emitted += pt_finite(e, pt_clamp);
+        diffuse += pt_finite(d, pt_clamp);
+        specular += pt_finite(r, pt_clamp);
+    }
+    float n = float(max(pt_samples, 1));
+    diffuse /= n;
+    specular /= n;
+    return emitted / n + diffuse + specular;
 }
 #endif
 
@@ -75,9 +129,20 @@ void main() {
 #if PT_FROM_GBUFFER
     if (gbuf_effect_at(p) != EFFECT_PATH_TRACED) {
         imageStore(dst, p, vec4(0.0));
+#if PT_LOBES
+        imageStore(dst_diffuse, p, vec4(0.0));
+        imageStore(dst_specular, p, vec4(0.0));
+#endif
         return;
     }
 #endif
 #endif
+#if PT_LOBES
+    vec3 diffuse, specular;
+    imageStore(dst, p, vec4(pt_pixel_lobes(p, diffuse, specular), 1.0));
+    imageStore(dst_diffuse, p, vec4(to_half_range(diffuse), 1.0));
+    imageStore(dst_specular, p, vec4(to_half_range(specular), 1.0));
+#else
     imageStore(dst, p, vec4(pt_pixel(p), 1.0));
+#endif
 }

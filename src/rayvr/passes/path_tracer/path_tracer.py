@@ -11,6 +11,10 @@ Two modes (property `mode`):
 
 The output is the mean of `samples_per_pixel` paths (rgba32f); feed it to Accumulate for a
 progressive render. Paths are seeded by pixel, view, frame index and sample index (PCG).
+With `lobes` the pass also writes what the first vertex's diffuse and specular lobes reflect
+(`diffuse`, `specular`, rgba16f, emission excluded; where a camera ray escapes, `diffuse` is the
+background) for a denoiser that demodulates them apart (rayvr.passes.SVGF); without it those
+pins do not exist and nothing is allocated for them.
 """
 from __future__ import annotations
 
@@ -39,12 +43,15 @@ class PathTracer(RenderPass):
     `pixel_jitter` (random sub-pixel offsets in
     "full" mode: anti-aliasing once accumulated; off: pixel centres moved by the views' TAA
     jitter), `mode` ("full" or "gbuffer"), `sampler` ("sobol": hash-based Owen-scrambled Sobol,
-    the default; "pcg": independent PCG hash samples, for comparisons)."""
+    the default; "pcg": independent PCG hash samples, for comparisons), `lobes` (also the
+    `diffuse` and `specular` outputs; then Russian roulette never ends a path at its first
+    vertex, and `clamp` caps each lobe of a sample on its own)."""
 
     COLOR = "color"
+    DIFFUSE, SPECULAR = "diffuse", "specular"
     PIXELS = "pixels"
     PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
-                  "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol"}
+                  "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol", "lobes": False}
     USES_SCENE = True
 
     def validate_property(self, key, value):
@@ -69,6 +76,10 @@ class PathTracer(RenderPass):
             r.add_input(self.PIXELS, "PATH_TRACED pixels (EffectCompaction); absent: whole screen").buffer(
                 pixel_list_bytes(cd.size, cd.views)).optional().indirect()
         r.add_output(self.COLOR, "path-traced radiance, mean of samples_per_pixel paths").format("rgba32f")
+        if self.lobes:
+            r.add_output(self.DIFFUSE, "what the first vertex's diffuse lobe reflects (emission excluded; "
+                                       "the background where a camera ray escapes)").format("rgba16f")
+            r.add_output(self.SPECULAR, "what its specular lobe reflects").format("rgba16f")
         return r
 
     def skip_reason(self, cd):
@@ -80,7 +91,7 @@ class PathTracer(RenderPass):
         listed = self.mode == "gbuffer" and self.PIXELS in cd.input_formats
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALT,
                          "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PIXEL_LIST_INPUT": int(listed),
-                         "RAYVR_SAMPLER": SAMPLERS[self.sampler]}
+                         "RAYVR_SAMPLER": SAMPLERS[self.sampler], "PT_LOBES": int(bool(self.lobes))}
         self._listed = listed
         self._group = ray_group(cd.views)
         self._defines.update(ray_group_defines(self._group))
@@ -92,8 +103,10 @@ class PathTracer(RenderPass):
         return dict(getattr(self, "_defines", {}))
 
     def _set_uniforms(self, res) -> None:
+        # with lobes Russian roulette spares the first vertex: its lobes' shares must be drawn
+        rr_start = max(int(self.rr_start), 1) if self.lobes else int(self.rr_start)
         values = {"pt_samples": int(self.samples_per_pixel), "pt_max_bounces": int(self.max_bounces),
-                  "pt_rr_start": int(self.rr_start), "pt_clamp": float(self.clamp),
+                  "pt_rr_start": rr_start, "pt_clamp": float(self.clamp),
                   "pt_pixel_jitter": bool(self.pixel_jitter)}
         for key, value in values.items():
             res.set(key, value)   # skipped where the GLSL compiler dropped the uniform
@@ -104,6 +117,9 @@ class PathTracer(RenderPass):
         if self.mode == "gbuffer":
             channels.bind_inputs(res, data)
         res.image("dst", data[self.COLOR])
+        if self.lobes:
+            res.image("dst_diffuse", data[self.DIFFUSE])
+            res.image("dst_specular", data[self.SPECULAR])
         pixels = data.get(self.PIXELS) if self._listed else None
         if pixels is not None:
             res.buffer("PixelList", pixels)

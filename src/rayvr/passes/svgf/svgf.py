@@ -1,0 +1,232 @@
+"""SVGF pass: spatiotemporal variance-guided filtering (Schied et al. 2017, "Spatiotemporal
+Variance-Guided Filtering: Real-Time Reconstruction for Path-Traced Global Illumination"), every
+view of a frame in each dispatch, each view with its own history (layer z is view z).
+
+Four stages, one compute shader each, run as dispatches of this one pass:
+    reproject   demodulate `diffuse` and `specular` by the BSDF's directional albedos
+                (glsl/bsdf.glsl bsdf_albedo) at the G-buffer surface; fetch last frame's history
+                where the G-buffer's motion vector points, over the taps that pass the
+                disocclusion test (depth against the view's previous view-projection, normal,
+                effect word); blend colour and luminance moments; count the history length
+    variance    per-pixel variance from the moments; a 7x7 spatial estimate while the history
+                is shorter than 4 frames
+    a-trous     `iterations` passes of the edge-stopping 5x5 wavelet filter (taps 1, 2, 4, ...
+                pixels apart; depth, normal and variance-scaled luminance weights)
+    modulate    filtered illumination x albedo + emission
+The colour history is the output of a-trous iteration `feedback_tap` as in the paper (0: the
+first), or with `feedback_tap` -1 (the default) the unfiltered temporal mean. Fed back, the
+filter's blur compounds frame after frame: on the Cornell box at 32x32 and 1 spp, 16 still
+frames end at relMSE 0.0125 with the first iteration fed back and 0.0041 without (raw 16-frame
+accumulation: 0.011). For the same reason the variance that scales the luminance weights is the
+variance of the temporal mean (one frame's, from the moments, over the frames averaged), so the
+filter backs off as a still view's history grows and the image converges.
+The stages are one pass, not four, because the paper's temporal stage reads last frame's
+*filtered* illumination: the a-trous stage writes the history the reprojection reads, a loop
+that separate graph passes could only express as a cycle (Falcor's SVGFPass and Tauray's svgf
+stage are one unit for the same reason). TAA follows in the graphs (rayvr.graphs).
+
+History resets on the first frame, on `reset()` and on scene edits that change the lighting
+(materials or lights: `GpuScene.version` moved and one of them differs). Camera motion never
+resets it (reprojection follows the head), nor do moved instances: their pixels fail the
+disocclusion test where the surface behind them changed.
+"""
+from __future__ import annotations
+
+from ...errors import OptionError
+from ...gpu.program_resources import program_resources
+from ...rendergraph.registry import register_pass
+from ...rendergraph.render_pass import Access, Reflection, RenderPass
+from ..dispatch import groups_2d
+from ..effects import effect_defines, scene_defines
+from ..gbuffer import channels
+
+GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
+STAGES = ("reproject", "variance", "atrous", "modulate")
+MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
+
+
+def lights_key(scene) -> tuple:
+    """What the scene's punctual lights look like (a change invalidates the lighting history)."""
+    return tuple((l.type, tuple(l.position), tuple(l.direction), tuple(l.color), l.intensity, l.range,
+                  l.inner_cone_angle, l.outer_cone_angle) for l in scene.lights)
+
+
+@register_pass
+class SVGF(RenderPass):
+    """Denoises `diffuse` (+ optional `specular`) first-vertex radiance into `color` (rgba16f);
+    see the module docstring.
+
+    Properties: `iterations` (a-trous passes, 0-8; 0 = temporal accumulation only),
+    `feedback_tap` (the iteration whose output becomes the colour history; -1: the unfiltered
+    temporal mean), `alpha` and
+    `moments_alpha` (weights of the new frame's colour and moments, at least 1 / history length),
+    `max_history` (frames the history length counts to), `phi_color`, `phi_normal`, `phi_depth`
+    (the edge-stopping sigmas of luminance, normal and depth)."""
+
+    DIFFUSE, SPECULAR, COLOR = "diffuse", "specular", "color"
+    HISTORY_DIFFUSE, HISTORY_SPECULAR = "historyDiffuse", "historySpecular"
+    MOMENTS = ("moments0", "moments1")
+    SURFACE = ("surface0", "surface1")
+    FILTER_DIFFUSE = ("filterDiffuse0", "filterDiffuse1")
+    FILTER_SPECULAR = ("filterSpecular0", "filterSpecular1")
+    PROPERTIES = {"iterations": 5, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2, "max_history": 32,
+                  "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
+    USES_SCENE = True
+
+    def __init__(self, props: dict | None = None, **kwargs):
+        super().__init__(props, **kwargs)
+        self._frames = 0
+        self._history_valid = False
+        self._scene_version = None
+        self._scene_key = None
+        self.resets = 0   # histories dropped by scene edits (lighting changed) since compile
+
+    def validate_property(self, key, value):
+        value = super().validate_property(key, value)
+        if key == "iterations" and (int(value) != value or not 0 <= value <= MAX_ITERATIONS):
+            raise OptionError(f"pass {self.name}: property 'iterations' must be an integer from 0 to "
+                              f"{MAX_ITERATIONS}, got {value!r}")
+        low = {"feedback_tap": -1, "max_history": 1}.get(key)
+        if low is not None and (int(value) != value or value < low):
+            raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= {low}, got {value!r}")
+        if key in ("alpha", "moments_alpha") and not 0.0 < value <= 1.0:
+            raise OptionError(f"pass {self.name}: property '{key}' must be in (0, 1] (weight of the new "
+                              f"frame), got {value!r}")
+        if key in ("phi_color", "phi_depth") and not value > 0.0:
+            raise OptionError(f"pass {self.name}: property '{key}' must be > 0, got {value!r}")
+        if key == "phi_normal" and not value >= 0.0:
+            raise OptionError(f"pass {self.name}: property 'phi_normal' must be >= 0, got {value!r}")
+        return int(value) if key in ("iterations", "feedback_tap", "max_history") else value
+
+    def reset(self) -> None:
+        """Forget the history: the next frame starts it again."""
+        self._history_valid = False
+
+    @property
+    def history_valid(self) -> bool:
+        """Whether the next frame reprojects a history (False after a reset or a scene edit)."""
+        return self._history_valid
+
+    def reflect(self, cd):
+        r = Reflection()
+        channels.add_inputs(r, GBUFFER)
+        r.add_input(self.DIFFUSE, "radiance the first vertex's diffuse lobe reflects, emission excluded "
+                                  "(the background where nothing was hit)")
+        r.add_input(self.SPECULAR, "radiance its specular lobe reflects").optional()
+        r.add_output(self.COLOR, "denoised radiance (remodulated, with emission)").format("rgba16f")
+        lobes = [(self.HISTORY_DIFFUSE, self.FILTER_DIFFUSE, "diffuse")]
+        if self.SPECULAR in cd.input_formats:
+            lobes.append((self.HISTORY_SPECULAR, self.FILTER_SPECULAR, "specular"))
+        for history, scratch, lobe in lobes:
+            r.add_internal(history, f"filtered {lobe} illumination of last frame (the colour history)"
+                           ).format("rgba16f")
+            for name in scratch:   # transients: they alias with other passes' textures
+                r.add_output(name, f"{lobe} illumination + variance between the stages (scratch)").format("rgba16f")
+        for name in self.MOMENTS:
+            r.add_internal(name, "luminance moments: diffuse m1 m2, specular m1 m2 (used in turn)").format("rgba32f")
+        for name in self.SURFACE:
+            r.add_internal(name, "depth, normal, effect word, history length (used in turn)").format("rgba32ui")
+        return r
+
+    def compile(self, ctx, cd):
+        self._specular = self.SPECULAR in cd.input_formats
+        self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular)}
+        self._res = {stage: program_resources(self.compute_program(ctx.gl, f"svgf_{stage}.comp", self._defines))
+                     for stage in STAGES}
+        self._groups = groups_2d(cd.size, cd.views)
+        self._frames = 0
+        self._scene_version = None
+        self._scene_key = None
+        self.resets = 0
+        self.reset()
+
+    def defines(self) -> dict:
+        return dict(getattr(self, "_defines", {}))
+
+    def _lighting_edited(self, ctx) -> bool:
+        """Whether the materials or lights changed since the last frame (instances alone do not
+        count: the disocclusion test handles what they uncover)."""
+        gs = ctx.scene
+        if gs is None or gs.version == self._scene_version:
+            return False
+        self._scene_version = gs.version
+        key = (gs.scene.materials.version, lights_key(gs.scene))
+        edited = key != self._scene_key
+        self._scene_key = key
+        return edited
+
+    def _lobes(self, res, data, prefix: str, pins) -> None:
+        """Bind `<prefix>_diffuse` (and `_specular`) of `res` to pins (diffuse pin, specular pin)."""
+        bind = res.texture if prefix == "src" else res.image
+        bind(f"{prefix}_diffuse", data[pins[0]])
+        if self._specular:
+            bind(f"{prefix}_specular", data[pins[1]])
+
+    def _set_common(self, res) -> None:
+        res.set("svgf_phi_depth", float(self.phi_depth))
+        res.set("svgf_phi_normal", float(self.phi_normal))
+        res.set("svgf_phi_color", float(self.phi_color))
+
+    def execute(self, ctx, data):
+        if self._lighting_edited(ctx) and self._history_valid:
+            self.resets += 1
+            self.reset()
+        prev, cur = self._frames % 2, (self._frames + 1) % 2
+        scratch = [(self.FILTER_DIFFUSE[k], self.FILTER_SPECULAR[k]) for k in (0, 1)]
+        history = (self.HISTORY_DIFFUSE, self.HISTORY_SPECULAR)
+        iterations = int(self.iterations)
+        tap = min(int(self.feedback_tap), iterations - 1)   # < 0: the unfiltered temporal mean
+        between = (Access.SAMPLED, Access.IMAGE)
+
+        res = self._res["reproject"]
+        channels.bind_inputs(res, data, GBUFFER)
+        res.texture("svgf_diffuse_in", data[self.DIFFUSE])
+        res.texture("history_diffuse", data[self.HISTORY_DIFFUSE])
+        if self._specular:
+            res.texture("svgf_specular_in", data[self.SPECULAR])
+            res.texture("history_specular", data[self.HISTORY_SPECULAR])
+        res.texture("moments_prev", data[self.MOMENTS[prev]])
+        res.texture("surface_prev", data[self.SURFACE[prev]])
+        self._lobes(res, data, "out", scratch[0])
+        res.image("moments_out", data[self.MOMENTS[cur]])
+        res.image("surface_out", data[self.SURFACE[cur]])
+        res.set("svgf_alpha", float(self.alpha))
+        res.set("svgf_moments_alpha", float(self.moments_alpha))
+        res.set("svgf_max_history", float(self.max_history))
+        res.set("svgf_history_valid", self._history_valid)
+        res.prog.run(*self._groups)
+        ctx.barrier(*between)
+
+        res = self._res["variance"]
+        self._set_common(res)
+        self._lobes(res, data, "src", scratch[0])
+        self._lobes(res, data, "dst", scratch[1])
+        self._lobes(res, data, "history", history)
+        res.texture("moments_cur", data[self.MOMENTS[cur]])
+        res.texture("surface_cur", data[self.SURFACE[cur]])
+        res.set("svgf_write_history", tap < 0)
+        res.prog.run(*self._groups)
+        ctx.barrier(*between)
+
+        src = 1
+        res = self._res["atrous"]
+        self._set_common(res)
+        res.texture("surface_cur", data[self.SURFACE[cur]])
+        self._lobes(res, data, "history", history)
+        for i in range(iterations):
+            self._lobes(res, data, "src", scratch[src])
+            self._lobes(res, data, "dst", scratch[1 - src])
+            res.set("svgf_step", 1 << i)
+            res.set("svgf_write_history", i == tap)
+            res.prog.run(*self._groups)
+            ctx.barrier(*between)
+            src = 1 - src
+
+        res = self._res["modulate"]
+        channels.bind_inputs(res, data, GBUFFER)
+        res.texture("svgf_diffuse_in", data[self.DIFFUSE])
+        self._lobes(res, data, "src", scratch[src])
+        res.image("dst", data[self.COLOR])
+        res.prog.run(*self._groups)
+        self._frames += 1
+        self._history_valid = True

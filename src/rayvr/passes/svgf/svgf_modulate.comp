@@ -1,0 +1,29 @@
+// SVGF stage 4, remodulation: the filtered illumination of each lobe times its albedo, plus the
+// G-buffer's emission; where nothing was drawn, the input (the background) as it came.
+#include "svgf_common.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+uniform sampler2DArray svgf_diffuse_in;
+uniform sampler2DArray src_diffuse;
+#if SVGF_SPECULAR
+uniform sampler2DArray src_specular;
+#endif
+layout(rgba16f) writeonly uniform image2DArray dst;
+
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;
+    if (!svgf_has_geometry(gbuf_fetch_effect(p))) {
+        imageStore(dst, p, vec4(to_half_range(texelFetch(svgf_diffuse_in, p, 0).rgb), 1.0));
+        return;
+    }
+    GSurface g = gbuf_load(p);
+    vec3 albedo_d, albedo_s;
+    svgf_albedo(g, uint(p.z), albedo_d, albedo_s);
+    vec3 c = svgf_remodulate(texelFetch(src_diffuse, p, 0).rgb, albedo_d) + g.emissive;
+#if SVGF_SPECULAR
+    c += svgf_remodulate(texelFetch(src_specular, p, 0).rgb, albedo_s);
+#endif
+    imageStore(dst, p, vec4(to_half_range(c), 1.0));
+}

@@ -1,0 +1,126 @@
+// SVGF stage 1, reprojection and temporal accumulation, every view in one dispatch (layer z of
+// every history texture is view z). This frame's lobes are demodulated by their albedos; the
+// history of last frame's filtered illumination is fetched where the G-buffer's motion vector
+// says this surface was (bilinear over the taps that pass the disocclusion test, else the mean
+// of the 3x3 taps that do), blended with weight max(alpha, 1 / history length), and the
+// luminance moments are accumulated the same way (moments_alpha); the variance follows from them.
+#include "svgf_common.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+uniform sampler2DArray svgf_diffuse_in;
+uniform sampler2DArray history_diffuse;
+layout(rgba16f) writeonly uniform image2DArray out_diffuse;
+#if SVGF_SPECULAR
+uniform sampler2DArray svgf_specular_in;
+uniform sampler2DArray history_specular;
+layout(rgba16f) writeonly uniform image2DArray out_specular;
+#endif
+uniform sampler2DArray moments_prev;
+uniform usampler2DArray surface_prev;
+layout(rgba32f) writeonly uniform image2DArray moments_out;
+layout(rgba32ui) writeonly uniform uimage2DArray surface_out;
+
+uniform float svgf_alpha;           // weight of this frame's illumination (at least 1 / history)
+uniform float svgf_moments_alpha;   // the same for the moments
+uniform float svgf_max_history;
+uniform bool svgf_history_valid;    // false on the first frame and after a scene edit
+
+// The history this pixel reprojects to, summed over the taps of last frame that show its surface.
+struct Reprojected {
+    float weight;
+    vec3 diffuse;
+    vec3 specular;
+    vec4 moments;
+    float history;
+};
+
+void add_tap(inout Reprojected r, ivec3 q, float w, uint word, vec3 n, float prev_depth, float tolerance) {
+    if (w <= 0.0 || !svgf_inside(q.xy, textureSize(surface_prev, 0).xy)) return;
+    SvgfSurface s = svgf_unpack(texelFetch(surface_prev, q, 0));
+    if (s.history <= 0.0 || s.word != word || dot(s.n, n) < SVGF_NORMAL_COS
+        || abs(s.depth - prev_depth) > tolerance) return;
+    r.weight += w;
+    r.diffuse += w * texelFetch(history_diffuse, q, 0).rgb;
+#if SVGF_SPECULAR
+    r.specular += w * texelFetch(history_specular, q, 0).rgb;
+#endif
+    r.moments += w * texelFetch(moments_prev, q, 0);
+    r.history += w * s.history;
+}
+
+float depth_at(ivec3 q, ivec2 size) { return svgf_inside(q.xy, size) ? gbuf_fetch_posW(q).w : 0.0; }
+
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    ivec3 size = imageSize(out_diffuse);
+    if (any(greaterThanEqual(p, size))) return;
+    uint word = gbuf_fetch_effect(p);
+    if (!svgf_has_geometry(word)) {
+        imageStore(out_diffuse, p, vec4(0.0));
+#if SVGF_SPECULAR
+        imageStore(out_specular, p, vec4(0.0));
+#endif
+        imageStore(moments_out, p, vec4(0.0));
+        imageStore(surface_out, p, svgf_pack(svgf_no_geometry()));
+        return;
+    }
+    GSurface g = gbuf_load(p);
+    vec3 albedo_d, albedo_s;
+    svgf_albedo(g, uint(p.z), albedo_d, albedo_s);
+    vec3 diffuse = svgf_demodulate(texelFetch(svgf_diffuse_in, p, 0).rgb, albedo_d);
+    vec3 specular = vec3(0.0);
+#if SVGF_SPECULAR
+    specular = svgf_demodulate(texelFetch(svgf_specular_in, p, 0).rgb, albedo_s);
+#endif
+    float depth = gbuf_fetch_posW(p).w;
+    vec2 gradient = vec2(
+        svgf_depth_slope(depth, depth_at(p + ivec3(-1, 0, 0), size.xy), depth_at(p + ivec3(1, 0, 0), size.xy)),
+        svgf_depth_slope(depth, depth_at(p + ivec3(0, -1, 0), size.xy), depth_at(p + ivec3(0, 1, 0), size.xy)));
+
+    Reprojected r = Reprojected(0.0, vec3(0.0), vec3(0.0), vec4(0.0), 0.0);
+    if (svgf_history_valid) {
+        // where this surface point was in last frame's view, and the depth it had there
+        vec2 prev = vec2(p.xy) + 0.5 - gbuf_fetch_motion(p);
+        float prev_depth = (views[p.z].prev_view_proj * vec4(g.pos, 1.0)).w;
+        float tolerance = SVGF_DEPTH_TOLERANCE * prev_depth + 2.0 * (abs(gradient.x) + abs(gradient.y));
+        vec2 b = prev - 0.5;
+        ivec2 base = ivec2(floor(b));
+        vec2 f = b - vec2(base);
+        add_tap(r, ivec3(base, p.z), (1.0 - f.x) * (1.0 - f.y), word, g.n, prev_depth, tolerance);
+        add_tap(r, ivec3(base + ivec2(1, 0), p.z), f.x * (1.0 - f.y), word, g.n, prev_depth, tolerance);
+        add_tap(r, ivec3(base + ivec2(0, 1), p.z), (1.0 - f.x) * f.y, word, g.n, prev_depth, tolerance);
+        add_tap(r, ivec3(base + ivec2(1, 1), p.z), f.x * f.y, word, g.n, prev_depth, tolerance);
+        if (r.weight < 1e-3) {   // no bilinear tap survived: the 3x3 around the nearest pixel
+            r = Reprojected(0.0, vec3(0.0), vec3(0.0), vec4(0.0), 0.0);
+            ivec2 nearest = ivec2(floor(prev));
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                    add_tap(r, ivec3(nearest + ivec2(dx, dy), p.z), 1.0, word, g.n, prev_depth, tolerance);
+        }
+    }
+    bool found = r.weight >= 1e-3;
+    float history = found ? min(r.history / r.weight + 1.0, svgf_max_history) : 1.0;
+    float alpha = found ? max(svgf_alpha, 1.0 / history) : 1.0;
+    float moments_alpha = found ? max(svgf_moments_alpha, 1.0 / history) : 1.0;
+    float inv = found ? 1.0 / r.weight : 0.0;
+    float ld = luminance(diffuse), ls = luminance(specular);
+    vec4 moments = mix(r.moments * inv, vec4(ld, ld * ld, ls, ls * ls), moments_alpha);
+    // the moments' variance is that of one frame's sample; the colour averages about `samples`
+    // frames (1 / alpha's exponential window once the history is long), whose mean has
+    // 1 / samples of it: the filter then backs off as the history grows, and a still view
+    // converges to the temporal mean instead of staying blurred
+    float samples = min(history, (2.0 - svgf_alpha) / svgf_alpha);
+    vec2 variance = max(vec2(moments.y - moments.x * moments.x, moments.w - moments.z * moments.z), 0.0) / samples;
+    imageStore(out_diffuse, p, vec4(to_half_range(mix(r.diffuse * inv, diffuse, alpha)), variance.x));
+#if SVGF_SPECULAR
+    imageStore(out_specular, p, vec4(to_half_range(mix(r.specular * inv, specular, alpha)), variance.y));
+#endif
+    imageStore(moments_out, p, moments);
+    SvgfSurface s;
+    s.depth = depth;
+    s.n = g.n;
+    s.word = word;
+    s.history = history;
+    imageStore(surface_out, p, svgf_pack(s));
+}

@@ -1,0 +1,68 @@
+// SVGF stage 2, variance estimation: pixels with a history of SVGF_MIN_HISTORY frames or more keep
+// the temporal variance of their moments; younger ones (disoccluded, or the first frames) take
+// the variance of the moments of a 7x7 neighbourhood weighted by depth and normal, boosted by
+// 4 / history (section 4.2). Their illumination stays their own: the a-trous stage filters it. With `svgf_write_history` (no feedback from
+// an a-trous iteration) the temporal mean is also next frame's colour history.
+#define SVGF_READS_SURFACE 1
+#include "svgf_common.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+uniform sampler2DArray src_diffuse;
+layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
+layout(rgba16f) writeonly uniform image2DArray history_diffuse;
+#if SVGF_SPECULAR
+uniform sampler2DArray src_specular;
+layout(rgba16f) writeonly uniform image2DArray dst_specular;
+layout(rgba16f) writeonly uniform image2DArray history_specular;
+#endif
+uniform sampler2DArray moments_cur;
+uniform bool svgf_write_history;
+
+void store(ivec3 p, vec4 d, vec4 s) {
+    imageStore(dst_diffuse, p, d);
+#if SVGF_SPECULAR
+    imageStore(dst_specular, p, s);
+#endif
+}
+
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    ivec3 size = imageSize(dst_diffuse);
+    if (any(greaterThanEqual(p, size))) return;
+    SvgfSurface c = svgf_unpack(texelFetch(surface_cur, p, 0));
+    vec4 d = texelFetch(src_diffuse, p, 0);
+    vec4 s = vec4(0.0);
+#if SVGF_SPECULAR
+    s = texelFetch(src_specular, p, 0);
+#endif
+    if (svgf_write_history) {   // the temporal mean as it is, before any spatial filter
+        imageStore(history_diffuse, p, vec4(d.rgb, 0.0));
+#if SVGF_SPECULAR
+        imageStore(history_specular, p, vec4(s.rgb, 0.0));
+#endif
+    }
+    if (!svgf_has_geometry(c.word) || c.history >= SVGF_MIN_HISTORY) {
+        store(p, d, s);
+        return;
+    }
+    vec2 gradient = svgf_depth_gradient(p, c.depth, size.xy);
+    float sum_w = 0.0;
+    vec4 sum_m = vec4(0.0);
+    for (int dy = -3; dy <= 3; ++dy)
+        for (int dx = -3; dx <= 3; ++dx) {
+            ivec3 q = p + ivec3(dx, dy, 0);
+            if (!svgf_inside(q.xy, size.xy)) continue;
+            SvgfSurface t = svgf_unpack(texelFetch(surface_cur, q, 0));
+            if (!svgf_has_geometry(t.word)) continue;
+            float w = svgf_weight_depth(c.depth, t.depth, gradient, vec2(dx, dy)) * svgf_weight_normal(c.n, t.n);
+            sum_w += w;
+            sum_m += w * texelFetch(moments_cur, q, 0);
+        }
+    // the centre tap has weight 1, so sum_w >= 1
+    vec4 m = sum_m / sum_w;
+    // one sample's variance, boosted for the young history (x 4 / history) and divided as the
+    // temporal estimate is by the frames averaged
+    vec2 variance = max(vec2(m.y - m.x * m.x, m.w - m.z * m.z), 0.0) * (SVGF_MIN_HISTORY / (c.history * c.history));
+    store(p, vec4(d.rgb, variance.x), vec4(s.rgb, variance.y));
+}
