@@ -6,6 +6,7 @@
              │               ├─> Reflections ──────────────────┼─> Composite ─> ToneMap
              │               └─> PathTracer ─> Accumulate ─────┘
              └─(G-buffer pins to every lighting pass; effect ids to Compaction and Composite)
+    hybrid(gi="probes"): + Probes (ProbeGI, once per frame) ─> Direct, Shadows, Reflections
 
     path_traced():  PathTracer ─> Accumulate ─> ToneMap      (progressive reference renders)
     hybrid_taa():   hybrid() with TAA between Composite and ToneMap, fed GBuffer.motion
@@ -17,6 +18,7 @@ from __future__ import annotations
 from .rendergraph.graph import RenderGraph
 
 OUTPUT = "ToneMap.dst"        # display-referred rgba8, sRGB encoded
+GI_MODES = ("probes",)        # hybrid(gi=...): indirect light for RASTER, SHADOWS and REFLECTIONS materials
 HDR_OUTPUT = "Composite.color"  # linear radiance (rgba16f), for EXR
 PT_OUTPUT = "ToneMap.dst"          # path_traced(): display-referred rgba8, sRGB encoded
 PT_HDR_OUTPUT = "Accumulate.dst"   # path_traced(): linear radiance, mean over the accumulated frames (rgba32f)
@@ -26,17 +28,27 @@ TAA_HDR_OUTPUT = "TAA.dst"         # hybrid_taa(): anti-aliased linear radiance 
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
            auto_exposure: bool = False, light_samples: int = 1, background=(0.0, 0.0, 0.0),
            multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid",
-           gbuffer: str = "auto") -> RenderGraph:
+           gbuffer: str = "auto", gi: str | None = None, probes: dict | None = None) -> RenderGraph:
     """The hybrid raster + ray-traced graph: multiview G-buffer, direct light for every pixel,
     ray-traced shadows and reflections only for the pixels whose material's effect asks for them,
     path tracing (rayvr.passes.PathTracer in G-buffer mode) for PATH_TRACED materials, composite
     and tone map. `gbuffer`: 'raster', 'rt' (ray-traced, rayvr.passes.GBufferRT) or 'auto' (raster
     unless the GPU's raster is weak against its compute: Capabilities.weak_raster, chosen at compile
     and named in the compile report); the pass is "GBuffer" either way.
+    `gi="probes"` adds indirect light to RASTER, SHADOWS and REFLECTIONS materials from a volume of
+    irradiance probes ray traced once per frame for every view (rayvr.passes.ProbeGI, pass
+    "Probes", with `probes` as its properties); PATH_TRACED materials trace their own.
     Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR)."""
     from . import passes as P
+    from .errors import OptionError
     from .passes.gbuffer import channels
+    from .passes.probe_gi import inputs as probe_inputs
 
+    if gi not in (None, "none", *GI_MODES):
+        raise OptionError(f"hybrid(gi={gi!r}): unknown global illumination; use one of {', '.join(GI_MODES)} "
+                          f"or None")
+    if probes and gi != "probes":
+        raise OptionError("hybrid(probes=...): probe settings need gi='probes'")
     g = RenderGraph(name)
     g.add_pass(P.GBufferAuto(mode=gbuffer, multiview=multiview), "GBuffer")
     g.add_pass(P.DirectLighting(light_samples=light_samples, background=list(background), raster_only=True),
@@ -62,6 +74,10 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_edge("Shadows.shadowed", "Composite.shadowed")
     g.add_edge("Reflections.reflection", "Composite.reflection")
     g.add_edge("Composite.color", "ToneMap.src")
+    if gi == "probes":
+        g.add_pass(P.ProbeGI(dict(probes or {})), "Probes")
+        for lighting in ("Direct", "Shadows", "Reflections"):
+            probe_inputs.wire(g, "Probes", lighting)
     g.mark_output(OUTPUT)
     g.mark_output(HDR_OUTPUT)
     return g

@@ -2,12 +2,15 @@
 // reflection list, dispatched indirectly, or with PIXELS_2D the whole image in tiles): sample the
 // specular lobe (GGX VNDF; exact mirror at roughness 0), trace, shade the hit with emission and
 // shadowed direct light, continue up to MAX_BOUNCES. Output: reflected radiance weighted by the
-// specular BSDF, so the composite adds it to the direct light.
+// specular BSDF, so the composite adds it to the direct light. With PROBE_GI each hit adds the
+// probes' indirect diffuse light, and a path stopped by MAX_BOUNCES on a reflective surface their
+// glossy fallback.
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "pixel_list.glsl"
 #include "shading.glsl"
+#include "probe_gi.glsl"
 
 #if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
 layout(local_size_x = RAY_GROUP_SIZE) in;
@@ -41,9 +44,10 @@ void main() {
         SurfacePoint sp;
         MaterialParams mp;
         s = path_vertex_at_hit(hit, l, s.cone_width + hit.t * spread, spread, sp, mp);
-        radiance += throughput * ((mirror ? mp.emissive : vec3(0.0)) + shade_direct(s, rng));
+        radiance += throughput * ((mirror ? mp.emissive : vec3(0.0)) + shade_direct(s, rng) + probe_gi_diffuse(s));
         // Only surfaces that are themselves reflective carry the path further.
         if (mp.effect < EFFECT_REFLECTIONS) break;
+        if (bounce == MAX_BOUNCES - 1) radiance += throughput * probe_gi_glossy(s);
     }
     imageStore(dst, p, vec4(finite_or_zero(radiance), 1.0));
 }
