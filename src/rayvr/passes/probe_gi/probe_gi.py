@@ -17,7 +17,8 @@ frame: the views only read textures.
 
 Response: after a change of lighting or geometry the light that bounced once reaches 90% of its
 new value after ceil(ln 0.1 / ln hysteresis) updates (45 at the default 0.95); light that bounced
-k times follows within about ln 0.1 / ln(h + (1 - h) a) updates for surfaces of albedo a.
+more often also waits for the probes it bounced through, at worst ln 0.1 / ln(h + (1 - h) a)
+updates for surfaces of albedo a (the closed-box test, albedo 0.6, kept the once-bounced pace).
 """
 from __future__ import annotations
 

@@ -28,6 +28,7 @@ uniform uint probe_frame;
 uniform uint probe_step;          // update within the frame (warm-up)
 
 const float PROBE_DEPTH_SHARPNESS = 50.0;
+const float PROBE_DEPTH_MIN_COS = 0.5;     // 0.5^50 ~ 1e-15
 const float PROBE_BACKFACE_LIMIT = 0.25;   // probes seeing more back faces than this are inside geometry
 const float PROBE_BACKFACE_DEPTH = 0.2;    // back-face hits count this near: Chebyshev hides the probe
 
@@ -83,7 +84,7 @@ void main() {
     float dist = max_depth;
     if (live) {
         Hit hit;
-        if (trace_closest(origin, dir, 1e30, hit)) {
+        if (trace_closest(origin, dir, 1e29, hit)) {
             const float spread = sqrt(4.0 * RAYVR_PI / float(PROBE_RAYS));   // a ray's share of the sphere
             SurfacePoint sp;
             MaterialParams mp;
@@ -137,7 +138,9 @@ void main() {
         vec2 sum = vec2(0.0);
         float total = 0.0;
         for (int r = 0; r < PROBE_RAYS; ++r) {
-            float w = pow(max(0.0, dot(n, ray_direction[r])), PROBE_DEPTH_SHARPNESS);
+            float c = dot(n, ray_direction[r]);
+            if (c < PROBE_DEPTH_MIN_COS) continue;   // weight below 1e-15: not worth the pow
+            float w = pow(c, PROBE_DEPTH_SHARPNESS);
             float d = ray_radiance[r].a;
             sum += w * vec2(d, d * d);
             total += w;
