@@ -59,8 +59,9 @@ def run(args) -> dict:
               "consecutive frames after convergence, default hysteresis 0.95",
               "frame: SHADOWS with REFLECTIONS on one material; per_frame_ms is the graph's total; "
               "views_ratio = N views / one view of their pixels, both with GI",
-              "error: relMSE and FLIP against the converged path-traced reference; vs_no_gi = relMSE with GI / "
-              "relMSE of the same configuration without",
+              "error: relMSE and FLIP against the converged path-traced reference, each frame judged alone (so "
+              "the direct light's one-sample noise counts in full); vs_no_gi = relMSE with GI / relMSE of the same "
+              "configuration without",
               f"targets (H200, unmeasured here unless the device says so): update <= {TARGET_UPDATE_MS} ms for "
               f"16^3 x 128 rays; tauray SHADOWS + REFLECTIONS + GI <= {TARGET_STEREO_MS} ms at 2 x 1440x1600 "
               f"and vs_no_gi <= 0.5; 64 views <= {TARGET_VIEWS_RATIO}x one view"]

@@ -362,7 +362,18 @@ def test_user_volumes_pick_the_first_that_holds_a_point():
     assert rows[1].view(np.uint32)[8:12].tolist() == [4, 4, 4, 8]
 
 
-def test_octahedral_map_round_trip_and_borders():
+def test_probe_graph_saves_and_loads(tmp_path):
+    volumes = [{"min": [0, 0, 0], "max": [1, 2, 1], "counts": [2, 4, 2]}]
+    g = rv.graphs.hybrid(gi="probes", probes={"volumes": volumes, "rays_per_probe": 64})
+    for suffix in (".py", ".json"):
+        path = tmp_path / f"g{suffix}"
+        g.save(path)
+        back = rv.RenderGraph.load(path)
+        assert back.get_pass("Probes").get_properties() == g.get_pass("Probes").get_properties()
+        assert {str(e) for e in back.edges} == {str(e) for e in g.edges}
+
+
+def test_octahedral_map_round_trip():
     rng = np.random.default_rng(3)
     d = rng.normal(size=(1000, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)

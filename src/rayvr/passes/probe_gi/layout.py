@@ -53,7 +53,9 @@ class ProbeVolume:
         return self.first_probe_position + cells * self.spacing
 
     def as_dict(self) -> dict:
-        return {"min": list(self.lo), "max": list(self.hi), "counts": list(self.counts)}
+        """Plain JSON values (a pass property round-trips through it)."""
+        return {"min": [float(v) for v in self.lo], "max": [float(v) for v in self.hi],
+                "counts": [int(c) for c in self.counts]}
 
 
 def parse_counts(value, where: str) -> tuple[int, int, int]:
