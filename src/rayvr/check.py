@@ -114,9 +114,18 @@ def configurations() -> list[tuple[str, object, Effect | None]]:
     svgf = functools.partial(graphs.hybrid, denoise="svgf")
     for name, factory in (("hybrid", graphs.hybrid), ("hybrid_taa", graphs.hybrid_taa), ("hybrid svgf", svgf)):
         out += [(f"{name} {e.name}", factory, e) for e in Effect]
+    # probe GI reaches DirectLighting at RASTER and every lighting pass at REFLECTIONS
+    out += [(f"hybrid gi=probes {e.name}", _probe_gi_graph, e) for e in (Effect.RASTER, Effect.REFLECTIONS)]
     out.append(("path_traced", graphs.path_traced, None))
     out.append(("path_traced svgf", functools.partial(graphs.path_traced, denoise="svgf"), None))
     return out
+
+
+def _probe_gi_graph():
+    """hybrid(gi="probes") with a small probe grid (check looks for NaN and Inf, not quality)."""
+    from . import graphs
+
+    return graphs.hybrid(gi="probes", probes={"counts": [4, 4, 4], "rays_per_probe": 32, "warmup": 2})
 
 
 def run_check(scene, size=(32, 32), views: int = 2, frames: int = 2, gpu=None, progress: bool = False):

@@ -6,6 +6,7 @@
              │               ├─> Reflections ──────────────────┼─> Composite ─> ToneMap
              │               └─> PathTracer ─> Accumulate ─────┘
              └─(G-buffer pins to every lighting pass; effect ids to Compaction and Composite)
+    hybrid(gi="probes"): + Probes (ProbeGI, once per frame) ─> Direct, Shadows, Reflections
 
     path_traced():  PathTracer ─> Accumulate ─> ToneMap      (progressive reference renders)
     hybrid_taa():   hybrid() with TAA between Composite and ToneMap, fed GBuffer.motion
@@ -25,6 +26,7 @@ from .errors import OptionError
 from .rendergraph.graph import RenderGraph
 
 OUTPUT = "ToneMap.dst"        # display-referred rgba8, sRGB encoded
+GI_MODES = ("probes",)        # hybrid(gi=...): indirect light for RASTER, SHADOWS and REFLECTIONS materials
 HDR_OUTPUT = "Composite.color"  # linear radiance (rgba16f), for EXR
 PT_OUTPUT = "ToneMap.dst"          # path_traced(): display-referred rgba8, sRGB encoded
 PT_HDR_OUTPUT = "Accumulate.dst"   # path_traced(): linear radiance, mean over the accumulated frames (rgba32f)
@@ -86,7 +88,8 @@ def _denoised(g: RenderGraph, denoise: str | None, color: str, lobes: tuple[str,
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
            auto_exposure: bool = False, light_samples: int = 1,
            multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid",
-           gbuffer: str = "auto", denoise: str | None = None) -> RenderGraph:
+           gbuffer: str = "auto", denoise: str | None = None, gi: str | None = None,
+           probes: dict | None = None) -> RenderGraph:
     """The hybrid raster + ray-traced graph: multiview G-buffer, direct light for every pixel,
     ray-traced shadows and reflections only for the pixels whose material's effect asks for them,
     path tracing (rayvr.passes.PathTracer in G-buffer mode) for PATH_TRACED materials, composite
@@ -95,11 +98,21 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     and named in the compile report); the pass is "GBuffer" either way. `denoise`: None, 'svgf'
     (the composite's diffuse and specular light through SVGF and TAA: shadows, reflections and
     path-traced pixels converge over frames) or 'oidn' (offline; see the module docstring).
+    `gi="probes"` adds indirect light to RASTER, SHADOWS and REFLECTIONS materials from a volume of
+    irradiance probes ray traced once per frame for every view (rayvr.passes.ProbeGI, pass
+    "Probes", with `probes` as its properties); PATH_TRACED materials trace their own.
     Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR), with a denoiser then its HDR
     output (`TAA.dst` or `Denoise.dst`; `hdr_output(graph)` names a graph's)."""
     from . import passes as P
+    from .errors import OptionError
     from .passes.gbuffer import channels
+    from .passes.probe_gi import inputs as probe_inputs
 
+    if gi not in (None, "none", *GI_MODES):
+        raise OptionError(f"hybrid(gi={gi!r}): unknown global illumination; use one of {', '.join(GI_MODES)} "
+                          f"or None")
+    if probes and gi != "probes":
+        raise OptionError("hybrid(probes=...): probe settings need gi='probes'")
     denoise = denoiser(denoise)
     svgf = denoise == "svgf"
     g = RenderGraph(name)
@@ -132,6 +145,10 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_edge("Direct.direct", "Composite.direct")
     g.add_edge("Shadows.shadowed", "Composite.shadowed")
     g.add_edge("Reflections.reflection", "Composite.reflection")
+    if gi == "probes":
+        g.add_pass(P.ProbeGI(dict(probes or {})), "Probes")
+        for lighting in ("Direct", "Shadows", "Reflections"):
+            probe_inputs.wire(g, "Probes", lighting)
     g.mark_output(OUTPUT)
     g.mark_output(HDR_OUTPUT)
     _denoised(g, denoise, HDR_OUTPUT, ("Composite.diffuse", "Composite.specular"))

@@ -21,6 +21,7 @@ then converge over --frames); `--denoise oidn` runs Intel Open Image Denoise on 
 """
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +38,7 @@ PT_SPP_PER_FRAME = 8   # the most paths per pixel one path-traced frame traces
 DENOISE_CHOICES = ("none", "svgf", "oidn")
 OUT_SUFFIXES = (".png", ".jpg", ".jpeg", ".exr")
 MAX_IPD_M = 1.0   # metres: eyes are 0.05-0.08 apart; a light-field grid's spacing stays below a metre
+MAX_PROBES_PER_AXIS = 32   # 32^3 probes keep their atlases (three copies) near 300 MiB
 
 
 def register(sub) -> None:
@@ -88,12 +90,39 @@ def register(sub) -> None:
     p.add_argument("--denoise", default="none", choices=DENOISE_CHOICES,
                    help="none; svgf (SVGF + TAA over the frames, real time); oidn (Intel Open Image Denoise on "
                         "the last frame, offline: needs rayvr[oidn]); default none")
+    p.add_argument("--gi", default="none", choices=("none", "probes"),
+                   help="indirect light for RASTER, SHADOWS and REFLECTIONS materials: none, or 'probes' "
+                        "(irradiance probes ray traced once per frame for all views)")
+    p.add_argument("--probes", metavar="XxYxZ", help="with --gi probes: probes per axis over the scene's bounds "
+                                                     "(default 8x8x8)")
+    p.add_argument("--probe-rays", type=integer("--probe-rays", 16, 1024), help="with --gi probes: rays per probe "
+                                                                                "per frame, 16 to 1024 (default 128)")
     p.add_argument("--report", action="store_true", help="print the graph's compile report")
     cluster_cli.add_arguments(p)
     p.add_argument("--camera-path", metavar="FILE",
                    help="replay a camera path JSON (rayvr view records them): one frame per pose, "
                         "written as OUT_0000, OUT_0001, ...")
     p.set_defaults(func=run)
+
+
+def probe_options(args) -> dict | None:
+    """ProbeGI properties from --probes and --probe-rays (None without --gi probes)."""
+    if args.gi != "probes":
+        for flag, value in (("--probes", args.probes), ("--probe-rays", args.probe_rays)):
+            if value is not None:
+                raise OptionError(f"{flag} sets up irradiance probes; add --gi probes (or leave {flag} out)")
+        return None
+    out = {}
+    if args.probes is not None:
+        m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*[xX]\s*(\d+)\s*", str(args.probes))
+        counts = [int(g) for g in m.groups()] if m else []
+        if not counts or min(counts) < 1 or max(counts) > MAX_PROBES_PER_AXIS:
+            raise OptionError(f"--probes {args.probes}: expected XxYxZ probes per axis, each 1 to "
+                              f"{MAX_PROBES_PER_AXIS}, e.g. --probes 8x8x8")
+        out["counts"] = counts
+    if args.probe_rays is not None:
+        out["rays_per_probe"] = args.probe_rays
+    return out
 
 
 def parse_exposure(text) -> tuple[bool, float]:
@@ -188,6 +217,10 @@ def run(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() not in OUT_SUFFIXES:
         raise OptionError(f"--out {args.out}: write .png or .jpg (tone mapped) or .exr (HDR)")
+    probes = probe_options(args)
+    if probes is not None and args.graph == "path_traced":
+        raise OptionError("--gi probes: lights the hybrid graph's materials; --graph path_traced traces its own "
+                          "indirect light (leave --gi out)")
     grid = choose_grid(args)
     quilt = quilt_path(args, grid, size)
     paths = output_paths(out, args.views, args.layout)
@@ -225,7 +258,7 @@ def run(args) -> int:
         views = quilt_views(scene, grid[0], grid[1], size, args.view_cone)
     else:
         views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
-    graph = build_graph(args, exposure, auto_exposure)
+    graph = build_graph(args, exposure, auto_exposure, probes)
     hdr = out.suffix.lower() == ".exr"
     if camera_path is not None:
         with atomic_group():   # every frame's files, or none
@@ -261,8 +294,8 @@ def path_traced_frames(args) -> tuple[int, int]:
     return args.spp // per_frame, per_frame
 
 
-def build_graph(args, exposure: float, auto_exposure: bool):
-    """The graph --graph names, with the path tracing options."""
+def build_graph(args, exposure: float, auto_exposure: bool, probes: dict | None = None):
+    """The graph --graph names, with the path tracing, denoising and (hybrid) probe options."""
     from ..graphs import hybrid, path_traced
 
     if args.graph == "path_traced":
@@ -271,7 +304,8 @@ def build_graph(args, exposure: float, auto_exposure: bool):
                            exposure=exposure, auto_exposure=auto_exposure, denoise=args.denoise)
     g = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
                auto_exposure=auto_exposure, light_samples=args.light_samples, multiview=args.multiview,
-               gbuffer=args.gbuffer, path_bounces=args.bounces or 4, denoise=args.denoise)
+               gbuffer=args.gbuffer, path_bounces=args.bounces or 4, denoise=args.denoise,
+               gi=None if args.gi == "none" else args.gi, probes=probes)
     if args.spp is not None:
         g.update_pass("PathTracer", {"samples_per_pixel": args.spp})
     return g

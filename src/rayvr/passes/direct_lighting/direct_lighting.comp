@@ -1,10 +1,11 @@
 // Emission + unshadowed direct light for every pixel of every view, the environment where the
 // view sees no surface (RASTER materials use it as is; with RASTER_ONLY the pixels the ray passes
-// light are skipped).
+// light are skipped), + the probes' indirect diffuse light with PROBE_GI.
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "shading.glsl"
+#include "probe_gi.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 layout(rgba16f) writeonly uniform image2DArray dst;
@@ -24,6 +25,7 @@ void main() {
 #endif
     GSurface g = gbuf_load(p);
     Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
-    vec3 c = g.emissive + shade_direct(path_vertex_at_gbuffer(g, uint(p.z)), rng);
+    PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
+    vec3 c = g.emissive + shade_direct(s, rng) + probe_gi_diffuse(s);
     imageStore(dst, p, vec4(c, 1.0));
 }

@@ -1,6 +1,7 @@
 """DirectLighting: emission + unshadowed direct light for every pixel (no rays)."""
 from __future__ import annotations
 
+from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ..gbuffer.lighting_pass import GBufferLightingPass
 
@@ -16,6 +17,9 @@ class DirectLighting(GBufferLightingPass):
     OUTPUT_DESC = "emission + unshadowed direct light; the environment where nothing was drawn"
     SALT = 1
     PROPERTIES = {"light_samples": 1, "raster_only": False}
+
+    def lit_effects(self):
+        return {Effect.RASTER} if self.raster_only else set(Effect)
 
     def shader_defines(self):
         return {"LIGHT_SAMPLES": max(1, int(self.light_samples)), "SHADE_SHADOWS": 0,

@@ -1,6 +1,8 @@
 """The anatomy the G-buffer lighting passes share (DirectLighting, RTShadows, RTReflections): the
 G-buffer channels as inputs, one rgba16f radiance output, and for the ray passes either the
-compaction's pixel list (indirect dispatch) or the whole image in small tiles (PIXELS_2D)."""
+compaction's pixel list (indirect dispatch) or the whole image in small tiles (PIXELS_2D). The
+optional probe inputs (rayvr.passes.probe_gi.inputs), when connected, compile PROBE_GI in: the
+shader adds the probes' indirect diffuse light (glsl/probe_gi.glsl)."""
 from __future__ import annotations
 
 from ...gpu.program_resources import program_resources
@@ -9,6 +11,7 @@ from ...rendergraph.render_pass import Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
 from ..dispatch import COMPUTE_GROUP, groups_2d, ray_group, ray_group_defines
 from ..effects import effect_defines, effects_used, scene_defines
+from ..probe_gi import inputs as probe_inputs
 from . import channels
 
 
@@ -29,6 +32,7 @@ class GBufferLightingPass(RenderPass):
     PIXELS_2D: bool | None = None
     TILE = (8, 4)   # one warp (ray_group spreads it over views)
     VIEW_GROUP: int | None = None   # views a workgroup spans in a camera grid (None: dispatch.VIEW_GROUP)
+    LOWEST_EFFECT = Effect.RASTER   # the pixels it lights: this effect and above
 
     def reflect(self, cd):
         r = Reflection()
@@ -39,7 +43,19 @@ class GBufferLightingPass(RenderPass):
             if self._dispatch_2d(cd):
                 pin.unused("runs over the whole image: no material is PATH_TRACED")
         r.add_output(self.OUTPUT, self.OUTPUT_DESC).format("rgba16f")
+        probe_inputs.add_inputs(r, self.probes_unused(cd))
         return r
+
+    def lit_effects(self) -> set:
+        """The effects of the pixels this pass lights."""
+        return {e for e in Effect if e >= self.LOWEST_EFFECT}
+
+    def probes_unused(self, cd) -> str | None:
+        """Why the probes' light would reach no pixel of this pass (None: it may)."""
+        used = effects_used(cd)
+        if used is None or used & self.lit_effects():
+            return None
+        return "no material has an effect this pass lights"
 
     def shader_defines(self) -> dict:
         return {}
@@ -51,6 +67,13 @@ class GBufferLightingPass(RenderPass):
                          "PIXELS_2D": int(self._pixels_2d), **ray_group_defines(self._group)}
         if self.PIXEL_LIST and not self._pixels_2d:
             self._defines["PIXEL_LIST_INPUT"] = 1
+        self._probes = probe_inputs.bound(cd)
+        if self._probes:
+            import moderngl
+
+            self._defines["PROBE_GI"] = 1
+            self._probe_sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR),
+                                                          repeat_x=False, repeat_y=False))
         self._prog = self.compute_program(ctx.gl, self.SHADER, self._defines)
         self._res = program_resources(self._prog)
         # whole-image dispatches: ray passes in ray_group tiles, DirectLighting in 8x8 tiles of one view
@@ -75,10 +98,14 @@ class GBufferLightingPass(RenderPass):
         self.set_uniforms(res)
         channels.bind_inputs(res, data)
         res.image("dst", data[self.OUTPUT])
+        if self._probes:
+            probe_inputs.bind(res, data, self._probe_sampler)
         if self.PIXEL_LIST and not self._pixels_2d:
             pixels = data[self.PIXEL_LIST]
             res.buffer("PixelList", pixels)
             self._prog.run_indirect(pixels, DISPATCH_OFFSET)
         else:   # the shader declares no list (the compaction pass was pruned)
             self._prog.run(*self._groups)
+        if self._probes:
+            probe_inputs.unbind(res)
 

@@ -4,12 +4,15 @@
 // thin wall's pass-through; exact deltas at roughness 0), trace, shade the hit with emission and
 // shadowed direct light, continue up to MAX_BOUNCES through reflective hits (absorbing inside
 // volumes). Output: that radiance weighted by the specular lobes, which the composite adds to the
-// direct light (the diffuse part is the direct-light passes').
+// direct light (the diffuse part is the direct-light passes'). With PROBE_GI each hit adds the
+// probes' indirect diffuse light, and a path stopped by MAX_BOUNCES on a reflective surface their
+// glossy fallback.
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "pixel_list.glsl"
 #include "shading.glsl"
+#include "probe_gi.glsl"
 
 #if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
 layout(local_size_x = RAY_GROUP_SIZE) in;
@@ -48,9 +51,11 @@ void main() {
         // Emitters reach a rough reflection through light sampling (shade_direct at the pixel);
         // a delta lobe or a transmission sees them only through its ray.
         bool sees_emission = (bs.delta || bs.transmitted) && (sp.front_face || mp.double_sided);
-        radiance += throughput * ((sees_emission ? mp.emissive : vec3(0.0)) + shade_direct(s, rng));
+        radiance += throughput * ((sees_emission ? mp.emissive : vec3(0.0)) + shade_direct(s, rng)
+                                  + probe_gi_diffuse(s));
         // Only surfaces that are themselves reflective carry the path further.
         if (mp.effect < EFFECT_REFLECTIONS) break;
+        if (bounce == MAX_BOUNCES - 1) radiance += throughput * probe_gi_glossy(s);
     }
     imageStore(dst, p, vec4(finite_or_zero(radiance), 1.0));
 }

@@ -19,6 +19,7 @@ class RTReflections(GBufferLightingPass):
     OUTPUT = "reflection"
     OUTPUT_DESC = "specular-weighted reflected radiance (listed pixels only)"
     PIXEL_LIST = "pixels"
+    LOWEST_EFFECT = Effect.REFLECTIONS
     SALT = 3
     PROPERTIES = {"max_bounces": 1, "light_samples": 1}
 

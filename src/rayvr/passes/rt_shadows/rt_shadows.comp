@@ -1,10 +1,12 @@
 // Emission + ray-traced shadowed direct light for the pixels whose effect is SHADOWS or above: those
-// on the shadow list (indirect dispatch), or with PIXELS_2D every pixel of the image in tiles.
+// on the shadow list (indirect dispatch), or with PIXELS_2D every pixel of the image in tiles;
+// + the probes' indirect diffuse light with PROBE_GI.
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "pixel_list.glsl"
 #include "shading.glsl"
+#include "probe_gi.glsl"
 
 #if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
 layout(local_size_x = RAY_GROUP_SIZE) in;
@@ -18,6 +20,7 @@ void main() {
     if (!ray_pass_pixel(EFFECT_SHADOWS, imageSize(dst), p)) return;
     GSurface g = gbuf_load(p);
     Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
-    vec3 c = g.emissive + shade_direct(path_vertex_at_gbuffer(g, uint(p.z)), rng);
+    PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
+    vec3 c = g.emissive + shade_direct(s, rng) + probe_gi_diffuse(s);
     imageStore(dst, p, vec4(c, 1.0));
 }

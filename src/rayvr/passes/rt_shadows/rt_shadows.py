@@ -17,6 +17,7 @@ class RTShadows(GBufferLightingPass):
     OUTPUT = "shadowed"
     OUTPUT_DESC = "emission + shadowed direct light (listed pixels only)"
     PIXEL_LIST = "pixels"
+    LOWEST_EFFECT = Effect.SHADOWS
     SALT = 2
     PROPERTIES = {"light_samples": 1}
     TILE = (8, 8)

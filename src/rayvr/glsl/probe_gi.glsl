@@ -1,0 +1,144 @@
+// Indirect diffuse light from irradiance probes (DDGI, Majercik et al. 2019), updated once per
+// frame by rayvr.passes.ProbeGI and read by every view's shading at texture cost.
+//
+//   vec3 probe_gi_irradiance(vec3 p, vec3 n, vec3 v)  irradiance (integral of incident radiance
+//       x cos over n's hemisphere) of light that scattered at least once, at render-space point p
+//       with unit normal n; v: unit direction towards the viewer (moves the lookup off the surface)
+//   vec3 probe_gi_diffuse(PathVertex s)   diffuse albedo x irradiance / pi: the indirect diffuse
+//       radiance leaving s towards s.v
+//   vec3 probe_gi_glossy(PathVertex s)    specular albedo x irradiance about the mirror direction
+//       / pi: the glossy fallback for a reflection path that stops at s
+//
+// Both return 0 unless PROBE_GI is 1; then the shader declares the samplers probe_irradiance_tex
+// (rgba32f), probe_depth_tex (rg32f: mean distance, mean squared distance) and probe_state_tex
+// (rg32f: backface fraction, active), 2D arrays of one layer sampled linearly, clamped to their
+// edges, and the storage block ProbeVolumes (layout in rayvr/passes/probe_gi/layout.py).
+//
+// The 8 probes around p are weighted trilinearly, by how much they face the surface, and by
+// Chebyshev's bound on the probe seeing p (its depth moments): a probe behind a wall sees the wall
+// nearer than p and drops out, so light does not leak through. Disabled probes (inside geometry)
+// drop out too.
+#pragma once
+#include "path_vertex.glsl"
+
+#ifndef PROBE_GI
+#define PROBE_GI 0
+#endif
+
+#define PROBE_IRRADIANCE_TILE 8   // texels per side of a probe's tile, one-texel border included
+#define PROBE_DEPTH_TILE 16
+#define PROBE_FLAG_VISIBILITY 1u
+
+// Unit direction -> octahedral coordinates in [-1, 1]^2 and back.
+vec2 probe_oct_encode(vec3 d) {
+    vec2 p = d.xy / (abs(d.x) + abs(d.y) + abs(d.z));
+    if (d.z < 0.0) p = (1.0 - abs(p.yx)) * vec2(p.x >= 0.0 ? 1.0 : -1.0, p.y >= 0.0 ? 1.0 : -1.0);
+    return p;
+}
+
+vec3 probe_oct_decode(vec2 e) {
+    vec3 d = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (d.z < 0.0) d.xy = (1.0 - abs(d.yx)) * vec2(d.x >= 0.0 ? 1.0 : -1.0, d.y >= 0.0 ? 1.0 : -1.0);
+    return normalize(d);
+}
+
+#if PROBE_GI
+struct ProbeVolume {
+    vec4 origin;    // xyz: render-space position of probe (0, 0, 0); w: normal bias (scene units)
+    vec4 spacing;   // xyz: between neighbouring probes; w: view bias
+    uvec4 counts;   // xyz: probes per axis; w: atlas index of its first probe
+    vec4 lo;        // xyz: the box it serves (render space); w: depth moments' maximum distance
+    vec4 hi;
+};
+layout(std430) readonly buffer ProbeVolumes {
+    uvec4 probe_info;   // x: volumes, y: tiles per atlas row, z: probes in all, w: flags
+    ProbeVolume probe_volumes[];
+};
+uniform sampler2DArray probe_irradiance_tex;
+uniform sampler2DArray probe_depth_tex;
+uniform sampler2DArray probe_state_tex;
+
+ivec2 probe_tile(uint probe) { return ivec2(probe % probe_info.y, probe / probe_info.y); }
+
+// The first volume whose box holds p (list the fine ones first), else the last (clamped to it).
+uint probe_volume_at(vec3 p) {
+    uint n = probe_info.x;
+    for (uint i = 0u; i + 1u < n; ++i) {
+        if (all(greaterThanEqual(p, probe_volumes[i].lo.xyz)) && all(lessThanEqual(p, probe_volumes[i].hi.xyz)))
+            return i;
+    }
+    return n - 1u;
+}
+
+// Texture coordinates of direction d in probe `probe`'s tile of an atlas of `tile`-texel tiles.
+vec3 probe_tile_uv(sampler2DArray atlas, uint probe, vec3 d, int tile) {
+    vec2 texel = vec2(probe_tile(probe) * tile) + 1.0 + (probe_oct_encode(d) * 0.5 + 0.5) * float(tile - 2);
+    return vec3(texel / vec2(textureSize(atlas, 0).xy), 0.0);
+}
+
+bool probe_active(uint probe) { return texelFetch(probe_state_tex, ivec3(probe_tile(probe), 0), 0).y > 0.5; }
+
+vec3 probe_gi_irradiance(vec3 p, vec3 n, vec3 v) {
+    if (probe_info.x == 0u) return vec3(0.0);
+    ProbeVolume vol = probe_volumes[probe_volume_at(p)];
+    bool visibility = (probe_info.w & PROBE_FLAG_VISIBILITY) != 0u;
+    vec3 biased = p + n * vol.origin.w + v * vol.spacing.w;
+    ivec3 last = ivec3(vol.counts.xyz) - 1;
+    vec3 g = (biased - vol.origin.xyz) / vol.spacing.xyz;
+    ivec3 base = clamp(ivec3(floor(g)), ivec3(0), max(last - 1, ivec3(0)));
+    vec3 alpha = clamp(g - vec3(base), 0.0, 1.0);
+    vec3 sum = vec3(0.0);
+    float total = 0.0;
+    for (int i = 0; i < 8; ++i) {
+        ivec3 offset = ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+        ivec3 cell = min(base + offset, last);
+        uint probe = vol.counts.w + uint(cell.x) + vol.counts.x * (uint(cell.y) + vol.counts.y * uint(cell.z));
+        if (!probe_active(probe)) continue;
+        vec3 at = vol.origin.xyz + vec3(cell) * vol.spacing.xyz;
+        vec3 tri = mix(1.0 - alpha, alpha, vec3(offset));
+        // Probes behind the surface count less (smoothly, so the weights never all vanish).
+        float facing = (dot(normalize(at - p), n) + 1.0) * 0.5;
+        float w = facing * facing + 0.2;
+        if (visibility) {
+            vec3 from_probe = biased - at;
+            float d = length(from_probe);
+            vec2 m = texture(probe_depth_tex, probe_tile_uv(probe_depth_tex, probe, d > 0.0 ? from_probe / d : n,
+                                                            PROBE_DEPTH_TILE)).xy;
+            if (d > m.x) {   // farther than the probe's mean distance that way: Chebyshev's bound
+                float variance = abs(m.y - m.x * m.x);
+                float beyond = d - m.x;
+                float chebyshev = variance / (variance + beyond * beyond);
+                w *= chebyshev * chebyshev * chebyshev;
+            }
+        }
+        w = max(w, 1e-6);
+        const float crush = 0.2;   // tiny weights to nearly nothing: no faint light behind walls
+        if (w < crush) w *= w * w / (crush * crush);
+        w *= tri.x * tri.y * tri.z;
+        sum += w * texture(probe_irradiance_tex, probe_tile_uv(probe_irradiance_tex, probe, n,
+                                                               PROBE_IRRADIANCE_TILE)).rgb;
+        total += w;
+    }
+    return total > 0.0 ? sum / total : vec3(0.0);
+}
+#endif
+
+vec3 probe_gi_diffuse(PathVertex s) {
+#if PROBE_GI
+    vec3 diffuse, specular;
+    bsdf_albedo(s.bsdf, s.n, s.v, diffuse, specular);
+    return diffuse * probe_gi_irradiance(s.pos, s.n, s.v) * (1.0 / RAYVR_PI);
+#else
+    return vec3(0.0);
+#endif
+}
+
+vec3 probe_gi_glossy(PathVertex s) {
+#if PROBE_GI
+    vec3 diffuse, specular;
+    bsdf_albedo(s.bsdf, s.n, s.v, diffuse, specular);
+    return specular * probe_gi_irradiance(s.pos, reflect(-s.v, s.n), s.v) * (1.0 / RAYVR_PI);
+#else
+    return vec3(0.0);
+#endif
+}

@@ -1,0 +1,161 @@
+// One update of every probe (rayvr.passes.ProbeGI): a workgroup per probe, an invocation per ray.
+// Each traces one direction of a spherical Fibonacci set turned by this update's random rotation
+// and shades the hit with shadowed direct light plus the light the surface reflects from the
+// previous update's probes (so bounces add up over frames); rays that leave the scene take the
+// environment. Emission is left out: shade_direct samples every emitter at the shading point
+// already. Then each texel of the probe's irradiance (cosine-weighted) and depth-moment (cosine^50
+// weighted, Majercik et al. 2019) maps is blended with its previous value by the hysteresis.
+// Border texels repeat their octahedral opposite's interior texel, computed the same way, so
+// no second pass copies them. Results go to the pass's outputs and to the history the next
+// update reads (probe_*_tex are the previous update's history).
+#define PROBE_GI 1
+#include "probe_gi.glsl"
+#include "shading.glsl"
+#include "ray_query.glsl"
+
+layout(local_size_x = PROBE_RAYS) in;
+layout(rgba32f) writeonly uniform image2DArray irradiance_out;
+layout(rgba32f) writeonly uniform image2DArray irradiance_next;
+layout(rg32f) writeonly uniform image2DArray depth_out;
+layout(rg32f) writeonly uniform image2DArray depth_next;
+layout(rg32f) writeonly uniform image2DArray state_out;
+layout(rg32f) writeonly uniform image2DArray state_next;
+
+uniform mat3 probe_rotation;
+uniform float probe_hysteresis;   // weight of the previous value (0: replace it)
+uniform int probe_history;        // 0: no previous update (its textures are undefined)
+uniform uint probe_frame;
+uniform uint probe_step;          // update within the frame (warm-up)
+
+const float PROBE_DEPTH_SHARPNESS = 50.0;
+const float PROBE_DEPTH_MIN_COS = 0.5;     // 0.5^50 ~ 1e-15
+const float PROBE_BACKFACE_LIMIT = 0.25;   // probes seeing more back faces than this are inside geometry
+const float PROBE_BACKFACE_DEPTH = 0.2;    // back-face hits count this near: Chebyshev hides the probe
+
+shared vec4 ray_radiance[PROBE_RAYS];   // rgb; a: distance for the depth moments
+shared vec3 ray_direction[PROBE_RAYS];
+shared uint backfaces;
+
+// Direction i of n on the spherical Fibonacci lattice (equal areas).
+vec3 spherical_fibonacci(uint i, uint n) {
+    const float golden = 1.61803398874989484820;
+    float z = 1.0 - (2.0 * float(i) + 1.0) / float(n);
+    float phi = 2.0 * RAYVR_PI * fract(float(i) / golden);
+    float r = sqrt(max(0.0, 1.0 - z * z));
+    return vec3(r * cos(phi), r * sin(phi), z);
+}
+
+uint probe_volume_of(uint probe) {
+    uint v = 0u;
+    while (v + 1u < probe_info.x && probe >= probe_volumes[v + 1u].counts.w) ++v;
+    return v;
+}
+
+// The interior texel whose value texel `t` of a `tile`-texel octahedral tile holds.
+ivec2 border_source(ivec2 t, int tile) {
+    int e = tile - 1;
+    bool bx = t.x == 0 || t.x == e;
+    bool by = t.y == 0 || t.y == e;
+    if (bx && by) return ivec2(t.x == 0 ? e - 1 : 1, t.y == 0 ? e - 1 : 1);
+    if (bx) return ivec2(t.x == 0 ? 1 : e - 1, e - t.y);
+    if (by) return ivec2(e - t.x, t.y == 0 ? 1 : e - 1);
+    return t;
+}
+
+vec3 texel_direction(ivec2 t, int tile) {
+    return probe_oct_decode((vec2(t - 1) + 0.5) / float(tile - 2) * 2.0 - 1.0);
+}
+
+void main() {
+    uint probe = gl_WorkGroupID.x + gl_WorkGroupID.y * gl_NumWorkGroups.x;
+    uint ray = gl_LocalInvocationID.x;
+    bool live = probe < probe_info.z;   // no early return: barrier() below needs every invocation
+    if (ray == 0u) backfaces = 0u;
+    ProbeVolume vol = probe_volumes[live ? probe_volume_of(probe) : 0u];
+    float max_depth = vol.lo.w;
+    uint local = probe - vol.counts.w;
+    uvec3 cell = uvec3(local % vol.counts.x, (local / vol.counts.x) % vol.counts.y,
+                       local / (vol.counts.x * vol.counts.y));
+    vec3 origin = vol.origin.xyz + vec3(cell) * vol.spacing.xyz;
+    vec3 dir = normalize(probe_rotation * spherical_fibonacci(ray, uint(PROBE_RAYS)));
+    barrier();
+
+    vec3 radiance = vec3(0.0);
+    float dist = max_depth;
+    if (live) {
+        Hit hit;
+        if (trace_closest(origin, dir, 1e29, hit)) {
+            const float spread = sqrt(4.0 * RAYVR_PI / float(PROBE_RAYS));   // a ray's share of the sphere
+            SurfacePoint sp;
+            MaterialParams mp;
+            PathVertex s = path_vertex_at_hit(hit, dir, hit.t * spread, spread, sp, mp);
+            if (!sp.front_face && !mp.double_sided) {
+                atomicAdd(backfaces, 1u);
+                dist = min(PROBE_BACKFACE_DEPTH * hit.t, max_depth);
+            } else {
+                Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT);
+                radiance = shade_direct(s, rng);
+                if (probe_history != 0) radiance += probe_gi_diffuse(s);
+                dist = min(hit.t, max_depth);
+            }
+        } else {
+            radiance = environment_radiance(dir);
+        }
+    }
+    ray_radiance[ray] = vec4(finite_or_zero(radiance), dist);
+    ray_direction[ray] = dir;
+    memoryBarrierShared();
+    barrier();
+    if (!live) return;
+
+    ivec2 tile = probe_tile(probe);
+    bool history = probe_history != 0;
+    float h = history ? probe_hysteresis : 0.0;
+    const int IT = PROBE_IRRADIANCE_TILE;
+    for (uint k = ray; k < uint(IT * IT); k += uint(PROBE_RAYS)) {
+        ivec2 t = ivec2(int(k) % IT, int(k) / IT);
+        ivec2 src = border_source(t, IT);
+        vec3 n = texel_direction(src, IT);
+        vec3 sum = vec3(0.0);
+        float total = 0.0;
+        for (int r = 0; r < PROBE_RAYS; ++r) {
+            float w = max(0.0, dot(n, ray_direction[r]));
+            sum += w * ray_radiance[r].rgb;
+            total += w;
+        }
+        // sum(L cos) / sum(cos) estimates irradiance / pi
+        vec3 e = total > 0.0 ? RAYVR_PI * sum / total : vec3(0.0);
+        if (history) e = mix(e, texelFetch(probe_irradiance_tex, ivec3(tile * IT + src, 0), 0).rgb, h);
+        ivec3 texel = ivec3(tile * IT + t, 0);
+        imageStore(irradiance_out, texel, vec4(e, 1.0));
+        imageStore(irradiance_next, texel, vec4(e, 1.0));
+    }
+    const int DT = PROBE_DEPTH_TILE;
+    for (uint k = ray; k < uint(DT * DT); k += uint(PROBE_RAYS)) {
+        ivec2 t = ivec2(int(k) % DT, int(k) / DT);
+        ivec2 src = border_source(t, DT);
+        vec3 n = texel_direction(src, DT);
+        vec2 sum = vec2(0.0);
+        float total = 0.0;
+        for (int r = 0; r < PROBE_RAYS; ++r) {
+            float c = dot(n, ray_direction[r]);
+            if (c < PROBE_DEPTH_MIN_COS) continue;   // weight below 1e-15: not worth the pow
+            float w = pow(c, PROBE_DEPTH_SHARPNESS);
+            float d = ray_radiance[r].a;
+            sum += w * vec2(d, d * d);
+            total += w;
+        }
+        vec2 moments = total > 1e-12 ? sum / total : vec2(max_depth, max_depth * max_depth);
+        if (history) moments = mix(moments, texelFetch(probe_depth_tex, ivec3(tile * DT + src, 0), 0).xy, h);
+        ivec3 texel = ivec3(tile * DT + t, 0);
+        imageStore(depth_out, texel, vec4(moments, 0.0, 0.0));
+        imageStore(depth_next, texel, vec4(moments, 0.0, 0.0));
+    }
+    if (ray == 0u) {
+        float fraction = float(backfaces) / float(PROBE_RAYS);
+        if (history) fraction = mix(fraction, texelFetch(probe_state_tex, ivec3(tile, 0), 0).x, h);
+        vec4 state = vec4(fraction, fraction < PROBE_BACKFACE_LIMIT ? 1.0 : 0.0, 0.0, 0.0);
+        imageStore(state_out, ivec3(tile, 0), state);
+        imageStore(state_next, ivec3(tile, 0), state);
+    }
+}
