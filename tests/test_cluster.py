@@ -259,9 +259,10 @@ def test_converge_with_and_without_workers_share_the_cache_and_the_table(cluster
             "--cache", str(tmp_path / "cache")]
     assert main(["converge", *tiny, "--workers", "2", "--report", str(tmp_path / "split")]) == 0
     out = capsys.readouterr().out
-    assert "timed on" in out and out.count("| worker ") == 6
+    configs = len(json.loads((tmp_path / "split" / "results.json").read_text())["rows"])
+    assert configs >= 6 and "timed on" in out and out.count("| worker ") == configs
     cached = sorted((tmp_path / "cache").iterdir())
-    assert len(cached) == 2 + 6                          # the static and trajectory references, six floors
+    assert len(cached) == 2 + configs                    # the static and trajectory references, a floor each
     assert main(["converge", *tiny, "--report", str(tmp_path / "here")]) == 0
     assert "timed on" not in capsys.readouterr().out
     assert sorted((tmp_path / "cache").iterdir()) == cached          # nothing rendered again

@@ -39,6 +39,7 @@ void main() {
     bsdf_set_side(b, inside);
     vec3 n = vec3(0.0, 0.0, 1.0);
     vec3 v = vec3(sqrt(max(0.0, 1.0 - cos_v * cos_v)), 0.0, cos_v);
+    bsdf_set_view(b, n, v);
     vec4 r = vec4(0.0);
     if (mode == 0u || mode == 3u) {
         BsdfSample s;

@@ -24,6 +24,10 @@
 // eval returns f(v, l) |n.l| (radiance per unit incoming radiance), without delta lobes.
 //   BsdfParams bsdf_params(MaterialParams m)             the BSDF of a material (scene.glsl)
 //   bsdf_set_side(inout b, bool inside)                  v inside the volume (a back face hit)
+//   bsdf_set_view(inout b, n, v)                         caches what depends on v alone (the
+//                                                        tables at n.v, the lobes' probabilities);
+//                                                        call it last, before eval/pdf/sample,
+//                                                        which take the same n and v
 //   vec3  bsdf_eval(b, n, v, l)                          f |cos|
 //   float bsdf_pdf(b, n, v, l)                           solid-angle pdf of bsdf_sample's non-delta lobes
 //   bool  bsdf_sample(b, n, v, u, out BsdfSample)        u in [0,1)^3
@@ -53,6 +57,16 @@ struct BsdfParams {
     float ior;             // the material's index of refraction (outside: 1)
     bool thin;             // thin-walled transmission (no volume)
     bool inside;           // v is inside the volume (bsdf_set_side)
+    // bsdf_set_view's cache: n.v, the tables' A and B there, the compensations of the specular
+    // and glass lobes (1 / E_ss-like divisors), the dielectric layer's albedo at n.v and its
+    // hemispherical average, the lobes' sampling probabilities
+    float nv;
+    vec2 ab_v;
+    float ess_v;
+    float glass_comp_v;
+    float layer_v;
+    float layer_avg;
+    vec3 lobe_p;
 };
 
 BsdfParams bsdf_params(MaterialParams m) {
@@ -69,6 +83,13 @@ BsdfParams bsdf_params(MaterialParams m) {
     b.f90 = b.specular;
     b.thin = !m.volume;
     b.inside = false;
+    b.nv = 0.0;
+    b.ab_v = vec2(0.0);
+    b.ess_v = 1.0;
+    b.glass_comp_v = 1.0;
+    b.layer_v = 0.0;
+    b.layer_avg = 0.0;
+    b.lobe_p = vec3(1.0, 0.0, 0.0);
     return b;
 }
 
@@ -205,7 +226,7 @@ vec3 bsdf_eval_reflection(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     if (nv <= 0.0 || nl <= 0.0 || bsdf_is_delta(b)) return vec3(0.0);
     vec3 w = bsdf_weights(b);
     float alpha = bsdf_alpha(b);
-    float ess_v = bsdf_ess(bsdf_table_ab(nv, b.roughness));
+    float ess_v = b.ess_v;
     vec3 h = normalize(v + l);
     float vh = max(dot(v, h), 0.0);
     float g2 = 1.0 / (1.0 + smith_lambda(nv, sin2_between(n, v), alpha) + smith_lambda(nl, sin2_between(n, l), alpha));
@@ -213,7 +234,7 @@ vec3 bsdf_eval_reflection(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     vec3 fresnel = w.x * fresnel_schlick(b.f0, b.f90, vh) * (1.0 + b.f0 * (1.0 / ess_v - 1.0))
                  + w.z * fresnel_schlick(b.base_color, vh) * (1.0 + b.base_color * (1.0 / ess_v - 1.0));
     if (w.y > 0.0)   // glass, compensated over its reflected and transmitted energy together
-        fresnel += w.y * bsdf_glass_fresnel(b, vh) / (b.thin ? ess_v : bsdf_glass_albedo(nv, b.roughness, b.ior, b.inside));
+        fresnel += w.y * bsdf_glass_fresnel(b, vh) / b.glass_comp_v;
     return fresnel * fss * nl;
 }
 
@@ -222,10 +243,8 @@ vec3 bsdf_eval_diffuse(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     float nv = dot(n, v), nl = dot(n, l);
     vec3 w = bsdf_weights(b);
     if (nv <= 0.0 || nl <= 0.0 || w.x <= 0.0) return vec3(0.0);
-    float ev = bsdf_dielectric_layer(b, bsdf_table_ab(nv, b.roughness));
-    float el = bsdf_dielectric_layer(b, bsdf_table_ab(nl, b.roughness));
-    float eavg = bsdf_layer_average(max3(b.f0), b.f90, bsdf_table_averages(b.roughness));
-    return w.x * b.base_color * ((1.0 - ev) * (1.0 - el) / max(1.0 - eavg, 1e-4) / RAYVR_PI * nl);
+    float el = b.f90 > 0.0 ? bsdf_dielectric_layer(b, bsdf_table_ab(nl, b.roughness)) : 0.0;
+    return w.x * b.base_color * ((1.0 - b.layer_v) * (1.0 - el) / max(1.0 - b.layer_avg, 1e-4) / RAYVR_PI * nl);
 }
 
 // The half vector of a transmission from v to l below the surface (thin: of the mirrored l),
@@ -253,7 +272,7 @@ vec3 bsdf_eval_transmission(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     if (!bsdf_transmission_half(b, n, v, l, h)) return vec3(0.0);
     float alpha = bsdf_alpha(b);
     // thin walls: the reflected lobe mirrored, compensated as reflection is; volumes: the glass table
-    float comp = b.thin ? bsdf_ess(bsdf_table_ab(nv, b.roughness)) : bsdf_glass_albedo(nv, b.roughness, b.ior, b.inside);
+    float comp = b.glass_comp_v;
     float vh = dot(v, h);
     float g2 = 1.0 / (1.0 + smith_lambda(nv, sin2_between(n, v), alpha) + smith_lambda(anl, sin2_between(n, l), alpha));
     float d = ggx_d(dot(n, h), sin2_between(n, h), alpha);
@@ -282,11 +301,10 @@ vec3 bsdf_eval(BsdfParams b, vec3 n, vec3 v, vec3 l) {
 // Probabilities of the reflection, diffuse and transmission lobes, from their albedos at mu_v.
 // Every lobe that can carry light keeps at least a small share, so that MIS never meets a zero
 // pdf where f > 0.
-vec3 bsdf_lobe_probabilities(BsdfParams b, float nv) {
+vec3 bsdf_lobe_probabilities_at(BsdfParams b, float nv, vec2 ab) {
     vec3 w = bsdf_weights(b);
-    vec2 ab = bsdf_table_ab(nv, b.roughness);
     vec3 e_spec = bsdf_layer_albedo(b.f0, b.f90, ab);
-    float fg = max3(bsdf_glass_fresnel(b, nv));
+    float fg = w.y > 0.0 ? max3(bsdf_glass_fresnel(b, nv)) : 0.0;
     float base = luminance(b.base_color);
     vec3 p = vec3(w.x * luminance(e_spec) + w.z * luminance(bsdf_layer_albedo(b.base_color, 1.0, ab)) + w.y * fg,
                   w.x * (1.0 - max3(e_spec)) * base,
@@ -296,6 +314,20 @@ vec3 bsdf_lobe_probabilities(BsdfParams b, float nv) {
     p = max(p, mix(vec3(0.0), vec3(0.02), can));
     float sum = p.x + p.y + p.z;
     return sum > 0.0 ? p / sum : vec3(1.0, 0.0, 0.0);
+}
+
+void bsdf_set_view(inout BsdfParams b, vec3 n, vec3 v) {
+    b.nv = clamp(dot(n, v), 0.0, 1.0);
+    b.ab_v = bsdf_table_ab(b.nv, b.roughness);
+    b.ess_v = bsdf_ess(b.ab_v);
+    b.glass_comp_v = b.ess_v;
+#if SCENE_HAS_TRANSMISSION
+    if (b.transmission > 0.0 && b.metallic < 1.0 && !b.thin)
+        b.glass_comp_v = bsdf_glass_albedo(b.nv, b.roughness, b.ior, b.inside);
+#endif
+    b.layer_v = bsdf_dielectric_layer(b, b.ab_v);
+    b.layer_avg = b.f90 > 0.0 ? bsdf_layer_average(max3(b.f0), b.f90, bsdf_table_averages(b.roughness)) : 0.0;
+    b.lobe_p = bsdf_lobe_probabilities_at(b, b.nv, b.ab_v);
 }
 
 // Pdf of the GGX visible normal h for v: G1(v) max(v.h, 0) D(h) / n.v.
@@ -337,7 +369,7 @@ float bsdf_pdf_transmission(BsdfParams b, vec3 n, vec3 v, vec3 l) {
 float bsdf_pdf(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     float nv = dot(n, v), nl = dot(n, l);
     if (nv <= 0.0 || nl == 0.0) return 0.0;
-    vec3 p = bsdf_lobe_probabilities(b, nv);
+    vec3 p = b.lobe_p;
     if (nl > 0.0) return p.x * bsdf_pdf_reflection(b, n, v, l) + p.y * nl / RAYVR_PI;
     return p.z * bsdf_pdf_transmission(b, n, v, l);
 }
@@ -411,7 +443,7 @@ bool bsdf_sample_lobes(BsdfParams b, vec3 n, vec3 v, vec3 u, bvec3 use, out Bsdf
     s.l = n;
     float nv = dot(n, v);
     if (nv <= 0.0) return false;
-    vec3 p = mix(vec3(0.0), bsdf_lobe_probabilities(b, nv), use);
+    vec3 p = mix(vec3(0.0), b.lobe_p, use);
     float sum = p.x + p.y + p.z;
     if (!(sum > 0.0)) return false;
     p /= sum;
@@ -451,8 +483,8 @@ bool bsdf_sample_specular(BsdfParams b, vec3 n, vec3 v, vec3 u, out BsdfSample s
 // ---- albedos ----------------------------------------------------------------------------------
 void bsdf_albedo(BsdfParams b, vec3 n, vec3 v, out vec3 diffuse, out vec3 specular) {
     vec3 w = bsdf_weights(b);
-    float nv = clamp(dot(n, v), 0.0, 1.0);
-    vec2 ab = bsdf_table_ab(nv, b.roughness);
+    float nv = b.nv;
+    vec2 ab = b.ab_v;
     vec3 e_spec = bsdf_layer_albedo(b.f0, b.f90, ab);
     diffuse = w.x * b.base_color * (1.0 - max3(e_spec));
     specular = w.x * e_spec + w.z * bsdf_layer_albedo(b.base_color, 1.0, ab) + w.y * bsdf_glass_fresnel(b, nv);

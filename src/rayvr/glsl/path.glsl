@@ -67,6 +67,14 @@ void pt_trace_parts(PathVertex s, inout Rng rng, const bool split, out vec3 diff
         vec3 from = s.pos;
         SurfacePoint sp;
         MaterialParams mp;
+#if SCENE_HAS_EMISSIVE_TRIANGLES
+        if (bounce == pt_max_bounces - 1) {   // the path ends here: only the hit's emission counts
+            sp = surface_at_cone(hit, bs.l, s.cone_width + hit.t * spread);
+            mp = material_params_at(sp.material, sp.uv, sp.uv_lod);
+        } else
+#else
+        if (bounce == pt_max_bounces - 1) break;
+#endif
         s = path_vertex_at_hit(hit, bs.l, s.cone_width + hit.t * spread, spread, sp, mp);
 #if SCENE_HAS_EMISSIVE_TRIANGLES
         if (max3(mp.emissive) > 0.0 && (sp.front_face || mp.double_sided)) {

@@ -30,6 +30,7 @@ PathVertex path_vertex_at_hit(Hit hit, vec3 dir, float cone_width, float cone_sp
     s.bsdf = bsdf_params(mp);
     // a back face of a volume: the ray comes from inside it (refraction goes out, TIR possible)
     bsdf_set_side(s.bsdf, !sp.front_face && mp.volume);
+    bsdf_set_view(s.bsdf, s.n, s.v);
     s.attenuation = mp.attenuation;
     s.cone_width = cone_width;
     s.cone_spread = cone_spread;
@@ -61,6 +62,7 @@ PathVertex path_vertex_at_gbuffer(GSurface g, uint view) {
     s.v = normalize(views[view].eye.xyz - g.pos);
     MaterialParams m = gbuf_material_params(g);
     s.bsdf = bsdf_params(m);
+    bsdf_set_view(s.bsdf, s.n, s.v);
     s.attenuation = m.attenuation;
     s.cone_spread = view_pixel_spread(view);
     s.cone_width = distance(views[view].eye.xyz, g.pos) * s.cone_spread;

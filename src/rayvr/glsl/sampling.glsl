@@ -15,10 +15,13 @@ uint pcg_hash(uint v) {
 
 // Random numbers of one path: RAYVR_SAMPLER 1 (default) hash-based Owen-scrambled Sobol (Burley
 // 2020, "Practical Hash-based Owen Scrambling"): each call of rng_next/rng_next2/rng_next3 takes
-// a new dimension group, a 4D Sobol point whose index is shuffled and whose coordinates are
-// Owen-scrambled by nested uniform scrambling with seeds from the pixel, view and pass (per-pixel
-// decorrelation) and the group; the sample index runs over the frames (progressive). RAYVR_SAMPLER
-// 0: the PCG hash (Jarzynski & Olano 2020) of the earlier versions, for comparisons.
+// a new dimension group, whose sample index is shuffled and whose coordinates are Owen-scrambled
+// (nested uniform scrambling seeded by the pixel, view, pass and group: per-pixel
+// decorrelation); the sample index runs over the frames (progressive). A group's pair is the
+// first two Sobol dimensions, a (0,2)-sequence, computed without a table (a table's lookups at
+// shuffled, per-lane indices serialise in the constant cache: measured 4x slower on an H200);
+// rng_next3's third coordinate is a van der Corput point under its own shuffle (Burley's
+// padding). RAYVR_SAMPLER 0: the PCG hash (Jarzynski & Olano 2020), for comparisons.
 #ifndef RAYVR_SAMPLER
 #define RAYVR_SAMPLER 1
 #endif
@@ -29,27 +32,12 @@ struct Rng {
     uint group;   // Sobol: the next dimension group
 };
 
-// Sobol direction numbers of dimensions 1-3 (Joe & Kuo's, d = 2, 3, 4); dimension 0 is the van
-// der Corput sequence (the bits reversed).
-const uint SOBOL_DIRECTIONS[96] = uint[96](
-    0x80000000u, 0xc0000000u, 0xa0000000u, 0xf0000000u, 0x88000000u, 0xcc000000u, 0xaa000000u, 0xff000000u,
-    0x80800000u, 0xc0c00000u, 0xa0a00000u, 0xf0f00000u, 0x88880000u, 0xcccc0000u, 0xaaaa0000u, 0xffff0000u,
-    0x80008000u, 0xc000c000u, 0xa000a000u, 0xf000f000u, 0x88008800u, 0xcc00cc00u, 0xaa00aa00u, 0xff00ff00u,
-    0x80808080u, 0xc0c0c0c0u, 0xa0a0a0a0u, 0xf0f0f0f0u, 0x88888888u, 0xccccccccu, 0xaaaaaaaau, 0xffffffffu,
-    0x80000000u, 0xc0000000u, 0x60000000u, 0x90000000u, 0xe8000000u, 0x5c000000u, 0x8e000000u, 0xc5000000u,
-    0x68800000u, 0x9cc00000u, 0xee600000u, 0x55900000u, 0x80680000u, 0xc09c0000u, 0x60ee0000u, 0x90550000u,
-    0xe8808000u, 0x5cc0c000u, 0x8e606000u, 0xc5909000u, 0x6868e800u, 0x9c9c5c00u, 0xeeee8e00u, 0x5555c500u,
-    0x8000e880u, 0xc0005cc0u, 0x60008e60u, 0x9000c590u, 0xe8006868u, 0x5c009c9cu, 0x8e00eeeeu, 0xc5005555u,
-    0x80000000u, 0xc0000000u, 0x20000000u, 0x50000000u, 0xf8000000u, 0x74000000u, 0xa2000000u, 0x93000000u,
-    0xd8800000u, 0x25400000u, 0x59e00000u, 0xe6d00000u, 0x78080000u, 0xb40c0000u, 0x82020000u, 0xc3050000u,
-    0x208f8000u, 0x51474000u, 0xfbea2000u, 0x75d93000u, 0xa0858800u, 0x914e5400u, 0xdbe79e00u, 0x25db6d00u,
-    0x58800080u, 0xe54000c0u, 0x79e00020u, 0xb6d00050u, 0x800800f8u, 0xc00c0074u, 0x200200a2u, 0x50050093u);
-
-uint sobol(uint index, uint dim) {
-    if (dim == 0u) return bitfieldReverse(index);
+// Sobol dimension 1 (dimension 0 is bitfieldReverse(index)): its direction numbers are the rows
+// of Pascal's triangle mod 2, v_{k+1} = v_k ^ (v_k >> 1) from v_0 = 2^31.
+uint sobol_dimension1(uint index) {
     uint x = 0u;
-    uint base = 32u * (dim - 1u);
-    for (; index != 0u; index &= index - 1u) x ^= SOBOL_DIRECTIONS[base + uint(findLSB(index))];
+    for (uint v = 0x80000000u; index != 0u; index >>= 1u, v ^= v >> 1u)
+        if ((index & 1u) != 0u) x ^= v;
     return x;
 }
 
@@ -93,30 +81,27 @@ Rng rng_init_sample(uvec2 pixel, uint view, uint frame, uint salt, uint k, uint 
 Rng rng_init(uvec2 pixel, uint view, uint frame, uint salt) { return rng_init_sample(pixel, view, frame, salt, 0u, 1u); }
 
 #if RAYVR_SAMPLER
-// Coordinate `dim` of the current group's point (seed, shuffled index) in [0, 1).
-float rng_coordinate(uint index, uint seed, uint dim) {
-    return float(nested_uniform_scramble(sobol(index, dim), hash_combine(seed, dim + 1u)) >> 8u) * (1.0 / 16777216.0);
-}
+float rng_unit(uint bits) { return float(bits >> 8u) * (1.0 / 16777216.0); }
 
-// The next dimension group: its seed and its shuffled sample index.
+// The next dimension group's seed.
 uint rng_group_seed(inout Rng r) { return hash_combine(r.state, pcg_hash(r.group++)); }
 
 float rng_next(inout Rng r) {
     uint seed = rng_group_seed(r);
     uint i = nested_uniform_scramble(r.index, seed);
-    return rng_coordinate(i, seed, 0u);
+    return rng_unit(nested_uniform_scramble(bitfieldReverse(i), hash_combine(seed, 1u)));
 }
 
 vec2 rng_next2(inout Rng r) {
     uint seed = rng_group_seed(r);
     uint i = nested_uniform_scramble(r.index, seed);
-    return vec2(rng_coordinate(i, seed, 0u), rng_coordinate(i, seed, 1u));
+    return vec2(rng_unit(nested_uniform_scramble(bitfieldReverse(i), hash_combine(seed, 1u))),
+                rng_unit(nested_uniform_scramble(sobol_dimension1(i), hash_combine(seed, 2u))));
 }
 
 vec3 rng_next3(inout Rng r) {
-    uint seed = rng_group_seed(r);
-    uint i = nested_uniform_scramble(r.index, seed);
-    return vec3(rng_coordinate(i, seed, 0u), rng_coordinate(i, seed, 1u), rng_coordinate(i, seed, 2u));
+    vec2 xy = rng_next2(r);
+    return vec3(xy, rng_next(r));
 }
 #else
 // Uniform float in [0, 1): one PCG step; pcg_hash(state) is the output of the state after it.
