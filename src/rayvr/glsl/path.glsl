@@ -27,27 +27,41 @@ void pt_trace_parts(PathVertex s, inout Rng rng, const bool split, out vec3 diff
     vec3 first_total = vec3(0.0);     // split: all the first vertex's light sample added
     vec3 share = vec3(0.0);           // split: the diffuse share of the first BSDF sample's weight
     for (int bounce = 0; bounce < pt_max_bounces; ++bounce) {
-#if SCENE_HAS_PUNCTUAL_LIGHTS || SCENE_HAS_EMISSIVE_TRIANGLES || SCENE_HAS_ENVIRONMENT
+        // Everything that needs the BSDF comes first (the light sample's value, the BSDF sample,
+        // the medium), so that it is dead while the rays are traced: fewer live registers there.
+        vec3 nee = vec3(0.0);          // the light sample's contribution, if unoccluded
+        vec3 nee_diffuse = vec3(0.0);  // split: its diffuse part
+        vec3 nee_dir = vec3(0.0);
+        float nee_dist = -1.0;         // < 0: no shadow ray
+#if SCENE_HAS_LIGHTS
         LightSample ls = sample_light(s.pos, rng_next3(rng));
         if (ls.valid && dot(ls.direction, s.ng) > 0.0) {
             vec3 f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
-            if (max3(f) > 0.0 && !trace_occluded(offset_ray_origin(s.pos, s.ng), ls.direction, ls.distance * (1.0 - 1e-4))) {
+            if (max3(f) > 0.0) {
                 float w = ls.pdf > 0.0 ? power_heuristic(ls.pdf, bsdf_pdf(s.bsdf, s.n, s.v, ls.direction)) : 1.0;
-                radiance += beta * f * ls.weight * w;
+                nee = beta * f * ls.weight * w;
                 if (split && bounce == 0)
-                    first_diffuse = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction) * ls.weight * w;
+                    nee_diffuse = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction) * ls.weight * w;
+                nee_dir = ls.direction;
+                nee_dist = ls.distance * (1.0 - 1e-4);
             }
         }
 #endif
-        if (split && bounce == 0) first_total = radiance;
         BsdfSample bs;
-        if (!bsdf_sample(s.bsdf, s.n, s.v, rng_next3(rng), bs)) break;
+        bool scattered = bsdf_sample(s.bsdf, s.n, s.v, rng_next3(rng), bs);
         // the sampled side must agree with the geometric surface (shading normals may not)
         float side = dot(bs.l, s.ng);
-        if (bs.transmitted ? side >= 0.0 : side <= 0.0) break;
-        if (split && bounce == 0 && !bs.delta && !bs.transmitted)
+        if (scattered && (bs.transmitted ? side >= 0.0 : side <= 0.0)) scattered = false;
+        if (scattered && split && bounce == 0 && !bs.delta && !bs.transmitted)
             share = clamp(bsdf_eval_diffuse(s.bsdf, s.n, s.v, bs.l) / (bs.pdf * max(bs.weight, vec3(1e-30))),
                           vec3(0.0), vec3(1.0));
+        if (scattered && bs.transmitted && !s.bsdf.thin) medium = s.bsdf.inside ? vec3(0.0) : s.attenuation;
+        if (nee_dist >= 0.0 && !trace_occluded(offset_ray_origin(s.pos, s.ng), nee_dir, nee_dist)) {
+            radiance += nee;
+            if (split && bounce == 0) first_diffuse = nee_diffuse;
+        }
+        if (split && bounce == 0) first_total = radiance;
+        if (!scattered) break;
         beta *= bs.weight;
         if (!(max3(beta) > 0.0)) break;
         if (bounce >= pt_rr_start) {
@@ -55,7 +69,6 @@ void pt_trace_parts(PathVertex s, inout Rng rng, const bool split, out vec3 diff
             if (rng_next(rng) >= q) break;
             beta /= q;
         }
-        if (bs.transmitted && !s.bsdf.thin) medium = s.bsdf.inside ? vec3(0.0) : s.attenuation;
         Hit hit;
         if (!trace_closest(offset_ray_origin(s.pos, bs.transmitted ? -s.ng : s.ng), bs.l, 1e30, hit)) {
             float w = bs.delta ? 1.0 : power_heuristic(bs.pdf, environment_light_pdf(bs.l));

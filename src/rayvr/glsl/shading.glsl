@@ -17,7 +17,7 @@
 // when SHADE_SHADOWS.
 vec3 shade_direct(PathVertex s, inout Rng rng) {
     vec3 sum = vec3(0.0);
-#if SCENE_HAS_PUNCTUAL_LIGHTS || SCENE_HAS_EMISSIVE_TRIANGLES
+#if SCENE_HAS_LIGHTS   // punctual, emissive or the environment (lights.glsl)
 #if SHADE_SHADOWS
     vec3 origin = offset_ray_origin(s.pos, s.ng);
 #endif
