@@ -194,6 +194,21 @@ def atomic_write(path, write) -> Path:
         return group.add(path, write)
 
 
+def read_json(path, where: str, error=OptionError, what: str = "it", hint: str = "check the path"):
+    """The JSON document in `path`; `error` (a RayvrError class) naming `where` (and `what` the
+    file is) when it cannot be read or is not JSON (with the line and column), `hint` saying what
+    to give instead."""
+    import json
+
+    try:
+        return json.loads(Path(path).read_text())
+    except OSError as exc:
+        raise error(f"{where}: cannot read {what}: {exc.strerror or exc}; {hint}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        pos = f" (line {exc.lineno}, column {exc.colno}): {exc.msg}" if isinstance(exc, json.JSONDecodeError) else ""
+        raise error(f"{where}: not valid JSON{pos}") from None
+
+
 def write_text(path, text: str) -> Path:
     """Write `text` to `path` atomically."""
     return atomic_write(path, lambda tmp: tmp.write_text(text))

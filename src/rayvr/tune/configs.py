@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..fileio import read_json
 from ..errors import OptionError, did_you_mean
 from ..graphs import HDR_OUTPUTS  # noqa: F401  (the HDR pins the error is measured on, in order of preference)
 from ..materials.effect import Effect
@@ -293,13 +294,7 @@ CONFIG_FIELDS = ("name", "effects", "graph", "options", "accumulate", "output")
 def load_configs(path) -> list[Config]:
     """Configurations from a JSON file (see the module docstring); errors name the file and entry."""
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text())
-    except OSError as exc:
-        raise OptionError(f"--configs {path}: cannot read it ({exc.strerror or exc}); check the path") from None
-    except json.JSONDecodeError as exc:
-        raise OptionError(f"--configs {path}: not valid JSON (line {exc.lineno}, column {exc.colno}): "
-                          f"{exc.msg}") from None
+    doc = read_json(path, f"--configs {path}")
     items = doc.get("configs") if isinstance(doc, dict) else doc
     if not isinstance(items, list) or not items:
         raise OptionError(f"--configs {path}: expected a non-empty list of configurations (top level or "

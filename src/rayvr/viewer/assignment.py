@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..fileio import read_json
 from ..errors import OptionError, did_you_mean
 from ..materials.effect import Effect
 
@@ -31,13 +32,8 @@ def load_assignment(path, scene) -> dict[str, Effect]:
     path = Path(path)
     if path.is_dir():
         path = path / "tune.json"
-    try:
-        doc = json.loads(path.read_text())
-    except OSError as exc:
-        raise OptionError(f"{path}: cannot read the assignment: {exc.strerror or exc}; give a JSON file "
-                          f"the viewer saved or a rayvr tune report's tune.json") from None
-    except json.JSONDecodeError as exc:
-        raise OptionError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from None
+    doc = read_json(path, str(path), what="the assignment",
+                    hint="give a JSON file the viewer saved or a rayvr tune report's tune.json")
     if isinstance(doc, dict) and isinstance(doc.get("assignment"), dict):
         doc = doc["assignment"]
     if not isinstance(doc, dict) or not doc:

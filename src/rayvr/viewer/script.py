@@ -21,10 +21,10 @@ a scripted run moves the camera the same way on every machine.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from pathlib import Path
 
+from ..fileio import read_json
 from ..errors import OptionError, did_you_mean
 from .input import BUTTONS, InputEvent
 
@@ -63,13 +63,7 @@ class InputScript:
         """Read and check a script; `key_names` are the key names the window knows (glfw's).
         OptionError naming the file and the event's field on any mistake."""
         path = Path(path)
-        try:
-            doc = json.loads(path.read_text())
-        except OSError as exc:
-            raise OptionError(f"--script {path}: cannot read it: {exc.strerror or exc}; check the path") from None
-        except json.JSONDecodeError as exc:
-            raise OptionError(f"--script {path}: not valid JSON (line {exc.lineno}, column {exc.colno}): "
-                              f"{exc.msg}") from None
+        doc = read_json(path, f"--script {path}")
         return cls.parse(doc, key_names, str(path))
 
     @classmethod

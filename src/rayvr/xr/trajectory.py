@@ -6,12 +6,12 @@ and the orientation spherically interpolated; before the first and after the las
 """
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
+from ..fileio import read_json
 from ..errors import OptionError, XrError, did_you_mean
 from . import quaternion
 from .views import Pose
@@ -87,12 +87,7 @@ def _numbers(value, n: int, where: str, path: Path) -> np.ndarray:
 
 
 def _load_pose_log(path: Path):
-    try:
-        doc = json.loads(path.read_text())
-    except OSError as exc:
-        raise XrError(f"{path}: cannot read the pose log: {exc.strerror or exc}; check the path") from exc
-    except json.JSONDecodeError as exc:
-        raise XrError(f"{path}: not valid JSON (line {exc.lineno}, column {exc.colno}): {exc.msg}") from exc
+    doc = read_json(path, str(path), XrError, "the pose log")
     poses = doc.get("poses") if isinstance(doc, dict) else doc
     if not isinstance(poses, list) or not poses:
         raise XrError(f"{path}: poses: expected a non-empty list of {{\"t\", \"position\", \"orientation\"}} "
