@@ -18,6 +18,7 @@ import json
 
 from ..errors import OptionError
 from .converge import StudyPlan, add_study_arguments, parse_list, print_summary
+from ..tune.budget import FRAME_BUDGET_MS
 from .options import number
 
 TUNE_METRICS = ("flip", "relmse")          # the tuner's: per-pixel error maps
@@ -26,7 +27,7 @@ TUNE_METRICS = ("flip", "relmse")          # the tuner's: per-pixel error maps
 def register(sub) -> None:
     p = sub.add_parser("tune", help="fit per-material effects to a GPU frame budget, beside the error study")
     add_study_arguments(p)
-    p.add_argument("--budget-ms", type=number("--budget-ms", 0, 1e6, low_open=True, unit=" ms"), default=11.1,
+    p.add_argument("--budget-ms", type=number("--budget-ms", 0, 1e6, low_open=True, unit=" ms"), default=FRAME_BUDGET_MS,
                    help="GPU ms per frame, > 0 (default 11.1: 90 Hz)")
     p.add_argument("--metric", default="flip", choices=TUNE_METRICS,
                    help="error the tuner minimises (default flip: displayed-image FLIP)")

@@ -28,6 +28,8 @@ import math
 from ..errors import OptionError
 from ..materials.effect import Effect
 
+FRAME_BUDGET_MS = 11.1   # one frame at 90 Hz, a headset's usual refresh
+
 
 @dataclasses.dataclass
 class CostModel:
@@ -147,7 +149,7 @@ class TuneResult:
                 "model": self.model.as_dict()}
 
 
-def choose_effects(model: CostModel, budget_ms: float = 11.1, levels=tuple(Effect), fixed: dict | None = None) -> TuneResult:
+def choose_effects(model: CostModel, budget_ms: float = FRAME_BUDGET_MS, levels=tuple(Effect), fixed: dict | None = None) -> TuneResult:
     """The greedy choice of the module docstring. `levels`: the effects it may choose;
     `fixed`: {material: effect} kept as given."""
     if not (isinstance(budget_ms, (int, float)) and budget_ms > 0 and math.isfinite(budget_ms)):

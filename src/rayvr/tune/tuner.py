@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from ..errors import OptionError
 from ..materials.effect import Effect
-from .budget import TuneResult, choose_effects
+from .budget import FRAME_BUDGET_MS, TuneResult, choose_effects
 from .configs import accepts, hybrid_graph, set_effects
 from .display import Display
 from .metrics import DEFAULT_EPS
@@ -30,7 +30,7 @@ def make_judge(scene, view_set, metric: str, reference=None, cache_dir=None, dis
                       metric, eps)
 
 
-def tune_effects(renderer_or_scene, budget_ms: float = 11.1, size=None, views=None, metric: str = "flip",
+def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=None, views=None, metric: str = "flip",
                  levels=tuple(Effect), fixed: dict | None = None, graph=None, options: dict | None = None,
                  frames: int = 10, warmup: int = 3, warmup_s: float | None = None, trials: int = 2,
                  reference=None, cache_dir=None, display: Display = Display(), preset: str = "index",
@@ -81,7 +81,7 @@ def _target(renderer_or_scene, size, views, graph, gpu):
     return renderer_or_scene, view_set, graph or hybrid_graph, gpu
 
 
-def tuned_study(scene, view_set, reference: Reference, settings, configs, budgets=(11.1,), metric: str = "flip",
+def tuned_study(scene, view_set, reference: Reference, settings, configs, budgets=(FRAME_BUDGET_MS,), metric: str = "flip",
                 levels=tuple(Effect), trials: int = 2, cache_dir=None, progress: bool = True, gpu=None,
                 notes=(), budget_option: str = "budget_ms", runner=None):
     """The error study with the tuner on top: probe a cost model against `reference` (judged as

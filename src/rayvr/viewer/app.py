@@ -22,12 +22,13 @@ import numpy as np
 from ..errors import OptionError, RayvrError, ViewerError
 from ..gpu.context import use_context
 from .camera import CameraRig
+from ..tune.budget import FRAME_BUDGET_MS
 from .display import FrameDisplay
 from .input import InputEvent, InputState
 from .script import InputScript, ScriptAction
 from .view_rig import ViewRig
 
-BUDGET_MS = 11.1          # 90 Hz
+BUDGET_MS = FRAME_BUDGET_MS   # 90 Hz
 HISTORY = 240             # frames of timing kept for the plots
 MAX_WINDOW = (1600, 900)  # the default window's largest size
 GRAPHS = ("hybrid", "path_traced")

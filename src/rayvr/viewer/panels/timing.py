@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..app import BUDGET_MS
+from ...tune.budget import FRAME_BUDGET_MS as BUDGET_MS
 
 
 def draw(v, state) -> None:
