@@ -313,7 +313,7 @@ struct Hit {
 
 struct SurfacePoint {
     vec3 position;           // render space
-    vec3 normal;             // shading normal (normal map applied), faces the incoming ray
+    vec3 normal;             // shading normal (normal map applied), on geometric_normal's side
     vec3 geometric_normal;   // faces the incoming ray
     vec2 uv;
     uint material;
@@ -357,10 +357,10 @@ SurfacePoint surface_at_cone(Hit h, vec3 dir, float cone_width) {
     s.geometric_normal = safe_normalize(ng, -normalize(dir));
     s.normal = safe_normalize(n, s.geometric_normal);
     s.front_face = dot(s.geometric_normal, dir) < 0.0;
-    if (!s.front_face) {
-        s.geometric_normal = -s.geometric_normal;
-        s.normal = -s.normal;
-    }
+    if (!s.front_face) s.geometric_normal = -s.geometric_normal;
+    // the shading normal on the geometric normal's side, whatever way the vertex normals point
+    // (flipped by an exporter): the raster G-buffer's rule too
+    if (dot(s.normal, s.geometric_normal) < 0.0) s.normal = -s.normal;
     s.uv = w.x * vec2(a.position_u.w, a.normal_v.w) + w.y * vec2(b.position_u.w, b.normal_v.w)
          + w.z * vec2(c.position_u.w, c.normal_v.w);
     s.material = scene_triangle_materials[tri];
