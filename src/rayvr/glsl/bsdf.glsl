@@ -42,7 +42,7 @@ layout(std430, binding = RAYVR_BSDF_TABLE_SSBO) readonly buffer BsdfTables {
     float bsdf_table[];     // A, B per (roughness, mu); Ā, B̄, C̄, D̄ per roughness; glass per (side, IOR, roughness, mu)
 };
 
-const float BSDF_DELTA_ROUGHNESS = 1e-3;   // perceptual roughness below which lobes are deltas
+const float BSDF_DELTA_ROUGHNESS = MATERIAL_DELTA_ROUGHNESS;   // below it lobes are deltas (scene.glsl)
 const float BSDF_MIN_ALPHA = 1e-6;         // BSDF_DELTA_ROUGHNESS^2
 
 struct BsdfParams {

@@ -32,7 +32,10 @@ GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, bool front_face, Mat
     t.normW = vec4(n, 0.0);
     t.faceNormalW = vec4(ng, front_face ? 0.0 : 1.0);
     t.baseColor = vec4(m.base_color, m.alpha);
-    t.metalRough = vec2(m.metallic, m.roughness);
+    // float16 rounds roughness either way: keep the side of the delta threshold (a near mirror
+    // stays rough, as the path tracer's float32 material sees it; 1/512 > float16's half ulp)
+    float r = m.roughness < MATERIAL_DELTA_ROUGHNESS ? 0.0 : max(m.roughness, MATERIAL_DELTA_ROUGHNESS * (1.0 + 1.0 / 512.0));
+    t.metalRough = vec2(m.metallic, r);
     vec3 emitted = front_face || m.double_sided ? m.emissive : vec3(0.0);
     t.emissive = vec4(to_half_range(emitted), 0.0);   // the emissive target is rgba16f
     t.effect = gbuf_pack_effect(m.effect, material);

@@ -155,6 +155,10 @@ struct MaterialParams {
     bool double_sided;
 };
 
+// Perceptual roughness below which a material's lobes are deltas (a mirror, straight refraction):
+// bsdf.glsl's BSDF_DELTA_ROUGHNESS, and what the G-buffer keeps exact through its float16 roughness.
+const float MATERIAL_DELTA_ROUGHNESS = 1e-3;
+
 // uv_lod: log2 of a ray's footprint in (untransformed) uv units; UV_LOD_FINEST reads level 0.
 #define UV_LOD_FINEST -64.0
 
