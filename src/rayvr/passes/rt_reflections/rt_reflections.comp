@@ -57,5 +57,5 @@ void main() {
         if (mp.effect < EFFECT_REFLECTIONS) break;
         if (bounce == MAX_BOUNCES - 1) radiance += throughput * probe_gi_glossy(s);
     }
-    imageStore(dst, p, vec4(finite_or_zero(radiance), 1.0));
+    imageStore(dst, p, vec4(to_half_range(finite_or_zero(radiance)), 1.0));   // the target is rgba16f
 }

@@ -22,5 +22,5 @@ void main() {
     Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
     PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
     vec3 c = g.emissive + shade_direct(s, rng) + probe_gi_diffuse(s);
-    imageStore(dst, p, vec4(c, 1.0));
+    imageStore(dst, p, vec4(to_half_range(c), 1.0));   // the target is rgba16f
 }
