@@ -546,3 +546,286 @@ def test_extreme_near_and_far_planes_render_the_moderate_image(gpu, gbuffer):
     ref, got = images
     same = np.all(np.abs(got - ref) <= HALF_RTOL * np.maximum(ref, 1e-3), axis=-1)
     assert same.mean() > 0.99, f"{(~same).sum()} of {same.size} pixels differ"
+
+
+# ---- 8, 9: long paths in a closed box ------------------------------------------------------------
+def closed_box(rho, emitting_walls=True) -> Scene:
+    """A closed 2 m cube seen from inside (faces wound inwards) of Lambert albedo rho: every wall
+    emitting radiance 1 (a furnace: the radiance everywhere is sum_k rho^k over the bounces a path
+    may take, exactly), or only a 0.2 m square light under the ceiling."""
+    s = Scene("closed_box")
+    wall = lambert("Wall", (rho,) * 3, emissive=(1.0, 1.0, 1.0) if emitting_walls else (0.0, 0.0, 0.0))
+    s.add_material(wall)
+    pos, idx = box((-1, -1, -1), (1, 1, 1))
+    s.add_object("Box", pos, idx[:, ::-1].copy(), 0)
+    if not emitting_walls:
+        s.add_material(lambert("Light", (rho,) * 3, emissive=(1.0, 1.0, 1.0)))
+        s.add_object("Light", *quad_mesh([[-0.1, 0.99, -0.1], [0.1, 0.99, -0.1], [0.1, 0.99, 0.1], [-0.1, 0.99, 0.1]],
+                                         (0, -1, 0)), "Light")
+    return s
+
+
+def frame_means(scene, graph, views, frames):
+    """Each frame's image mean of the path tracer's own (unaccumulated) output: independent
+    estimates whose spread gives the standard error."""
+    graph.mark_output("PathTracer.color")
+    means = []
+    with Renderer(scene, graph, views=views) as r:
+        for _ in range(frames):
+            r.render()
+            means.append(sane(r.read_output("PathTracer.color").astype(np.float64)).mean())
+    return np.array(means)
+
+
+INSIDE = view_set((0.2, -0.1, 0.6), (-0.3, 0.2, -1.0), fov=80.0, size=16)
+
+
+@pytest.mark.parametrize("rho", [0.999, 0.01])
+def test_russian_roulette_from_the_first_bounce_is_unbiased(gpu, rho):
+    """The furnace (closed_box) at albedo 0.999, where a path's throughput stays near 1 and
+    roulette rarely ends it, and at 0.01, where it falls to 0.01 a bounce and roulette (survival
+    clamped at 0.05) ends most paths at once but boosts the survivors: with roulette from bounce 0
+    and without it, 30 bounces, both means agree with each other and with the closed form
+    sum_{k<=30} rho^k within four standard errors."""
+    bounces, frames = 30, 8
+    want = sum(rho ** k for k in range(bounces + 1))
+    stats = {}
+    for what, rr_start in (("roulette from bounce 0", 0), ("no roulette", 1000)):
+        m = frame_means(closed_box(rho), path_traced(bounces=bounces, rr_start=rr_start, jitter=True), INSIDE, frames)
+        stats[what] = (m.mean(), m.std(ddof=1) / math.sqrt(frames))
+    (a, sa), (b, sb) = stats.values()
+    assert abs(a - b) < 4 * math.hypot(sa, sb) + 1e-6 * want, stats
+    for what, (m, se) in stats.items():
+        assert abs(m - want) < 4 * se + 1e-4 * want, (what, m, se, want)
+
+
+def test_a_closed_box_of_albedo_0999_with_100_bounces_stays_finite_and_bounded(gpu):
+    """Albedo 0.999 and 100 bounces: as a furnace the radiance is sum_{k<=100} 0.999^k = 96.08
+    exactly (mean over the image within 2%); with one small light instead no pixel exceeds the
+    analytic bound L_e / (1 - rho) = 1000 (radiance is at most L_e + rho max L), nor its
+    100-bounce truncation, and every value stays finite. The light's power pi L_e A_l, kept at
+    rho a bounce, leaves the box's surfaces A as pi L_e A_l sum_k rho^k in all: their mean
+    radiance is L_e A_l sum_k rho^k / A, and at albedo 0.999 interreflection makes the radiance
+    so uniform that the image's mean is it within 5%."""
+    want = sum(0.999 ** k for k in range(101))
+    img = sane(render(closed_box(0.999), path_traced(bounces=100, jitter=True), INSIDE, PT, frames=4))
+    assert img.mean() == pytest.approx(want, rel=0.02)
+    img = sane(render(closed_box(0.999, emitting_walls=False), path_traced(bounces=100, jitter=True), INSIDE, PT,
+                      frames=4))
+    assert img.max() < want < 1.0 / (1 - 0.999)
+    area_mean = 0.2 * 0.2 * want / (6 * 4 + 2 * 0.2 * 0.2)   # walls and both sides of the light
+    assert img.mean() == pytest.approx(area_mean, rel=0.05)
+
+
+# ---- 14. 10,000 instances ------------------------------------------------------------------------
+def test_ten_thousand_instances_cover_exactly_the_pixels_their_quads_cover(gpu):
+    """A 100 x 100 grid of instances of one unit quad, each scaled to 12 mm in its 20 mm cell and
+    lit from above: every pixel centre whose ray meets a quad (float64 coverage, here) has the
+    Lambert closed form, every other one is black (the scene has a light: no environment), in
+    the raster and ray-traced G-buffers and the path tracer; centres within 0.2 mm of an edge
+    are left out."""
+    cells, cell, side = 100, 0.02, 0.012
+    sun = (0.2, -1.0, 0.1)
+    s = Scene("instances")
+    s.add_material(lambert("Tile", (0.6,) * 3))
+    mesh = s.add_mesh(Mesh("Tile", *quad_mesh([[-0.5, 0, -0.5], [0.5, 0, -0.5], [0.5, 0, 0.5], [-0.5, 0, 0.5]], (0, 1, 0)),
+                           np.uint32(0)))
+    centres = (np.arange(cells) - (cells - 1) / 2) * cell
+    for x in centres:
+        for z in centres:
+            t = np.diag([side, 1.0, side, 1.0])
+            t[:3, 3] = (x, 0.0, z)
+            s.add_instance(mesh, t)
+    s.lights.append(Light("directional", direction=sun, intensity=2.0))
+    views = view_set((0.013, 2.2, 0.007), (0.013, 0.0, 0.007), fov=50.0, size=32, up=(0, 0, -1))
+    o, d = pixel_rays(views)
+    p = o + d * (-o[..., 1:2] / d[..., 1:2])
+    local = (p[..., [0, 2]] - centres[0]) / cell
+    off = np.abs(local - np.round(local)) * cell                      # distance from the nearest cell centre
+    inside = np.all(off < side / 2, axis=-1) & np.all(np.abs(p[..., [0, 2]]) < cells * cell / 2, axis=-1)
+    clear = np.all(np.abs(off - side / 2) > 2e-4, axis=-1)
+    want = np.where(inside, lambert_under_sun(0.6, 2.0, sun), 0.0)
+    assert 100 < inside.sum() < inside.size - 100
+    images = {"path tracer": render(s, path_traced(), views, PT)}
+    for gbuffer in ("raster", "rt"):
+        images[f"SHADOWS ({gbuffer})"] = render(set_effect(s, rv.Effect.SHADOWS), hybrid(gbuffer=gbuffer), views,
+                                                HYBRID)
+    for what, img in images.items():
+        got = sane(img, what)[0, ..., 0]
+        np.testing.assert_allclose(got[clear], want[clear], rtol=HALF_RTOL, atol=0, err_msg=what)
+
+
+# ---- 17. degenerate triangles --------------------------------------------------------------------
+def test_degenerate_triangles_change_nothing(gpu):
+    """Zero-area triangles (a repeated vertex, three collinear points, an emissive one), a 1e-12 m
+    triangle and a 1e-12 m wide needle mixed into the Cornell box as meshes of their own: no ray can meet them, so the image is the box's, bit for bit but for
+    rounding, in both graphs, and nothing is NaN (their normals, BVH boxes and light-table areas)."""
+    tri = np.array([[0.1, 0.2, 0.1], [0.1, 0.2, 0.1], [0.2, 0.3, 0.1],          # repeated vertex
+                    [-0.1, 0.1, 0.0], [0.0, 0.2, 0.0], [0.1, 0.3, 0.0],         # collinear
+                    [0.0, 0.0, 0.0], [1e-12, 0.0, 0.0], [0.0, 1e-12, 0.0],      # 1e-12 m
+                    [-0.2, 0.3, 0.2], [0.0, 0.3, 0.2], [-0.2, 0.3 + 1e-12, 0.2]], np.float32)   # needle
+    views = rv.renderer.default_views(cornell_box(), 2, (16, 16))
+    images = {}
+    for degenerate in (False, True):
+        s = set_effect(cornell_box(), rv.Effect.REFLECTIONS)
+        if degenerate:
+            s.add_material(lambert("Sliver", (0.6,) * 3))
+            s.add_material(lambert("DarkEmitter", (0.6,) * 3, emissive=(1.0, 1.0, 1.0)))
+            s.add_object("Slivers", tri, np.arange(12, dtype=np.uint32).reshape(4, 3), "Sliver")
+            s.add_object("Flat", tri[:3], np.array([[0, 1, 2]], np.uint32), "DarkEmitter")
+            assert np.isfinite(s.meshes[-1].normals).all() and np.isfinite(s.meshes[-2].normals).all()
+        images[degenerate] = (sane(render(s, path_traced(spp=2, bounces=3), views, PT), f"pt, {degenerate}"),
+                              sane(render(s, hybrid(), views, HYBRID), f"hybrid, {degenerate}"))
+    np.testing.assert_allclose(images[True][0], images[False][0], rtol=1e-5, atol=1e-7)
+    np.testing.assert_allclose(images[True][1], images[False][1], rtol=HALF_RTOL, atol=1e-6)
+
+
+# ---- 18. tiny and huge scenes (test_stability has 1e-3 and 1e4 with the raster G-buffer) ----------
+@pytest.mark.parametrize("scale, gbuffer", [(1e-4, "raster"), (1e-4, "rt"), (1e4, "rt")])
+def test_a_tenth_of_a_millimetre_and_a_ten_kilometre_cornell_box_render_the_unit_image(gpu, scale, gbuffer):
+    """Radiance from an area light depends on solid angles only: the Cornell box and its camera
+    scaled by 1e-4 (0.06 mm) or 1e4 render the unit box's image, in the hybrid with either
+    G-buffer and in the path tracer (ray offsets and clip planes scale with the scene)."""
+    from test_stability import transformed_cornell
+
+    views = {}
+    for k in (1.0, scale):
+        s = set_effect(transformed_cornell(k), rv.Effect.REFLECTIONS)
+        v = rv.renderer.default_views(s, 1, (16, 16))   # mono: a stereo pair's IPD would not scale
+        views[k] = (sane(render(s, hybrid(gbuffer=gbuffer), v, HYBRID), f"hybrid at {k}"),
+                    sane(render(s, path_traced(spp=2, bounces=3), v, PT), f"path tracer at {k}"))
+    for got, ref, what in zip(views[scale], views[1.0], ("hybrid", "path tracer")):
+        diff = np.abs(got - ref).mean() / ref.mean()
+        assert diff < 1e-3, f"{what} at scale {scale}: mean relative difference {diff:.6f}"
+
+
+# ---- 2. a stereo pair far from the origin --------------------------------------------------------
+@pytest.mark.parametrize("offset", [(1e5, 0.0, -1e5), (1e7, 3e6, 1e7)])
+def test_a_stereo_pair_far_from_the_origin_renders_the_image_at_the_origin(gpu, offset):
+    """The Cornell box and a stereo camera moved 1e5 m and 1e7 m (where float32 world positions
+    are 1 m apart): the scene is re-anchored at the eyes (render space, scene/gpu_frame.py), so
+    both eyes see the image at the origin, in the hybrid with either G-buffer and the path tracer."""
+    from test_stability import transformed_cornell
+
+    images = {}
+    for where in ((0.0, 0.0, 0.0), offset):
+        s = set_effect(transformed_cornell(1.0, where), rv.Effect.REFLECTIONS)
+        v = rv.renderer.default_views(s, 2, (16, 16))
+        images[where] = [sane(render(s, hybrid(gbuffer=g), v, HYBRID), f"{g} at {where}") for g in ("raster", "rt")]
+        images[where].append(sane(render(s, path_traced(spp=2, bounces=3), v, PT), f"path tracer at {where}"))
+    for got, ref, what in zip(images[offset], images[(0.0, 0.0, 0.0)], ("raster", "rt", "path tracer")):
+        diff = np.abs(got - ref).mean() / ref.mean()
+        assert diff < 1e-3, f"{what} {offset} m away: mean relative difference {diff:.5f}"
+
+
+# ---- 19. lights on and inside surfaces -----------------------------------------------------------
+def test_a_point_light_on_a_surface_or_inside_a_closed_box_stays_finite(gpu):
+    """A point light exactly on a Lambert plane (distance 0 from the point below it): every point
+    of the plane sees it at cos = 0, so the plane stays black (the 1 / d^2 at d = 0 meets a zero
+    cosine, never 0 * Inf); the same light 1 m up gives the closed form. A point light inside a
+    closed box on the plane: the box and the plane are exactly dark where shadows are traced
+    (the box's outer faces turn away from it, the box occludes the plane)."""
+    views = view_set((0.3, 2.0, 1.5), (0.0, 0.0, 0.0), fov=50.0)
+    for height in (0.0, 1.0):
+        s = plane_scene(sun=None, half=20.0)
+        s.lights.append(Light("point", position=(0.0, height, 0.0), intensity=2.0))
+        o, d = pixel_rays(views)
+        p = o + d * (-o[..., 1:2] / d[..., 1:2])
+        dist2 = ((p - [0.0, height, 0.0]) ** 2).sum(-1)
+        want = 0.4 / math.pi * 2.0 * height / dist2 ** 1.5
+        images = {"path tracer": render(s, path_traced(), views, PT)}
+        for effect in EFFECTS[:3]:
+            images[effect.name] = render(set_effect(s, effect), hybrid(), views, HYBRID)
+        for what, img in images.items():
+            got = sane(img, f"{what}, light at {height} m")[0, ..., 0]
+            np.testing.assert_allclose(got, want, rtol=3e-3, atol=1e-6, err_msg=f"{what}, light at {height} m")
+    s = plane_scene(sun=None)
+    s.add_material(lambert("Box", (0.6,) * 3))
+    s.add_object("Box", *box((-0.3, 0.0, -0.3), (0.3, 0.6, 0.3)), "Box")
+    s.lights.append(Light("point", position=(0.0, 0.3, 0.0), intensity=2.0))
+    images = {"path tracer": render(s, path_traced(bounces=3), views, PT)}
+    for effect in EFFECTS[1:]:
+        images[effect.name] = render(set_effect(s, effect), hybrid(max_bounces=2), views, HYBRID)
+    for what, img in images.items():
+        assert sane(img, what).max() == 0.0, f"{what}: light escaped the box ({img.max()})"
+
+
+# ---- the G-buffer's normal precision -------------------------------------------------------------
+def smooth_sphere(radius=100.0, material=None) -> Scene:
+    """An icosphere of radius `radius` m whose vertex normals are its vertices' directions: the
+    interpolated normal at a point of a facet is then exactly the direction of that point from
+    the centre, a float64 reference for every pixel."""
+    import trimesh
+
+    ico = trimesh.creation.icosphere(subdivisions=3, radius=radius)
+    s = Scene("sphere")
+    s.add_material(material or lambert("Sphere", (0.6,) * 3, effect=rv.Effect.RASTER))
+    s.add_object("Sphere", ico.vertices, ico.faces, 0, normals=ico.vertices / radius)
+    return s
+
+
+@pytest.mark.parametrize("gbuffer", ["raster", "rt"])
+def test_the_gbuffers_shading_normals_are_as_precise_as_float32(gpu, gbuffer):
+    """A 100 m smooth sphere seen from 300 m: the G-buffer's shading normal against the float64
+    normal at its own position is within 1e-5 rad (float16 normals: up to 3.3e-4 rad), and its
+    Lambert radiance near the terminator, lit from the side, is rho / pi * E * n.l of the float64
+    normal within 0.15% from n.l = 0.01 (float16 normals: 0.19% here, 0.5% at 64 x 64 pixels). Pixels on
+    facets that face away from the light are dark (the light sample's side test takes the
+    geometric normal) and left out. The face normal, which only picks sides and offsets rays,
+    keeps float16."""
+    s = smooth_sphere()
+    sun = np.array([-1.0, 0.0, -0.25])
+    s.lights.append(Light("directional", direction=sun, intensity=2.0))
+    views = view_set((0.0, 0.0, 300.0), (0.0, 0.0, 0.0), fov=45.0, size=32, far=1e4)
+    g = hybrid(gbuffer=gbuffer)
+    for pin in ("GBuffer.posW", "GBuffer.normW", "GBuffer.faceNormalW"):
+        g.mark_output(pin)
+    with Renderer(s, g, views=views) as r:
+        r.render()
+        origin = r.view_set.origin()
+        img = sane(r.read_output(HYBRID).astype(np.float64))[0, ..., 0]
+        pos = r.read_output("GBuffer.posW")[0].astype(np.float64)
+        n = r.read_output("GBuffer.normW")[0, ..., :3].astype(np.float64)
+        ng = r.read_output("GBuffer.faceNormalW")[0, ..., :3].astype(np.float64)
+    hit = pos[..., 3] > 0
+    assert hit.sum() > 200
+    want = pos[hit, :3] + origin
+    want /= np.linalg.norm(want, axis=-1, keepdims=True)
+
+    def angle(a):
+        a = a[hit] / np.linalg.norm(a[hit], axis=-1, keepdims=True)
+        return np.arccos(np.clip((a * want).sum(-1), -1.0, 1.0))
+
+    assert angle(n).max() < 1e-5, f"shading normals off by up to {angle(n).max():.2e} rad"
+    assert angle(ng).max() < 0.1   # a facet's normal: the tessellation's angle, not rounding
+    cos = want @ (-sun / np.linalg.norm(sun))
+    band = (cos > 0.01) & (cos < 0.3) & (img[hit] > 0)
+    assert band.sum() >= 20
+    err = np.abs(img[hit][band] / (0.6 / math.pi * 2.0 * cos[band]) - 1.0)
+    assert err.max() < 1.5e-3, f"radiance near the terminator off by up to {err.max():.2%}"
+
+
+@pytest.mark.parametrize("roughness", [0.05, 0.01])
+def test_a_near_mirrors_highlight_in_the_hybrid_is_the_path_tracers(gpu, roughness):
+    """A tilted smooth metal plane (its normal one that float16 rounds by 3.9e-4 rad) whose
+    mirror direction at the central pixel points at a directional light: the highlight's peak,
+    D = 1 / (pi alpha^2) wide of alpha = roughness^2, depends on the normal to a fraction of
+    alpha. The hybrid (ray-traced G-buffer: the same points as the path tracer's pixel-centre
+    rays) equals the path tracer within 0.5% of the peak (float16 normals: within it at roughness
+    0.05, 9.7% at 0.01)."""
+    n = np.array([-0.57739167, 0.60865618, 0.54420264])
+    t1 = np.cross(n, [0.0, 0.0, 1.0])
+    t1 /= np.linalg.norm(t1)
+    t2 = np.cross(n, t1)
+    s = Scene("tilted")
+    s.add_material(Material("Metal", base_color=(0.6, 0.6, 0.6, 1.0), metallic=1.0, roughness=roughness,
+                            effect=rv.Effect.RASTER))
+    s.add_object("Plane", *quad_mesh([5 * (a * t1 + b * t2) for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))], n), 0)
+    eye = 2.0 * n + t1
+    v = eye / np.linalg.norm(eye)
+    s.lights.append(Light("directional", direction=-(2 * np.dot(v, n) * n - v), intensity=2.0 * roughness ** 4))
+    views = view_set(eye, (0.0, 0.0, 0.0), fov=10.0, size=25)
+    got = sane(render(s, hybrid(gbuffer="rt"), views, HYBRID))[0, ..., 0]
+    want = sane(render(s, path_traced(), views, PT))[0, ..., 0]
+    assert want[12, 12] == want.max() > 0.05
+    assert np.abs(got - want).max() < 5e-3 * want.max(), f"{np.abs(got - want).max() / want.max():.2%} of the peak"
