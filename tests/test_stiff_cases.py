@@ -159,15 +159,31 @@ def test_grazing_views_of_a_lambert_plane_see_its_closed_form_radiance(gpu, angl
 
 
 # ---- 11, 12, 13: which side of a surface is seen --------------------------------------------------
-def emitter_scene(double_sided: bool) -> Scene:
-    """An emissive quad at z = 0 whose winding faces +Z (radiance 3), and a Lambert wall behind it
-    at z = -1 facing +Z, lit by nothing else."""
+def emitter_scene(double_sided: bool, walls: bool = False) -> Scene:
+    """A 1 m emissive square at z = 0 whose winding faces +Z (radiance 3) under a black sky; with
+    `walls`, Lambert walls at z = 1 and z = -1 facing it, lit by nothing else."""
     s = Scene("emitter")
     s.add_material(lambert("Emitter", (0.0, 0.0, 0.0), emissive=(1.0, 1.0, 1.0), emissive_strength=3.0,
                            double_sided=double_sided))
     s.add_object("Emitter", *quad_mesh([[-0.5, -0.5, 0], [0.5, -0.5, 0], [0.5, 0.5, 0], [-0.5, 0.5, 0]], (0, 0, 1)), 0)
+    if walls:
+        s.add_material(lambert("Wall", (0.4,) * 3))
+        for z in (1.0, -1.0):
+            s.add_object(f"Wall{z:+.0f}", *quad_mesh([[-3, -3, z], [3, -3, z], [3, 3, z], [-3, 3, z]], (0, 0, -z)), "Wall")
     s.environment = Environment((0.0, 0.0, 0.0), name="black")
     return s
+
+
+def square_irradiance(points, normal, radiance, half=0.5, n=64):
+    """Irradiance at `points` (..., 3) with `normal` from a Lambertian square [-half, half]^2 at
+    z = 0 of `radiance`, by a float64 midpoint rule: L sum cos cos' / r^2 dA."""
+    u = (np.arange(n) + 0.5) / n * 2 * half - half
+    q = np.stack(np.meshgrid(u, u, [0.0], indexing="ij"), -1).reshape(-1, 3)
+    d = q[None] - points.reshape(-1, 1, 3)
+    r2 = (d ** 2).sum(-1)
+    cos_w = np.maximum((d * normal).sum(-1), 0) / np.sqrt(r2)
+    cos_e = np.abs(d[..., 2]) / np.sqrt(r2)
+    return (radiance * cos_w * cos_e / r2).sum(-1).reshape(points.shape[:-1]) * (2 * half / n) ** 2
 
 
 @pytest.mark.parametrize("double_sided", [False, True])
@@ -187,6 +203,29 @@ def test_an_emitter_shows_its_radiance_from_its_front_and_only_double_sided_from
         for what, img in images.items():
             got = sane(img, what)[0, centre, centre]
             np.testing.assert_allclose(got, want, atol=1e-6, err_msg=f"{what}, {side}, double-sided {double_sided}")
+
+
+@pytest.mark.parametrize("double_sided", [False, True])
+def test_a_double_sided_emitter_lights_both_sides_and_a_single_sided_one_only_its_front(gpu, double_sided):
+    """Walls on both sides of the emissive square, each seen from between it and the wall: the
+    wall its front faces gets rho / pi * E (E the square's irradiance, float64 quadrature), the
+    wall behind it the same when it is double-sided and exactly 0 otherwise (light sampling, in
+    the shadow pass and the path tracer, follows the G-buffer's rule). Means over 16 frames."""
+    s = set_effect(emitter_scene(double_sided, walls=True), rv.Effect.SHADOWS)
+    for side, z in (("front", 1.0), ("back", -1.0)):
+        views = view_set((0.0, 0.0, z / 2), (0.0, 0.0, z), fov=60.0)
+        o, d = pixel_rays(views)
+        p = o + d * ((z - o[..., 2:3]) / d[..., 2:3])
+        want = 0.4 / math.pi * square_irradiance(p, np.array([0.0, 0.0, -z]), 3.0)
+        if side == "back" and not double_sided:
+            want = np.zeros_like(want)
+        for what, graph, pin in (("path tracer", path_traced(jitter=False), PT), ("SHADOWS", hybrid(), HYBRID)):
+            img = sane(render(s, graph, views, pin, frames=16, average=pin == HYBRID), what)[0, ..., 0]
+            if want.max() == 0:
+                assert img.max() == 0.0, f"{what}: the back of a single-sided emitter lit the wall"
+            else:
+                assert img.mean() == pytest.approx(want.mean(), rel=0.02), f"{what}, {side}"
+                np.testing.assert_allclose(img, want, rtol=0.25, err_msg=f"{what}, {side}")
 
 
 @pytest.mark.parametrize("gbuffer", ["raster", "rt"])
