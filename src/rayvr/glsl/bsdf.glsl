@@ -30,6 +30,7 @@
 //                                                        which take the same n and v
 //   vec3  bsdf_eval(b, n, v, l)                          f |cos|
 //   float bsdf_pdf(b, n, v, l)                           solid-angle pdf of bsdf_sample's non-delta lobes
+//   float bsdf_pdf_specular(b, n, v, l)                  the same of bsdf_sample_specular, l above
 //   bool  bsdf_sample(b, n, v, u, out BsdfSample)        u in [0,1)^3
 //   bsdf_albedo(b, n, v, out diffuse, out specular)      directional albedos of the two parts
 #pragma once
@@ -42,7 +43,7 @@ layout(std430, binding = RAYVR_BSDF_TABLE_SSBO) readonly buffer BsdfTables {
     float bsdf_table[];     // A, B per (roughness, mu); Ā, B̄, C̄, D̄ per roughness; glass per (side, IOR, roughness, mu)
 };
 
-const float BSDF_DELTA_ROUGHNESS = 1e-3;   // perceptual roughness below which lobes are deltas
+const float BSDF_DELTA_ROUGHNESS = MATERIAL_DELTA_ROUGHNESS;   // below it lobes are deltas (scene.glsl)
 const float BSDF_MIN_ALPHA = 1e-6;         // BSDF_DELTA_ROUGHNESS^2
 
 struct BsdfParams {
@@ -372,6 +373,14 @@ float bsdf_pdf(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     vec3 p = b.lobe_p;
     if (nl > 0.0) return p.x * bsdf_pdf_reflection(b, n, v, l) + p.y * nl / RAYVR_PI;
     return p.z * bsdf_pdf_transmission(b, n, v, l);
+}
+
+// Solid-angle pdf of bsdf_sample_specular's direction l above the surface (its reflection lobe
+// among the specular ones): what the direct-light passes weigh their light samples against.
+float bsdf_pdf_specular(BsdfParams b, vec3 n, vec3 v, vec3 l) {
+    float sum = b.lobe_p.x + b.lobe_p.z;
+    if (dot(n, v) <= 0.0 || !(sum > 0.0)) return 0.0;
+    return b.lobe_p.x / sum * bsdf_pdf_reflection(b, n, v, l);
 }
 
 struct BsdfSample {

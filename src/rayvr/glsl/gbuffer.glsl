@@ -21,16 +21,23 @@ uint gbuf_pack_effect(uint effect, uint material) { return (material << 8u) | (e
 
 #ifdef GBUF_WRITER
 // The texel of the surface at render-space `pos` seen from view v: normals already facing the
-// viewer, material m (index `material`). Motion comes from the unjittered view_proj and
-// prev_view_proj, so it carries no TAA jitter. Needs views.glsl and scene.glsl.
-GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, MaterialParams m, uint material) {
+// viewer, `front_face` whether the viewer sees the side the winding makes the front, material m
+// (index `material`). The back of a single-sided emitter emits nothing (as a ray hit's in the
+// path tracer); faceNormalW.w is 1 where the back is seen, so readers know a volume's inside.
+// Motion comes from the unjittered view_proj and prev_view_proj, so it carries no TAA jitter.
+// Needs views.glsl and scene.glsl.
+GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, bool front_face, MaterialParams m, uint material) {
     GBufferTexel t;
     t.posW = vec4(pos, -(views[v].view * vec4(pos, 1.0)).z);
     t.normW = vec4(n, 0.0);
-    t.faceNormalW = vec4(ng, 0.0);
+    t.faceNormalW = vec4(ng, front_face ? 0.0 : 1.0);
     t.baseColor = vec4(m.base_color, m.alpha);
-    t.metalRough = vec2(m.metallic, m.roughness);
-    t.emissive = vec4(to_half_range(m.emissive), 0.0);   // the emissive target is rgba16f
+    // float16 rounds roughness either way: keep the side of the delta threshold (a near mirror
+    // stays rough, as the path tracer's float32 material sees it; 1/512 > float16's half ulp)
+    float r = m.roughness < MATERIAL_DELTA_ROUGHNESS ? 0.0 : max(m.roughness, MATERIAL_DELTA_ROUGHNESS * (1.0 + 1.0 / 512.0));
+    t.metalRough = vec2(m.metallic, r);
+    vec3 emitted = front_face || m.double_sided ? m.emissive : vec3(0.0);
+    t.emissive = vec4(to_half_range(emitted), 0.0);   // the emissive target is rgba16f
     t.effect = gbuf_pack_effect(m.effect, material);
     vec4 now_clip = views[v].view_proj * vec4(pos, 1.0);
     vec4 before_clip = views[v].prev_view_proj * vec4(pos, 1.0);
@@ -61,6 +68,7 @@ struct GSurface {
     vec3 pos;          // render space
     vec3 n;            // shading normal, facing the viewer
     vec3 ng;           // geometric normal, facing the viewer
+    bool front_face;   // the viewer sees the side the winding makes the front
     vec3 base_color;
     float alpha;
     float metallic;
@@ -77,7 +85,9 @@ GSurface gbuf_load(ivec3 p) {
     GSurface s;
     s.pos = gbuf_fetch_posW(p).xyz;
     s.n = normalize(gbuf_fetch_normW(p).xyz);
-    s.ng = normalize(gbuf_fetch_faceNormalW(p).xyz);
+    vec4 ng = gbuf_fetch_faceNormalW(p);
+    s.ng = normalize(ng.xyz);
+    s.front_face = ng.w < 0.5;
     vec4 bc = gbuf_fetch_baseColor(p);
     s.base_color = bc.rgb;
     s.alpha = bc.a;

@@ -62,6 +62,7 @@ PathVertex path_vertex_at_gbuffer(GSurface g, uint view) {
     s.v = normalize(views[view].eye.xyz - g.pos);
     MaterialParams m = gbuf_material_params(g);
     s.bsdf = bsdf_params(m);
+    bsdf_set_side(s.bsdf, !g.front_face && m.volume);   // as path_vertex_at_hit: inside a volume
     bsdf_set_view(s.bsdf, s.n, s.v);
     s.attenuation = m.attenuation;
     s.cone_spread = view_pixel_spread(view);

@@ -155,6 +155,10 @@ struct MaterialParams {
     bool double_sided;
 };
 
+// Perceptual roughness below which a material's lobes are deltas (a mirror, straight refraction):
+// bsdf.glsl's BSDF_DELTA_ROUGHNESS, and what the G-buffer keeps exact through its float16 roughness.
+const float MATERIAL_DELTA_ROUGHNESS = 1e-3;
+
 // uv_lod: log2 of a ray's footprint in (untransformed) uv units; UV_LOD_FINEST reads level 0.
 #define UV_LOD_FINEST -64.0
 
@@ -252,6 +256,13 @@ bool material_alpha_passes(uint m, vec2 uv) {
 
 // ---- triangles ------------------------------------------------------------------------------
 
+// The render-space normal of the side the winding makes the front, for object-space vertices
+// a, b, c of instance i (unnormalised; zero for a degenerate triangle). Ray hits and the raster
+// G-buffer both take a triangle's front from it (glTF: a mirroring transform keeps the front).
+vec3 instance_face_normal(uint i, vec3 a, vec3 b, vec3 c) {
+    return instance_normal_to_render(i, cross(b - a, c - a));
+}
+
 vec2 triangle_uv(uint tri, vec2 bary) {
     vec3 w = vec3(1.0 - bary.x - bary.y, bary);
     VertexData a = scene_vertices[scene_indices[3u * tri]];
@@ -268,6 +279,7 @@ struct RasterVertex {
     vec3 normal;     // render space, normalised
     vec2 uv;
     vec4 tangent;    // render space xyz, handedness w (0 without normal maps)
+    vec3 face_normal;   // the triangle's instance_face_normal (the front side; unnormalised)
     uint material;
     uint triangle;   // scene triangle
 };
@@ -285,6 +297,9 @@ RasterVertex scene_raster_vertex(uint instance, int vertex_id) {
     r.tangent = vec4(safe_normalize(instance_vector_to_render(instance, t.xyz), vec3(1, 0, 0)), t.w);
 #endif
     r.triangle = uint(vertex_id) / 3u;
+    r.face_normal = instance_face_normal(instance, scene_vertices[scene_indices[3u * r.triangle]].position_u.xyz,
+                                         scene_vertices[scene_indices[3u * r.triangle + 1u]].position_u.xyz,
+                                         scene_vertices[scene_indices[3u * r.triangle + 2u]].position_u.xyz);
     r.material = scene_triangle_materials[r.triangle];
     return r;
 }
@@ -302,7 +317,7 @@ struct Hit {
 
 struct SurfacePoint {
     vec3 position;           // render space
-    vec3 normal;             // shading normal (normal map applied), faces the incoming ray
+    vec3 normal;             // shading normal (normal map applied), on geometric_normal's side
     vec3 geometric_normal;   // faces the incoming ray
     vec2 uv;
     uint material;
@@ -341,16 +356,15 @@ SurfacePoint surface_at_cone(Hit h, vec3 dir, float cone_width) {
     VertexData c = scene_vertices[scene_indices[3u * tri + 2u]];
     vec3 p = w.x * a.position_u.xyz + w.y * b.position_u.xyz + w.z * c.position_u.xyz;
     s.position = instance_point_to_render(h.instance, p);
-    vec3 ng = instance_normal_to_render(h.instance, cross(b.position_u.xyz - a.position_u.xyz,
-                                                          c.position_u.xyz - a.position_u.xyz));
+    vec3 ng = instance_face_normal(h.instance, a.position_u.xyz, b.position_u.xyz, c.position_u.xyz);
     vec3 n = instance_normal_to_render(h.instance, w.x * a.normal_v.xyz + w.y * b.normal_v.xyz + w.z * c.normal_v.xyz);
     s.geometric_normal = safe_normalize(ng, -normalize(dir));
     s.normal = safe_normalize(n, s.geometric_normal);
     s.front_face = dot(s.geometric_normal, dir) < 0.0;
-    if (!s.front_face) {
-        s.geometric_normal = -s.geometric_normal;
-        s.normal = -s.normal;
-    }
+    if (!s.front_face) s.geometric_normal = -s.geometric_normal;
+    // the shading normal on the geometric normal's side, whatever way the vertex normals point
+    // (flipped by an exporter): the raster G-buffer's rule too
+    if (dot(s.normal, s.geometric_normal) < 0.0) s.normal = -s.normal;
     s.uv = w.x * vec2(a.position_u.w, a.normal_v.w) + w.y * vec2(b.position_u.w, b.normal_v.w)
          + w.z * vec2(c.position_u.w, c.normal_v.w);
     s.material = scene_triangle_materials[tri];

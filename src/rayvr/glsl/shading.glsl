@@ -14,8 +14,13 @@
 #endif
 
 // Mean over LIGHT_SAMPLES light samples of f(v, l) cos * Le / pdf at vertex s, with visibility
-// when SHADE_SHADOWS.
-vec3 shade_direct(PathVertex s, inout Rng rng) {
+// when SHADE_SHADOWS. `specular_traced`: a ray pass also samples s's specular lobes
+// (bsdf_sample_specular) and adds the lights its rays find (RTReflections, at the pixels whose
+// effect is REFLECTIONS or above and at its reflective hits short of its bounce limit); the two
+// share the specular lobes' light by the power heuristic, weight 1 together, so a near-mirror
+// reflects an environment or a large emitter (which light sampling almost never finds in its
+// narrow lobe) and a small emitter stays light-sampled. Punctual lights (pdf 0) stay here whole.
+vec3 shade_direct_mis(PathVertex s, inout Rng rng, bool specular_traced) {
     vec3 sum = vec3(0.0);
 #if SCENE_HAS_LIGHTS   // punctual, emissive or the environment (lights.glsl)
 #if SHADE_SHADOWS
@@ -24,7 +29,13 @@ vec3 shade_direct(PathVertex s, inout Rng rng) {
     for (int k = 0; k < LIGHT_SAMPLES; ++k) {
         LightSample ls = sample_light(s.pos, rng_next3(rng));
         if (!ls.valid || dot(ls.direction, s.ng) <= 0.0) continue;
-        vec3 f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
+        vec3 f;
+        if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0)
+            f = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction)
+              + power_heuristic(ls.pdf, bsdf_pdf_specular(s.bsdf, s.n, s.v, ls.direction))
+              * bsdf_eval_reflection(s.bsdf, s.n, s.v, ls.direction);
+        else
+            f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
         if (f.x + f.y + f.z <= 0.0) continue;
 #if SHADE_SHADOWS
         if (trace_occluded(origin, ls.direction, ls.distance * (1.0 - 1e-4))) continue;
@@ -35,3 +46,5 @@ vec3 shade_direct(PathVertex s, inout Rng rng) {
 #endif
     return sum;
 }
+
+vec3 shade_direct(PathVertex s, inout Rng rng) { return shade_direct_mis(s, rng, false); }

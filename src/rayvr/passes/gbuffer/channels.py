@@ -45,8 +45,8 @@ NO_GEOMETRY = 0xFF   # the effect word where nothing was drawn (gbuffer.glsl GBU
 CHANNELS = (
     Channel("posW", "rgba32f", (0.0, 0.0, 0.0, 0.0),
             "render-space position; w = linear eye depth (0: no geometry)"),
-    Channel("normW", "rgba16f", (0.0, 0.0, 0.0, 0.0), "shading normal (render space, facing the viewer)"),
-    Channel("faceNormalW", "rgba16f", (0.0, 0.0, 0.0, 0.0), "geometric normal (render space, facing the viewer)"),
+    Channel("normW", "rgba32f", (0.0, 0.0, 0.0, 0.0), "shading normal (render space, facing the viewer)"),
+    Channel("faceNormalW", "rgba16f", (0.0, 0.0, 0.0, 0.0), "geometric normal (render space, facing the viewer); w = 1 where the back face is seen"),
     Channel("baseColor", "rgba8", (0.0, 0.0, 0.0, 0.0), "base colour and alpha"),
     Channel("metalRough", "rg16f", (0.0, 0.0), "metallic, roughness"),
     Channel("emissive", "rgba16f", (0.0, 0.0, 0.0, 0.0), "emitted radiance"),

@@ -11,6 +11,7 @@ in vec3 v_pos;
 in vec3 v_normal;
 in vec2 v_uv;
 in vec4 v_tangent;
+flat in vec3 v_face_normal;
 flat in uint v_material;
 flat in uint v_view;
 
@@ -22,9 +23,11 @@ void main() {
 #endif
     vec3 eye = views[v_view].eye.xyz;
     vec3 to_eye = eye - v_pos;
-    // Geometric normal from screen-space derivatives of the render-space position.
-    vec3 ng = safe_normalize(cross(dFdx(v_pos), dFdy(v_pos)), v_normal);
-    if (dot(ng, to_eye) < 0.0) ng = -ng;
+    // The triangle's own normal (as a ray hit's, scene.glsl surface_at_cone): which side is the
+    // front, and the geometric normal without the rounding of screen-space derivatives.
+    vec3 ng = safe_normalize(v_face_normal, normalize(to_eye));
+    bool front_face = dot(ng, to_eye) >= 0.0;
+    if (!front_face) ng = -ng;
     vec3 n = safe_normalize(v_normal, ng);
     if (dot(n, ng) < 0.0) n = -n;   // back face seen: shade the side facing the viewer
 #if SCENE_HAS_NORMAL_MAPS
@@ -36,5 +39,5 @@ void main() {
         n = safe_normalize(tn.x * t + tn.y * b + tn.z * n, n);
     }
 #endif
-    gbuf_output(gbuf_encode(v_view, v_pos, n, ng, m, v_material));   // one output per channel
+    gbuf_output(gbuf_encode(v_view, v_pos, n, ng, front_face, m, v_material));   // one output per channel
 }

@@ -22,6 +22,7 @@ out vec3 v_pos;
 out vec3 v_normal;
 out vec2 v_uv;
 out vec4 v_tangent;
+flat out vec3 v_face_normal;
 flat out uint v_material;
 flat out uint v_view;
 
@@ -32,6 +33,7 @@ void main() {
     v_normal = r.normal;
     v_uv = r.uv;
     v_tangent = r.tangent;
+    v_face_normal = r.face_normal;
     v_material = r.material;
     v_view = view;
     gl_Position = views[view].view_proj * vec4(r.position, 1.0);

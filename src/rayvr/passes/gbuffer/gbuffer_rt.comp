@@ -23,7 +23,8 @@ GBufferTexel primary_surface(uint v, ivec2 pixel) {
     SurfacePoint s = surface_at_cone(hit, d, (t_near + hit.t) * view_pixel_spread(v));
     // as the raster path: the shading normal turned to the side of the (viewer-facing) face normal
     vec3 n = dot(s.normal, s.geometric_normal) < 0.0 ? -s.normal : s.normal;
-    return gbuf_encode(v, s.position, n, s.geometric_normal, material_params_at(s.material, s.uv, s.uv_lod), s.material);
+    return gbuf_encode(v, s.position, n, s.geometric_normal, s.front_face, material_params_at(s.material, s.uv, s.uv_lod),
+                       s.material);
 }
 
 void main() {

@@ -3,7 +3,8 @@
 // the BSDF's specular lobes (GGX VNDF reflection, and for transmissive materials refraction or a
 // thin wall's pass-through; exact deltas at roughness 0), trace, shade the hit with emission and
 // shadowed direct light, continue up to MAX_BOUNCES through reflective hits (absorbing inside
-// volumes). Output: that radiance weighted by the specular lobes, which the composite adds to the
+// volumes). Light a rough lobe's ray finds (emitters, the environment) and the light sample of
+// the vertex it left share it by the power heuristic (shading.glsl shade_direct_mis). Output: that radiance weighted by the specular lobes, which the composite adds to the
 // direct light (the diffuse part is the direct-light passes'). With PROBE_GI each hit adds the
 // probes' indirect diffuse light, and a path stopped by MAX_BOUNCES on a reflective surface their
 // glossy fallback.
@@ -38,24 +39,32 @@ void main() {
         if (!(max3(throughput) > 0.0)) break;
         if (bs.transmitted && !s.bsdf.thin) medium = s.bsdf.inside ? vec3(0.0) : s.attenuation;
         Hit hit;
+        // Light this ray finds: all of it behind a delta or a transmission (light sampling finds
+        // none), else its power-heuristic share with the light sample of the vertex it left
+        // (shade_direct_mis there weighs the other share)
+        bool whole = bs.delta || bs.transmitted;
         if (!trace_closest(offset_ray_origin(s.pos, bs.transmitted ? -s.ng : s.ng), bs.l, 1e30, hit)) {
-            // a rough lobe already gets the environment through light sampling; a delta only here
-            if (bs.delta || bs.transmitted) radiance += throughput * environment_radiance(bs.l);
+            float w = whole ? 1.0 : power_heuristic(bs.pdf, environment_light_pdf(bs.l));
+            radiance += throughput * environment_radiance(bs.l) * w;
             break;
         }
         if (max3(medium) > 0.0) throughput *= exp(-medium * hit.t);
         float spread = cone_spread_after_bounce(s.cone_spread, bs.pdf, bs.delta);
         SurfacePoint sp;
         MaterialParams mp;
+        vec3 from = s.pos;
         s = path_vertex_at_hit(hit, bs.l, s.cone_width + hit.t * spread, spread, sp, mp);
-        // Emitters reach a rough reflection through light sampling (shade_direct at the pixel);
-        // a delta lobe or a transmission sees them only through its ray.
-        bool sees_emission = (bs.delta || bs.transmitted) && (sp.front_face || mp.double_sided);
-        radiance += throughput * ((sees_emission ? mp.emissive : vec3(0.0)) + shade_direct(s, rng)
-                                  + probe_gi_diffuse(s));
+        vec3 emitted = vec3(0.0);
+#if SCENE_HAS_EMISSIVE_TRIANGLES
+        if (max3(mp.emissive) > 0.0 && (sp.front_face || mp.double_sided))
+            emitted = mp.emissive * (whole ? 1.0 : power_heuristic(bs.pdf, emissive_light_pdf(sp, hit.instance, from)));
+#endif
         // Only surfaces that are themselves reflective carry the path further.
-        if (mp.effect < EFFECT_REFLECTIONS) break;
+        bool continues = mp.effect >= EFFECT_REFLECTIONS;
+        radiance += throughput * (emitted + shade_direct_mis(s, rng, continues && bounce + 1 < MAX_BOUNCES)
+                                  + probe_gi_diffuse(s));
+        if (!continues) break;
         if (bounce == MAX_BOUNCES - 1) radiance += throughput * probe_gi_glossy(s);
     }
-    imageStore(dst, p, vec4(finite_or_zero(radiance), 1.0));
+    imageStore(dst, p, vec4(to_half_range(finite_or_zero(radiance)), 1.0));   // the target is rgba16f
 }

@@ -10,7 +10,10 @@ from ..gbuffer.lighting_pass import GBufferLightingPass
 @register_pass
 class RTReflections(GBufferLightingPass):
     """Mirror and glossy (GGX VNDF) reflections for the pixels whose effect is REFLECTIONS or above,
-    `max_bounces` deep; reflected hits are shaded with ray-traced shadows. The output is the
+    `max_bounces` deep; reflected hits are shaded with ray-traced shadows. Emitters and the
+    environment that a glossy ray finds are weighed against the direct-light passes' light samples
+    by the power heuristic (those weigh the specular lobes of REFLECTIONS pixels the other way:
+    shading.glsl shade_direct_mis), so near-mirrors reflect the sky. The output is the
     reflected radiance already weighted by the specular BSDF (the composite adds it).
     Runs over the whole image in 8x4 tiles unless a material is PATH_TRACED (benchmarks/RESULTS.md
     compares the tile shapes and the list)."""

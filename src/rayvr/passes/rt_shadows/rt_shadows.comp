@@ -21,6 +21,7 @@ void main() {
     GSurface g = gbuf_load(p);
     Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
     PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
-    vec3 c = g.emissive + shade_direct(s, rng) + probe_gi_diffuse(s);
-    imageStore(dst, p, vec4(c, 1.0));
+    // REFLECTIONS and above: RTReflections traces the specular lobes and shares their light (MIS)
+    vec3 c = g.emissive + shade_direct_mis(s, rng, g.effect >= EFFECT_REFLECTIONS) + probe_gi_diffuse(s);
+    imageStore(dst, p, vec4(to_half_range(c), 1.0));   // the target is rgba16f
 }
