@@ -1,5 +1,8 @@
 """What a compiled graph allocates, it frees: passes' own GPU objects (RenderPass.own/release),
 resources and timers, on recompile and on close."""
+import numpy as np
+import pytest
+
 import rayvr as rv
 from rayvr.gpu.objects import live_gl_objects
 from rayvr.renderer import default_views
@@ -53,3 +56,17 @@ def test_renderer_close_frees_what_it_allocated(gpu):
     # programs are cached per source and defines; timer queries are pooled for the next graph
     leaked = {k: after[k] - before[k] for k in after if k not in ("programs", "queries") and after[k] != before[k]}
     assert not leaked, leaked
+
+
+@pytest.mark.parametrize("components, dtype", [(4, "f2"), (2, "f4"), (1, "f4"), (4, "u4"), (4, "f1")])
+def test_zero_texture_clears_what_was_there(gl, components, dtype):
+    """Graph textures start as zeros on every driver (GL leaves new memory undefined: NVIDIA
+    returns old bits, NaN patterns included): zero_texture clears a texture holding 7s."""
+    from rayvr.gpu.textures import zero_texture
+
+    np_dtype = {"f2": np.float16, "f4": np.float32, "u4": np.uint32, "f1": np.uint8}[dtype]
+    t = gl.texture_array((4, 3, 2), components, dtype=dtype)
+    t.write(np.full(4 * 3 * 2 * components, 7, np_dtype).tobytes())
+    zero_texture(t)
+    assert not np.frombuffer(t.read(), np_dtype).any()
+    t.release()

@@ -20,6 +20,7 @@ import moderngl
 import numpy as np
 
 from ..errors import GraphError, did_you_mean
+from ..gpu.textures import zero_texture
 from ..gpu.timer import acquire_timer, release_timer, timing_method
 from .compiler import STAGES, Plan
 from .formats import NUMPY_DTYPES, get_format
@@ -83,6 +84,7 @@ class CompiledGraph:
         tex = self.gl.texture_array((size[0], size[1], layers), f.components, dtype=f.dtype)
         if f.dtype == "u4":   # integer textures are incomplete (read as 0) with linear filtering
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        zero_texture(tex)
         return tex
 
     def release(self) -> None:
