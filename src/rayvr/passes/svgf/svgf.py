@@ -67,8 +67,7 @@ class SVGF(RenderPass):
     HISTORY_DIFFUSE, HISTORY_SPECULAR = "historyDiffuse", "historySpecular"
     MOMENTS = ("moments0", "moments1")
     SURFACE = ("surface0", "surface1")
-    FILTER_DIFFUSE = ("filterDiffuse0", "filterDiffuse1")
-    FILTER_SPECULAR = ("filterSpecular0", "filterSpecular1")
+    FILTER = ("filter0", "filter1")
     PROPERTIES = {"iterations": 5, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2, "max_history": 32,
                   "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
     USES_SCENE = True
@@ -114,14 +113,16 @@ class SVGF(RenderPass):
                                   "(the background where nothing was hit)")
         r.add_input(self.SPECULAR, "radiance its specular lobe reflects").optional()
         r.add_output(self.COLOR, "denoised radiance (remodulated, with emission)").format("rgba16f")
-        lobes = [(self.HISTORY_DIFFUSE, self.FILTER_DIFFUSE, "diffuse")]
-        if self.SPECULAR in cd.input_formats:
-            lobes.append((self.HISTORY_SPECULAR, self.FILTER_SPECULAR, "specular"))
-        for history, scratch, lobe in lobes:
+        specular = self.SPECULAR in cd.input_formats
+        lobes = [(self.HISTORY_DIFFUSE, "diffuse")] + [(self.HISTORY_SPECULAR, "specular")] * specular
+        for history, lobe in lobes:
             r.add_internal(history, f"filtered {lobe} illumination of last frame (the colour history)"
                            ).format("rgba16f")
-            for name in scratch:   # transients: they alias with other passes' textures
-                r.add_output(name, f"{lobe} illumination + variance between the stages (scratch)").format("rgba16f")
+        for name in self.FILTER:   # transients: they alias with other passes' textures
+            r.add_output(name, "both lobes' illumination + variance between the stages (scratch): float16 "
+                               "pairs (diffuse rg) (diffuse b, variance) (specular rg) (specular b, variance)"
+                         if specular else "diffuse illumination + variance between the stages (scratch)"
+                         ).format("rgba32ui" if specular else "rgba16f")
         for name in self.MOMENTS:
             r.add_internal(name, "luminance moments: diffuse m1 m2, specular m1 m2 (used in turn)").format("rgba32f")
         for name in self.SURFACE:
@@ -155,12 +156,11 @@ class SVGF(RenderPass):
         self._scene_key = key
         return edited
 
-    def _lobes(self, res, data, prefix: str, pins) -> None:
-        """Bind `<prefix>_diffuse` (and `_specular`) of `res` to pins (diffuse pin, specular pin)."""
-        bind = res.texture if prefix == "src" else res.image
-        bind(f"{prefix}_diffuse", data[pins[0]])
+    def _histories(self, res, data) -> None:
+        """Bind the colour histories as the images `history_diffuse` (and `_specular`) of `res`."""
+        res.image("history_diffuse", data[self.HISTORY_DIFFUSE])
         if self._specular:
-            bind(f"{prefix}_specular", data[pins[1]])
+            res.image("history_specular", data[self.HISTORY_SPECULAR])
 
     def _set_common(self, res) -> None:
         res.set("svgf_phi_depth", float(self.phi_depth))
@@ -172,8 +172,7 @@ class SVGF(RenderPass):
             self.resets += 1
             self.reset()
         prev, cur = self._frames % 2, (self._frames + 1) % 2
-        scratch = [(self.FILTER_DIFFUSE[k], self.FILTER_SPECULAR[k]) for k in (0, 1)]
-        history = (self.HISTORY_DIFFUSE, self.HISTORY_SPECULAR)
+        scratch = [data[name] for name in self.FILTER]
         iterations = int(self.iterations)
         tap = min(int(self.feedback_tap), iterations - 1)   # < 0: the unfiltered temporal mean
         between = (Access.SAMPLED, Access.IMAGE)
@@ -187,7 +186,7 @@ class SVGF(RenderPass):
             res.texture("history_specular", data[self.HISTORY_SPECULAR])
         res.texture("moments_prev", data[self.MOMENTS[prev]])
         res.texture("surface_prev", data[self.SURFACE[prev]])
-        self._lobes(res, data, "out", scratch[0])
+        res.image("out_illum", scratch[0])
         res.image("moments_out", data[self.MOMENTS[cur]])
         res.image("surface_out", data[self.SURFACE[cur]])
         res.set("svgf_alpha", float(self.alpha))
@@ -197,25 +196,24 @@ class SVGF(RenderPass):
         res.prog.run(*self._groups)
         ctx.barrier(*between)
 
-        res = self._res["variance"]
+        res = self._res["variance"]   # in place in scratch[0]
         self._set_common(res)
-        self._lobes(res, data, "src", scratch[0])
-        self._lobes(res, data, "dst", scratch[1])
-        self._lobes(res, data, "history", history)
+        res.image("illum", scratch[0], read=True, write=True)
+        self._histories(res, data)
         res.texture("moments_cur", data[self.MOMENTS[cur]])
         res.texture("surface_cur", data[self.SURFACE[cur]])
         res.set("svgf_write_history", tap < 0)
         res.prog.run(*self._groups)
         ctx.barrier(*between)
 
-        src = 1
+        src = 0
         res = self._res["atrous"]
         self._set_common(res)
         res.texture("surface_cur", data[self.SURFACE[cur]])
-        self._lobes(res, data, "history", history)
+        self._histories(res, data)
         for i in range(iterations):
-            self._lobes(res, data, "src", scratch[src])
-            self._lobes(res, data, "dst", scratch[1 - src])
+            res.texture("src_illum", scratch[src])
+            res.image("dst_illum", scratch[1 - src])
             res.set("svgf_step", 1 << i)
             res.set("svgf_write_history", i == tap)
             res.prog.run(*self._groups)
@@ -225,7 +223,7 @@ class SVGF(RenderPass):
         res = self._res["modulate"]
         channels.bind_inputs(res, data, GBUFFER)
         res.texture("svgf_diffuse_in", data[self.DIFFUSE])
-        self._lobes(res, data, "src", scratch[src])
+        res.texture("src_illum", scratch[src])
         res.image("dst", data[self.COLOR])
         res.prog.run(*self._groups)
         self._frames += 1

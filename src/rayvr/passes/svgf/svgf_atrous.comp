@@ -7,12 +7,10 @@
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
-uniform sampler2DArray src_diffuse;
-layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
+uniform SVGF_ILLUM_SAMPLER src_illum;
+layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE dst_illum;
 layout(rgba16f) writeonly uniform image2DArray history_diffuse;
 #if SVGF_SPECULAR
-uniform sampler2DArray src_specular;
-layout(rgba16f) writeonly uniform image2DArray dst_specular;
 layout(rgba16f) writeonly uniform image2DArray history_specular;
 #endif
 uniform int svgf_step;
@@ -29,10 +27,7 @@ vec2 blurred_variance(ivec3 p, ivec2 size) {
             ivec3 q = p + ivec3(dx, dy, 0);
             if (!svgf_inside(q.xy, size)) continue;
             float k = (dx == 0 ? 0.5 : 0.25) * (dy == 0 ? 0.5 : 0.25);
-            sum.x += k * texelFetch(src_diffuse, q, 0).a;
-#if SVGF_SPECULAR
-            sum.y += k * texelFetch(src_specular, q, 0).a;
-#endif
+            sum += k * svgf_illum_variance(texelFetch(src_illum, q, 0));
             total += k;
         }
     return sum / total;
@@ -40,22 +35,29 @@ vec2 blurred_variance(ivec3 p, ivec2 size) {
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
-    ivec3 size = imageSize(dst_diffuse);
+    ivec3 size = imageSize(dst_illum);
     if (any(greaterThanEqual(p, size))) return;
     SvgfSurface c = svgf_unpack(texelFetch(surface_cur, p, 0));
-    vec4 d = texelFetch(src_diffuse, p, 0);
-    vec4 s = vec4(0.0);
+    SvgfIllum centre = texelFetch(src_illum, p, 0);
+    if (!svgf_has_geometry(c.word)) {   // nothing to filter: the texel as it came
+        imageStore(dst_illum, p, centre);
+        if (svgf_write_history) {
+            imageStore(history_diffuse, p, vec4(svgf_illum_diffuse(centre).rgb, 0.0));
 #if SVGF_SPECULAR
-    s = texelFetch(src_specular, p, 0);
+            imageStore(history_specular, p, vec4(svgf_illum_specular(centre).rgb, 0.0));
 #endif
-    if (svgf_has_geometry(c.word)) {
+        }
+        return;
+    }
+    vec4 d = svgf_illum_diffuse(centre), s = svgf_illum_specular(centre);
+    {
         vec2 phi = svgf_phi_color * sqrt(max(blurred_variance(p, size.xy), 0.0) + 1e-10);
         vec2 gradient = svgf_depth_gradient(p, c.depth, size.xy);
         float ld = luminance(d.rgb), ls = luminance(s.rgb);
-        float centre = KERNEL[0] * KERNEL[0];
-        vec2 sum_w = vec2(centre);
-        vec3 sum_d = centre * d.rgb, sum_s = centre * s.rgb;
-        vec2 sum_v = centre * centre * vec2(d.a, s.a);
+        float k0 = KERNEL[0] * KERNEL[0];
+        vec2 sum_w = vec2(k0);
+        vec3 sum_d = k0 * d.rgb, sum_s = k0 * s.rgb;
+        vec2 sum_v = k0 * k0 * vec2(d.a, s.a);
         for (int dy = -2; dy <= 2; ++dy)
             for (int dx = -2; dx <= 2; ++dx) {
                 if (dx == 0 && dy == 0) continue;
@@ -66,13 +68,14 @@ void main() {
                 if (!svgf_has_geometry(t.word)) continue;
                 float w = KERNEL[abs(dx)] * KERNEL[abs(dy)] * svgf_weight_depth(c.depth, t.depth, gradient, offset)
                           * svgf_weight_normal(c.n, t.n);
-                vec4 qd = texelFetch(src_diffuse, q, 0);
+                SvgfIllum tap = texelFetch(src_illum, q, 0);
+                vec4 qd = svgf_illum_diffuse(tap);
                 float wd = w * exp(-abs(ld - luminance(qd.rgb)) / phi.x);
                 sum_w.x += wd;
                 sum_d += wd * qd.rgb;
                 sum_v.x += wd * wd * qd.a;
 #if SVGF_SPECULAR
-                vec4 qs = texelFetch(src_specular, q, 0);
+                vec4 qs = svgf_illum_specular(tap);
                 float ws = w * exp(-abs(ls - luminance(qs.rgb)) / phi.y);
                 sum_w.y += ws;
                 sum_s += ws * qs.rgb;
@@ -82,10 +85,9 @@ void main() {
         d = vec4(sum_d / sum_w.x, sum_v.x / (sum_w.x * sum_w.x));
         s = vec4(sum_s / sum_w.y, sum_v.y / (sum_w.y * sum_w.y));
     }
-    imageStore(dst_diffuse, p, d);
+    imageStore(dst_illum, p, svgf_illum_pack(d, s));
     if (svgf_write_history) imageStore(history_diffuse, p, vec4(d.rgb, 0.0));
 #if SVGF_SPECULAR
-    imageStore(dst_specular, p, s);
     if (svgf_write_history) imageStore(history_specular, p, vec4(s.rgb, 0.0));
 #endif
 }

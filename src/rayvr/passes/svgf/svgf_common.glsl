@@ -1,5 +1,6 @@
 // SVGF's shared pieces (rayvr/passes/svgf): the surface each stage keeps per pixel (packed in
-// rgba32ui: linear depth, octahedral normal, effect word, history length), demodulation by the
+// rgba32ui: linear depth, octahedral normal, effect word, history length), the illumination
+// texel between the stages (both lobes and their variances in one texel), demodulation by the
 // BSDF's directional albedos, and the edge-stopping weights of the variance estimate and the
 // a-trous filter (Schied et al. 2017, section 4).
 #pragma once
@@ -58,6 +59,32 @@ SvgfSurface svgf_unpack(uvec4 u) {
     s.history = uintBitsToFloat(u.w);
     return s;
 }
+
+// The illumination between the stages, both lobes in one texel so that a tap is one fetch: with
+// SVGF_SPECULAR rgba32ui of float16 pairs (diffuse rg), (diffuse b, its variance), (specular rg),
+// (specular b, its variance); without, rgba16f (diffuse rgb, its variance). Stages declare
+// `uniform SVGF_ILLUM_SAMPLER name;` and `layout(SVGF_ILLUM_FORMAT) uniform SVGF_ILLUM_IMAGE name;`.
+#if SVGF_SPECULAR
+#define SVGF_ILLUM_FORMAT rgba32ui
+#define SVGF_ILLUM_SAMPLER usampler2DArray
+#define SVGF_ILLUM_IMAGE uimage2DArray
+#define SvgfIllum uvec4
+SvgfIllum svgf_illum_pack(vec4 d, vec4 s) {
+    return uvec4(packHalf2x16(d.rg), packHalf2x16(d.ba), packHalf2x16(s.rg), packHalf2x16(s.ba));
+}
+vec4 svgf_illum_diffuse(SvgfIllum t) { return vec4(unpackHalf2x16(t.x), unpackHalf2x16(t.y)); }
+vec4 svgf_illum_specular(SvgfIllum t) { return vec4(unpackHalf2x16(t.z), unpackHalf2x16(t.w)); }
+vec2 svgf_illum_variance(SvgfIllum t) { return vec2(unpackHalf2x16(t.y).y, unpackHalf2x16(t.w).y); }
+#else
+#define SVGF_ILLUM_FORMAT rgba16f
+#define SVGF_ILLUM_SAMPLER sampler2DArray
+#define SVGF_ILLUM_IMAGE image2DArray
+#define SvgfIllum vec4
+SvgfIllum svgf_illum_pack(vec4 d, vec4 s) { return d; }
+vec4 svgf_illum_diffuse(SvgfIllum t) { return t; }
+vec4 svgf_illum_specular(SvgfIllum t) { return vec4(0.0); }
+vec2 svgf_illum_variance(SvgfIllum t) { return vec2(t.a, 0.0); }
+#endif
 
 bool svgf_has_geometry(uint word) { return gbuf_effect_of(word) != GBUF_NO_GEOMETRY; }
 

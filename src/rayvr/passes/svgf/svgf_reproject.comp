@@ -10,12 +10,11 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 uniform sampler2DArray svgf_diffuse_in;
 uniform sampler2DArray history_diffuse;
-layout(rgba16f) writeonly uniform image2DArray out_diffuse;
 #if SVGF_SPECULAR
 uniform sampler2DArray svgf_specular_in;
 uniform sampler2DArray history_specular;
-layout(rgba16f) writeonly uniform image2DArray out_specular;
 #endif
+layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE out_illum;   // both lobes + variances
 uniform sampler2DArray moments_prev;
 uniform usampler2DArray surface_prev;
 layout(rgba32f) writeonly uniform image2DArray moments_out;
@@ -53,14 +52,11 @@ float depth_at(ivec3 q, ivec2 size) { return svgf_inside(q.xy, size) ? gbuf_fetc
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
-    ivec3 size = imageSize(out_diffuse);
+    ivec3 size = imageSize(out_illum);
     if (any(greaterThanEqual(p, size))) return;
     uint word = gbuf_fetch_effect(p);
     if (!svgf_has_geometry(word)) {
-        imageStore(out_diffuse, p, vec4(0.0));
-#if SVGF_SPECULAR
-        imageStore(out_specular, p, vec4(0.0));
-#endif
+        imageStore(out_illum, p, svgf_illum_pack(vec4(0.0), vec4(0.0)));
         imageStore(moments_out, p, vec4(0.0));
         imageStore(surface_out, p, svgf_pack(svgf_no_geometry()));
         return;
@@ -112,10 +108,8 @@ void main() {
     // converges to the temporal mean instead of staying blurred
     float samples = min(history, (2.0 - svgf_alpha) / svgf_alpha);
     vec2 variance = max(vec2(moments.y - moments.x * moments.x, moments.w - moments.z * moments.z), 0.0) / samples;
-    imageStore(out_diffuse, p, vec4(to_half_range(mix(r.diffuse * inv, diffuse, alpha)), variance.x));
-#if SVGF_SPECULAR
-    imageStore(out_specular, p, vec4(to_half_range(mix(r.specular * inv, specular, alpha)), variance.y));
-#endif
+    imageStore(out_illum, p, svgf_illum_pack(vec4(to_half_range(mix(r.diffuse * inv, diffuse, alpha)), variance.x),
+                                             vec4(to_half_range(mix(r.specular * inv, specular, alpha)), variance.y)));
     imageStore(moments_out, p, moments);
     SvgfSurface s;
     s.depth = depth;

@@ -1,51 +1,36 @@
 // SVGF stage 2, variance estimation: pixels with a history of SVGF_MIN_HISTORY frames or more keep
 // the temporal variance of their moments; younger ones (disoccluded, or the first frames) take
 // the variance of the moments of a 7x7 neighbourhood weighted by depth and normal, boosted by
-// 4 / history (section 4.2). Their illumination stays their own: the a-trous stage filters it. With `svgf_write_history` (no feedback from
-// an a-trous iteration) the temporal mean is also next frame's colour history.
+// 4 / history (section 4.2), in place in the reprojection's illumination texel. Their illumination
+// stays their own: the a-trous stage filters it. With `svgf_write_history` (no feedback from an
+// a-trous iteration) the temporal mean is also next frame's colour history.
 #define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
-uniform sampler2DArray src_diffuse;
-layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
+// in place: a pixel reads and writes its own texel only, and only young ones write
+layout(SVGF_ILLUM_FORMAT) uniform SVGF_ILLUM_IMAGE illum;
 layout(rgba16f) writeonly uniform image2DArray history_diffuse;
 #if SVGF_SPECULAR
-uniform sampler2DArray src_specular;
-layout(rgba16f) writeonly uniform image2DArray dst_specular;
 layout(rgba16f) writeonly uniform image2DArray history_specular;
 #endif
 uniform sampler2DArray moments_cur;
 uniform bool svgf_write_history;
 
-void store(ivec3 p, vec4 d, vec4 s) {
-    imageStore(dst_diffuse, p, d);
-#if SVGF_SPECULAR
-    imageStore(dst_specular, p, s);
-#endif
-}
-
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
-    ivec3 size = imageSize(dst_diffuse);
+    ivec3 size = imageSize(illum);
     if (any(greaterThanEqual(p, size))) return;
     SvgfSurface c = svgf_unpack(texelFetch(surface_cur, p, 0));
-    vec4 d = texelFetch(src_diffuse, p, 0);
-    vec4 s = vec4(0.0);
-#if SVGF_SPECULAR
-    s = texelFetch(src_specular, p, 0);
-#endif
+    SvgfIllum centre = imageLoad(illum, p);
     if (svgf_write_history) {   // the temporal mean as it is, before any spatial filter
-        imageStore(history_diffuse, p, vec4(d.rgb, 0.0));
+        imageStore(history_diffuse, p, vec4(svgf_illum_diffuse(centre).rgb, 0.0));
 #if SVGF_SPECULAR
-        imageStore(history_specular, p, vec4(s.rgb, 0.0));
+        imageStore(history_specular, p, vec4(svgf_illum_specular(centre).rgb, 0.0));
 #endif
     }
-    if (!svgf_has_geometry(c.word) || c.history >= SVGF_MIN_HISTORY) {
-        store(p, d, s);
-        return;
-    }
+    if (!svgf_has_geometry(c.word) || c.history >= SVGF_MIN_HISTORY) return;   // the temporal variance
     vec2 gradient = svgf_depth_gradient(p, c.depth, size.xy);
     float sum_w = 0.0;
     vec4 sum_m = vec4(0.0);
@@ -64,5 +49,6 @@ void main() {
     // one sample's variance, boosted for the young history (x 4 / history) and divided as the
     // temporal estimate is by the frames averaged
     vec2 variance = max(vec2(m.y - m.x * m.x, m.w - m.z * m.z), 0.0) * (SVGF_MIN_HISTORY / (c.history * c.history));
-    store(p, vec4(d.rgb, variance.x), vec4(s.rgb, variance.y));
+    imageStore(illum, p, svgf_illum_pack(vec4(svgf_illum_diffuse(centre).rgb, variance.x),
+                                         vec4(svgf_illum_specular(centre).rgb, variance.y)));
 }
