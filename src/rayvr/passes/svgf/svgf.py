@@ -66,6 +66,7 @@ class SVGF(RenderPass):
     DIFFUSE, SPECULAR, COLOR = "diffuse", "specular", "color"
     HISTORY_DIFFUSE, HISTORY_SPECULAR = "historyDiffuse", "historySpecular"
     MOMENTS = ("moments0", "moments1")
+    KEY = ("key0", "key1")
     SURFACE = ("surface0", "surface1")
     FILTER = ("filter0", "filter1")
     PROPERTIES = {"iterations": 5, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2, "max_history": 32,
@@ -125,8 +126,11 @@ class SVGF(RenderPass):
                          ).format("rgba32ui" if specular else "rgba16f")
         for name in self.MOMENTS:
             r.add_internal(name, "luminance moments: diffuse m1 m2, specular m1 m2 (used in turn)").format("rgba32f")
+        for name in self.KEY:
+            r.add_internal(name, "filter key: linear depth (0: no geometry), octahedral normal (used in turn)"
+                           ).format("rg32ui")
         for name in self.SURFACE:
-            r.add_internal(name, "depth, normal, effect word, history length (used in turn)").format("rgba32ui")
+            r.add_internal(name, "effect word, history length (used in turn)").format("rg32ui")
         return r
 
     def compile(self, ctx, cd):
@@ -185,9 +189,11 @@ class SVGF(RenderPass):
             res.texture("svgf_specular_in", data[self.SPECULAR])
             res.texture("history_specular", data[self.HISTORY_SPECULAR])
         res.texture("moments_prev", data[self.MOMENTS[prev]])
+        res.texture("key_prev", data[self.KEY[prev]])
         res.texture("surface_prev", data[self.SURFACE[prev]])
         res.image("out_illum", scratch[0])
         res.image("moments_out", data[self.MOMENTS[cur]])
+        res.image("key_out", data[self.KEY[cur]])
         res.image("surface_out", data[self.SURFACE[cur]])
         res.set("svgf_alpha", float(self.alpha))
         res.set("svgf_moments_alpha", float(self.moments_alpha))
@@ -201,6 +207,7 @@ class SVGF(RenderPass):
         res.image("illum", scratch[0], read=True, write=True)
         self._histories(res, data)
         res.texture("moments_cur", data[self.MOMENTS[cur]])
+        res.texture("key_cur", data[self.KEY[cur]])
         res.texture("surface_cur", data[self.SURFACE[cur]])
         res.set("svgf_write_history", tap < 0)
         res.prog.run(*self._groups)
@@ -209,7 +216,7 @@ class SVGF(RenderPass):
         src = 0
         res = self._res["atrous"]
         self._set_common(res)
-        res.texture("surface_cur", data[self.SURFACE[cur]])
+        res.texture("key_cur", data[self.KEY[cur]])
         self._histories(res, data)
         for i in range(iterations):
             res.texture("src_illum", scratch[src])

@@ -37,9 +37,11 @@ void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     ivec3 size = imageSize(dst_illum);
     if (any(greaterThanEqual(p, size))) return;
-    SvgfSurface c = svgf_unpack(texelFetch(surface_cur, p, 0));
+    float depth;
+    vec3 n;
+    bool geometry = svgf_key_at(p, size.xy, depth, n);
     SvgfIllum centre = texelFetch(src_illum, p, 0);
-    if (!svgf_has_geometry(c.word)) {   // nothing to filter: the texel as it came
+    if (!geometry) {   // nothing to filter: the texel as it came
         imageStore(dst_illum, p, centre);
         if (svgf_write_history) {
             imageStore(history_diffuse, p, vec4(svgf_illum_diffuse(centre).rgb, 0.0));
@@ -52,7 +54,7 @@ void main() {
     vec4 d = svgf_illum_diffuse(centre), s = svgf_illum_specular(centre);
     {
         vec2 phi = svgf_phi_color * sqrt(max(blurred_variance(p, size.xy), 0.0) + 1e-10);
-        vec2 gradient = svgf_depth_gradient(p, c.depth, size.xy);
+        vec2 gradient = svgf_depth_gradient(p, depth, size.xy);
         float ld = luminance(d.rgb), ls = luminance(s.rgb);
         float k0 = KERNEL[0] * KERNEL[0];
         vec2 sum_w = vec2(k0);
@@ -63,11 +65,11 @@ void main() {
                 if (dx == 0 && dy == 0) continue;
                 vec2 offset = vec2(dx, dy) * float(svgf_step);
                 ivec3 q = p + ivec3(ivec2(offset), 0);
-                if (!svgf_inside(q.xy, size.xy)) continue;
-                SvgfSurface t = svgf_unpack(texelFetch(surface_cur, q, 0));
-                if (!svgf_has_geometry(t.word)) continue;
-                float w = KERNEL[abs(dx)] * KERNEL[abs(dy)] * svgf_weight_depth(c.depth, t.depth, gradient, offset)
-                          * svgf_weight_normal(c.n, t.n);
+                float tap_depth;
+                vec3 tap_n;
+                if (!svgf_key_at(q, size.xy, tap_depth, tap_n)) continue;
+                float w = KERNEL[abs(dx)] * KERNEL[abs(dy)] * svgf_weight_depth(depth, tap_depth, gradient, offset)
+                          * svgf_weight_normal(n, tap_n);
                 SvgfIllum tap = texelFetch(src_illum, q, 0);
                 vec4 qd = svgf_illum_diffuse(tap);
                 float wd = w * exp(-abs(ld - luminance(qd.rgb)) / phi.x);

@@ -1,5 +1,7 @@
 // SVGF's shared pieces (rayvr/passes/svgf): the surface each stage keeps per pixel (packed in
-// rgba32ui: linear depth, octahedral normal, effect word, history length), the illumination
+// two rg32ui textures: the filter key, linear depth and octahedral normal, which the variance and
+// a-trous stages compare per tap; and the effect word and history length, which only the
+// reprojection compares per tap), the illumination
 // texel between the stages (both lobes and their variances in one texel), demodulation by the
 // BSDF's directional albedos, and the edge-stopping weights of the variance estimate and the
 // a-trous filter (Schied et al. 2017, section 4).
@@ -47,18 +49,22 @@ vec3 svgf_unpack_normal(uint bits) {
     return normalize(n);
 }
 
-uvec4 svgf_pack(SvgfSurface s) {
-    return uvec4(floatBitsToUint(s.depth), svgf_pack_normal(s.n), s.word, floatBitsToUint(s.history));
-}
+// The filter key: linear depth (float bits; 0: no geometry, a drawn point's depth being
+// positive) and the octahedral normal (snorm16x2), 64 bits a tap.
+uvec2 svgf_pack_key(SvgfSurface s) { return uvec2(floatBitsToUint(s.depth), svgf_pack_normal(s.n)); }
+// The rest: effect word and history length (float bits).
+uvec2 svgf_pack_tag(SvgfSurface s) { return uvec2(s.word, floatBitsToUint(s.history)); }
 
-SvgfSurface svgf_unpack(uvec4 u) {
+SvgfSurface svgf_unpack(uvec2 key, uvec2 tag) {
     SvgfSurface s;
-    s.depth = uintBitsToFloat(u.x);
-    s.n = svgf_unpack_normal(u.y);
-    s.word = u.z;
-    s.history = uintBitsToFloat(u.w);
+    s.depth = uintBitsToFloat(key.x);
+    s.n = svgf_unpack_normal(key.y);
+    s.word = tag.x;
+    s.history = uintBitsToFloat(tag.y);
     return s;
 }
+
+float svgf_key_depth(uvec2 key) { return uintBitsToFloat(key.x); }
 
 // The illumination between the stages, both lobes in one texel so that a tap is one fetch: with
 // SVGF_SPECULAR rgba32ui of float16 pairs (diffuse rg), (diffuse b, its variance), (specular rg),
@@ -132,10 +138,19 @@ float svgf_weight_normal(vec3 np, vec3 nq) {
 
 #ifdef SVGF_READS_SURFACE
 // This frame's surfaces (the reprojection stage's output), for the stages after it.
+uniform usampler2DArray key_cur;
 uniform usampler2DArray surface_cur;
 
+// Geometry at p (depth > 0) and its key; taps outside the view have none.
+bool svgf_key_at(ivec3 q, ivec2 size, out float depth, out vec3 n) {
+    uvec2 key = svgf_inside(q.xy, size) ? texelFetch(key_cur, q, 0).xy : uvec2(0u);
+    depth = svgf_key_depth(key);
+    n = depth > 0.0 ? svgf_unpack_normal(key.y) : vec3(0.0, 0.0, 1.0);
+    return depth > 0.0;
+}
+
 float svgf_depth_at(ivec3 q, ivec2 size) {
-    return svgf_inside(q.xy, size) ? uintBitsToFloat(texelFetch(surface_cur, q, 0).x) : 0.0;
+    return svgf_inside(q.xy, size) ? svgf_key_depth(texelFetch(key_cur, q, 0).xy) : 0.0;
 }
 
 // The depth gradient (per pixel) at p, whose depth is z.

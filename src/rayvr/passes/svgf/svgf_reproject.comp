@@ -16,9 +16,11 @@ uniform sampler2DArray history_specular;
 #endif
 layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE out_illum;   // both lobes + variances
 uniform sampler2DArray moments_prev;
+uniform usampler2DArray key_prev;
 uniform usampler2DArray surface_prev;
 layout(rgba32f) writeonly uniform image2DArray moments_out;
-layout(rgba32ui) writeonly uniform uimage2DArray surface_out;
+layout(rg32ui) writeonly uniform uimage2DArray key_out;
+layout(rg32ui) writeonly uniform uimage2DArray surface_out;
 
 uniform float svgf_alpha;           // weight of this frame's illumination (at least 1 / history)
 uniform float svgf_moments_alpha;   // the same for the moments
@@ -35,8 +37,8 @@ struct Reprojected {
 };
 
 void add_tap(inout Reprojected r, ivec3 q, float w, uint word, vec3 n, float prev_depth, float tolerance) {
-    if (w <= 0.0 || !svgf_inside(q.xy, textureSize(surface_prev, 0).xy)) return;
-    SvgfSurface s = svgf_unpack(texelFetch(surface_prev, q, 0));
+    if (w <= 0.0 || !svgf_inside(q.xy, textureSize(key_prev, 0).xy)) return;
+    SvgfSurface s = svgf_unpack(texelFetch(key_prev, q, 0).xy, texelFetch(surface_prev, q, 0).xy);
     if (s.history <= 0.0 || s.word != word || dot(s.n, n) < SVGF_NORMAL_COS
         || abs(s.depth - prev_depth) > tolerance) return;
     r.weight += w;
@@ -58,7 +60,9 @@ void main() {
     if (!svgf_has_geometry(word)) {
         imageStore(out_illum, p, svgf_illum_pack(vec4(0.0), vec4(0.0)));
         imageStore(moments_out, p, vec4(0.0));
-        imageStore(surface_out, p, svgf_pack(svgf_no_geometry()));
+        SvgfSurface none = svgf_no_geometry();
+        imageStore(key_out, p, uvec4(svgf_pack_key(none), 0u, 0u));
+        imageStore(surface_out, p, uvec4(svgf_pack_tag(none), 0u, 0u));
         return;
     }
     GSurface g = gbuf_load(p);
@@ -112,9 +116,10 @@ void main() {
                                              vec4(to_half_range(mix(r.specular * inv, specular, alpha)), variance.y)));
     imageStore(moments_out, p, moments);
     SvgfSurface s;
-    s.depth = depth;
+    s.depth = max(depth, 1e-30);   // > 0: the key says geometry
     s.n = g.n;
     s.word = word;
     s.history = history;
-    imageStore(surface_out, p, svgf_pack(s));
+    imageStore(key_out, p, uvec4(svgf_pack_key(s), 0u, 0u));
+    imageStore(surface_out, p, uvec4(svgf_pack_tag(s), 0u, 0u));
 }

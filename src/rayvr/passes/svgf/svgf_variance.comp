@@ -22,7 +22,7 @@ void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     ivec3 size = imageSize(illum);
     if (any(greaterThanEqual(p, size))) return;
-    SvgfSurface c = svgf_unpack(texelFetch(surface_cur, p, 0));
+    SvgfSurface c = svgf_unpack(texelFetch(key_cur, p, 0).xy, texelFetch(surface_cur, p, 0).xy);
     SvgfIllum centre = imageLoad(illum, p);
     if (svgf_write_history) {   // the temporal mean as it is, before any spatial filter
         imageStore(history_diffuse, p, vec4(svgf_illum_diffuse(centre).rgb, 0.0));
@@ -30,17 +30,17 @@ void main() {
         imageStore(history_specular, p, vec4(svgf_illum_specular(centre).rgb, 0.0));
 #endif
     }
-    if (!svgf_has_geometry(c.word) || c.history >= SVGF_MIN_HISTORY) return;   // the temporal variance
+    if (!(c.depth > 0.0) || c.history >= SVGF_MIN_HISTORY) return;   // the temporal variance
     vec2 gradient = svgf_depth_gradient(p, c.depth, size.xy);
     float sum_w = 0.0;
     vec4 sum_m = vec4(0.0);
     for (int dy = -3; dy <= 3; ++dy)
         for (int dx = -3; dx <= 3; ++dx) {
             ivec3 q = p + ivec3(dx, dy, 0);
-            if (!svgf_inside(q.xy, size.xy)) continue;
-            SvgfSurface t = svgf_unpack(texelFetch(surface_cur, q, 0));
-            if (!svgf_has_geometry(t.word)) continue;
-            float w = svgf_weight_depth(c.depth, t.depth, gradient, vec2(dx, dy)) * svgf_weight_normal(c.n, t.n);
+            float depth;
+            vec3 n;
+            if (!svgf_key_at(q, size.xy, depth, n)) continue;
+            float w = svgf_weight_depth(c.depth, depth, gradient, vec2(dx, dy)) * svgf_weight_normal(c.n, n);
             sum_w += w;
             sum_m += w * texelFetch(moments_cur, q, 0);
         }
