@@ -43,6 +43,10 @@ from ..gbuffer import channels
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 STAGES = ("reproject", "variance", "atrous", "modulate")
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
+# A-trous iterations with steps up to this take every tap from the workgroup's shared tile of
+# (8 + 4 step)^2 texels (svgf_atrous.comp); larger steps fetch their taps. 2: a 16x16 tile, 6 KiB
+# of shared memory a workgroup; 4 (24x24, 13.5 KiB) is the most that fits GL's 32 KiB minimum.
+TILE_MAX_STEP = 2
 
 
 def lights_key(scene) -> tuple:
@@ -135,7 +139,8 @@ class SVGF(RenderPass):
 
     def compile(self, ctx, cd):
         self._specular = self.SPECULAR in cd.input_formats
-        self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular)}
+        self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular),
+                         "SVGF_TILE_MAX_STEP": TILE_MAX_STEP}
         self._res = {stage: program_resources(self.compute_program(ctx.gl, f"svgf_{stage}.comp", self._defines))
                      for stage in STAGES}
         self._groups = groups_2d(cd.size, cd.views)
