@@ -9,10 +9,18 @@ Four stages, one compute shader each, run as dispatches of this one pass:
                 disocclusion test (depth against the view's previous view-projection, normal,
                 effect word); blend colour and luminance moments; count the history length
     variance    per-pixel variance from the moments; a 7x7 spatial estimate while the history
-                is shorter than 4 frames
+                is shorter than 4 frames (in place: only those pixels write)
     a-trous     `iterations` passes of the edge-stopping 5x5 wavelet filter (taps 1, 2, 4, ...
                 pixels apart; depth, normal and variance-scaled luminance weights)
     modulate    filtered illumination x albedo + emission
+The a-trous stage is bound by texture fetches, so what it reads per tap is small: the filter
+key (`key0/1`, rg32ui: linear depth, 0 where nothing was drawn, and octahedral normal) and one
+texel holding both lobes' illumination and variance (`filter0/1`, rgba32ui float16 pairs; rgba16f
+without `specular`). Each workgroup loads its 8x8 pixels of both with an apron into shared memory
+once per iteration: 2 x step pixels while the step is at most TILE_MAX_STEP (every tap), else 1
+(the variance blur, the centre and the depth gradient, which is computed from the key's depths
+there rather than stored). The effect word and history length only the reprojection compares
+(`surface0/1`).
 The colour history is the output of a-trous iteration `feedback_tap` as in the paper (0: the
 first), or with `feedback_tap` -1 (the default) the unfiltered temporal mean. Fed back, the
 filter's blur compounds frame after frame: on the Cornell box at 32x32 and 1 spp, 16 still
