@@ -9,7 +9,8 @@ Four stages, one compute shader each, run as dispatches of this one pass:
                 disocclusion test (depth against the view's previous view-projection, normal,
                 effect word); blend colour and luminance moments; count the history length
     variance    per-pixel variance from the moments; a 7x7 spatial estimate while the history
-                is shorter than 4 frames (in place: only those pixels write)
+                is shorter than 4 frames (in place: only those pixels write; a workgroup
+                with one loads its keys and moments with a 3-pixel apron into shared memory)
     a-trous     `iterations` passes of the edge-stopping 5x5 wavelet filter (taps 1, 2, 4, ...
                 pixels apart; depth, normal and variance-scaled luminance weights)
     modulate    filtered illumination x albedo + emission

@@ -71,9 +71,8 @@ void main() {
         return;
     }
     vec3 n = svgf_unpack_normal(tile_key[at].y);
-    vec2 gradient = vec2(
-        svgf_depth_slope(depth, svgf_key_depth(tile_key[at - 1]), svgf_key_depth(tile_key[at + 1])),
-        svgf_depth_slope(depth, svgf_key_depth(tile_key[at - width]), svgf_key_depth(tile_key[at + width])));
+    vec2 gradient = svgf_depth_gradient(depth, svgf_key_depth(tile_key[at - 1]), svgf_key_depth(tile_key[at + 1]),
+                                        svgf_key_depth(tile_key[at - width]), svgf_key_depth(tile_key[at + width]));
 
     // the variance blurred by a 3x3 Gaussian over the pixels inside the view (x diffuse, y
     // specular): a steadier luminance scale

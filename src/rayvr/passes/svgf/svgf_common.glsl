@@ -126,6 +126,12 @@ float svgf_depth_slope(float z, float before, float after) {
     return s > 1e29 ? 0.0 : s;
 }
 
+// The depth gradient (per pixel) at a pixel of depth z from its neighbours' depths (0: no
+// geometry, or outside the view) left, right, below and above.
+vec2 svgf_depth_gradient(float z, float left, float right, float below, float above) {
+    return vec2(svgf_depth_slope(z, left, right), svgf_depth_slope(z, below, above));
+}
+
 // w_z: depth difference against the depth gradient's prediction over `offset` pixels.
 float svgf_weight_depth(float zp, float zq, vec2 gradient, vec2 offset) {
     return exp(-abs(zp - zq) / (svgf_phi_depth * abs(dot(gradient, offset)) + 1e-3 * zp + 1e-8));
@@ -141,21 +147,4 @@ float svgf_weight_normal(vec3 np, vec3 nq) {
 uniform usampler2DArray key_cur;
 uniform usampler2DArray surface_cur;
 
-// Geometry at p (depth > 0) and its key; taps outside the view have none.
-bool svgf_key_at(ivec3 q, ivec2 size, out float depth, out vec3 n) {
-    uvec2 key = svgf_inside(q.xy, size) ? texelFetch(key_cur, q, 0).xy : uvec2(0u);
-    depth = svgf_key_depth(key);
-    n = depth > 0.0 ? svgf_unpack_normal(key.y) : vec3(0.0, 0.0, 1.0);
-    return depth > 0.0;
-}
-
-float svgf_depth_at(ivec3 q, ivec2 size) {
-    return svgf_inside(q.xy, size) ? svgf_key_depth(texelFetch(key_cur, q, 0).xy) : 0.0;
-}
-
-// The depth gradient (per pixel) at p, whose depth is z.
-vec2 svgf_depth_gradient(ivec3 p, float z, ivec2 size) {
-    return vec2(svgf_depth_slope(z, svgf_depth_at(p + ivec3(-1, 0, 0), size), svgf_depth_at(p + ivec3(1, 0, 0), size)),
-                svgf_depth_slope(z, svgf_depth_at(p + ivec3(0, -1, 0), size), svgf_depth_at(p + ivec3(0, 1, 0), size)));
-}
 #endif

@@ -74,9 +74,8 @@ void main() {
     specular = svgf_demodulate(texelFetch(svgf_specular_in, p, 0).rgb, albedo_s);
 #endif
     float depth = gbuf_fetch_posW(p).w;
-    vec2 gradient = vec2(
-        svgf_depth_slope(depth, depth_at(p + ivec3(-1, 0, 0), size.xy), depth_at(p + ivec3(1, 0, 0), size.xy)),
-        svgf_depth_slope(depth, depth_at(p + ivec3(0, -1, 0), size.xy), depth_at(p + ivec3(0, 1, 0), size.xy)));
+    vec2 gradient = svgf_depth_gradient(depth, depth_at(p + ivec3(-1, 0, 0), size.xy), depth_at(p + ivec3(1, 0, 0), size.xy),
+                                        depth_at(p + ivec3(0, -1, 0), size.xy), depth_at(p + ivec3(0, 1, 0), size.xy));
 
     Reprojected r = Reprojected(0.0, vec3(0.0), vec3(0.0), vec4(0.0), 0.0);
     if (svgf_history_valid) {
