@@ -1,7 +1,7 @@
 """One SVGF a-trous iteration (passes/svgf/svgf_atrous.comp) against a float64 numpy reference
 of the filter (Schied et al. 2017, section 4.3: 5x5 B3 kernel, depth / normal / luminance weights,
 the 3x3-blurred variance, the variance filtered with the squared weights), on a synthetic
-13x11 x 2-view key and illumination: steps 1 and 2 (taps from the workgroup's shared tile), 4
+13x11 x 2-view key and illumination: steps 1, 2, 4
 and 8 (taps fetched, most outside the view), with and without the specular lobe (rgba32ui float16
 pairs, rgba16f), and the colour history it writes."""
 import numpy as np
@@ -9,7 +9,6 @@ import pytest
 
 from rayvr.gpu.program_resources import program_resources
 from rayvr.passes import SVGF
-from rayvr.passes.svgf import svgf as svgf_module
 
 W, H, L = 13, 11, 2          # partial workgroups in x and y, two views
 PHI = {"svgf_phi_color": 4.0, "svgf_phi_normal": 16.0, "svgf_phi_depth": 1.0}
@@ -118,8 +117,7 @@ def reference(key, d, s, step, specular):
 def dispatch(gl, key, d, s, step, specular):
     """One iteration on the GPU, with the history written: (diffuse, specular, history diffuse,
     history specular) as float64, rows as in the inputs."""
-    prog = SVGF().compute_program(gl, "svgf_atrous.comp", {"SVGF_SPECULAR": int(specular),
-                                                            "SVGF_TILE_MAX_STEP": svgf_module.TILE_MAX_STEP})
+    prog = SVGF().compute_program(gl, "svgf_atrous.comp", {"SVGF_SPECULAR": int(specular)})
     res = program_resources(prog)
 
     def texture(data, components, dtype):

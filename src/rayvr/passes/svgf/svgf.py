@@ -9,19 +9,16 @@ Four stages, one compute shader each, run as dispatches of this one pass:
                 disocclusion test (depth against the view's previous view-projection, normal,
                 effect word); blend colour and luminance moments; count the history length
     variance    per-pixel variance from the moments; a 7x7 spatial estimate while the history
-                is shorter than 4 frames (in place: only those pixels write; a workgroup
-                with one loads its keys and moments with a 3-pixel apron into shared memory)
+                is shorter than 4 frames (in place: only those pixels write)
     a-trous     `iterations` passes of the edge-stopping 5x5 wavelet filter (taps 1, 2, 4, ...
                 pixels apart; depth, normal and variance-scaled luminance weights)
     modulate    filtered illumination x albedo + emission
 The a-trous stage is bound by texture fetches, so what it reads per tap is small: the filter
 key (`key0/1`, rg32ui: linear depth, 0 where nothing was drawn, and octahedral normal) and one
 texel holding both lobes' illumination and variance (`filter0/1`, rgba32ui float16 pairs; rgba16f
-without `specular`). Each workgroup loads its 8x8 pixels of both with an apron into shared memory
-once per iteration: 2 x step pixels while the step is at most TILE_MAX_STEP (every tap), else 1
-(the variance blur, the centre and the depth gradient, which is computed from the key's depths
-there rather than stored). The effect word and history length only the reprojection compares
-(`surface0/1`).
+without `specular`). The effect word and history length only the reprojection compares
+(`surface0/1`). (A workgroup tile in shared memory, loaded once per iteration, fetches fewer
+texels and measured 1.7x slower on the H200: docs/DESIGN.md.)
 The colour history is the output of a-trous iteration `feedback_tap` as in the paper (0: the
 first), or with `feedback_tap` -1 (the default) the unfiltered temporal mean. Fed back, the
 filter's blur compounds frame after frame: on the Cornell box at 32x32 and 1 spp, 16 still
@@ -52,10 +49,6 @@ from ..gbuffer import channels
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 STAGES = ("reproject", "variance", "atrous", "modulate")
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
-# A-trous iterations with steps up to this take every tap from the workgroup's shared tile of
-# (8 + 4 step)^2 texels (svgf_atrous.comp); larger steps fetch their taps. 2: a 16x16 tile, 6 KiB
-# of shared memory a workgroup; 4 (24x24, 13.5 KiB) is the most that fits GL's 32 KiB minimum.
-TILE_MAX_STEP = 2
 
 
 def lights_key(scene) -> tuple:
@@ -148,8 +141,7 @@ class SVGF(RenderPass):
 
     def compile(self, ctx, cd):
         self._specular = self.SPECULAR in cd.input_formats
-        self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular),
-                         "SVGF_TILE_MAX_STEP": TILE_MAX_STEP}
+        self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular)}
         self._res = {stage: program_resources(self.compute_program(ctx.gl, f"svgf_{stage}.comp", self._defines))
                      for stage in STAGES}
         self._groups = groups_2d(cd.size, cd.views)

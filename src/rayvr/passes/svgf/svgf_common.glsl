@@ -147,4 +147,21 @@ float svgf_weight_normal(vec3 np, vec3 nq) {
 uniform usampler2DArray key_cur;
 uniform usampler2DArray surface_cur;
 
+// Geometry at q (depth > 0) and its key; taps outside the view have none.
+bool svgf_key_at(ivec3 q, ivec2 size, out float depth, out vec3 n) {
+    uvec2 key = svgf_inside(q.xy, size) ? texelFetch(key_cur, q, 0).xy : uvec2(0u);
+    depth = svgf_key_depth(key);
+    n = depth > 0.0 ? svgf_unpack_normal(key.y) : vec3(0.0, 0.0, 1.0);
+    return depth > 0.0;
+}
+
+float svgf_depth_at(ivec3 q, ivec2 size) {
+    return svgf_inside(q.xy, size) ? svgf_key_depth(texelFetch(key_cur, q, 0).xy) : 0.0;
+}
+
+// The depth gradient (per pixel) at p, whose depth is z, from the key.
+vec2 svgf_depth_gradient(ivec3 p, float z, ivec2 size) {
+    return svgf_depth_gradient(z, svgf_depth_at(p + ivec3(-1, 0, 0), size), svgf_depth_at(p + ivec3(1, 0, 0), size),
+                               svgf_depth_at(p + ivec3(0, -1, 0), size), svgf_depth_at(p + ivec3(0, 1, 0), size));
+}
 #endif
