@@ -311,11 +311,14 @@ def test_view_without_a_display_exits_2_in_one_line(monkeypatch, capsys):
                    "rayvr render)\n")
 
 
-def test_view_without_the_extra_exits_2_in_one_line(monkeypatch, capsys):
-    monkeypatch.setitem(sys.modules, "imgui_bundle", None)     # import imgui_bundle raises ImportError
+@pytest.mark.parametrize("module, name", [("glfw", "glfw"), ("imgui_bundle", "imgui-bundle")])
+def test_view_without_the_extra_exits_2_in_one_line(monkeypatch, capsys, module, name):
+    if module == "imgui_bundle":
+        pytest.importorskip("glfw")                            # glfw is looked for first
+    monkeypatch.setitem(sys.modules, module, None)             # importing it raises ImportError
     assert main(["view"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "needs the viewer extra (imgui-bundle is missing" in err
+    assert err.count("\n") == 1 and f"needs the viewer extra ({name} is missing" in err
     assert "pip install 'rayvr[viewer]'" in err
 
 
