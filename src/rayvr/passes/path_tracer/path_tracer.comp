@@ -28,9 +28,12 @@ layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
 layout(rgba16f) writeonly uniform image2DArray dst_specular;
 #endif
 
+// Sample `sample_index`'s generator; it also seeds the sample's alphaMode BLEND decisions.
 Rng pt_rng(ivec3 p, int sample_index) {
-    return rng_init_sample(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT, uint(sample_index),
-                           uint(pt_samples));
+    Rng r = rng_init_sample(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT, uint(sample_index),
+                            uint(pt_samples));
+    rq_blend_begin(r);
+    return r;
 }
 
 #if PT_FROM_GBUFFER

@@ -83,6 +83,8 @@ void main() {
     vec3 radiance = vec3(0.0);
     float dist = max_depth;
     if (live) {
+        Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT);
+        rq_blend_begin(rng);   // alphaMode BLEND: this ray's decisions
         Hit hit;
         if (trace_closest(origin, dir, 1e29, hit)) {
             const float spread = sqrt(4.0 * RAYVR_PI / float(PROBE_RAYS));   // a ray's share of the sphere
@@ -93,7 +95,6 @@ void main() {
                 atomicAdd(backfaces, 1u);
                 dist = min(PROBE_BACKFACE_DEPTH * hit.t, max_depth);
             } else {
-                Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT);
                 radiance = shade_direct(s, rng);
                 if (probe_history != 0) radiance += probe_gi_diffuse(s);
                 dist = min(hit.t, max_depth);

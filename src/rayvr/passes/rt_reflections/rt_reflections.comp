@@ -26,6 +26,7 @@ void main() {
     ivec3 p;
     if (!ray_pass_pixel(EFFECT_REFLECTIONS, imageSize(dst), p)) return;
     Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
+    rq_blend_begin(rng);   // alphaMode BLEND: this pixel's decisions
     PathVertex s = path_vertex_at_gbuffer(gbuf_load(p), uint(p.z));
     vec3 throughput = vec3(1.0);
     vec3 radiance = vec3(0.0);

@@ -20,6 +20,7 @@ void main() {
     if (!ray_pass_pixel(EFFECT_SHADOWS, imageSize(dst), p)) return;
     GSurface g = gbuf_load(p);
     Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
+    rq_blend_begin(rng);   // alphaMode BLEND: this pixel's decisions
     PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
     // REFLECTIONS and above: RTReflections traces the specular lobes and shares their light (MIS)
     vec3 c = g.emissive + shade_direct_mis(s, rng, g.effect >= EFFECT_REFLECTIONS) + probe_gi_diffuse(s);
