@@ -55,6 +55,7 @@ class ProbeGI(RenderPass):
     Outputs: `irradiance`, `depth`, `state` (one-layer atlases) and `volumes` (the
     ProbeVolumes block), read by the lighting passes through `rayvr.passes.probe_gi.inputs`."""
 
+    COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     USES_SCENE = True
     VOLUMES = "volumes"
     PROPERTIES = {"counts": [8, 8, 8], "volumes": [], "rays_per_probe": 128, "hysteresis": 0.95, "warmup": 8,

@@ -12,6 +12,7 @@
 #include "probe_gi.glsl"
 #include "shading.glsl"
 #include "ray_query.glsl"
+#include "nonfinite.glsl"
 
 layout(local_size_x = PROBE_RAYS) in;
 layout(rgba32f) writeonly uniform image2DArray irradiance_out;
@@ -103,7 +104,7 @@ void main() {
             radiance = environment_radiance(dir);
         }
     }
-    ray_radiance[ray] = vec4(finite_or_zero(radiance), dist);
+    ray_radiance[ray] = vec4(nonfinite_scrub(radiance), dist);
     ray_direction[ray] = dir;
     memoryBarrierShared();
     barrier();

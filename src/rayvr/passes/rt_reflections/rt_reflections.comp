@@ -14,6 +14,7 @@
 #include "pixel_list.glsl"
 #include "shading.glsl"
 #include "probe_gi.glsl"
+#include "nonfinite.glsl"
 
 #if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
 layout(local_size_x = RAY_GROUP_SIZE) in;
@@ -67,5 +68,5 @@ void main() {
         if (!continues) break;
         if (bounce == MAX_BOUNCES - 1) radiance += throughput * probe_gi_glossy(s);
     }
-    imageStore(dst, p, vec4(to_half_range(finite_or_zero(radiance)), 1.0));   // the target is rgba16f
+    imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(radiance)), 1.0));   // the target is rgba16f
 }
