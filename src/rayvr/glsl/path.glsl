@@ -70,9 +70,13 @@ void pt_trace_parts(PathVertex s, inout Rng rng, const bool split, out vec3 diff
             if (rng_next(rng) >= q) break;
             beta /= q;
         }
+        // The light sample above covers only the side of the surface that the geometric normal
+        // faces, so a transmitted direction (below it) has no light-sampling strategy to share
+        // with: its emission takes the whole weight, as a delta lobe's does.
+        bool whole = bs.delta || bs.transmitted;
         Hit hit;
         if (!trace_closest(offset_ray_origin(s.pos, bs.transmitted ? -s.ng : s.ng), bs.l, 1e30, hit)) {
-            float w = bs.delta ? 1.0 : power_heuristic(bs.pdf, environment_light_pdf(bs.l));
+            float w = whole ? 1.0 : power_heuristic(bs.pdf, environment_light_pdf(bs.l));
             radiance += beta * environment_radiance(bs.l) * w;
             break;
         }
@@ -92,7 +96,7 @@ void pt_trace_parts(PathVertex s, inout Rng rng, const bool split, out vec3 diff
         s = path_vertex_at_hit(hit, bs.l, s.cone_width + hit.t * spread, spread, sp, mp);
 #if SCENE_HAS_EMISSIVE_TRIANGLES
         if (max3(mp.emissive) > 0.0 && (sp.front_face || mp.double_sided)) {
-            float w = bs.delta ? 1.0 : power_heuristic(bs.pdf, emissive_light_pdf(sp, hit.instance, from));
+            float w = whole ? 1.0 : power_heuristic(bs.pdf, emissive_light_pdf(sp, hit.instance, from));
             radiance += beta * mp.emissive * w;
         }
 #endif

@@ -35,6 +35,7 @@ from . import layout as L
 
 RNG_SALT = 11
 MAX_GROUPS_X = 65535
+RAY_RECORD_BYTES = 48   # one ProbeRay (probe_rays.glsl): radiance, hit, ids
 # pin -> (format, texels per probe side)
 MAPS = {"irradiance": ("rgba32f", L.IRRADIANCE_TILE), "depth": ("rg32f", L.DEPTH_TILE),
         "state": ("rg32f", L.STATE_TILE)}
@@ -58,6 +59,7 @@ class ProbeGI(RenderPass):
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     USES_SCENE = True
     VOLUMES = "volumes"
+    RAYS = "rays"
     PROPERTIES = {"counts": [8, 8, 8], "volumes": [], "rays_per_probe": 128, "hysteresis": 0.95, "warmup": 8,
                   "normal_bias": 0.1, "view_bias": 0.3, "visibility": True}
 
@@ -113,6 +115,8 @@ class ProbeGI(RenderPass):
             for k in (0, 1):
                 r.add_internal(self.history_pin(name, k), f"probe {name}, kept between updates (used in turn)") \
                     .format(fmt).texture_size(w, h).views(1)
+        r.add_internal(self.RAYS, "each probe ray's hit and direct light, from the trace stage to the update "
+                                  "stage").buffer(self.rays_per_frame() * RAY_RECORD_BYTES)
         n = len(self.volumes) or 1
         r.add_output(self.VOLUMES, "the probe volumes (ProbeVolumes block, render space)").buffer(L.volume_bytes(n))
         return r
@@ -124,15 +128,18 @@ class ProbeGI(RenderPass):
         self._atlas = self.atlas()
         self._defines = {**scene_defines(ctx), "PROBE_RAYS": int(self.rays_per_probe), "SHADE_SHADOWS": 1,
                          "LIGHT_SAMPLES": 1, "RNG_SALT": RNG_SALT}
-        self._prog = self.compute_program(ctx.gl, "probe_update.comp", self._defines)
-        self._res = program_resources(self._prog)
+        # two dispatches per update: rays and direct light, then the bounce lookup and the blend (the
+        # lookup's registers in the traversal kernel cost it occupancy: probe_trace.comp)
+        self._trace = program_resources(self.compute_program(ctx.gl, "probe_trace.comp", self._defines))
+        self._res = program_resources(self.compute_program(ctx.gl, "probe_update.comp", self._defines))
         n = self._atlas.probes
         self._groups = (min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), 1)
         self._sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR), repeat_x=False,
                                                 repeat_y=False))
-        # each map three times (output and two histories), and the volumes block
+        # each map three times (output and two histories), the ray records and the volumes block
         self._memory = sum(3 * math.prod(self._atlas.size(tile)) * get_format(fmt).bytes_per_texel
-                           for fmt, tile in MAPS.values()) + L.volume_bytes(len(self._volumes))
+                           for fmt, tile in MAPS.values()) + L.volume_bytes(len(self._volumes)) \
+            + self.rays_per_frame() * RAY_RECORD_BYTES
         self.reset()
 
     def reset(self) -> None:
@@ -165,27 +172,34 @@ class ProbeGI(RenderPass):
         volumes = data[self.VOLUMES]
         volumes.write(L.pack_volumes(self._volumes, self._atlas, origin, float(self.normal_bias),
                                      float(self.view_bias), bool(self.visibility)))
+        for res in (self._trace, self._res):
+            res.buffer("ProbeVolumes", volumes)
+            res.buffer("ProbeRays", data[self.RAYS])
+        self._trace.set("probe_frame", int(ctx.frame_index) & 0xFFFFFFFF)
         res = self._res
-        res.buffer("ProbeVolumes", volumes)
-        res.set("probe_frame", int(ctx.frame_index) & 0xFFFFFFFF)
         steps = 1 + (int(self.warmup) if self._updates == 0 else 0)
         for step in range(steps):
             if step:
-                ctx.barrier(Access.SAMPLED, Access.IMAGE)
+                ctx.barrier(Access.SAMPLED, Access.IMAGE, Access.STORAGE)
             self._update(ctx, data, step)
         for name in MAPS:
             res.clear_sampler(f"probe_{name}_tex")
 
     def _update(self, ctx, data, step: int) -> None:
+        rotation = tuple(L.random_rotation([ctx.frame_index, step]).T.ravel())
+        trace = self._trace
+        trace.set("probe_rotation", rotation)
+        trace.set("probe_step", step)
+        trace.prog.run(*self._groups)
+        ctx.barrier(Access.STORAGE)
         res = self._res
         read, write = self._updates % 2, (self._updates + 1) % 2
-        res.set("probe_rotation", tuple(L.random_rotation([ctx.frame_index, step]).T.ravel()))
+        res.set("probe_rotation", rotation)
         res.set("probe_hysteresis", self.hysteresis_at(self._updates))
         res.set("probe_history", int(self._updates > 0))
-        res.set("probe_step", step)
         for name in MAPS:
             res.texture(f"probe_{name}_tex", data[self.history_pin(name, read)], sampler=self._sampler)
             res.image(f"{name}_out", data[name])
             res.image(f"{name}_next", data[self.history_pin(name, write)])
-        self._prog.run(*self._groups)
+        res.prog.run(*self._groups)
         self._updates += 1

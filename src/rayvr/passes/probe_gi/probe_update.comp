@@ -1,17 +1,13 @@
-// One update of every probe (rayvr.passes.ProbeGI): a workgroup per probe, an invocation per ray.
-// Each traces one direction of a spherical Fibonacci set turned by this update's random rotation
-// and shades the hit with shadowed direct light plus the light the surface reflects from the
-// previous update's probes (so bounces add up over frames); rays that leave the scene take the
-// environment. Emission is left out: shade_direct samples every emitter at the shading point
-// already. Then each texel of the probe's irradiance (cosine-weighted) and depth-moment (cosine^50
+// Stage 2 of a probe update (rayvr.passes.ProbeGI): a workgroup per probe, an invocation per ray.
+// Each takes its ray's record from stage 1 (probe_trace.comp: the hit and its direct light) and
+// adds the light the surface reflects from the previous update's probes (so bounces add up over
+// frames). Then each texel of the probe's irradiance (cosine-weighted) and depth-moment (cosine^50
 // weighted, Majercik et al. 2019) maps is blended with its previous value by the hysteresis.
 // Border texels repeat their octahedral opposite's interior texel, computed the same way, so
 // no second pass copies them. Results go to the pass's outputs and to the history the next
 // update reads (probe_*_tex are the previous update's history).
 #define PROBE_GI 1
-#include "probe_gi.glsl"
-#include "shading.glsl"
-#include "ray_query.glsl"
+#include "probe_rays.glsl"
 #include "nonfinite.glsl"
 
 layout(local_size_x = PROBE_RAYS) in;
@@ -22,35 +18,16 @@ layout(rg32f) writeonly uniform image2DArray depth_next;
 layout(rg32f) writeonly uniform image2DArray state_out;
 layout(rg32f) writeonly uniform image2DArray state_next;
 
-uniform mat3 probe_rotation;
 uniform float probe_hysteresis;   // weight of the previous value (0: replace it)
 uniform int probe_history;        // 0: no previous update (its textures are undefined)
-uniform uint probe_frame;
-uniform uint probe_step;          // update within the frame (warm-up)
 
 const float PROBE_DEPTH_SHARPNESS = 50.0;
 const float PROBE_DEPTH_MIN_COS = 0.5;     // 0.5^50 ~ 1e-15
 const float PROBE_BACKFACE_LIMIT = 0.25;   // probes seeing more back faces than this are inside geometry
-const float PROBE_BACKFACE_DEPTH = 0.2;    // back-face hits count this near: Chebyshev hides the probe
 
 shared vec4 ray_radiance[PROBE_RAYS];   // rgb; a: distance for the depth moments
 shared vec3 ray_direction[PROBE_RAYS];
 shared uint backfaces;
-
-// Direction i of n on the spherical Fibonacci lattice (equal areas).
-vec3 spherical_fibonacci(uint i, uint n) {
-    const float golden = 1.61803398874989484820;
-    float z = 1.0 - (2.0 * float(i) + 1.0) / float(n);
-    float phi = 2.0 * RAYVR_PI * fract(float(i) / golden);
-    float r = sqrt(max(0.0, 1.0 - z * z));
-    return vec3(r * cos(phi), r * sin(phi), z);
-}
-
-uint probe_volume_of(uint probe) {
-    uint v = 0u;
-    while (v + 1u < probe_info.x && probe >= probe_volumes[v + 1u].counts.w) ++v;
-    return v;
-}
 
 // The interior texel whose value texel `t` of a `tile`-texel octahedral tile holds.
 ivec2 border_source(ivec2 t, int tile) {
@@ -72,39 +49,30 @@ void main() {
     uint ray = gl_LocalInvocationID.x;
     bool live = probe < probe_info.z;   // no early return: barrier() below needs every invocation
     if (ray == 0u) backfaces = 0u;
-    ProbeVolume vol = probe_volumes[live ? probe_volume_of(probe) : 0u];
-    float max_depth = vol.lo.w;
-    uint local = probe - vol.counts.w;
-    uvec3 cell = uvec3(local % vol.counts.x, (local / vol.counts.x) % vol.counts.y,
-                       local / (vol.counts.x * vol.counts.y));
-    vec3 origin = vol.origin.xyz + vec3(cell) * vol.spacing.xyz;
-    vec3 dir = normalize(probe_rotation * spherical_fibonacci(ray, uint(PROBE_RAYS)));
+    float max_depth = probe_volumes[live ? probe_volume_of(probe) : 0u].lo.w;
+    vec3 dir = probe_ray_direction(ray);
     barrier();
 
-    vec3 radiance = vec3(0.0);
-    float dist = max_depth;
+    vec4 radiance = vec4(0.0, 0.0, 0.0, max_depth);
     if (live) {
-        Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT);
-        rq_blend_begin(rng);   // alphaMode BLEND: this ray's decisions
-        Hit hit;
-        if (trace_closest(origin, dir, 1e29, hit)) {
-            const float spread = sqrt(4.0 * RAYVR_PI / float(PROBE_RAYS));   // a ray's share of the sphere
+        ProbeRay rec = probe_rays[probe * uint(PROBE_RAYS) + ray];
+        radiance = rec.radiance;
+        uint kind = floatBitsToUint(rec.hit.w);
+        if (kind == PROBE_RAY_BACKFACE) {
+            atomicAdd(backfaces, 1u);
+        } else if (kind == PROBE_RAY_SURFACE && probe_history != 0) {
+            Hit hit;
+            hit.t = rec.hit.x;
+            hit.barycentrics = rec.hit.yz;
+            hit.instance = rec.ids.x;
+            hit.primitive = rec.ids.y;
             SurfacePoint sp;
             MaterialParams mp;
-            PathVertex s = path_vertex_at_hit(hit, dir, hit.t * spread, spread, sp, mp);
-            if (!sp.front_face && !mp.double_sided) {
-                atomicAdd(backfaces, 1u);
-                dist = min(PROBE_BACKFACE_DEPTH * hit.t, max_depth);
-            } else {
-                radiance = shade_direct(s, rng);
-                if (probe_history != 0) radiance += probe_gi_diffuse(s);
-                dist = min(hit.t, max_depth);
-            }
-        } else {
-            radiance = environment_radiance(dir);
+            PathVertex s = path_vertex_at_hit(hit, dir, hit.t * PROBE_RAY_SPREAD, PROBE_RAY_SPREAD, sp, mp);
+            radiance.rgb += nonfinite_scrub(probe_gi_diffuse(s));
         }
     }
-    ray_radiance[ray] = vec4(nonfinite_scrub(radiance), dist);
+    ray_radiance[ray] = radiance;
     ray_direction[ray] = dir;
     memoryBarrierShared();
     barrier();

@@ -9,10 +9,19 @@ Four stages, one compute shader each, run as dispatches of this one pass:
                 disocclusion test (depth against the view's previous view-projection, normal,
                 effect word); blend colour and luminance moments; count the history length
     variance    per-pixel variance from the moments; a 7x7 spatial estimate while the history
-                is shorter than 4 frames
+                is shorter than 4 frames (in place: only those pixels write; a workgroup
+                with one loads its keys and moments with a 3-pixel apron into shared memory)
     a-trous     `iterations` passes of the edge-stopping 5x5 wavelet filter (taps 1, 2, 4, ...
                 pixels apart; depth, normal and variance-scaled luminance weights)
     modulate    filtered illumination x albedo + emission
+The a-trous stage is bound by texture fetches, so what it reads per tap is small: the filter
+key (`key0/1`, rg32ui: linear depth, 0 where nothing was drawn, and octahedral normal) and one
+texel holding both lobes' illumination and variance (`filter0/1`, rgba32ui float16 pairs; rgba16f
+without `specular`). Each workgroup loads its 8x8 pixels of both with an apron into shared memory
+once per iteration: 2 x step pixels while the step is at most TILE_MAX_STEP (every tap), else 1
+(the variance blur, the centre and the depth gradient, which is computed from the key's depths
+there rather than stored). The effect word and history length only the reprojection compares
+(`surface0/1`).
 The colour history is the output of a-trous iteration `feedback_tap` as in the paper (0: the
 first), or with `feedback_tap` -1 (the default) the unfiltered temporal mean. Fed back, the
 filter's blur compounds frame after frame: on the Cornell box at 32x32 and 1 spp, 16 still
@@ -43,6 +52,10 @@ from ..gbuffer import channels
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 STAGES = ("reproject", "variance", "atrous", "modulate")
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
+# A-trous iterations with steps up to this take every tap from the workgroup's shared tile of
+# (8 + 4 step)^2 texels (svgf_atrous.comp); larger steps fetch their taps. 2: a 16x16 tile, 6 KiB
+# of shared memory a workgroup; 4 (24x24, 13.5 KiB) is the most that fits GL's 32 KiB minimum.
+TILE_MAX_STEP = 2
 
 
 def lights_key(scene) -> tuple:
@@ -66,9 +79,9 @@ class SVGF(RenderPass):
     DIFFUSE, SPECULAR, COLOR = "diffuse", "specular", "color"
     HISTORY_DIFFUSE, HISTORY_SPECULAR = "historyDiffuse", "historySpecular"
     MOMENTS = ("moments0", "moments1")
+    KEY = ("key0", "key1")
     SURFACE = ("surface0", "surface1")
-    FILTER_DIFFUSE = ("filterDiffuse0", "filterDiffuse1")
-    FILTER_SPECULAR = ("filterSpecular0", "filterSpecular1")
+    FILTER = ("filter0", "filter1")
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"iterations": 5, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2, "max_history": 32,
                   "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
@@ -115,23 +128,29 @@ class SVGF(RenderPass):
                                   "(the background where nothing was hit)")
         r.add_input(self.SPECULAR, "radiance its specular lobe reflects").optional()
         r.add_output(self.COLOR, "denoised radiance (remodulated, with emission)").format("rgba16f")
-        lobes = [(self.HISTORY_DIFFUSE, self.FILTER_DIFFUSE, "diffuse")]
-        if self.SPECULAR in cd.input_formats:
-            lobes.append((self.HISTORY_SPECULAR, self.FILTER_SPECULAR, "specular"))
-        for history, scratch, lobe in lobes:
+        specular = self.SPECULAR in cd.input_formats
+        lobes = [(self.HISTORY_DIFFUSE, "diffuse")] + [(self.HISTORY_SPECULAR, "specular")] * specular
+        for history, lobe in lobes:
             r.add_internal(history, f"filtered {lobe} illumination of last frame (the colour history)"
                            ).format("rgba16f")
-            for name in scratch:   # transients: they alias with other passes' textures
-                r.add_output(name, f"{lobe} illumination + variance between the stages (scratch)").format("rgba16f")
+        for name in self.FILTER:   # transients: they alias with other passes' textures
+            r.add_output(name, "both lobes' illumination + variance between the stages (scratch): float16 "
+                               "pairs (diffuse rg) (diffuse b, variance) (specular rg) (specular b, variance)"
+                         if specular else "diffuse illumination + variance between the stages (scratch)"
+                         ).format("rgba32ui" if specular else "rgba16f")
         for name in self.MOMENTS:
             r.add_internal(name, "luminance moments: diffuse m1 m2, specular m1 m2 (used in turn)").format("rgba32f")
+        for name in self.KEY:
+            r.add_internal(name, "filter key: linear depth (0: no geometry), octahedral normal (used in turn)"
+                           ).format("rg32ui")
         for name in self.SURFACE:
-            r.add_internal(name, "depth, normal, effect word, history length (used in turn)").format("rgba32ui")
+            r.add_internal(name, "effect word, history length (used in turn)").format("rg32ui")
         return r
 
     def compile(self, ctx, cd):
         self._specular = self.SPECULAR in cd.input_formats
-        self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular)}
+        self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular),
+                         "SVGF_TILE_MAX_STEP": TILE_MAX_STEP}
         self._res = {stage: program_resources(self.compute_program(ctx.gl, f"svgf_{stage}.comp", self._defines))
                      for stage in STAGES}
         self._groups = groups_2d(cd.size, cd.views)
@@ -156,12 +175,11 @@ class SVGF(RenderPass):
         self._scene_key = key
         return edited
 
-    def _lobes(self, res, data, prefix: str, pins) -> None:
-        """Bind `<prefix>_diffuse` (and `_specular`) of `res` to pins (diffuse pin, specular pin)."""
-        bind = res.texture if prefix == "src" else res.image
-        bind(f"{prefix}_diffuse", data[pins[0]])
+    def _histories(self, res, data) -> None:
+        """Bind the colour histories as the images `history_diffuse` (and `_specular`) of `res`."""
+        res.image("history_diffuse", data[self.HISTORY_DIFFUSE])
         if self._specular:
-            bind(f"{prefix}_specular", data[pins[1]])
+            res.image("history_specular", data[self.HISTORY_SPECULAR])
 
     def _set_common(self, res) -> None:
         res.set("svgf_phi_depth", float(self.phi_depth))
@@ -173,8 +191,7 @@ class SVGF(RenderPass):
             self.resets += 1
             self.reset()
         prev, cur = self._frames % 2, (self._frames + 1) % 2
-        scratch = [(self.FILTER_DIFFUSE[k], self.FILTER_SPECULAR[k]) for k in (0, 1)]
-        history = (self.HISTORY_DIFFUSE, self.HISTORY_SPECULAR)
+        scratch = [data[name] for name in self.FILTER]
         iterations = int(self.iterations)
         tap = min(int(self.feedback_tap), iterations - 1)   # < 0: the unfiltered temporal mean
         between = (Access.SAMPLED, Access.IMAGE)
@@ -187,9 +204,11 @@ class SVGF(RenderPass):
             res.texture("svgf_specular_in", data[self.SPECULAR])
             res.texture("history_specular", data[self.HISTORY_SPECULAR])
         res.texture("moments_prev", data[self.MOMENTS[prev]])
+        res.texture("key_prev", data[self.KEY[prev]])
         res.texture("surface_prev", data[self.SURFACE[prev]])
-        self._lobes(res, data, "out", scratch[0])
+        res.image("out_illum", scratch[0])
         res.image("moments_out", data[self.MOMENTS[cur]])
+        res.image("key_out", data[self.KEY[cur]])
         res.image("surface_out", data[self.SURFACE[cur]])
         res.set("svgf_alpha", float(self.alpha))
         res.set("svgf_moments_alpha", float(self.moments_alpha))
@@ -198,25 +217,25 @@ class SVGF(RenderPass):
         res.prog.run(*self._groups)
         ctx.barrier(*between)
 
-        res = self._res["variance"]
+        res = self._res["variance"]   # in place in scratch[0]
         self._set_common(res)
-        self._lobes(res, data, "src", scratch[0])
-        self._lobes(res, data, "dst", scratch[1])
-        self._lobes(res, data, "history", history)
+        res.image("illum", scratch[0], read=True, write=True)
+        self._histories(res, data)
         res.texture("moments_cur", data[self.MOMENTS[cur]])
+        res.texture("key_cur", data[self.KEY[cur]])
         res.texture("surface_cur", data[self.SURFACE[cur]])
         res.set("svgf_write_history", tap < 0)
         res.prog.run(*self._groups)
         ctx.barrier(*between)
 
-        src = 1
+        src = 0
         res = self._res["atrous"]
         self._set_common(res)
-        res.texture("surface_cur", data[self.SURFACE[cur]])
-        self._lobes(res, data, "history", history)
+        res.texture("key_cur", data[self.KEY[cur]])
+        self._histories(res, data)
         for i in range(iterations):
-            self._lobes(res, data, "src", scratch[src])
-            self._lobes(res, data, "dst", scratch[1 - src])
+            res.texture("src_illum", scratch[src])
+            res.image("dst_illum", scratch[1 - src])
             res.set("svgf_step", 1 << i)
             res.set("svgf_write_history", i == tap)
             res.prog.run(*self._groups)
@@ -226,7 +245,7 @@ class SVGF(RenderPass):
         res = self._res["modulate"]
         channels.bind_inputs(res, data, GBUFFER)
         res.texture("svgf_diffuse_in", data[self.DIFFUSE])
-        self._lobes(res, data, "src", scratch[src])
+        res.texture("src_illum", scratch[src])
         res.image("dst", data[self.COLOR])
         res.prog.run(*self._groups)
         self._frames += 1

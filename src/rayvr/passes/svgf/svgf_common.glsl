@@ -1,5 +1,8 @@
 // SVGF's shared pieces (rayvr/passes/svgf): the surface each stage keeps per pixel (packed in
-// rgba32ui: linear depth, octahedral normal, effect word, history length), demodulation by the
+// two rg32ui textures: the filter key, linear depth and octahedral normal, which the variance and
+// a-trous stages compare per tap; and the effect word and history length, which only the
+// reprojection compares per tap), the illumination
+// texel between the stages (both lobes and their variances in one texel), demodulation by the
 // BSDF's directional albedos, and the edge-stopping weights of the variance estimate and the
 // a-trous filter (Schied et al. 2017, section 4).
 #pragma once
@@ -47,18 +50,48 @@ vec3 svgf_unpack_normal(uint bits) {
     return normalize(n);
 }
 
-uvec4 svgf_pack(SvgfSurface s) {
-    return uvec4(floatBitsToUint(s.depth), svgf_pack_normal(s.n), s.word, floatBitsToUint(s.history));
-}
+// The filter key: linear depth (float bits; 0: no geometry, a drawn point's depth being
+// positive) and the octahedral normal (snorm16x2), 64 bits a tap.
+uvec2 svgf_pack_key(SvgfSurface s) { return uvec2(floatBitsToUint(s.depth), svgf_pack_normal(s.n)); }
+// The rest: effect word and history length (float bits).
+uvec2 svgf_pack_tag(SvgfSurface s) { return uvec2(s.word, floatBitsToUint(s.history)); }
 
-SvgfSurface svgf_unpack(uvec4 u) {
+SvgfSurface svgf_unpack(uvec2 key, uvec2 tag) {
     SvgfSurface s;
-    s.depth = uintBitsToFloat(u.x);
-    s.n = svgf_unpack_normal(u.y);
-    s.word = u.z;
-    s.history = uintBitsToFloat(u.w);
+    s.depth = uintBitsToFloat(key.x);
+    s.n = svgf_unpack_normal(key.y);
+    s.word = tag.x;
+    s.history = uintBitsToFloat(tag.y);
     return s;
 }
+
+float svgf_key_depth(uvec2 key) { return uintBitsToFloat(key.x); }
+
+// The illumination between the stages, both lobes in one texel so that a tap is one fetch: with
+// SVGF_SPECULAR rgba32ui of float16 pairs (diffuse rg), (diffuse b, its variance), (specular rg),
+// (specular b, its variance); without, rgba16f (diffuse rgb, its variance). Stages declare
+// `uniform SVGF_ILLUM_SAMPLER name;` and `layout(SVGF_ILLUM_FORMAT) uniform SVGF_ILLUM_IMAGE name;`.
+#if SVGF_SPECULAR
+#define SVGF_ILLUM_FORMAT rgba32ui
+#define SVGF_ILLUM_SAMPLER usampler2DArray
+#define SVGF_ILLUM_IMAGE uimage2DArray
+#define SvgfIllum uvec4
+SvgfIllum svgf_illum_pack(vec4 d, vec4 s) {
+    return uvec4(packHalf2x16(d.rg), packHalf2x16(d.ba), packHalf2x16(s.rg), packHalf2x16(s.ba));
+}
+vec4 svgf_illum_diffuse(SvgfIllum t) { return vec4(unpackHalf2x16(t.x), unpackHalf2x16(t.y)); }
+vec4 svgf_illum_specular(SvgfIllum t) { return vec4(unpackHalf2x16(t.z), unpackHalf2x16(t.w)); }
+vec2 svgf_illum_variance(SvgfIllum t) { return vec2(unpackHalf2x16(t.y).y, unpackHalf2x16(t.w).y); }
+#else
+#define SVGF_ILLUM_FORMAT rgba16f
+#define SVGF_ILLUM_SAMPLER sampler2DArray
+#define SVGF_ILLUM_IMAGE image2DArray
+#define SvgfIllum vec4
+SvgfIllum svgf_illum_pack(vec4 d, vec4 s) { return d; }
+vec4 svgf_illum_diffuse(SvgfIllum t) { return t; }
+vec4 svgf_illum_specular(SvgfIllum t) { return vec4(0.0); }
+vec2 svgf_illum_variance(SvgfIllum t) { return vec2(t.a, 0.0); }
+#endif
 
 bool svgf_has_geometry(uint word) { return gbuf_effect_of(word) != GBUF_NO_GEOMETRY; }
 
@@ -94,6 +127,12 @@ float svgf_depth_slope(float z, float before, float after) {
     return s > 1e29 ? 0.0 : s;
 }
 
+// The depth gradient (per pixel) at a pixel of depth z from its neighbours' depths (0: no
+// geometry, or outside the view) left, right, below and above.
+vec2 svgf_depth_gradient(float z, float left, float right, float below, float above) {
+    return vec2(svgf_depth_slope(z, left, right), svgf_depth_slope(z, below, above));
+}
+
 // w_z: depth difference against the depth gradient's prediction over `offset` pixels.
 float svgf_weight_depth(float zp, float zq, vec2 gradient, vec2 offset) {
     return exp(-abs(zp - zq) / (svgf_phi_depth * abs(dot(gradient, offset)) + 1e-3 * zp + 1e-8));
@@ -106,15 +145,7 @@ float svgf_weight_normal(vec3 np, vec3 nq) {
 
 #ifdef SVGF_READS_SURFACE
 // This frame's surfaces (the reprojection stage's output), for the stages after it.
+uniform usampler2DArray key_cur;
 uniform usampler2DArray surface_cur;
 
-float svgf_depth_at(ivec3 q, ivec2 size) {
-    return svgf_inside(q.xy, size) ? uintBitsToFloat(texelFetch(surface_cur, q, 0).x) : 0.0;
-}
-
-// The depth gradient (per pixel) at p, whose depth is z.
-vec2 svgf_depth_gradient(ivec3 p, float z, ivec2 size) {
-    return vec2(svgf_depth_slope(z, svgf_depth_at(p + ivec3(-1, 0, 0), size), svgf_depth_at(p + ivec3(1, 0, 0), size)),
-                svgf_depth_slope(z, svgf_depth_at(p + ivec3(0, -1, 0), size), svgf_depth_at(p + ivec3(0, 1, 0), size)));
-}
 #endif

@@ -5,10 +5,7 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 uniform sampler2DArray svgf_diffuse_in;
-uniform sampler2DArray src_diffuse;
-#if SVGF_SPECULAR
-uniform sampler2DArray src_specular;
-#endif
+uniform SVGF_ILLUM_SAMPLER src_illum;
 layout(rgba16f) writeonly uniform image2DArray dst;
 
 void main() {
@@ -21,9 +18,10 @@ void main() {
     GSurface g = gbuf_load(p);
     vec3 albedo_d, albedo_s;
     svgf_albedo(g, uint(p.z), albedo_d, albedo_s);
-    vec3 c = svgf_remodulate(texelFetch(src_diffuse, p, 0).rgb, albedo_d) + g.emissive;
+    SvgfIllum illum = texelFetch(src_illum, p, 0);
+    vec3 c = svgf_remodulate(svgf_illum_diffuse(illum).rgb, albedo_d) + g.emissive;
 #if SVGF_SPECULAR
-    c += svgf_remodulate(texelFetch(src_specular, p, 0).rgb, albedo_s);
+    c += svgf_remodulate(svgf_illum_specular(illum).rgb, albedo_s);
 #endif
     imageStore(dst, p, vec4(to_half_range(c), 1.0));
 }

@@ -10,16 +10,17 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 uniform sampler2DArray svgf_diffuse_in;
 uniform sampler2DArray history_diffuse;
-layout(rgba16f) writeonly uniform image2DArray out_diffuse;
 #if SVGF_SPECULAR
 uniform sampler2DArray svgf_specular_in;
 uniform sampler2DArray history_specular;
-layout(rgba16f) writeonly uniform image2DArray out_specular;
 #endif
+layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE out_illum;   // both lobes + variances
 uniform sampler2DArray moments_prev;
+uniform usampler2DArray key_prev;
 uniform usampler2DArray surface_prev;
 layout(rgba32f) writeonly uniform image2DArray moments_out;
-layout(rgba32ui) writeonly uniform uimage2DArray surface_out;
+layout(rg32ui) writeonly uniform uimage2DArray key_out;
+layout(rg32ui) writeonly uniform uimage2DArray surface_out;
 
 uniform float svgf_alpha;           // weight of this frame's illumination (at least 1 / history)
 uniform float svgf_moments_alpha;   // the same for the moments
@@ -36,8 +37,8 @@ struct Reprojected {
 };
 
 void add_tap(inout Reprojected r, ivec3 q, float w, uint word, vec3 n, float prev_depth, float tolerance) {
-    if (w <= 0.0 || !svgf_inside(q.xy, textureSize(surface_prev, 0).xy)) return;
-    SvgfSurface s = svgf_unpack(texelFetch(surface_prev, q, 0));
+    if (w <= 0.0 || !svgf_inside(q.xy, textureSize(key_prev, 0).xy)) return;
+    SvgfSurface s = svgf_unpack(texelFetch(key_prev, q, 0).xy, texelFetch(surface_prev, q, 0).xy);
     if (s.history <= 0.0 || s.word != word || dot(s.n, n) < SVGF_NORMAL_COS
         || abs(s.depth - prev_depth) > tolerance) return;
     r.weight += w;
@@ -53,16 +54,15 @@ float depth_at(ivec3 q, ivec2 size) { return svgf_inside(q.xy, size) ? gbuf_fetc
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
-    ivec3 size = imageSize(out_diffuse);
+    ivec3 size = imageSize(out_illum);
     if (any(greaterThanEqual(p, size))) return;
     uint word = gbuf_fetch_effect(p);
     if (!svgf_has_geometry(word)) {
-        imageStore(out_diffuse, p, vec4(0.0));
-#if SVGF_SPECULAR
-        imageStore(out_specular, p, vec4(0.0));
-#endif
+        imageStore(out_illum, p, svgf_illum_pack(vec4(0.0), vec4(0.0)));
         imageStore(moments_out, p, vec4(0.0));
-        imageStore(surface_out, p, svgf_pack(svgf_no_geometry()));
+        SvgfSurface none = svgf_no_geometry();
+        imageStore(key_out, p, uvec4(svgf_pack_key(none), 0u, 0u));
+        imageStore(surface_out, p, uvec4(svgf_pack_tag(none), 0u, 0u));
         return;
     }
     GSurface g = gbuf_load(p);
@@ -74,9 +74,8 @@ void main() {
     specular = svgf_demodulate(texelFetch(svgf_specular_in, p, 0).rgb, albedo_s);
 #endif
     float depth = gbuf_fetch_posW(p).w;
-    vec2 gradient = vec2(
-        svgf_depth_slope(depth, depth_at(p + ivec3(-1, 0, 0), size.xy), depth_at(p + ivec3(1, 0, 0), size.xy)),
-        svgf_depth_slope(depth, depth_at(p + ivec3(0, -1, 0), size.xy), depth_at(p + ivec3(0, 1, 0), size.xy)));
+    vec2 gradient = svgf_depth_gradient(depth, depth_at(p + ivec3(-1, 0, 0), size.xy), depth_at(p + ivec3(1, 0, 0), size.xy),
+                                        depth_at(p + ivec3(0, -1, 0), size.xy), depth_at(p + ivec3(0, 1, 0), size.xy));
 
     Reprojected r = Reprojected(0.0, vec3(0.0), vec3(0.0), vec4(0.0), 0.0);
     if (svgf_history_valid) {
@@ -112,15 +111,14 @@ void main() {
     // converges to the temporal mean instead of staying blurred
     float samples = min(history, (2.0 - svgf_alpha) / svgf_alpha);
     vec2 variance = max(vec2(moments.y - moments.x * moments.x, moments.w - moments.z * moments.z), 0.0) / samples;
-    imageStore(out_diffuse, p, vec4(to_half_range(mix(r.diffuse * inv, diffuse, alpha)), variance.x));
-#if SVGF_SPECULAR
-    imageStore(out_specular, p, vec4(to_half_range(mix(r.specular * inv, specular, alpha)), variance.y));
-#endif
+    imageStore(out_illum, p, svgf_illum_pack(vec4(to_half_range(mix(r.diffuse * inv, diffuse, alpha)), variance.x),
+                                             vec4(to_half_range(mix(r.specular * inv, specular, alpha)), variance.y)));
     imageStore(moments_out, p, moments);
     SvgfSurface s;
-    s.depth = depth;
+    s.depth = max(depth, 1e-30);   // > 0: the key says geometry
     s.n = g.n;
     s.word = word;
     s.history = history;
-    imageStore(surface_out, p, svgf_pack(s));
+    imageStore(key_out, p, uvec4(svgf_pack_key(s), 0u, 0u));
+    imageStore(surface_out, p, uvec4(svgf_pack_tag(s), 0u, 0u));
 }

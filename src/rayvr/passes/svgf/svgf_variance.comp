@@ -1,68 +1,84 @@
 // SVGF stage 2, variance estimation: pixels with a history of SVGF_MIN_HISTORY frames or more keep
 // the temporal variance of their moments; younger ones (disoccluded, or the first frames) take
 // the variance of the moments of a 7x7 neighbourhood weighted by depth and normal, boosted by
-// 4 / history (section 4.2). Their illumination stays their own: the a-trous stage filters it. With `svgf_write_history` (no feedback from
-// an a-trous iteration) the temporal mean is also next frame's colour history.
+// 4 / history (section 4.2), in place in the reprojection's illumination texel. Their illumination
+// stays their own: the a-trous stage filters it. With `svgf_write_history` (no feedback from an
+// a-trous iteration) the temporal mean is also next frame's colour history.
 #define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#define SVGF_GROUP 8
+layout(local_size_x = SVGF_GROUP, local_size_y = SVGF_GROUP, local_size_z = 1) in;
 
-uniform sampler2DArray src_diffuse;
-layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
+// in place: a pixel reads and writes its own texel only, and only young ones write
+layout(SVGF_ILLUM_FORMAT) uniform SVGF_ILLUM_IMAGE illum;
 layout(rgba16f) writeonly uniform image2DArray history_diffuse;
 #if SVGF_SPECULAR
-uniform sampler2DArray src_specular;
-layout(rgba16f) writeonly uniform image2DArray dst_specular;
 layout(rgba16f) writeonly uniform image2DArray history_specular;
 #endif
 uniform sampler2DArray moments_cur;
 uniform bool svgf_write_history;
 
-void store(ivec3 p, vec4 d, vec4 s) {
-    imageStore(dst_diffuse, p, d);
-#if SVGF_SPECULAR
-    imageStore(dst_specular, p, s);
-#endif
-}
+// A workgroup with a young pixel loads its 8x8 pixels' keys and moments with a 3-pixel apron
+// into shared memory once (196 texels for 64 pixels, instead of 49 a young pixel); texels outside
+// the view or without geometry hold key 0. Groups without one load nothing.
+#define SVGF_APRON 3
+#define SVGF_TILE (SVGF_GROUP + 2 * SVGF_APRON)
+shared uvec2 tile_key[SVGF_TILE * SVGF_TILE];
+shared vec4 tile_moments[SVGF_TILE * SVGF_TILE];
+shared bool group_young;
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
-    ivec3 size = imageSize(dst_diffuse);
-    if (any(greaterThanEqual(p, size))) return;
-    SvgfSurface c = svgf_unpack(texelFetch(surface_cur, p, 0));
-    vec4 d = texelFetch(src_diffuse, p, 0);
-    vec4 s = vec4(0.0);
+    ivec3 size = imageSize(illum);
+    bool young = false;
+    SvgfSurface c;
+    SvgfIllum centre;
+    if (all(lessThan(p, size))) {
+        c = svgf_unpack(texelFetch(key_cur, p, 0).xy, texelFetch(surface_cur, p, 0).xy);
+        centre = imageLoad(illum, p);
+        if (svgf_write_history) {   // the temporal mean as it is, before any spatial filter
+            imageStore(history_diffuse, p, vec4(svgf_illum_diffuse(centre).rgb, 0.0));
 #if SVGF_SPECULAR
-    s = texelFetch(src_specular, p, 0);
+            imageStore(history_specular, p, vec4(svgf_illum_specular(centre).rgb, 0.0));
 #endif
-    if (svgf_write_history) {   // the temporal mean as it is, before any spatial filter
-        imageStore(history_diffuse, p, vec4(d.rgb, 0.0));
-#if SVGF_SPECULAR
-        imageStore(history_specular, p, vec4(s.rgb, 0.0));
-#endif
+        }
+        young = c.depth > 0.0 && c.history < SVGF_MIN_HISTORY;   // else the temporal variance
     }
-    if (!svgf_has_geometry(c.word) || c.history >= SVGF_MIN_HISTORY) {
-        store(p, d, s);
-        return;
+    if (gl_LocalInvocationIndex == 0u) group_young = false;
+    barrier();
+    if (young) group_young = true;
+    barrier();
+    if (!group_young) return;   // the whole workgroup
+    ivec2 origin = ivec2(gl_WorkGroupID.xy) * SVGF_GROUP - SVGF_APRON;
+    for (int i = int(gl_LocalInvocationIndex); i < SVGF_TILE * SVGF_TILE; i += SVGF_GROUP * SVGF_GROUP) {
+        ivec3 q = ivec3(origin + ivec2(i % SVGF_TILE, i / SVGF_TILE), p.z);
+        uvec2 key = svgf_inside(q.xy, size.xy) ? texelFetch(key_cur, q, 0).xy : uvec2(0u);
+        tile_key[i] = key;
+        tile_moments[i] = svgf_key_depth(key) > 0.0 ? texelFetch(moments_cur, q, 0) : vec4(0.0);
     }
-    vec2 gradient = svgf_depth_gradient(p, c.depth, size.xy);
+    barrier();
+    if (!young) return;
+    int at = (int(gl_LocalInvocationID.y) + SVGF_APRON) * SVGF_TILE + int(gl_LocalInvocationID.x) + SVGF_APRON;
+    vec2 gradient = svgf_depth_gradient(c.depth, svgf_key_depth(tile_key[at - 1]), svgf_key_depth(tile_key[at + 1]),
+                                        svgf_key_depth(tile_key[at - SVGF_TILE]), svgf_key_depth(tile_key[at + SVGF_TILE]));
     float sum_w = 0.0;
     vec4 sum_m = vec4(0.0);
     for (int dy = -3; dy <= 3; ++dy)
         for (int dx = -3; dx <= 3; ++dx) {
-            ivec3 q = p + ivec3(dx, dy, 0);
-            if (!svgf_inside(q.xy, size.xy)) continue;
-            SvgfSurface t = svgf_unpack(texelFetch(surface_cur, q, 0));
-            if (!svgf_has_geometry(t.word)) continue;
-            float w = svgf_weight_depth(c.depth, t.depth, gradient, vec2(dx, dy)) * svgf_weight_normal(c.n, t.n);
+            int t = at + dy * SVGF_TILE + dx;
+            float depth = svgf_key_depth(tile_key[t]);
+            if (!(depth > 0.0)) continue;   // nothing drawn there, or outside the view
+            float w = svgf_weight_depth(c.depth, depth, gradient, vec2(dx, dy))
+                      * svgf_weight_normal(c.n, svgf_unpack_normal(tile_key[t].y));
             sum_w += w;
-            sum_m += w * texelFetch(moments_cur, q, 0);
+            sum_m += w * tile_moments[t];
         }
     // the centre tap has weight 1, so sum_w >= 1
     vec4 m = sum_m / sum_w;
     // one sample's variance, boosted for the young history (x 4 / history) and divided as the
     // temporal estimate is by the frames averaged
     vec2 variance = max(vec2(m.y - m.x * m.x, m.w - m.z * m.z), 0.0) * (SVGF_MIN_HISTORY / (c.history * c.history));
-    store(p, vec4(d.rgb, variance.x), vec4(s.rgb, variance.y));
+    imageStore(illum, p, svgf_illum_pack(vec4(svgf_illum_diffuse(centre).rgb, variance.x),
+                                         vec4(svgf_illum_specular(centre).rgb, variance.y)));
 }
