@@ -267,12 +267,14 @@ def test_alpha_masked_materials_are_skipped_by_rays(gl, tmp_path, bvh_layout):
     body = ("Hit h; bool hit = trace_closest(q.xyz, vec3(0, 0, -1), 1e29, h);"
             "bool occ = trace_occluded(q.xyz, vec3(0, 0, -1), 1e29);"
             "out_[i] = vec4(hit ? 1.0 : 0.0, occ ? 1.0 : 0.0, 0.0, 0.0);")
-    for mode, expect in (("MASK", [1, 0, 0, 1]), ("BLEND", [1, 1, 1, 1])):
+    # BLEND is stochastic transparency (tests/test_alpha_blend.py): alpha 0 is never hit, 1 always
+    for mode, expect in (("MASK", [1, 0, 0, 1]), ("BLEND", [1, 0, 0, 1]), ("OPAQUE", [1, 1, 1, 1])):
         mat = Material("Leaf", alpha_mode=mode, alpha_cutoff=0.5, base_color_texture=TextureRef(0))
         s = builtin.quad(material=mat)
         s.textures.append(Texture(img))
         gs = GpuScene(get_context(), s, bvh_layout=bvh_layout)
         assert gs.defines()["SCENE_HAS_ALPHA_MASK"] == (mode == "MASK")
+        assert gs.defines()["SCENE_HAS_ALPHA_BLEND"] == (mode == "BLEND")
         assert gs.defines()["RQ_BVH_WIDTH"] == (2 if bvh_layout == "bvh2" else 4)
         assert gs.defines()["RQ_BVH_QUANTIZED"] == (bvh_layout == "bvh4q")
         out, _ = run_kernel(gl, tmp_path, gs, body, rays, 1)

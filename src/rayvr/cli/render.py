@@ -22,6 +22,7 @@ then converge over --frames); `--denoise oidn` runs Intel Open Image Denoise on 
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -330,16 +331,26 @@ def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
                 oidn.set_properties({"enabled": i == frames - 1})
             r.render()
         pixels = r.read_output(hdr_output(graph) if hdr else OUTPUT, flip_y=True)
+        nonfinite = r.compiled.nonfinite_counts()   # exact, and the report's and profile's from here on
         if args.report:
             print(r.report())
         spp = f", {frames * graph.get_pass('PathTracer').samples_per_pixel} spp" if args.graph == "path_traced" else ""
         print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {frames} frame(s){spp}")
         print(r.profile())
+        say_nonfinite(nonfinite)
         if quilt_grid is not None:
             from ..xr.quilt import compose_quilt, read_quilt
 
             quilt_pixels = read_quilt(compose_quilt(r.gl, r.output_texture(OUTPUT), *quilt_grid))
     return pixels, quilt_pixels
+
+
+def say_nonfinite(counts: dict[str, int]) -> None:
+    """One line on stderr per pass that set non-finite samples to 0 in this render."""
+    from ..rendergraph.nonfinite import nonfinite_lines
+
+    for line in nonfinite_lines(counts):
+        print(f"rayvr: warning: {line}", file=sys.stderr)
 
 
 def render_path(args, scene, graph, views, hdr: bool, camera_path, out: Path) -> list[Path]:
@@ -356,8 +367,10 @@ def render_path(args, scene, graph, views, hdr: bool, camera_path, out: Path) ->
             images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
             for path, img in zip(output_paths(frame_path(out, i), len(views), args.layout), images):
                 written.append(write_exr(path, img) if hdr else write_image(path, img))
+        nonfinite = r.compiled.nonfinite_counts()   # exact, and the report's and profile's from here on
         if args.report:
             print(r.report())
         print(f"{scene.name}: {len(views)} view(s) of {views.size[0]}x{views.size[1]}, {len(camera_path)} frame(s)")
         print(r.profile())
+        say_nonfinite(nonfinite)
     return written

@@ -20,7 +20,7 @@ bool is_finite(vec3 c) { return !(any(isnan(c)) || any(isinf(c))); }
 bool is_finite(vec4 c) { return !(any(isnan(c)) || any(isinf(c))); }
 
 // A radiance sample with a NaN or Inf channel becomes 0 (the whole sample: one bad channel means
-// the path's weight is wrong). Passes count such samples where they scrub them.
+// the path's weight is wrong). Radiance passes scrub with nonfinite.glsl, which also counts them.
 vec3 finite_or_zero(vec3 c) { return is_finite(c) ? c : vec3(0.0); }
 vec4 finite_or(vec4 c, vec4 fallback) { return is_finite(c) ? c : fallback; }
 

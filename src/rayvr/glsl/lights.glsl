@@ -158,6 +158,10 @@ LightSample sample_emissive(uint k, vec3 p, vec2 u) {
     if (cos_l <= 0.0 && !m.double_sided) return s;   // the back of a single-sided emitter is dark
     s.pdf = emissive_area_pdf(e.ids.z) * d2 / max(abs(cos_l), 1e-12);
     s.weight = m.emissive / s.pdf;
+#if SCENE_HAS_ALPHA_BLEND
+    // a BLEND emitter is there for a ray with probability alpha (scene.glsl): its expected light
+    if (m.alpha_mode == ALPHA_MODE_BLEND) s.weight *= m.alpha;
+#endif
     s.valid = s.pdf > 0.0;
     return s;
 }

@@ -9,6 +9,7 @@
 #include "path_vertex.glsl"
 #include "lights.glsl"
 #include "ray_query.glsl"
+#include "nonfinite.glsl"
 
 uniform int pt_max_bounces;
 uniform int pt_rr_start;
@@ -110,8 +111,9 @@ vec3 pt_trace_from(PathVertex s, inout Rng rng) {
     return specular;
 }
 
-// A sample's radiance made safe: NaN/Inf dropped (returns 0), optional clamp (> 0) per channel.
+// A sample's radiance made safe: NaN/Inf dropped (returns 0, counted: nonfinite.glsl), optional
+// clamp (> 0) per channel.
 vec3 pt_finite(vec3 c, float clamp_max) {
-    c = finite_or_zero(c);
+    c = nonfinite_scrub(c);
     return clamp_max > 0.0 ? min(c, vec3(clamp_max)) : c;
 }

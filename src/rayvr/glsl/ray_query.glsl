@@ -6,7 +6,12 @@
 //
 // Render space; d need not be normalised (t is in units of d) but |d| should be ~1 and
 // tmax <= 1e29. `Hit` is declared in scene.glsl. Both faces are hit; alpha-masked materials
-// are tested in the any-hit step (SCENE_HAS_ALPHA_MASK).
+// are tested in the any-hit step (SCENE_HAS_ALPHA_MASK), and so are alphaMode BLEND ones
+// (SCENE_HAS_ALPHA_BLEND): stochastic transparency, a surface of alpha a is hit with probability
+// a (scene.glsl material_blend_passes), by both queries. A kernel seeds the decisions of its
+// invocation's rays with rq_blend_begin(Rng) (its path's generator: pixel, view, frame, sample)
+// before its first query; each query after it is a new ray of that path. Without BLEND in the
+// scene rq_blend_begin compiles to nothing.
 //
 // Layout (the interface of every BVH builder; RQ_BVH_WIDTH and RQ_BVH_QUANTIZED, from
 // GpuScene.defines(), say which one GpuScene uploaded, for both levels). Children's boxes live in
@@ -259,6 +264,36 @@ uint rq_stat_instances = 0u;   // BLAS entries (instance transforms)
 #define RQ_COUNT(c)
 #endif
 
+// Stochastic transparency (SCENE_HAS_ALPHA_BLEND): the path's seed and sample index, and the
+// number of the ray being traced along it (rq_begin counts them).
+#if SCENE_HAS_ALPHA_BLEND
+uint rq_blend_seed = 0u, rq_blend_index = 0u, rq_blend_ray = 0u;
+#endif
+
+// Seed this invocation's BLEND decisions with its path's generator (call it where the path's Rng
+// starts; rays traced before are decided as for seed 0).
+void rq_blend_begin(Rng r) {
+#if SCENE_HAS_ALPHA_BLEND
+    rq_blend_seed = r.state;
+    rq_blend_index = r.index;
+    rq_blend_ray = 0u;
+#endif
+}
+
+#if SCENE_HAS_ALPHA_MASK || SCENE_HAS_ALPHA_BLEND
+// Whether a hit at distance t, barycentrics b of scene triangle tri (material m, not OPAQUE) of
+// `instance` counts: the MASK cutoff, and the BLEND decision of the current ray.
+bool rq_alpha_passes(uint m, uint tri, uint instance, float t, vec2 b) {
+    vec2 uv = triangle_uv(tri, b);
+    if (!material_alpha_passes(m, uv)) return false;
+#if SCENE_HAS_ALPHA_BLEND
+    if (!material_blend_passes(m, uv, rq_blend_seed, rq_blend_index, alpha_blend_key(instance, m, t, rq_blend_ray)))
+        return false;
+#endif
+    return true;
+}
+#endif
+
 // Intersect the triangles of one leaf (BVH slots [first, first + count)); updates hit/tmax.
 bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, inout Hit hit, bool any_hit) {
     bool found = false;
@@ -269,9 +304,10 @@ bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, i
         vec2 b;
         if (!rq_triangle(r, v0.xyz, v1.xyz, v2.xyz, tmax, t, b)) continue;
         uint prim = floatBitsToUint(v0.w);
-#if SCENE_HAS_ALPHA_MASK
+#if SCENE_HAS_ALPHA_MASK || SCENE_HAS_ALPHA_BLEND
         uint tri = scene_triangle(instance, prim);
-        if (!material_alpha_passes(scene_triangle_materials[tri], triangle_uv(tri, b))) continue;
+        uint m = scene_triangle_materials[tri];
+        if (scene_materials[m].flags.y != ALPHA_MODE_OPAQUE && !rq_alpha_passes(m, tri, instance, t, b)) continue;
 #endif
         tmax = t;
         hit.t = t;
@@ -334,6 +370,9 @@ void rq_begin(vec3 o, vec3 d, float tmax_in, bool any_hit) {
     rq_blas_base = -1;
     rq_sp = 0;
     rq_next = 0u;
+#if SCENE_HAS_ALPHA_BLEND
+    ++rq_blend_ray;
+#endif
 }
 
 // One step of the ray's traversal: one node fetch, one BLAS entry or one leaf, so that a loop

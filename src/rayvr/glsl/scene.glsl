@@ -16,13 +16,14 @@
 // (instances_per_draw = 1) gl_ViewID_OVR is.
 //
 // Feature #defines (GpuScene.defines(), 0 or 1): SCENE_HAS_TEXTURES, SCENE_HAS_NORMAL_MAPS,
-// SCENE_HAS_ALPHA_MASK, SCENE_HAS_TRANSMISSION, SCENE_HAS_PUNCTUAL_LIGHTS,
+// SCENE_HAS_ALPHA_MASK, SCENE_HAS_ALPHA_BLEND, SCENE_HAS_TRANSMISSION, SCENE_HAS_PUNCTUAL_LIGHTS,
 // SCENE_HAS_EMISSIVE_TRIANGLES, SCENE_HAS_INSTANCING. Define SCENE_MATERIAL_IMPLICIT_LOD 1 in a
 // fragment shader to sample material textures with mip selection; ray passes pass a ray cone's
 // footprint instead (surface_at_cone, material_params_at: Akenine-Moeller et al., "Texture Level of
 // Detail Strategies for Real-Time Ray Tracing", Ray Tracing Gems ch. 20), or read level 0.
 #pragma once
 #include "color.glsl"
+#include "sampling.glsl"
 
 #ifndef RAYVR_PI
 #define RAYVR_PI 3.14159265358979323846
@@ -36,6 +37,9 @@
 #endif
 #ifndef SCENE_HAS_ALPHA_MASK
 #define SCENE_HAS_ALPHA_MASK 0
+#endif
+#ifndef SCENE_HAS_ALPHA_BLEND
+#define SCENE_HAS_ALPHA_BLEND 0
 #endif
 #ifndef SCENE_HAS_TRANSMISSION
 #define SCENE_HAS_TRANSMISSION 0
@@ -240,19 +244,60 @@ MaterialParams material_params_at(uint m, vec2 uv, float uv_lod) {
 
 MaterialParams material_params(uint m, vec2 uv) { return material_params_at(m, uv, UV_LOD_FINEST); }
 
-// Alpha of material m at uv against its cutoff (MASK); other modes always pass.
-bool material_alpha_passes(uint m, vec2 uv) {
-#if SCENE_HAS_ALPHA_MASK
-    if (scene_materials[m].flags.y != ALPHA_MODE_MASK) return true;
+#if SCENE_HAS_ALPHA_MASK || SCENE_HAS_ALPHA_BLEND
+// Alpha of material m at uv: the factor times the base colour texture's alpha (level 0).
+float material_alpha(uint m, vec2 uv) {
     float a = scene_materials[m].base_color.a;
 #if SCENE_HAS_TEXTURES
     if (scene_materials[m].tex[2 * TEX_BASE_COLOR].w >= 0.0) a *= material_texture(m, TEX_BASE_COLOR, uv, UV_LOD_FINEST).a;
 #endif
-    return a >= scene_materials[m].emission_cutoff.a;
+    return a;
+}
+#endif
+
+// Alpha of material m at uv against its cutoff (MASK); other modes always pass.
+bool material_alpha_passes(uint m, vec2 uv) {
+#if SCENE_HAS_ALPHA_MASK
+    if (scene_materials[m].flags.y != ALPHA_MODE_MASK) return true;
+    return material_alpha(m, uv) >= scene_materials[m].emission_cutoff.a;
 #else
     return true;
 #endif
 }
+
+#if SCENE_HAS_ALPHA_BLEND
+// alphaMode BLEND as stochastic transparency (Enderton et al. 2010): a surface of alpha a is there
+// for a ray or a fragment with probability a, so that the mean over frames is a * front +
+// (1 - a) * behind and a shadow ray through it is blocked with probability a. `seed` and `index`
+// are a path's Rng state and sample index (sampling.glsl; the index runs over the frames), `key`
+// names the surface met and the ray along the path (alpha_blend_key): u is the Owen-scrambled van
+// der Corput point of the index under a scramble of its own, so a key's decisions over
+// consecutive frames are stratified (0.3 is met 3 times in 10 frames, give or take one) and two
+// keys' are independent.
+float alpha_blend_u(uint seed, uint index, uint key) {
+    uint s = hash_combine(seed, pcg_hash(key ^ 0xA511E9B3u));
+    uint i = nested_uniform_scramble(index, s);
+    return float(nested_uniform_scramble(bitfieldReverse(i), hash_combine(s, 1u)) >> 8u) * (1.0 / 16777216.0);
+}
+
+// The key of a surface of `material` on `instance` met at distance t along ray number `ray` of a
+// path. Not the triangle: a ray through a shared edge hits both triangles (ray_query.glsl widens
+// edges), and two draws there would show the surface with probability 1 - (1 - a)^2. t is
+// bucketed at 1/256 of an octave (0.27%): the two hits of an edge fall in one bucket but for
+// rounding at a bucket's border (~1e-6 / 0.0027 of edge rays), and two layers of one material
+// closer than that along the ray share a draw.
+uint alpha_blend_key(uint instance, uint material, float t, uint ray) {
+    uint bucket = uint(int(floor(log2(max(t, 1e-30)) * 256.0)));
+    return pcg_hash(bucket + pcg_hash(material + pcg_hash(instance + pcg_hash(ray))));
+}
+
+// Whether material m at uv is there for the key: always unless BLEND, then with probability
+// alpha (alpha 1: always, 0: never; u < 1).
+bool material_blend_passes(uint m, vec2 uv, uint seed, uint index, uint key) {
+    if (scene_materials[m].flags.y != ALPHA_MODE_BLEND) return true;
+    return alpha_blend_u(seed, index, key) < material_alpha(m, uv);
+}
+#endif
 
 // ---- triangles ------------------------------------------------------------------------------
 

@@ -31,6 +31,8 @@ BINDINGS = {
     "RAYVR_PASS_SSBO_2": 18,
     "RAYVR_PASS_SSBO_3": 19,
     "RAYVR_PASS_SSBO_4": 20,
+    # atomic counter buffer binding (its own namespace): the running pass's non-finite counter
+    "RAYVR_NONFINITE_COUNTER": 0,
     "RAYVR_SCENE_TEXTURE_UNIT": 8,
     "RAYVR_ENVIRONMENT_TEXTURE_UNIT": 9,
     "RAYVR_MAX_VIEWS": 64,

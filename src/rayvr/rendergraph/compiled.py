@@ -24,6 +24,7 @@ from ..gpu.textures import zero_texture
 from ..gpu.timer import acquire_timer, release_timer, timing_method
 from .compiler import STAGES, Plan
 from .formats import NUMPY_DTYPES, get_format
+from .nonfinite import NonFiniteCounters
 from .profile import Profile, RollingTimes
 from .render_pass import HOST_READ_BITS, Access, PinDirection, PinKind, RenderContext, RenderData, barrier_bits
 from .report import CompileReport, ResourceInfo
@@ -55,7 +56,8 @@ class CompiledGraph:
         for p in self.order:
             self.passes[p].compile(ctx, plan.compile_data[p])
         self.barriers_before, self.final_barrier = frame_barriers(plan)
-        self._steps = [(self.passes[p].execute,
+        self.nonfinite = NonFiniteCounters(self.gl, [p for p in self.order if self.passes[p].COUNTS_NONFINITE])
+        self._steps = [(self._counted(p),
                         RenderData({pin: (None if res is None else self.resources[res])
                                     for pin, res in plan.bindings[p].items()}, plan.size, plan.views),
                         self.barriers_before[i])
@@ -87,11 +89,33 @@ class CompiledGraph:
         zero_texture(tex)
         return tex
 
+    def _counted(self, name: str):
+        """Pass `name`'s execute, after binding its non-finite counter when it counts."""
+        execute = self.passes[name].execute
+        if name not in self.nonfinite.slot:
+            return execute
+        bind = self.nonfinite.bind
+
+        def run(ctx, data):
+            bind(name)
+            execute(ctx, data)
+        return run
+
+    def nonfinite_counts(self) -> dict[str, int]:
+        """{pass: non-finite samples it set to 0 since compile or reset_nonfinite()}, for every
+        pass that counts (COUNTS_NONFINITE), exact: one small readback that waits for the GPU.
+        profile() and report() carry the latest counts without waiting (a frame or two old)."""
+        return self.nonfinite.read()
+
+    def reset_nonfinite(self) -> None:
+        self.nonfinite.reset()
+
     def release(self) -> None:
         """Free the GPU objects now: the resources, what each pass made in compile()
         (RenderPass.release) and the timers (otherwise they live as long as the GL context)."""
         for p in self.order:
             self.passes[p].release()
+        self.nonfinite.release()
         for obj in self.objects:
             obj.release()
         for timer in self._timers:
@@ -122,6 +146,7 @@ class CompiledGraph:
                 run(ctx, data)
         if self.final_barrier:
             gl.memory_barrier(self.final_barrier)
+        self.nonfinite.frame_end()
         self._cpu.add((time.perf_counter() - t0) * 1e3)
         self.frames += 1
 
@@ -155,7 +180,8 @@ class CompiledGraph:
                     if ms is not None:
                         times.add(ms)
         passes = {p: s for p, t in zip(self.order, self._times) if (s := t.stats()) is not None}
-        return Profile(self.timing_method, self.frames, self._window, passes, self._cpu.stats())
+        return Profile(self.timing_method, self.frames, self._window, passes, self._cpu.stats(),
+                       self.nonfinite.latest())
 
     # -- outputs -----------------------------------------------------------------------------
     def get_output(self, ref: str):
@@ -195,10 +221,14 @@ class CompiledGraph:
             barriers["(end of frame)"] = _bit_names(self.final_barrier)
         return CompileReport(self.graph_name, plan.size, plan.views, list(plan.order), dict(plan.pruned),
                              infos, plan.total_bytes, plan.unaliased_bytes, defines, list(plan.outputs),
-                             dict(plan.unavailable), [], extra, timing, dict(self.stage_ms), barriers)
+                             dict(plan.unavailable), [], extra, timing, dict(self.stage_ms), barriers,
+                             {n: 0 for n in self.nonfinite.names})
 
     def report(self) -> CompileReport:
-        """The compile report (the same object each call, so subsystems can append to it)."""
+        """The compile report (the same object each call, so subsystems can append to it), with
+        the latest non-finite counts the GPU has handed back (no wait: see nonfinite_counts())."""
+        if self._steps:   # not released
+            self._report.nonfinite = self.nonfinite.latest()
         return self._report
 
     def add_report(self, entry) -> None:

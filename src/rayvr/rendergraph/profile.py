@@ -35,6 +35,8 @@ class Profile:
     window: int
     passes: dict[str, PassStats]
     cpu_ms: PassStats | None        # CPU time inside execute() (includes waits with finish+wall)
+    # non-finite samples each counting pass set to 0 since compile (GPU counters: rendergraph.nonfinite)
+    nonfinite: dict[str, int] = dataclasses.field(default_factory=dict)
 
     @property
     def total_ms(self) -> float:
@@ -52,6 +54,9 @@ class Profile:
         lines.append(f"  {'total':<{width}}  {self.total_ms:9.3f}")
         if self.cpu_ms:
             lines.append(f"  CPU in execute(): mean {self.cpu_ms.mean_ms:.3f} ms")
+        if self.nonfinite:
+            lines.append("  non-finite samples set to 0 (all frames): "
+                         + ", ".join(f"{p} {n}" for p, n in self.nonfinite.items()))
         return "\n".join(lines)
 
 

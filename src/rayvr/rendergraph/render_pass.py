@@ -254,6 +254,9 @@ class RenderPass:
 
     PROPERTIES: dict[str, Any] = {}
     USES_SCENE = False
+    # The pass's shaders scrub non-finite radiance with glsl/nonfinite.glsl: the graph gives it a
+    # GPU counter (rendergraph.nonfinite) and binds it before execute().
+    COUNTS_NONFINITE = False
 
     def __init__(self, props: dict | None = None, **kwargs):
         self._props = copy.deepcopy(self.PROPERTIES)

@@ -50,6 +50,7 @@ class CompileReport:
     timing: str = ""
     stages: dict = dataclasses.field(default_factory=dict)      # compile stage -> CPU ms
     barriers: dict = dataclasses.field(default_factory=dict)    # pass -> memory barrier before it
+    nonfinite: dict = dataclasses.field(default_factory=dict)   # counting pass -> samples set to 0 so far
 
     @property
     def bytes_saved(self) -> int:
@@ -96,6 +97,9 @@ class CompileReport:
             lines += [f"  {p}: " + ", ".join(f"{k}={v}" for k, v in d.items()) for p, d in defs.items()]
         if self.barriers:
             lines.append("barriers: " + "; ".join(f"{p}: {b}" for p, b in self.barriers.items()))
+        if self.nonfinite:
+            lines.append("non-finite samples set to 0 (GPU counters, as of this report): "
+                         + ", ".join(f"{p} {n}" for p, n in self.nonfinite.items()))
         if self.stages:
             lines.append("compile stages: " + ", ".join(f"{k} {v:.1f} ms" for k, v in self.stages.items()))
         if self.left_out:

@@ -26,6 +26,7 @@ class Accumulate(RenderPass):
 
     SRC, DST = "src", "dst"
     SUM, COMPENSATION = "sum", "compensation"
+    COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"enabled": True, "max_frames": 0, "auto_reset": True}
 
     def __init__(self, props: dict | None = None, **kwargs):

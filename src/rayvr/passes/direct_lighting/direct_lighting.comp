@@ -6,6 +6,7 @@
 #include "gbuffer.glsl"
 #include "shading.glsl"
 #include "probe_gi.glsl"
+#include "nonfinite.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 layout(rgba16f) writeonly uniform image2DArray dst;
@@ -17,7 +18,7 @@ void main() {
     if (effect == GBUF_NO_GEOMETRY) {   // the sky: the environment through this pixel
         vec3 o, d;
         view_primary_ray(uint(p.z), vec2(p.xy) + 0.5 + views[p.z].jitter.xy, o, d);
-        imageStore(dst, p, vec4(to_half_range(environment_radiance(d)), 1.0));
+        imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(environment_radiance(d))), 1.0));
         return;
     }
 #if RASTER_ONLY
@@ -28,5 +29,5 @@ void main() {
     PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
     // REFLECTIONS and above: RTReflections traces the specular lobes and shares their light (MIS)
     vec3 c = g.emissive + shade_direct_mis(s, rng, g.effect >= EFFECT_REFLECTIONS) + probe_gi_diffuse(s);
-    imageStore(dst, p, vec4(to_half_range(c), 1.0));   // the target is rgba16f
+    imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(c)), 1.0));   // the target is rgba16f
 }

@@ -14,12 +14,26 @@ in vec4 v_tangent;
 flat in vec3 v_face_normal;
 flat in uint v_material;
 flat in uint v_view;
+#if SCENE_HAS_ALPHA_BLEND
+flat in uint v_instance;
+#endif
 
 
 void main() {
     MaterialParams m = material_params(v_material, v_uv);
 #if SCENE_HAS_ALPHA_MASK
     if (m.alpha_mode == ALPHA_MODE_MASK && m.alpha < scene_materials[v_material].emission_cutoff.a) discard;
+#endif
+#if SCENE_HAS_ALPHA_BLEND
+    // stochastic transparency: drawn with probability alpha, by GBufferRT's decision for this
+    // pixel's ray (ray 1 of its generator, t from the near plane; scene.glsl alpha_blend_u)
+    if (m.alpha_mode == ALPHA_MODE_BLEND) {
+        Rng rng = rng_init(uvec2(gl_FragCoord.xy), view_global_index(v_view), frame_index(), GBUF_RNG_SALT);
+        vec3 ray = v_pos - views[v_view].eye.xyz;
+        float dist = length(ray);
+        float t = dist - views[v_view].clip.x * dist / -(views[v_view].view * vec4(ray, 0.0)).z;
+        if (!(alpha_blend_u(rng.state, rng.index, alpha_blend_key(v_instance, v_material, t, 1u)) < m.alpha)) discard;
+    }
 #endif
     vec3 eye = views[v_view].eye.xyz;
     vec3 to_eye = eye - v_pos;

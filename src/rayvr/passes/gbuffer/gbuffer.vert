@@ -25,6 +25,9 @@ out vec4 v_tangent;
 flat out vec3 v_face_normal;
 flat out uint v_material;
 flat out uint v_view;
+#if SCENE_HAS_ALPHA_BLEND
+flat out uint v_instance;
+#endif
 
 void main() {
     uint view = CURRENT_VIEW;
@@ -36,6 +39,9 @@ void main() {
     v_face_normal = r.face_normal;
     v_material = r.material;
     v_view = view;
+#if SCENE_HAS_ALPHA_BLEND
+    v_instance = rayvr_instance;
+#endif
     gl_Position = views[view].view_proj * vec4(r.position, 1.0);
     // TAA jitter: sample at pixel centre + jitter (as the ray passes do), so the geometry moves by
     // -jitter; motion vectors (gbuf_encode) use the unjittered matrices.

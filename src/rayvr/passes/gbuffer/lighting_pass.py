@@ -18,6 +18,7 @@ from . import channels
 class GBufferLightingPass(RenderPass):
     """A pass that lights G-buffer pixels into one rgba16f output (see the module docstring)."""
 
+    COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     USES_SCENE = True
     SHADER = ""
     OUTPUT = "color"

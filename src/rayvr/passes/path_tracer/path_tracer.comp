@@ -28,9 +28,12 @@ layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
 layout(rgba16f) writeonly uniform image2DArray dst_specular;
 #endif
 
+// Sample `sample_index`'s generator; it also seeds the sample's alphaMode BLEND decisions.
 Rng pt_rng(ivec3 p, int sample_index) {
-    return rng_init_sample(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT, uint(sample_index),
-                           uint(pt_samples));
+    Rng r = rng_init_sample(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT, uint(sample_index),
+                            uint(pt_samples));
+    rq_blend_begin(r);
+    return r;
 }
 
 #if PT_FROM_GBUFFER
@@ -82,8 +85,8 @@ vec3 pt_pixel(ivec3 p) {
 #endif
 
 #if PT_LOBES
-// The mean of pt_samples paths as emission + diffuse + specular (each sample's parts made finite
-// and clamped on their own); returns the sum.
+// The mean of pt_samples paths as emission + diffuse + specular (a sample with a non-finite part
+// is dropped whole and counted once; its parts clamped on their own); returns the sum.
 vec3 pt_pixel_lobes(ivec3 p, out vec3 diffuse, out vec3 specular) {
     diffuse = vec3(0.0);
     specular = vec3(0.0);
@@ -107,6 +110,10 @@ vec3 pt_pixel_lobes(ivec3 p, out vec3 diffuse, out vec3 specular) {
             e = vec3(0.0);
         }
 #endif
+        if (!(is_finite(e) && is_finite(d) && is_finite(r))) {
+            nonfinite_count();
+            continue;
+        }
         emitted += pt_finite(e, pt_clamp);
         diffuse += pt_finite(d, pt_clamp);
         specular += pt_finite(r, pt_clamp);

@@ -50,6 +50,7 @@ class PathTracer(RenderPass):
     COLOR = "color"
     DIFFUSE, SPECULAR = "diffuse", "specular"
     PIXELS = "pixels"
+    COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
                   "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol", "lobes": False}
     USES_SCENE = True

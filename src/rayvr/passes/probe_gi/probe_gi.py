@@ -56,6 +56,7 @@ class ProbeGI(RenderPass):
     Outputs: `irradiance`, `depth`, `state` (one-layer atlases) and `volumes` (the
     ProbeVolumes block), read by the lighting passes through `rayvr.passes.probe_gi.inputs`."""
 
+    COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     USES_SCENE = True
     VOLUMES = "volumes"
     RAYS = "rays"

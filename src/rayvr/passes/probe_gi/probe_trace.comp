@@ -11,6 +11,7 @@
 #include "probe_rays.glsl"
 #include "shading.glsl"
 #include "ray_query.glsl"
+#include "nonfinite.glsl"
 
 layout(local_size_x = PROBE_RAYS) in;
 
@@ -29,6 +30,8 @@ void main() {
     uint kind = PROBE_RAY_MISS;
     vec3 radiance;
     float dist = vol.lo.w;
+    Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT);
+    rq_blend_begin(rng);   // alphaMode BLEND: this ray's decisions
     Hit hit;
     if (trace_closest(origin, dir, 1e29, hit)) {
         SurfacePoint sp;
@@ -41,14 +44,13 @@ void main() {
             radiance = vec3(0.0);
             dist = min(PROBE_BACKFACE_DEPTH * hit.t, dist);
         } else {
-            Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT);
             radiance = shade_direct(s, rng);
             dist = min(hit.t, dist);
         }
     } else {
         radiance = environment_radiance(dir);
     }
-    rec.radiance = vec4(finite_or_zero(radiance), dist);
+    rec.radiance = vec4(nonfinite_scrub(radiance), dist);
     rec.hit = vec4(hit.t, hit.barycentrics, uintBitsToFloat(kind));
     probe_rays[probe * uint(PROBE_RAYS) + ray] = rec;
 }

@@ -8,6 +8,7 @@
 // update reads (probe_*_tex are the previous update's history).
 #define PROBE_GI 1
 #include "probe_rays.glsl"
+#include "nonfinite.glsl"
 
 layout(local_size_x = PROBE_RAYS) in;
 layout(rgba32f) writeonly uniform image2DArray irradiance_out;
@@ -68,7 +69,7 @@ void main() {
             SurfacePoint sp;
             MaterialParams mp;
             PathVertex s = path_vertex_at_hit(hit, dir, hit.t * PROBE_RAY_SPREAD, PROBE_RAY_SPREAD, sp, mp);
-            radiance.rgb += finite_or_zero(probe_gi_diffuse(s));
+            radiance.rgb += nonfinite_scrub(probe_gi_diffuse(s));
         }
     }
     ray_radiance[ray] = radiance;

@@ -14,6 +14,7 @@
 #include "pixel_list.glsl"
 #include "shading.glsl"
 #include "probe_gi.glsl"
+#include "nonfinite.glsl"
 
 #if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
 layout(local_size_x = RAY_GROUP_SIZE) in;
@@ -26,6 +27,7 @@ void main() {
     ivec3 p;
     if (!ray_pass_pixel(EFFECT_REFLECTIONS, imageSize(dst), p)) return;
     Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
+    rq_blend_begin(rng);   // alphaMode BLEND: this pixel's decisions
     PathVertex s = path_vertex_at_gbuffer(gbuf_load(p), uint(p.z));
     vec3 throughput = vec3(1.0);
     vec3 radiance = vec3(0.0);
@@ -66,5 +68,5 @@ void main() {
         if (!continues) break;
         if (bounce == MAX_BOUNCES - 1) radiance += throughput * probe_gi_glossy(s);
     }
-    imageStore(dst, p, vec4(to_half_range(finite_or_zero(radiance)), 1.0));   // the target is rgba16f
+    imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(radiance)), 1.0));   // the target is rgba16f
 }

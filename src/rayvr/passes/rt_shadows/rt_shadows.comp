@@ -7,6 +7,7 @@
 #include "pixel_list.glsl"
 #include "shading.glsl"
 #include "probe_gi.glsl"
+#include "nonfinite.glsl"
 
 #if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
 layout(local_size_x = RAY_GROUP_SIZE) in;
@@ -20,8 +21,9 @@ void main() {
     if (!ray_pass_pixel(EFFECT_SHADOWS, imageSize(dst), p)) return;
     GSurface g = gbuf_load(p);
     Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
+    rq_blend_begin(rng);   // alphaMode BLEND: this pixel's decisions
     PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
     // REFLECTIONS and above: RTReflections traces the specular lobes and shares their light (MIS)
     vec3 c = g.emissive + shade_direct_mis(s, rng, g.effect >= EFFECT_REFLECTIONS) + probe_gi_diffuse(s);
-    imageStore(dst, p, vec4(to_half_range(c), 1.0));   // the target is rgba16f
+    imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(c)), 1.0));   // the target is rgba16f
 }

@@ -75,6 +75,7 @@ class SVGF(RenderPass):
     KEY = ("key0", "key1")
     SURFACE = ("surface0", "surface1")
     FILTER = ("filter0", "filter1")
+    COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"iterations": 5, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2, "max_history": 32,
                   "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
     USES_SCENE = True

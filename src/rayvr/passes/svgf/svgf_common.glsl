@@ -10,6 +10,7 @@
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "path_vertex.glsl"
+#include "nonfinite.glsl"
 
 // Demodulation divides by max(albedo, SVGF_ALBEDO_EPS) and remodulation multiplies by the same,
 // so a black lobe round-trips exactly.
@@ -112,7 +113,7 @@ void svgf_albedo(GSurface g, uint view, out vec3 diffuse, out vec3 specular) {
 }
 
 vec3 svgf_demodulate(vec3 radiance, vec3 albedo) {
-    return to_half_range(max(finite_or_zero(radiance), 0.0) / max(albedo, vec3(SVGF_ALBEDO_EPS)));
+    return to_half_range(max(nonfinite_scrub(radiance), 0.0) / max(albedo, vec3(SVGF_ALBEDO_EPS)));
 }
 
 vec3 svgf_remodulate(vec3 illumination, vec3 albedo) { return illumination * max(albedo, vec3(SVGF_ALBEDO_EPS)); }

@@ -4,6 +4,7 @@
 // All views in one dispatch; writes the output and the next frame's history.
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "color.glsl"
+#include "nonfinite.glsl"
 uniform sampler2DArray taa_color;
 uniform sampler2DArray taa_history;   // linear, clamp to edge (sampler object)
 #if TAA_HAS_MOTION
@@ -28,7 +29,7 @@ void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     ivec3 size = imageSize(dst);
     if (any(greaterThanEqual(p, size))) return;
-    vec4 current = texelFetch(taa_color, p, 0);
+    vec4 current = nonfinite_scrub(texelFetch(taa_color, p, 0));   // counted once, here
     vec4 result = current;
     vec2 motion = vec2(0.0);
 #if TAA_HAS_MOTION
@@ -42,7 +43,7 @@ void main() {
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
                     ivec3 q = ivec3(clamp(p.xy + ivec2(dx, dy), ivec2(0), size.xy - 1), p.z);
-                    vec3 c = rgb_to_ycocg(texelFetch(taa_color, q, 0).rgb);
+                    vec3 c = rgb_to_ycocg(finite_or_zero(texelFetch(taa_color, q, 0).rgb));   // counted at q
                     m1 += c;
                     m2 += c * c;
                 }
@@ -55,7 +56,10 @@ void main() {
         }
         result = mix(history, current, taa_alpha);
     }
-    result = finite_or(result, current);
+    if (!is_finite(result)) {   // a non-finite history
+        nonfinite_count();
+        result = current;
+    }
     imageStore(dst, p, result);
     imageStore(history_out, p, result);
 }

@@ -27,6 +27,7 @@ class TAA(RenderPass):
 
     COLOR, MOTION, DST = "color", "motion", "dst"
     HISTORY = ("history0", "history1")
+    COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"alpha": 0.1, "sigma": 1.0, "clamp": True, "format": "rgba16f"}
     FORMATS = ("rgba16f", "rgba32f")
 

@@ -4,6 +4,7 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 #include "color.glsl"
+#include "nonfinite.glsl"
 
 uniform sampler2DArray src;
 layout(rgba8) writeonly uniform image2DArray dst;
@@ -37,8 +38,7 @@ void main() {
 #if AUTO_EXPOSURE
     scale *= exposure_scale;
 #endif
-    vec3 hdr = max(c.rgb * scale, vec3(0.0));
-    hdr = finite_or_zero(hdr);
+    vec3 hdr = max(nonfinite_scrub(c.rgb * scale), vec3(0.0));
     vec3 ldr = tonemap(hdr);
 #if OUTPUT_SRGB
     ldr = srgb_encode(ldr);

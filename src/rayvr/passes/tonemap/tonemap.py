@@ -21,6 +21,7 @@ class ToneMapper(RenderPass):
     """
 
     SRC, DST = "src", "dst"
+    COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"operator": "aces", "exposure": 0.0, "auto_exposure": False, "key": 0.18,
                   "adaptation": 1.0, "srgb": True}
 
