@@ -87,20 +87,20 @@ def _effects(scene, mirror: bool = True) -> None:
 
 def _pass_ms(renderer, name: str, frames: int, warmup: int) -> float:
     """Mean ms of pass `name` over `frames` frames after `warmup` frames and the benchmarks'
-    timed warm-up (the profile's rolling window holds both: the warm-up's share is taken out).
-    Without the timed warm-up the H200 timed a 16x16 frame's probe update at idle clocks: 4.4 ms
-    where 1.17 was right."""
+    timed warm-up. Without the timed warm-up the H200 timed a 16x16 frame's probe update at idle
+    clocks: 4.4 ms where 1.17 was right."""
     from ._timing import warm_up
 
     warm_up(renderer)
     for _ in range(warmup):
         renderer.render()
-    before = renderer.profile().passes[name]
+    renderer.gl.finish()
+    renderer.profile()   # collect the warm-up's timer queries before forgetting them
+    renderer.compiled.reset_profile()
     for _ in range(frames):
         renderer.render()
     renderer.gl.finish()
-    after = renderer.profile().passes[name]
-    return (after.mean_ms * after.samples - before.mean_ms * before.samples) / max(1, after.samples - before.samples)
+    return renderer.profile().passes[name].mean_ms
 
 
 def update_rows(scene, args, quick: bool) -> list:

@@ -110,6 +110,12 @@ class CompiledGraph:
     def reset_nonfinite(self) -> None:
         self.nonfinite.reset()
 
+    def reset_profile(self) -> None:
+        """Forget the timed frames: profile() then covers only frames after this call (frames
+        whose timer queries are still in flight may yet land in it)."""
+        for times in (*self._times, self._cpu):
+            times.values.clear()
+
     def release(self) -> None:
         """Free the GPU objects now: the resources, what each pass made in compile()
         (RenderPass.release) and the timers (otherwise they live as long as the GL context)."""

@@ -55,6 +55,13 @@ void main() {
     {
         vec2 phi = svgf_phi_color * sqrt(max(blurred_variance(p, size.xy), 0.0) + 1e-10);
         vec2 gradient = svgf_depth_gradient(p, depth, size.xy);
+        // Every weight is one exp2 of a sum of exponents (depth, normal, luminance: the same
+        // product as svgf_weight_depth * svgf_weight_normal * exp(-|dl| / phi)), which spends
+        // half the special-function work of evaluating the factors one by one.
+        const float LOG2E = 1.4426950408889634;
+        vec2 lum_scale = LOG2E / phi;
+        float depth_eps = 1e-3 * depth + 1e-8;
+        float grad_step = svgf_phi_depth * float(svgf_step);
         float ld = luminance(d.rgb), ls = luminance(s.rgb);
         float k0 = KERNEL[0] * KERNEL[0];
         vec2 sum_w = vec2(k0);
@@ -63,22 +70,27 @@ void main() {
         for (int dy = -2; dy <= 2; ++dy)
             for (int dx = -2; dx <= 2; ++dx) {
                 if (dx == 0 && dy == 0) continue;
-                vec2 offset = vec2(dx, dy) * float(svgf_step);
-                ivec3 q = p + ivec3(ivec2(offset), 0);
+                ivec3 q = p + ivec3(dx * svgf_step, dy * svgf_step, 0);
                 float tap_depth;
                 vec3 tap_n;
                 if (!svgf_key_at(q, size.xy, tap_depth, tap_n)) continue;
-                float w = KERNEL[abs(dx)] * KERNEL[abs(dy)] * svgf_weight_depth(depth, tap_depth, gradient, offset)
-                          * svgf_weight_normal(n, tap_n);
+                float e = -LOG2E * abs(depth - tap_depth) / (grad_step * abs(gradient.x * float(dx) + gradient.y * float(dy))
+                                                             + depth_eps);
+                if (svgf_phi_normal > 0.0) {
+                    float c = dot(n, tap_n);
+                    if (!(c > 0.0)) continue;   // weight 0
+                    e += svgf_phi_normal * log2(c);
+                }
+                e += log2(KERNEL[abs(dx)] * KERNEL[abs(dy)]);
                 SvgfIllum tap = texelFetch(src_illum, q, 0);
                 vec4 qd = svgf_illum_diffuse(tap);
-                float wd = w * exp(-abs(ld - luminance(qd.rgb)) / phi.x);
+                float wd = exp2(e - abs(ld - luminance(qd.rgb)) * lum_scale.x);
                 sum_w.x += wd;
                 sum_d += wd * qd.rgb;
                 sum_v.x += wd * wd * qd.a;
 #if SVGF_SPECULAR
                 vec4 qs = svgf_illum_specular(tap);
-                float ws = w * exp(-abs(ls - luminance(qs.rgb)) / phi.y);
+                float ws = exp2(e - abs(ls - luminance(qs.rgb)) * lum_scale.y);
                 sum_w.y += ws;
                 sum_s += ws * qs.rgb;
                 sum_v.y += ws * ws * qs.a;
