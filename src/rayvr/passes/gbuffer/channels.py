@@ -47,7 +47,9 @@ CHANNELS = (
             "render-space position; w = linear eye depth (0: no geometry)"),
     Channel("normW", "rgba32f", (0.0, 0.0, 0.0, 0.0), "shading normal (render space, facing the viewer)"),
     Channel("faceNormalW", "rgba16f", (0.0, 0.0, 0.0, 0.0), "geometric normal (render space, facing the viewer); w = 1 where the back face is seen"),
-    Channel("baseColor", "rgba8", (0.0, 0.0, 0.0, 0.0), "base colour and alpha"),
+    # float16, not rgba8: 8 bits quantise dark colours coarsely (linear: albedo 0.01 stored as
+    # 3/255, 18% off; sRGB-encoded still 3% off), and the path tracer reads the material in float
+    Channel("baseColor", "rgba16f", (0.0, 0.0, 0.0, 0.0), "base colour and alpha"),
     Channel("metalRough", "rg16f", (0.0, 0.0), "metallic, roughness"),
     Channel("emissive", "rgba16f", (0.0, 0.0, 0.0, 0.0), "emitted radiance"),
     Channel("effect", "r32ui", (NO_GEOMETRY,), "effect id (low byte) | material index << 8; 0xFF: no geometry"),
