@@ -70,6 +70,14 @@ def read_exr(path: Path, where: str) -> np.ndarray:
     return np.stack([channels[c] for c in names], axis=2)
 
 
+def srgb_encode(x) -> np.ndarray:
+    """Linear values clipped to [0, 1] and sRGB-encoded (tonemap.comp's srgb_encode), in `x`'s
+    float dtype (float64 for other input)."""
+    x = np.asarray(x)
+    x = np.clip(x if x.dtype.kind == "f" else x.astype(np.float64), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
 def srgb_to_linear(x: np.ndarray) -> np.ndarray:
     """sRGB-encoded values in [0, 1] to linear (float64)."""
     x = np.asarray(x, dtype=np.float64)

@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from ..errors import OptionError
+from ..images import srgb_encode
 
 OPERATORS = ("aces", "reinhard", "linear")
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
@@ -64,11 +65,6 @@ def aces_fit(x: np.ndarray) -> np.ndarray:
     """Narkowicz 2015's fit of the ACES RRT+ODT, as tonemap.comp has it."""
     x = x * 0.6
     return np.clip((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0)
-
-
-def srgb_encode(c: np.ndarray) -> np.ndarray:
-    """sRGB encoding of values in [0, 1] (tonemap.comp's srgb_encode)."""
-    return np.where(c > 0.0031308, 1.055 * np.power(np.maximum(c, 0.0031308), 1.0 / 2.4) - 0.055, 12.92 * c)
 
 
 def tonemap(linear, operator: str = "aces", exposure: float = 0.0) -> np.ndarray:

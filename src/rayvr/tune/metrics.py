@@ -195,7 +195,7 @@ def ssim_views(test, reference, names=("test", "reference")) -> np.ndarray:
 # -- display encoding (for PSNR of display-referred images) -----------------------------------
 def srgb_encode(linear) -> np.ndarray:
     """Linear radiance clamped to [0, 1] and sRGB-encoded (float64): what a display shows at exposure 0."""
-    from ..xr.readback import srgb_encode as encode   # here: importing rayvr.xr loads moderngl
+    from ..images import srgb_encode as encode
 
     return encode(np.asarray(linear, dtype=np.float64))
 

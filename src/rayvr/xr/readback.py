@@ -3,13 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..images import srgb_encode
 from ..rendergraph.formats import NUMPY_DTYPES
-
-
-def srgb_encode(x: np.ndarray) -> np.ndarray:
-    """Linear values clipped to [0, 1] and sRGB-encoded, in `x`'s float dtype."""
-    x = np.clip(x, 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
 def to_uint8(pixels: np.ndarray, encode_srgb: bool = False) -> np.ndarray:
