@@ -355,3 +355,16 @@ def test_check_finds_a_nan_names_its_pass_and_writes_where(gpu, tmp_path, capsys
     mask = np.array(Image.open(masks / "hybrid_RASTER-Direct-direct.png"))[..., 0]
     assert mask.shape == (8, 16)                                             # two views side by side
     assert list(zip(*np.nonzero(mask))) == [(8 - 1 - 6, 8 + 5)]              # top-down row, view 1's column
+
+
+def test_check_counts_the_samples_a_pass_scrubbed_as_a_fault(gpu, capsys, monkeypatch):
+    """A NaN a pass set to 0 leaves its output finite; its GPU counter still fails the check (the
+    counters themselves are tested in test_nonfinite_counts.py)."""
+    from rayvr.rendergraph.compiled import CompiledGraph
+
+    monkeypatch.setattr(CompiledGraph, "nonfinite_counts",
+                        lambda self: {p: (3 if p == "Direct" else 0) for p in self.nonfinite.slot})
+    code, out, err = run(capsys, "check", "quad", "--size", "8x8", "--views", "1", "--frames", "1")
+    assert code == 1, err
+    assert "hybrid RASTER: 3 non-finite values" in out
+    assert "scrubbed samples 3" in out and "give --masks DIR" not in out

@@ -9,7 +9,9 @@ for the probed frames (this tool only): after each pass it asks the pass for GPU
 (`render_pass.nonfinite_counts() -> {pin: count}`, when a pass has them) and otherwise reads back
 every float texture the pass wrote. Transient textures alias, so they are read right after their
 writer runs, before a later pass reuses the memory. A mask (views, h, w) of the texels holding a
-non-finite component comes with every pin that has any.
+non-finite component comes with every pin that has any. Each pass that scrubs non-finite
+samples (COUNTS_NONFINITE) also gets a finding for its GPU counter, pin SCRUBBED: a NaN or Inf
+that it set to 0 is a fault upstream even though its output is finite.
 """
 from __future__ import annotations
 
@@ -22,6 +24,9 @@ from .errors import RayvrError
 from .materials.effect import Effect
 
 FLOAT_DTYPES = ("f2", "f4")
+# The pseudo-pin of a pass's GPU counter of non-finite samples it set to 0 (over all the frames;
+# glsl/nonfinite.glsl): the values it would otherwise have written are gone, so no mask.
+SCRUBBED = "scrubbed samples"
 
 
 @dataclasses.dataclass
@@ -152,6 +157,9 @@ def run_check(scene, size=(32, 32), views: int = 2, frames: int = 2, gpu=None, p
                     with nonfinite_by_pass(r.compiled, name, found):
                         for _ in range(frames):
                             r.render()
+                    for pass_name, count in r.compiled.nonfinite_counts().items():
+                        found[(pass_name, SCRUBBED)] = PinFinding(name, pass_name, SCRUBBED, 0, count,
+                                                                  source="gpu counters")
             except RayvrError as exc:
                 failures.append(ConfigFailure(name, " ".join(str(exc).split())))
             findings += found.values()

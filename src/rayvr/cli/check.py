@@ -58,12 +58,13 @@ def run(args) -> int:
     for line in scene.warnings:
         print(f"  {line}")
     bad = [f for f in findings if f.nonfinite]
-    if bad and masks is not None:
+    with_masks = [f for f in bad if f.mask is not None]
+    if with_masks and masks is not None:
         with atomic_group():
-            for f in bad:
+            for f in with_masks:
                 image = np.concatenate(list(f.mask), axis=1).astype(np.uint8) * 255
                 write_image(masks / mask_name(f), np.repeat(image[..., None], 3, axis=-1))
-        print(f"wrote {len(bad)} mask(s) into {masks}")
-    elif bad:
+        print(f"wrote {len(with_masks)} mask(s) into {masks}")
+    elif with_masks:
         print("give --masks DIR to write where the non-finite texels are")
     return 1 if bad or failures else 0
