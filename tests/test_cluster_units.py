@@ -121,6 +121,7 @@ def test_worker_views_and_samples_in_this_process_equal_a_renderer(gpu):
         r.render()
         whole = r.read_output("Composite.color", flip_y=True)
     assert np.array_equal(got["pixels"]["Composite.color"], whole[1:3])
+    assert "Shadows" in got["nonfinite"] and not any(got["nonfinite"].values())   # each share's own counts
     pt = rv.tune.path_traced_graph(spp=1, max_bounces=2)
     two = default_views(scene, 1, (16, 16))
     start = seeds.reference_first_frame()                     # the study's reference seeds
@@ -160,3 +161,25 @@ def test_without_ray_the_cluster_names_the_extra(monkeypatch, tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and err.strip() == "rayvr: error: --workers needs the cluster extra: pip install 'rayvr[cluster]'"
     assert not list(tmp_path.iterdir())                    # nothing written
+
+
+def test_render_with_workers_sums_the_shares_non_finite_counts(gpu, monkeypatch, capsys):
+    """`rayvr render --workers`: the shares' counts of scrubbed samples, summed by pass, reach
+    stderr as one line each (as without workers)."""
+    import argparse
+    import contextlib
+
+    from rayvr.cluster import cli as cluster_cli
+    from rayvr.cluster import jobs
+
+    scene = rv.scenes.quad()
+    views = default_views(scene, 2, (8, 8))
+    radiance = np.zeros((2, 8, 8, 4), np.float32)
+    shares = [{"first_view": 0, "views": 1, "render_ms": 1.0, "worker": "w0", "nonfinite": {"Direct": 2, "ToneMap": 0}},
+              {"first_view": 1, "views": 1, "render_ms": 1.0, "worker": "w1", "nonfinite": {"Direct": 3, "ToneMap": 0}}]
+    monkeypatch.setattr(cluster_cli, "open_cluster", lambda args: contextlib.nullcontext(None))
+    monkeypatch.setattr(jobs, "render_views", lambda *a, **k: jobs.ViewsResult({"Composite.color": radiance}, shares, 0.0))
+    args = argparse.Namespace(frames=1, report=False)
+    cluster_cli.render(args, "quad", scene, rv.graphs.hybrid(), views, hdr=True)
+    err = capsys.readouterr().err
+    assert err == "rayvr: warning: 5 non-finite samples in pass Direct were set to 0\n"

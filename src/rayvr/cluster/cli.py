@@ -58,8 +58,15 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
               f"{share['worker']}")
     if getattr(args, "report", False):
         print("--report: each worker compiles its own graph; run without --workers for the compile report")
+    from ..cli.render import say_nonfinite
+
+    nonfinite: dict[str, int] = {}
+    for share in result.shares:   # every share's passes, summed by pass
+        for name, count in share.get("nonfinite", {}).items():
+            nonfinite[name] = nonfinite.get(name, 0) + int(count)
     radiance = result.pixels[pin]
     if hdr and grid is None:
+        say_nonfinite(nonfinite)
         return radiance, None
     tm = graph.get_pass("ToneMap")
     pixels, texture, compiled = tone_map(radiance, tm.operator, tm.exposure, tm.auto_exposure)
@@ -70,8 +77,11 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
             from ..xr.quilt import compose_quilt, read_quilt
 
             quilt_pixels = read_quilt(compose_quilt(get_context().gl, texture, *grid))
+        for name, count in compiled.nonfinite_counts().items():   # the tone map of the gathered views
+            nonfinite[name] = nonfinite.get(name, 0) + int(count)
     finally:
         compiled.release()
+    say_nonfinite(nonfinite)
     return (radiance if hdr else pixels), quilt_pixels
 
 

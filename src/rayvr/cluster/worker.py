@@ -171,6 +171,7 @@ class RenderWorker:
         `pins` after the last: {pin: (views, h, w, c)} in the pins' formats."""
         r = self._renderer(scene, graph, views, profiling)
         r.frame_index = int(frame_index)
+        r.compiled.reset_nonfinite()        # the Renderer is cached: count this share alone
         t0 = time.perf_counter()
         for _ in range(int(frames)):
             r.render(views)
@@ -181,7 +182,8 @@ class RenderWorker:
         t2 = time.perf_counter()
         profile = str(r.profile()) if profiling else None
         return {"pixels": pixels, "render_ms": (t1 - t0) * 1e3 / max(int(frames), 1),
-                "readback_ms": (t2 - t1) * 1e3, "views": len(views), "profile": profile, "worker": self.describe()}
+                "readback_ms": (t2 - t1) * 1e3, "views": len(views), "profile": profile,
+                "nonfinite": r.compiled.nonfinite_counts(), "worker": self.describe()}
 
     def job_frames(self, scene, graph: dict, sequence, first: int, count: int, warmup: int = 0, pins=(),
                    flip_y: bool = True, frame_index_base: int = 0) -> dict:
