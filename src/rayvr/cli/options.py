@@ -136,3 +136,11 @@ def apply_lighting(scene, args) -> None:
         print(f"rayvr: warning: {scene.path or scene.name}: no light (no punctual light, emissive material or environment); "
               f"lighting it with a neutral uniform environment of radiance 1 (--environment to choose one)",
               file=sys.stderr)
+
+
+def say_nonfinite(counts: dict[str, int]) -> None:
+    """One line on stderr per pass that set non-finite samples to 0 in this render."""
+    from ..rendergraph.nonfinite import nonfinite_lines
+
+    for line in nonfinite_lines(counts):
+        print(f"rayvr: warning: {line}", file=sys.stderr)

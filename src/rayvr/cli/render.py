@@ -31,7 +31,7 @@ from ..cluster import cli as cluster_cli
 from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
 from .options import (MAX_VIEWS, add_lighting_arguments, apply_lighting, integer, load_scene_arg, number,
-                      parse_size, views_count)
+                      parse_size, say_nonfinite, views_count)
 
 LAYOUTS = ("per-view", "side-by-side")
 GRAPHS = ("hybrid", "path_traced")
@@ -343,14 +343,6 @@ def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
 
             quilt_pixels = read_quilt(compose_quilt(r.gl, r.output_texture(OUTPUT), *quilt_grid))
     return pixels, quilt_pixels
-
-
-def say_nonfinite(counts: dict[str, int]) -> None:
-    """One line on stderr per pass that set non-finite samples to 0 in this render."""
-    from ..rendergraph.nonfinite import nonfinite_lines
-
-    for line in nonfinite_lines(counts):
-        print(f"rayvr: warning: {line}", file=sys.stderr)
 
 
 def render_path(args, scene, graph, views, hdr: bool, camera_path, out: Path) -> list[Path]:

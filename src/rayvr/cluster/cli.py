@@ -58,7 +58,7 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
               f"{share['worker']}")
     if getattr(args, "report", False):
         print("--report: each worker compiles its own graph; run without --workers for the compile report")
-    from ..cli.render import say_nonfinite
+    from ..cli.options import say_nonfinite
 
     nonfinite: dict[str, int] = {}
     for share in result.shares:   # every share's passes, summed by pass
