@@ -13,7 +13,9 @@
 //   glass      = rough dielectric interface (Walter et al. 2007): reflection and refraction
 //                through the microfacet by the exact Fresnel term (total internal reflection
 //                included), tinted by the base colour; thin-walled without a volume (the
-//                transmitted lobe mirrors the reflected one through the surface, no bending)
+//                transmitted lobe mirrors the reflected one through the surface, no bending).
+//                Sampled as Walter's section 5.3: a visible normal m, then reflection with
+//                probability F(v.m), refraction otherwise (bsdf_sample_lobe)
 // Single-scatter GGX loses energy at high roughness: the specular lobes are scaled by
 // 1 + f0 (1 / E_ss - 1) (Turquin 2019; exact for white metal) and glass by 1 / E_ss (an
 // approximation for the transmitted part). E comes from rayvr/materials/bsdf_tables.py's tables.
@@ -31,6 +33,7 @@
 //   vec3  bsdf_eval(b, n, v, l)                          f |cos|
 //   float bsdf_pdf(b, n, v, l)                           solid-angle pdf of bsdf_sample's non-delta lobes
 //   float bsdf_pdf_specular(b, n, v, l)                  the same of bsdf_sample_specular, l above
+//                                                        (its reflections: glass's share included)
 //   bool  bsdf_sample(b, n, v, u, out BsdfSample)        u in [0,1)^3
 //   bsdf_albedo(b, n, v, out diffuse, out specular)      directional albedos of the two parts
 #pragma once
