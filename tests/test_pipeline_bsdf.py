@@ -11,8 +11,12 @@ from rayvr.gpu.program_resources import program_resources
 from rayvr.gpu.shaders import compute_program
 from rayvr.materials import bsdf_tables
 
+# RAYVR_SAMPLER 0: independent PCG samples, one per invocation (the Owen-scrambled Sobol sampler's
+# first point under 65,536 seeds is not an independent sample: a transmitted fraction of 0.0195
+# drew 0.0179 from it, 2.8 standard errors off, against 0.0192 from PCG)
 SHADER = """
 #define SCENE_HAS_TRANSMISSION 1
+#define RAYVR_SAMPLER 0
 #include "bsdf.glsl"
 layout(local_size_x = 64) in;
 layout(std430) writeonly buffer Out { vec4 result[]; };
@@ -27,6 +31,8 @@ uniform bool volume;
 uniform bool inside;
 uniform uint mode;   // 0: full sample (weight.r, eval/pdf, valid, transmitted)  1: eval at a uniform l (sphere)
                      // 2: eval of l = mirror reflection (lobe value)  3: delta sample (weight.r, delta, transmitted)
+                     // 4: bsdf_pdf and bsdf_pdf_specular over an equal-area 1024 x 1024 grid of the sphere
+                     // 5: specular sample (valid, l above, transmitted)
 void main() {
     uint i = gl_GlobalInvocationID.x;
     Rng rng = rng_init(uvec2(i, 7u), 0u, 0u, 11u);
@@ -52,6 +58,18 @@ void main() {
         } else {
             r = vec4(ok ? s.weight.r : 0.0, s.delta ? 1.0 : 0.0, s.transmitted ? 1.0 : 0.0, ok ? 1.0 : 0.0);
         }
+    } else if (mode == 4u) {   // the mean over the cell's 4 x 4 sub-cells: a 1024 x 1024 grid
+        for (uint k = 0u; k < 16u; ++k) {
+            float z = 1.0 - 2.0 * (float(4u * (i / 256u) + k / 4u) + 0.5) / 1024.0;
+            float phi = 6.283185307 * (float(4u * (i % 256u) + k % 4u) + 0.5) / 1024.0;
+            float s = sqrt(max(0.0, 1.0 - z * z));
+            vec3 l = vec3(s * cos(phi), s * sin(phi), z);
+            r += vec4(bsdf_pdf(b, n, v, l), bsdf_pdf_specular(b, n, v, l), 0.0, 0.0) / 16.0;
+        }
+    } else if (mode == 5u) {
+        BsdfSample s;
+        bool ok = bsdf_sample_specular(b, n, v, rng_next3(rng), s);
+        r = vec4(ok ? 1.0 : 0.0, ok && s.l.z > 0.0 ? 1.0 : 0.0, ok && s.transmitted ? 1.0 : 0.0, 0.0);
     } else if (mode == 1u) {
         vec2 u = rng_next2(rng);
         float z = 1.0 - 2.0 * u.x, s = sqrt(max(0.0, 1.0 - z * z)), phi = 6.283185307 * u.y;
@@ -133,6 +151,32 @@ def test_sample_weight_is_eval_over_pdf(bsdf):
         ok = s[:, 2] > 0
         assert ok.mean() > 0.5, args
         np.testing.assert_allclose(s[ok, 0], s[ok, 1], rtol=2e-3, atol=1e-5, err_msg=str(args))
+
+
+PDF_CASES = [dict(transmission=1.0, volume=True), dict(transmission=1.0, volume=True, inside=True),
+             dict(transmission=1.0), dict(transmission=0.5, metallic=0.3, base=(0.8, 0.5, 0.2), volume=True),
+             dict(transmission=0.7, base=(0.2, 0.4, 0.9), inside=True, volume=True), dict()]
+
+
+@pytest.mark.parametrize("roughness", [0.3, 1.0])
+@pytest.mark.parametrize("cos_v", [0.3, 0.8])
+@pytest.mark.parametrize("case", range(len(PDF_CASES)))
+def test_pdf_is_the_density_that_the_sampler_draws(bsdf, roughness, cos_v, case):
+    """bsdf_pdf integrates over the sphere to the probability that bsdf_sample returns a
+    direction (glass's per-microfacet choice between reflection and refraction included: a pdf
+    that were not the sampler's density would still give weight == eval / pdf pointwise), and
+    bsdf_pdf_specular over the upper hemisphere to bsdf_sample_specular's probability of a
+    direction there. The integrals on an equal-area 1024 x 1024 grid (refraction's lobe has an
+    edge, at the critical angle of its microfacets: a float64 quadrature of this grid is within
+    0.25% of 4M float64 samples of Walter's scheme, at roughness 1 and cos 0.3; 256 x 256 was
+    0.7% off), the probabilities from 65,536 samples (standard error <= 0.002)."""
+    args = PDF_CASES[case]
+    grid = bsdf(4, cos_v, roughness, **args)
+    ok = bsdf(0, cos_v, roughness, **args)[:, 2] > 0
+    assert grid[:, 0].mean() * 4 * np.pi == pytest.approx(ok.mean(), abs=0.006)
+    spec = bsdf(5, cos_v, roughness, **args)
+    assert grid[:, 1].mean() * 4 * np.pi == pytest.approx(spec[:, 1].mean(), abs=0.006)
+    assert ok.mean() > 0.5
 
 
 @pytest.mark.parametrize("roughness,metallic", [(0.5, 0.0), (1.0, 0.0), (0.6, 1.0), (0.8, 0.5)])

@@ -13,7 +13,9 @@
 //   glass      = rough dielectric interface (Walter et al. 2007): reflection and refraction
 //                through the microfacet by the exact Fresnel term (total internal reflection
 //                included), tinted by the base colour; thin-walled without a volume (the
-//                transmitted lobe mirrors the reflected one through the surface, no bending)
+//                transmitted lobe mirrors the reflected one through the surface, no bending).
+//                Sampled as Walter's section 5.3: a visible normal m, then reflection with
+//                probability F(v.m), refraction otherwise (bsdf_sample_lobe)
 // Single-scatter GGX loses energy at high roughness: the specular lobes are scaled by
 // 1 + f0 (1 / E_ss - 1) (Turquin 2019; exact for white metal) and glass by 1 / E_ss (an
 // approximation for the transmitted part). E comes from rayvr/materials/bsdf_tables.py's tables.
@@ -31,6 +33,7 @@
 //   vec3  bsdf_eval(b, n, v, l)                          f |cos|
 //   float bsdf_pdf(b, n, v, l)                           solid-angle pdf of bsdf_sample's non-delta lobes
 //   float bsdf_pdf_specular(b, n, v, l)                  the same of bsdf_sample_specular, l above
+//                                                        (its reflections: glass's share included)
 //   bool  bsdf_sample(b, n, v, u, out BsdfSample)        u in [0,1)^3
 //   bsdf_albedo(b, n, v, out diffuse, out specular)      directional albedos of the two parts
 #pragma once
@@ -299,19 +302,28 @@ vec3 bsdf_eval(BsdfParams b, vec3 n, vec3 v, vec3 l) {
 }
 
 // ---- the lobes, sampled -----------------------------------------------------------------------
-// Probabilities of the reflection, diffuse and transmission lobes, from their albedos at mu_v.
-// Every lobe that can carry light keeps at least a small share, so that MIS never meets a zero
-// pdf where f > 0.
+// Three lobes are chosen among by their probabilities at mu_v (bsdf_set_view): 0 the specular
+// reflections of the dielectric layer and the metal, 1 the dielectric's Lambert base, 2 glass
+// (its reflection and its transmission together). Glass splits between reflection and
+// transmission per sampled microfacet m, as Walter et al. 2007 (section 5.3) and Mitsuba 3's
+// roughdielectric do: m from the visible normals of v, reflection about m with the probability
+// of its Fresnel term F(v.m) (1 under total internal reflection), refraction through m (thin
+// walls: the reflection mirrored through the surface) otherwise. The Fresnel term at the macro
+// normal would starve transmission inside rough glass beyond the critical angle, where most
+// microfacets still refract (weights of ~50 from a 2% floor).
+
+// Probabilities of the three lobes, from their albedos at mu_v. Every lobe that can carry light
+// keeps at least a small share, so that MIS never meets a zero pdf where f > 0.
 vec3 bsdf_lobe_probabilities_at(BsdfParams b, float nv, vec2 ab) {
     vec3 w = bsdf_weights(b);
     vec3 e_spec = bsdf_layer_albedo(b.f0, b.f90, ab);
     float fg = w.y > 0.0 ? max3(bsdf_glass_fresnel(b, nv)) : 0.0;
     float base = luminance(b.base_color);
-    vec3 p = vec3(w.x * luminance(e_spec) + w.z * luminance(bsdf_layer_albedo(b.base_color, 1.0, ab)) + w.y * fg,
+    vec3 p = vec3(w.x * luminance(e_spec) + w.z * luminance(bsdf_layer_albedo(b.base_color, 1.0, ab)),
                   w.x * (1.0 - max3(e_spec)) * base,
-                  w.y * (1.0 - fg) * base);
-    bvec3 can = bvec3(w.z > 0.0 || (w.x > 0.0 && b.f90 > 0.0) || (w.y > 0.0 && b.specular > 0.0),
-                      w.x > 0.0 && base > 0.0, w.y > 0.0 && base > 0.0);
+                  w.y * (fg + (1.0 - fg) * base));
+    bvec3 can = bvec3(w.z > 0.0 || (w.x > 0.0 && b.f90 > 0.0), w.x > 0.0 && base > 0.0,
+                      w.y > 0.0 && (base > 0.0 || b.specular > 0.0));
     p = max(p, mix(vec3(0.0), vec3(0.02), can));
     float sum = p.x + p.y + p.z;
     return sum > 0.0 ? p / sum : vec3(1.0, 0.0, 0.0);
@@ -331,6 +343,23 @@ void bsdf_set_view(inout BsdfParams b, vec3 n, vec3 v) {
     b.lobe_p = bsdf_lobe_probabilities_at(b, b.nv, b.ab_v);
 }
 
+// An index-matched volume (eta 1): its transmission is a delta straight through at any roughness.
+bool bsdf_index_matched(BsdfParams b) { return !b.thin && abs(bsdf_eta(b) - 1.0) < 1e-4; }
+
+// The probability that glass's lobe reflects at a microfacet whose cosine to v is c: its Fresnel
+// term (glTF's scaled one, bsdf_glass_fresnel; its mean over RGB for a coloured specular, so that
+// both branches' weights stay within 3x of a white glass's). 0 when index-matched (the
+// transmission is a delta there, the reflection's F ~ 0 is left to light sampling).
+float bsdf_glass_reflect_probability(BsdfParams b, float c) {
+#if SCENE_HAS_TRANSMISSION
+    if (bsdf_index_matched(b)) return 0.0;
+    vec3 f = bsdf_glass_fresnel(b, c);
+    return clamp((f.x + f.y + f.z) * (1.0 / 3.0), 0.0, 1.0);
+#else
+    return 0.0;
+#endif
+}
+
 // Pdf of the GGX visible normal h for v: G1(v) max(v.h, 0) D(h) / n.v.
 float bsdf_vndf_pdf(BsdfParams b, vec3 n, vec3 v, vec3 h) {
     float nv = dot(n, v);
@@ -345,42 +374,68 @@ vec3 bsdf_sample_vndf(BsdfParams b, vec3 n, vec3 v, vec2 u) {
     return tbn * sample_ggx_vndf(normalize(vec3(vl.xy, max(vl.z, 1e-6))), bsdf_alpha(b), u);
 }
 
-// Solid-angle pdfs of each lobe's own sampling (non-delta), for l on its side.
+// Solid-angle pdf of a reflection about a visible normal, D_v(h) / (4 v.h), for l above (non-delta).
 float bsdf_pdf_reflection(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     if (bsdf_is_delta(b) || dot(n, l) <= 0.0) return 0.0;
     vec3 h = normalize(v + l);
     return bsdf_vndf_pdf(b, n, v, h) / (4.0 * max(dot(v, h), 1e-8));
 }
 
-float bsdf_pdf_transmission(BsdfParams b, vec3 n, vec3 v, vec3 l) {
+// Glass lobe's probability of reflecting towards l above: F(v.h) at l's half vector.
+float bsdf_glass_reflect_probability_to(BsdfParams b, vec3 v, vec3 l) {
 #if SCENE_HAS_TRANSMISSION
-    float eta = bsdf_eta(b);
-    if (bsdf_is_delta(b) || dot(n, l) >= 0.0 || (!b.thin && abs(eta - 1.0) < 1e-4)) return 0.0;
-    vec3 h;
-    if (!bsdf_transmission_half(b, n, v, l, h)) return 0.0;
-    if (b.thin) return bsdf_vndf_pdf(b, n, v, h) / (4.0 * max(dot(v, h), 1e-8));
-    float lh = dot(l, h);
-    float denom = dot(v, h) + eta * lh;
-    return bsdf_vndf_pdf(b, n, v, h) * eta * eta * abs(lh) / (denom * denom);
+    return bsdf_glass_reflect_probability(b, max(dot(v, normalize(v + l)), 0.0));
 #else
     return 0.0;
 #endif
 }
 
-float bsdf_pdf(BsdfParams b, vec3 n, vec3 v, vec3 l) {
-    float nv = dot(n, v), nl = dot(n, l);
-    if (nv <= 0.0 || nl == 0.0) return 0.0;
-    vec3 p = b.lobe_p;
-    if (nl > 0.0) return p.x * bsdf_pdf_reflection(b, n, v, l) + p.y * nl / RAYVR_PI;
-    return p.z * bsdf_pdf_transmission(b, n, v, l);
+// Solid-angle pdf of glass's lobe refracting (thin: passing, mirrored) to l below the surface:
+// (1 - F(v.h)) D_v(h) times the Jacobian of h to l, eta^2 |l.h| / (v.h + eta l.h)^2 (Walter et
+// al. eq. 17) for a refraction, 1 / (4 v.h) for a thin wall's mirrored reflection.
+float bsdf_pdf_transmission(BsdfParams b, vec3 n, vec3 v, vec3 l) {
+#if SCENE_HAS_TRANSMISSION
+    if (bsdf_is_delta(b) || dot(n, l) >= 0.0 || bsdf_index_matched(b)) return 0.0;
+    vec3 h;
+    if (!bsdf_transmission_half(b, n, v, l, h)) return 0.0;
+    float vh = dot(v, h);
+    float pass = (1.0 - bsdf_glass_reflect_probability(b, vh)) * bsdf_vndf_pdf(b, n, v, h);
+    if (b.thin) return pass / (4.0 * max(vh, 1e-8));
+    float eta = bsdf_eta(b);
+    float lh = dot(l, h);
+    float denom = vh + eta * lh;
+    return pass * eta * eta * abs(lh) / (denom * denom);
+#else
+    return 0.0;
+#endif
 }
 
-// Solid-angle pdf of bsdf_sample_specular's direction l above the surface (its reflection lobe
-// among the specular ones): what the direct-light passes weigh their light samples against.
-float bsdf_pdf_specular(BsdfParams b, vec3 n, vec3 v, vec3 l) {
+// Pdf of bsdf_sample_lobes's direction l among the lobes of probabilities p (summing to 1).
+float bsdf_pdf_lobes(BsdfParams b, vec3 n, vec3 v, vec3 l, vec3 p) {
+    float nv = dot(n, v), nl = dot(n, l);
+    if (nv <= 0.0 || nl == 0.0) return 0.0;
+    if (nl < 0.0) return p.z * bsdf_pdf_transmission(b, n, v, l);
+    float reflect_p = p.x;
+#if SCENE_HAS_TRANSMISSION
+    if (p.z > 0.0) reflect_p += p.z * bsdf_glass_reflect_probability_to(b, v, l);
+#endif
+    return reflect_p * bsdf_pdf_reflection(b, n, v, l) + p.y * nl / RAYVR_PI;
+}
+
+float bsdf_pdf(BsdfParams b, vec3 n, vec3 v, vec3 l) { return bsdf_pdf_lobes(b, n, v, l, b.lobe_p); }
+
+// The lobe probabilities of bsdf_sample_specular: the diffuse lobe left out.
+vec3 bsdf_specular_lobe_probabilities(BsdfParams b) {
     float sum = b.lobe_p.x + b.lobe_p.z;
-    if (dot(n, v) <= 0.0 || !(sum > 0.0)) return 0.0;
-    return b.lobe_p.x / sum * bsdf_pdf_reflection(b, n, v, l);
+    return sum > 0.0 ? vec3(b.lobe_p.x, 0.0, b.lobe_p.z) / sum : vec3(0.0);
+}
+
+// Solid-angle pdf of bsdf_sample_specular's direction l above the surface (its reflections:
+// the reflection lobe and glass's reflecting share): what the direct-light passes weigh their
+// light samples against.
+float bsdf_pdf_specular(BsdfParams b, vec3 n, vec3 v, vec3 l) {
+    if (dot(n, l) <= 0.0) return 0.0;
+    return bsdf_pdf_lobes(b, n, v, l, bsdf_specular_lobe_probabilities(b));
 }
 
 struct BsdfSample {
@@ -405,10 +460,16 @@ vec3 bsdf_delta_transmittance(BsdfParams b, float nv) {
     return bsdf_weights(b).y * b.base_color * (vec3(1.0) - bsdf_glass_fresnel(b, nv)) / (eta * eta);
 }
 
-// A direction of lobe `lobe` (0 reflection, 1 diffuse, 2 transmission) from u; `delta` when the
-// lobe is a delta there (then l is exact). False when it has none (below the surface, TIR).
-bool bsdf_sample_lobe(BsdfParams b, vec3 n, vec3 v, int lobe, vec2 u, out vec3 l, out bool delta) {
+// A direction of lobe `lobe` (0 reflection, 1 diffuse, 2 glass) from u.xy (glass: u_split in
+// [0,1) chooses between its reflection and transmission); `delta` when it is a delta there (then
+// l is exact), `transmitted` when l is below; `q` glass's probability of the reflection it chose
+// against (F at the microfacet; at n for a delta). False when it has none (l on the wrong side,
+// total internal reflection in the transmission branch of a glass whose F stays below 1).
+bool bsdf_sample_lobe(BsdfParams b, vec3 n, vec3 v, int lobe, vec2 u, float u_split, out vec3 l, out bool delta,
+                      out bool transmitted, out float q) {
     delta = false;
+    transmitted = false;
+    q = 0.0;
     l = n;
     if (lobe == 0) {
         delta = bsdf_is_delta(b);
@@ -420,20 +481,26 @@ bool bsdf_sample_lobe(BsdfParams b, vec3 n, vec3 v, int lobe, vec2 u, out vec3 l
         return true;
     }
 #if SCENE_HAS_TRANSMISSION
-    float eta = bsdf_eta(b);
-    bool matched = !b.thin && abs(eta - 1.0) < 1e-4;
-    delta = bsdf_is_delta(b) || matched;
-    if (delta && (b.thin || matched)) {
+    bool matched = bsdf_index_matched(b);
+    delta = bsdf_is_delta(b);
+    vec3 h = delta ? n : bsdf_sample_vndf(b, n, v, u);
+    q = bsdf_glass_reflect_probability(b, dot(v, h));
+    if (u_split < q) {
+        l = reflect(-v, h);
+        return dot(n, l) > 0.0;
+    }
+    transmitted = true;
+    if (matched || (delta && b.thin)) {   // straight through
+        delta = true;
         l = -v;
         return true;
     }
-    vec3 h = delta ? n : bsdf_sample_vndf(b, n, v, u);
     if (b.thin) {
         vec3 r = reflect(-v, h);
         l = r - 2.0 * dot(n, r) * n;
     } else {
-        l = refract(-v, h, 1.0 / eta);
-        if (dot(l, l) == 0.0) return false;   // total internal reflection: the reflection lobe carries it
+        l = refract(-v, h, 1.0 / bsdf_eta(b));
+        if (dot(l, l) == 0.0) return false;   // total internal reflection (F < 1: glTF's specular < 1)
     }
     return dot(n, l) < 0.0;
 #else
@@ -441,10 +508,11 @@ bool bsdf_sample_lobe(BsdfParams b, vec3 n, vec3 v, int lobe, vec2 u, out vec3 l
 #endif
 }
 
-// One sample among the lobes `use` selects (reflection, diffuse, transmission), chosen by their
-// probabilities; u.xy the direction, u.z the lobe. The weight is f / pdf over the chosen set
-// (one-sample MIS between the lobes), or a delta's value over its probability.
-bool bsdf_sample_lobes(BsdfParams b, vec3 n, vec3 v, vec3 u, bvec3 use, out BsdfSample s) {
+// One sample among the lobes (with or without the diffuse one), chosen by their probabilities;
+// u.xy the direction, u.z the lobe (and, rescaled, glass's reflection or transmission). The
+// weight is f / pdf over the chosen set (one-sample MIS between the lobes: bsdf_pdf_lobes), or
+// the deltas' value in that direction over the probability of drawing it.
+bool bsdf_sample_lobes(BsdfParams b, vec3 n, vec3 v, vec3 u, bool with_diffuse, out BsdfSample s) {
     s.delta = false;
     s.transmitted = false;
     s.pdf = 0.0;
@@ -452,27 +520,27 @@ bool bsdf_sample_lobes(BsdfParams b, vec3 n, vec3 v, vec3 u, bvec3 use, out Bsdf
     s.l = n;
     float nv = dot(n, v);
     if (nv <= 0.0) return false;
-    vec3 p = mix(vec3(0.0), b.lobe_p, use);
-    float sum = p.x + p.y + p.z;
-    if (!(sum > 0.0)) return false;
-    p /= sum;
+    vec3 p = with_diffuse ? b.lobe_p : bsdf_specular_lobe_probabilities(b);
+    if (!(p.x + p.y + p.z > 0.0)) return false;
     int lobe = u.z < p.x ? 0 : (u.z < p.x + p.y ? 1 : 2);
+    float u_split = lobe == 2 ? clamp((u.z - p.x - p.y) / max(p.z, 1e-30), 0.0, 1.0) : 0.0;
     bool delta;
-    if (!bsdf_sample_lobe(b, n, v, lobe, u.xy, s.l, delta)) return false;
-    s.transmitted = lobe == 2;
+    float q;
+    if (!bsdf_sample_lobe(b, n, v, lobe, u.xy, u_split, s.l, delta, s.transmitted, q)) return false;
     if (delta) {
         s.delta = true;
-        s.weight = (lobe == 0 ? bsdf_delta_reflectance(b, nv) : bsdf_delta_transmittance(b, nv)) / p[lobe];
+        // a smooth surface's mirror direction is drawn by the reflection lobe and glass's
+        // reflection, its straight or refracted one by glass's transmission alone
+        s.weight = s.transmitted ? bsdf_delta_transmittance(b, nv) / (p.z * (1.0 - q))
+                                 : bsdf_delta_reflectance(b, nv) / (p.x + p.z * bsdf_glass_reflect_probability(b, nv));
         return max3(s.weight) > 0.0;
     }
+    s.pdf = bsdf_pdf_lobes(b, n, v, s.l, p);
     vec3 f;
-    if (s.transmitted) {
-        s.pdf = p.z * bsdf_pdf_transmission(b, n, v, s.l);
+    if (s.transmitted)
         f = bsdf_eval_transmission(b, n, v, s.l);
-    } else {
-        s.pdf = p.x * bsdf_pdf_reflection(b, n, v, s.l) + p.y * dot(n, s.l) / RAYVR_PI;
-        f = (use.x ? bsdf_eval_reflection(b, n, v, s.l) : vec3(0.0)) + (use.y ? bsdf_eval_diffuse(b, n, v, s.l) : vec3(0.0));
-    }
+    else
+        f = bsdf_eval_reflection(b, n, v, s.l) + (with_diffuse ? bsdf_eval_diffuse(b, n, v, s.l) : vec3(0.0));
     if (!(s.pdf > 0.0)) return false;
     s.weight = f / s.pdf;
     return true;
@@ -480,13 +548,13 @@ bool bsdf_sample_lobes(BsdfParams b, vec3 n, vec3 v, vec3 u, bvec3 use, out Bsdf
 
 // One sample of the whole BSDF (its pdf is bsdf_pdf's).
 bool bsdf_sample(BsdfParams b, vec3 n, vec3 v, vec3 u, out BsdfSample s) {
-    return bsdf_sample_lobes(b, n, v, u, bvec3(true), s);
+    return bsdf_sample_lobes(b, n, v, u, true, s);
 }
 
-// One sample of the specular lobes alone (reflection and transmission): what RTReflections
-// traces, the diffuse part being lit by the direct-light passes.
+// One sample of the specular lobes alone (reflection and glass): what RTReflections traces, the
+// diffuse part being lit by the direct-light passes. Its pdf above the surface is bsdf_pdf_specular's.
 bool bsdf_sample_specular(BsdfParams b, vec3 n, vec3 v, vec3 u, out BsdfSample s) {
-    return bsdf_sample_lobes(b, n, v, u, bvec3(true, false, true), s);
+    return bsdf_sample_lobes(b, n, v, u, false, s);
 }
 
 // ---- albedos ----------------------------------------------------------------------------------
