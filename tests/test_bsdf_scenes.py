@@ -137,6 +137,41 @@ def test_rough_thin_walled_glass_in_a_furnace_keeps_its_mean(gpu, roughness):
     assert img[..., 0].mean() == pytest.approx(1.0, abs=0.01)
 
 
+def test_many_long_paths_in_one_frame_keep_their_light(gpu, monkeypatch):
+    """128 paths of up to 64 bounces through a rough glass volume in one frame: the mean stays 1.
+    On llvmpipe, whose invocations stop every loop after 65,535 iterations in all, this holds
+    because the path tracer traces a frame's paths one per dispatch there
+    (SOFTWARE_PATHS_PER_DISPATCH); in one dispatch the same frame loses light in whole rows."""
+    from rayvr.passes.path_tracer import path_tracer
+
+    mat = white(metallic=0.0, roughness=0.3, transmission=1.0, ior=1.5, thickness=2.0)
+    views = view_set(**FURNACE_VIEWS, size=16)
+    img = render(furnace_scene(mat), views, GLASS_SPP * GLASS_FRAMES, 1, GLASS_BOUNCES)
+    assert img[..., 0].mean() == pytest.approx(1.0, abs=0.015)
+    if gpu.caps.is_software:
+        monkeypatch.setattr(path_tracer, "SOFTWARE_PATHS_PER_DISPATCH", 0)   # all paths in one dispatch
+        one = render(furnace_scene(mat), views, GLASS_SPP * GLASS_FRAMES, 1, GLASS_BOUNCES)
+        assert one[..., 0].mean() < 0.9, "llvmpipe kept the light of 128 long paths in one invocation"
+
+
+def test_paths_traced_in_slices_equal_one_dispatch(gpu, monkeypatch):
+    """The sliced dispatches draw the same paths (the sample index runs over the frame's paths) and
+    add their shares of the mean: the image equals one dispatch's, up to float32 summation."""
+    from rayvr.passes.path_tracer import path_tracer
+
+    scene = rv.scenes.cornell_box()
+    views = view_set((0.0, 1.0, 3.4), (0.0, 1.0, 0.0), 40.0, size=16)
+    images = {}
+    for per_dispatch in (0, 1, 3):
+        monkeypatch.setattr(path_tracer, "SOFTWARE_PATHS_PER_DISPATCH", per_dispatch)
+        images[per_dispatch] = render(scene, views, 4, 2, 4)
+    if not gpu.caps.is_software:
+        pytest.skip("only software renderers slice a frame's paths")
+    assert images[0].max() > 0.05
+    np.testing.assert_allclose(images[1], images[0], rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(images[3], images[0], rtol=1e-5, atol=1e-6)
+
+
 # ---- thin sheet and slab -------------------------------------------------------------------------
 def behind_glass_scene(glass: Material, geometry: str) -> Scene:
     """An emissive wall of radiance 1 at z = -1 facing +z, black environment, and between it and

@@ -5,6 +5,11 @@
 //   PT_LOBES 1: also the first vertex's diffuse and specular parts (path.glsl pt_trace_parts) into
 //     dst_diffuse / dst_specular, emission excluded (where a camera ray escapes, the background
 //     is in dst_diffuse); dst is still their sum with the emission.
+//   PT_SAMPLE_SLICES N > 0 (llvmpipe): a dispatch traces paths [pt_sample_first, + N) of the
+//     pt_samples and adds their share of the mean to what the earlier dispatches of the frame
+//     stored. llvmpipe ends all of an invocation's loops once they have run 65,535 iterations
+//     together, silently (every traversal step is one), so many long paths in one invocation
+//     would lose light; one path per invocation stays far below it.
 #if PT_FROM_GBUFFER
 #define GBUF_READER 1
 #endif
@@ -19,13 +24,26 @@ layout(local_size_x = PIXEL_LIST_GROUP) in;
 #else
 layout(local_size_x = RAY_GROUP_SIZE) in;
 #endif
-layout(rgba32f) writeonly uniform image2DArray dst;
+#ifndef PT_SAMPLE_SLICES
+#define PT_SAMPLE_SLICES 0
+#endif
+#if PT_SAMPLE_SLICES
+#define PT_DST_ACCESS
+uniform int pt_sample_first;   // this dispatch's first path
+#define PT_K0 pt_sample_first
+#define PT_K1 min(pt_sample_first + PT_SAMPLE_SLICES, pt_samples)
+#else
+#define PT_DST_ACCESS writeonly
+#define PT_K0 0
+#define PT_K1 pt_samples
+#endif
+layout(rgba32f) PT_DST_ACCESS uniform image2DArray dst;
 uniform int pt_samples;
 uniform float pt_clamp;
 uniform bool pt_pixel_jitter;
 #if PT_LOBES
-layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
-layout(rgba16f) writeonly uniform image2DArray dst_specular;
+layout(rgba16f) PT_DST_ACCESS uniform image2DArray dst_diffuse;
+layout(rgba16f) PT_DST_ACCESS uniform image2DArray dst_specular;
 #endif
 
 // Sample `sample_index`'s generator; it also seeds the sample's alphaMode BLEND decisions.
@@ -41,7 +59,7 @@ vec3 pt_pixel(ivec3 p) {
     GSurface g = gbuf_load(p);
     PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
     vec3 sum = vec3(0.0);
-    for (int k = 0; k < pt_samples; ++k) {
+    for (int k = PT_K0; k < PT_K1; ++k) {
         Rng rng = pt_rng(p, k);
         sum += pt_finite(g.emissive + pt_trace_from(s, rng), pt_clamp);
     }
@@ -76,7 +94,7 @@ vec3 pt_sample(ivec3 p, inout Rng rng) {
 
 vec3 pt_pixel(ivec3 p) {
     vec3 sum = vec3(0.0);
-    for (int k = 0; k < pt_samples; ++k) {
+    for (int k = PT_K0; k < PT_K1; ++k) {
         Rng rng = pt_rng(p, k);
         sum += pt_finite(pt_sample(p, rng), pt_clamp);
     }
@@ -95,7 +113,7 @@ vec3 pt_pixel_lobes(ivec3 p, out vec3 diffuse, out vec3 specular) {
     GSurface g = gbuf_load(p);
     PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
 #endif
-    for (int k = 0; k < pt_samples; ++k) {
+    for (int k = PT_K0; k < PT_K1; ++k) {
         Rng rng = pt_rng(p, k);
         vec3 d = vec3(0.0), r = vec3(0.0), e;
 #if PT_FROM_GBUFFER
@@ -146,10 +164,22 @@ void main() {
 #endif
 #if PT_LOBES
     vec3 diffuse, specular;
-    imageStore(dst, p, vec4(pt_pixel_lobes(p, diffuse, specular), 1.0));
+    vec3 c = pt_pixel_lobes(p, diffuse, specular);
+#if PT_SAMPLE_SLICES
+    if (pt_sample_first > 0) {   // the frame's earlier slices
+        c += imageLoad(dst, p).rgb;
+        diffuse += imageLoad(dst_diffuse, p).rgb;
+        specular += imageLoad(dst_specular, p).rgb;
+    }
+#endif
+    imageStore(dst, p, vec4(c, 1.0));
     imageStore(dst_diffuse, p, vec4(to_half_range(diffuse), 1.0));
     imageStore(dst_specular, p, vec4(to_half_range(specular), 1.0));
 #else
-    imageStore(dst, p, vec4(pt_pixel(p), 1.0));
+    vec3 c = pt_pixel(p);
+#if PT_SAMPLE_SLICES
+    if (pt_sample_first > 0) c += imageLoad(dst, p).rgb;
+#endif
+    imageStore(dst, p, vec4(c, 1.0));
 #endif
 }

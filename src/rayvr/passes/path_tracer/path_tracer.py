@@ -22,7 +22,7 @@ from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
-from ...rendergraph.render_pass import Reflection, RenderPass
+from ...rendergraph.render_pass import Access, Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
 from ..dispatch import groups_2d, ray_group, ray_group_defines
 from ..effects import effect_defines, scene_defines, unused_effect_reason
@@ -30,6 +30,10 @@ from ..gbuffer import channels
 
 MODES = ("full", "gbuffer")
 SAMPLERS = {"sobol": 1, "pcg": 0}   # glsl/sampling.glsl RAYVR_SAMPLER
+# Paths per invocation per dispatch on software renderers (path_tracer.comp PT_SAMPLE_SLICES):
+# llvmpipe stops an invocation's loops after 65,535 iterations in all, so a frame's paths are
+# traced in dispatches of this many. 0: all in one dispatch, as on GPUs.
+SOFTWARE_PATHS_PER_DISPATCH = 1
 RNG_SALT = 7
 
 
@@ -93,6 +97,9 @@ class PathTracer(RenderPass):
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALT,
                          "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PIXEL_LIST_INPUT": int(listed),
                          "RAYVR_SAMPLER": SAMPLERS[self.sampler], "PT_LOBES": int(bool(self.lobes))}
+        software = getattr(getattr(ctx, "caps", None), "is_software", False)
+        self._slice = int(SOFTWARE_PATHS_PER_DISPATCH) if software else 0
+        self._defines["PT_SAMPLE_SLICES"] = self._slice
         self._listed = listed
         self._group = ray_group(cd.views)
         self._defines.update(ray_group_defines(self._group))
@@ -124,7 +131,13 @@ class PathTracer(RenderPass):
         pixels = data.get(self.PIXELS) if self._listed else None
         if pixels is not None:
             res.buffer("PixelList", pixels)
-            self._prog.run_indirect(pixels, DISPATCH_OFFSET)
-        else:
-            self._prog.run(*self._groups)
+        spp = int(self.samples_per_pixel)
+        for first in range(0, spp, self._slice or spp):
+            if first:
+                ctx.barrier(Access.IMAGE)   # the slice before stored its share
+            res.set("pt_sample_first", first)
+            if pixels is not None:
+                self._prog.run_indirect(pixels, DISPATCH_OFFSET)
+            else:
+                self._prog.run(*self._groups)
 
