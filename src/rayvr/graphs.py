@@ -6,7 +6,7 @@
              │               ├─> Reflections ──────────────────┼─> Composite ─> ToneMap
              │               └─> PathTracer ─> Accumulate ─────┘
              └─(G-buffer pins to every lighting pass; effect ids to Compaction and Composite)
-    hybrid(gi="probes"): + Probes (ProbeGI, once per frame) ─> Direct, Shadows, Reflections
+    hybrid(gi="probes"): + Probes (ProbeGI, once per frame) ─> Composite, Reflections
 
     path_traced():  PathTracer ─> Accumulate ─> ToneMap      (progressive reference renders)
     hybrid_taa():   hybrid() with TAA between Composite and ToneMap, fed GBuffer.motion
@@ -147,8 +147,13 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_edge("Reflections.reflection", "Composite.reflection")
     if gi == "probes":
         g.add_pass(P.ProbeGI(dict(probes or {})), "Probes")
-        for lighting in ("Direct", "Shadows", "Reflections"):
-            probe_inputs.wire(g, "Probes", lighting)
+        # the primary surfaces' lookup in the composite (no rays there), the reflected hits' in
+        # Reflections
+        for reader in ("Composite", "Reflections"):
+            probe_inputs.wire(g, "Probes", reader)
+        channels.wire(g, "GBuffer", "Composite", [n for n in channels.LIGHTING if n not in ("effect", "emissive")])
+        if not svgf:
+            g.add_edge("GBuffer.emissive", "Composite.emissive")
     g.mark_output(OUTPUT)
     g.mark_output(HDR_OUTPUT)
     _denoised(g, denoise, HDR_OUTPUT, ("Composite.diffuse", "Composite.specular"))

@@ -7,6 +7,7 @@ from ...rendergraph.render_pass import Reflection, RenderPass
 from ..dispatch import groups_2d
 from ..effects import effect_defines
 from ..gbuffer import channels
+from ..probe_gi import inputs as probe_inputs
 
 # input pin -> the sampler uniform composite.comp reads it through
 SAMPLERS = {"effect": "gbuf_effect", "emissive": "gbuf_emissive", "direct": "direct_tex", "shadowed": "shadowed_tex",
@@ -19,7 +20,9 @@ class HybridComposite(RenderPass):
     """`direct` for RASTER pixels, `shadowed` (optional) for SHADOWS and above, plus `reflection`
     (optional) for REFLECTIONS and above, `pathTraced` (optional) instead of all of them for
     PATH_TRACED pixels -> `color` (rgba16f radiance). A missing optional input
-    (its pass pruned because no material needs it) compiles its code out.
+    (its pass pruned because no material needs it) compiles its code out. With the probe inputs
+    and the G-buffer's lighting channels connected (rayvr.passes.probe_gi.inputs), the probes'
+    indirect diffuse light is added to RASTER, SHADOWS and REFLECTIONS pixels here.
 
     With `lobes` the pass also writes the light as a denoiser demodulates it (rayvr.passes.SVGF):
     `diffuse` (direct or shadowed light minus the G-buffer's `emissive`, or the path tracer's
@@ -39,8 +42,14 @@ class HybridComposite(RenderPass):
         r.add_input(self.REFLECTION, "ray-traced reflected radiance").optional()
         r.add_input(self.PATH_TRACED, "path-traced radiance for PATH_TRACED pixels").optional()
         r.add_output(self.COLOR, "composited HDR radiance").format("rgba16f")
+        probe_inputs.add_inputs(r)
+        for name in channels.LIGHTING:   # the surface for the probe lookup (emissive: also the lobes')
+            if name != self.EFFECT:
+                c = channels.channel(name)
+                pin = r.add_input(c.name, f"G-buffer {c.name}: {c.meaning}").format(c.format)
+                if not (self.lobes and name == self.EMISSIVE):
+                    pin.optional()
         if self.lobes:
-            channels.add_inputs(r, (self.EMISSIVE,))
             r.add_input(self.PATH_DIFFUSE, "the path tracer's diffuse lobe (PathTracer lobes)").optional()
             r.add_input(self.PATH_SPECULAR, "the path tracer's specular lobe").optional()
             r.add_output(self.DIFFUSE, "diffuse light, emission excluded (background where nothing was drawn)"
@@ -53,10 +62,20 @@ class HybridComposite(RenderPass):
         has = {"HAS_SHADOWS": self.SHADOWED, "HAS_REFLECTIONS": self.REFLECTION, "HAS_PATHS": self.PATH_TRACED,
                "HAS_PATH_LOBES": self.PATH_DIFFUSE}
         defines = {d: int(pin in cd.input_formats) for d, pin in has.items()}
-        self._prog = self.compute_program(ctx.gl, "composite.comp",
-                                          {**effect_defines(), **defines, "SPLIT_LOBES": int(bool(self.lobes))})
+        self._probes = probe_inputs.bound(cd) and all(n in cd.input_formats for n in channels.LIGHTING)
+        if self._probes:
+            import moderngl
+
+            defines["PROBE_GI"] = 1
+            self._probe_sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR),
+                                                          repeat_x=False, repeat_y=False))
+        self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes))}
+        self._prog = self.compute_program(ctx.gl, "composite.comp", {**effect_defines(), **self._defines})
         self._res = program_resources(self._prog)
         self._groups = groups_2d(cd.size, cd.views)
+
+    def defines(self) -> dict:
+        return dict(getattr(self, "_defines", {}))
 
     def execute(self, ctx, data):
         for pin, sampler in SAMPLERS.items():
@@ -67,4 +86,9 @@ class HybridComposite(RenderPass):
         if self.lobes:
             self._res.image("dst_diffuse", data[self.DIFFUSE])
             self._res.image("dst_specular", data[self.SPECULAR])
+        if self._probes:
+            channels.bind_inputs(self._res, data)
+            probe_inputs.bind(self._res, data, self._probe_sampler)
         self._prog.run(*self._groups)
+        if self._probes:
+            probe_inputs.unbind(self._res)
