@@ -16,6 +16,28 @@ struct PathVertex {
     float cone_spread;   // and its spread angle
 };
 
+// Shading-normal adaptation (Keller et al. 2017, "The Iray Light Transport Simulation and
+// Rendering System", A.3): where the mirror direction of v about the shading normal n falls
+// below the geometric surface (ng, facing v), as at the silhouettes of a coarse mesh with smooth
+// normals, n is bent towards ng until that direction is just above the surface. Without it the
+// BSDF's samples there point into the surface and are dropped: a smooth sphere of 80 triangles
+// lost most of its reflection at the rim. Elsewhere n is returned unchanged.
+const float SHADING_ADAPT_HEIGHT = 0.01;   // the lowest the mirror direction may lie (its cosine to ng)
+vec3 adapt_shading_normal(vec3 n, vec3 ng, vec3 v) {
+    float hv = dot(v, ng);
+    // never higher than the geometric mirror direction (whose height is v's): a flat surface
+    // (n = ng) seen at a grazing angle keeps its normal
+    float h = min(SHADING_ADAPT_HEIGHT, hv);
+    vec3 r = reflect(-v, n);
+    float a = dot(r, ng);
+    if (a >= h || hv <= 0.0) return n;
+    vec3 t = r - a * ng;   // the mirror direction's tangential part
+    float lt = length(t);
+    if (!(lt > 1e-6)) return ng;
+    vec3 raised = t * (sqrt(1.0 - h * h) / lt) + h * ng;
+    return normalize(v + raised);   // the half vector: v mirrors to `raised` about it
+}
+
 // The vertex where `hit` of a ray along `dir` lies; `cone_width` is the ray cone's width at the
 // hit. `sp` and `mp` return the surface and its material (emission, flags) for the caller.
 PathVertex path_vertex_at_hit(Hit hit, vec3 dir, float cone_width, float cone_spread,
@@ -24,9 +46,9 @@ PathVertex path_vertex_at_hit(Hit hit, vec3 dir, float cone_width, float cone_sp
     mp = material_params_at(sp.material, sp.uv, sp.uv_lod);
     PathVertex s;
     s.pos = sp.position;
-    s.n = sp.normal;
     s.ng = sp.geometric_normal;
     s.v = -dir;
+    s.n = adapt_shading_normal(sp.normal, s.ng, s.v);
     s.bsdf = bsdf_params(mp);
     // a back face of a volume: the ray comes from inside it (refraction goes out, TIR possible)
     bsdf_set_side(s.bsdf, !sp.front_face && mp.volume);
@@ -57,9 +79,9 @@ MaterialParams gbuf_material_params(GSurface g) {
 PathVertex path_vertex_at_gbuffer(GSurface g, uint view) {
     PathVertex s;
     s.pos = g.pos;
-    s.n = g.n;
     s.ng = g.ng;
     s.v = normalize(views[view].eye.xyz - g.pos);
+    s.n = adapt_shading_normal(g.n, s.ng, s.v);
     MaterialParams m = gbuf_material_params(g);
     s.bsdf = bsdf_params(m);
     bsdf_set_side(s.bsdf, !g.front_face && m.volume);   // as path_vertex_at_hit: inside a volume
