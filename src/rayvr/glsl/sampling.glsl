@@ -80,17 +80,22 @@ Rng rng_init_sample(uvec2 pixel, uint view, uint frame, uint salt, uint k, uint 
 
 Rng rng_init(uvec2 pixel, uint view, uint frame, uint salt) { return rng_init_sample(pixel, view, frame, salt, 0u, 1u); }
 
-#if RAYVR_SAMPLER
+// A uniform float in [0, 1) from the top 24 bits.
 float rng_unit(uint bits) { return float(bits >> 8u) * (1.0 / 16777216.0); }
 
+// Point `index` of a one-dimensional Owen-scrambled Sobol (van der Corput) sequence whose index
+// shuffle and scramble are seeded by `seed`: consecutive indices are stratified, two seeds'
+// sequences independent. rng_next's dimension, and alphaMode BLEND's decisions (scene.glsl).
+float sobol_1d(uint index, uint seed) {
+    uint i = nested_uniform_scramble(index, seed);
+    return rng_unit(nested_uniform_scramble(bitfieldReverse(i), hash_combine(seed, 1u)));
+}
+
+#if RAYVR_SAMPLER
 // The next dimension group's seed.
 uint rng_group_seed(inout Rng r) { return hash_combine(r.state, pcg_hash(r.group++)); }
 
-float rng_next(inout Rng r) {
-    uint seed = rng_group_seed(r);
-    uint i = nested_uniform_scramble(r.index, seed);
-    return rng_unit(nested_uniform_scramble(bitfieldReverse(i), hash_combine(seed, 1u)));
-}
+float rng_next(inout Rng r) { return sobol_1d(r.index, rng_group_seed(r)); }
 
 vec2 rng_next2(inout Rng r) {
     uint seed = rng_group_seed(r);
@@ -108,7 +113,7 @@ vec3 rng_next3(inout Rng r) {
 float rng_next(inout Rng r) {
     uint word = pcg_hash(r.state);
     r.state = r.state * 747796405u + 2891336453u;
-    return float(word >> 8u) * (1.0 / 16777216.0);
+    return rng_unit(word);
 }
 
 vec2 rng_next2(inout Rng r) { return vec2(rng_next(r), rng_next(r)); }

@@ -275,9 +275,7 @@ bool material_alpha_passes(uint m, vec2 uv) {
 // consecutive frames are stratified (0.3 is met 3 times in 10 frames, give or take one) and two
 // keys' are independent.
 float alpha_blend_u(uint seed, uint index, uint key) {
-    uint s = hash_combine(seed, pcg_hash(key ^ 0xA511E9B3u));
-    uint i = nested_uniform_scramble(index, s);
-    return float(nested_uniform_scramble(bitfieldReverse(i), hash_combine(s, 1u)) >> 8u) * (1.0 / 16777216.0);
+    return sobol_1d(index, hash_combine(seed, pcg_hash(key ^ 0xA511E9B3u)));
 }
 
 // The key of a surface of `material` on `instance` met at distance t along ray number `ray` of a

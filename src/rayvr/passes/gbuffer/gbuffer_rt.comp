@@ -22,11 +22,10 @@ GBufferTexel primary_surface(uint v, ivec2 pixel) {
     Hit hit;
     rq_blend_begin(rng_init(uvec2(pixel), view_global_index(v), frame_index(), GBUF_RNG_SALT));   // alphaMode BLEND
     if (!trace_closest(o + d * t_near, d, t_far - t_near, hit)) return gbuf_no_geometry();
+    // surface_at_cone turns the shading normal to the (viewer-facing) face normal's side, as the raster path does
     SurfacePoint s = surface_at_cone(hit, d, (t_near + hit.t) * view_pixel_spread(v));
-    // as the raster path: the shading normal turned to the side of the (viewer-facing) face normal
-    vec3 n = dot(s.normal, s.geometric_normal) < 0.0 ? -s.normal : s.normal;
-    return gbuf_encode(v, s.position, n, s.geometric_normal, s.front_face, material_params_at(s.material, s.uv, s.uv_lod),
-                       s.material);
+    return gbuf_encode(v, s.position, s.normal, s.geometric_normal, s.front_face,
+                       material_params_at(s.material, s.uv, s.uv_lod), s.material);
 }
 
 void main() {
