@@ -312,6 +312,17 @@ def build_graph(args, exposure: float, auto_exposure: bool, probes: dict | None 
     return g
 
 
+def summarize(r, args, line: str) -> None:
+    """After a render: the compile report (--report), `line`, the profile, and on stderr the
+    passes that set non-finite samples to 0."""
+    nonfinite = r.compiled.nonfinite_counts()   # exact, and the report's and profile's from here on
+    if args.report:
+        print(r.report())
+    print(line)
+    print(r.profile())
+    say_nonfinite(nonfinite)
+
+
 def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
     """Render in this process: (pixels (views, h, w, c) rows top-down, the quilt's pixels when
     `quilt_grid` (cols, rows) is given, else None)."""
@@ -331,13 +342,8 @@ def render_here(args, scene, graph, views, hdr: bool, quilt_grid=None) -> tuple:
                 oidn.set_properties({"enabled": i == frames - 1})
             r.render()
         pixels = r.read_output(hdr_output(graph) if hdr else OUTPUT, flip_y=True)
-        nonfinite = r.compiled.nonfinite_counts()   # exact, and the report's and profile's from here on
-        if args.report:
-            print(r.report())
         spp = f", {frames * graph.get_pass('PathTracer').samples_per_pixel} spp" if args.graph == "path_traced" else ""
-        print(f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {frames} frame(s){spp}")
-        print(r.profile())
-        say_nonfinite(nonfinite)
+        summarize(r, args, f"{scene.name}: {len(views)} view(s) of {size[0]}x{size[1]}, {frames} frame(s){spp}")
         if quilt_grid is not None:
             from ..xr.quilt import compose_quilt, read_quilt
 
@@ -359,10 +365,6 @@ def render_path(args, scene, graph, views, hdr: bool, camera_path, out: Path) ->
             images = [np.concatenate(list(pixels), axis=1)] if args.layout == "side-by-side" else list(pixels)
             for path, img in zip(output_paths(frame_path(out, i), len(views), args.layout), images):
                 written.append(write_exr(path, img) if hdr else write_image(path, img))
-        nonfinite = r.compiled.nonfinite_counts()   # exact, and the report's and profile's from here on
-        if args.report:
-            print(r.report())
-        print(f"{scene.name}: {len(views)} view(s) of {views.size[0]}x{views.size[1]}, {len(camera_path)} frame(s)")
-        print(r.profile())
-        say_nonfinite(nonfinite)
+        summarize(r, args, f"{scene.name}: {len(views)} view(s) of {views.size[0]}x{views.size[1]}, "
+                           f"{len(camera_path)} frame(s)")
     return written

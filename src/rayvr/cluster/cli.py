@@ -3,6 +3,7 @@ options, the Cluster they ask for, and the subcommands' cluster paths. Nothing h
 unless the options ask for a cluster."""
 from __future__ import annotations
 
+import collections
 import contextlib
 
 MAX_WORKERS = 1024
@@ -60,10 +61,9 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
         print("--report: each worker compiles its own graph; run without --workers for the compile report")
     from ..cli.options import say_nonfinite
 
-    nonfinite: dict[str, int] = {}
-    for share in result.shares:   # every share's passes, summed by pass
-        for name, count in share.get("nonfinite", {}).items():
-            nonfinite[name] = nonfinite.get(name, 0) + int(count)
+    nonfinite = collections.Counter()   # every share's passes, summed by pass
+    for share in result.shares:
+        nonfinite.update(share.get("nonfinite", {}))
     radiance = result.pixels[pin]
     if hdr and grid is None:
         say_nonfinite(nonfinite)
@@ -77,8 +77,7 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
             from ..xr.quilt import compose_quilt, read_quilt
 
             quilt_pixels = read_quilt(compose_quilt(get_context().gl, texture, *grid))
-        for name, count in compiled.nonfinite_counts().items():   # the tone map of the gathered views
-            nonfinite[name] = nonfinite.get(name, 0) + int(count)
+        nonfinite.update(compiled.nonfinite_counts())   # the tone map of the gathered views
     finally:
         compiled.release()
     say_nonfinite(nonfinite)

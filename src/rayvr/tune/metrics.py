@@ -23,6 +23,7 @@ import os
 
 import numpy as np
 
+from .. import images
 from ..errors import OptionError, RayvrError
 
 DYNAMIC_RANGES = ("auto", "ldr", "hdr")
@@ -195,9 +196,7 @@ def ssim_views(test, reference, names=("test", "reference")) -> np.ndarray:
 # -- display encoding (for PSNR of display-referred images) -----------------------------------
 def srgb_encode(linear) -> np.ndarray:
     """Linear radiance clamped to [0, 1] and sRGB-encoded (float64): what a display shows at exposure 0."""
-    from ..images import srgb_encode as encode
-
-    return encode(np.asarray(linear, dtype=np.float64))
+    return images.srgb_encode(np.asarray(linear, dtype=np.float64))
 
 
 # -- the study's metrics ----------------------------------------------------------------------

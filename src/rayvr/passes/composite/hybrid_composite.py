@@ -9,10 +9,9 @@ from ..effects import effect_defines
 from ..gbuffer import channels
 from ..probe_gi import inputs as probe_inputs
 
-# input pin -> the sampler uniform composite.comp reads it through
-SAMPLERS = {"effect": "gbuf_effect", "emissive": "gbuf_emissive", "direct": "direct_tex", "shadowed": "shadowed_tex",
-            "reflection": "reflection_tex", "pathTraced": "path_tex", "pathDiffuse": "path_diffuse_tex",
-            "pathSpecular": "path_specular_tex"}
+# input pin -> the sampler uniform composite.comp reads it through (the G-buffer's: channels.bind_inputs)
+SAMPLERS = {"direct": "direct_tex", "shadowed": "shadowed_tex", "reflection": "reflection_tex", "pathTraced": "path_tex",
+            "pathDiffuse": "path_diffuse_tex", "pathSpecular": "path_specular_tex"}
 
 
 @register_pass
@@ -78,6 +77,7 @@ class HybridComposite(RenderPass):
         return dict(getattr(self, "_defines", {}))
 
     def execute(self, ctx, data):
+        channels.bind_inputs(self._res, data)   # those connected: effect, emissive, the probe lookup's surface
         for pin, sampler in SAMPLERS.items():
             tex = data.get(pin)
             if tex is not None:
@@ -87,7 +87,6 @@ class HybridComposite(RenderPass):
             self._res.image("dst_diffuse", data[self.DIFFUSE])
             self._res.image("dst_specular", data[self.SPECULAR])
         if self._probes:
-            channels.bind_inputs(self._res, data)
             probe_inputs.bind(self._res, data, self._probe_sampler)
         self._prog.run(*self._groups)
         if self._probes:
