@@ -51,7 +51,7 @@ def run(args) -> dict:
             if "update" in parts:
                 rows += update_rows(scene, args, quick)
             if "frame" in parts:
-                rows += frame_rows(scene, args, quick)
+                rows += frame_rows(scene, args, quick, notes)
             if "error" in parts:
                 rows += error_rows(scene, args, quick, notes)
     notes += ["update: the Probes pass's time per frame (timer queries, or finish + wall on llvmpipe), "
@@ -137,7 +137,7 @@ def update_rows(scene, args, quick: bool) -> list:
     return rows
 
 
-def frame_rows(scene, args, quick: bool) -> list:
+def frame_rows(scene, args, quick: bool, notes: list) -> list:
     from rayvr.renderer import default_views
 
     from ._timing import wall_ms_per_frame
@@ -155,8 +155,12 @@ def frame_rows(scene, args, quick: bool) -> list:
         for gi in (False, True):
             with rv.Renderer(scene, _graph(gi), views=view_set) as r:
                 wall = wall_ms_per_frame(r, frames, 2)
-                gpu = r.profile().total_ms if r.gpu.caps.timer_queries else None
+                prof = r.profile()
+                gpu = prof.total_ms if r.gpu.caps.timer_queries else None
                 times[gi] = gpu or wall
+                if gpu:
+                    notes.append(f"frame {scene.name} {views}x{w}x{h}{' + GI' if gi else ''}, GPU ms per pass: "
+                                 + ", ".join(f"{k} {s.mean_ms:.3f}" for k, s in prof.passes.items()))
         label = f"{views}x{w}x{h}"
         target = views == 2 and not quick and "test" in scene.name
         rows.append(["frame", scene.name, "SHADOWS + REFLECTIONS", label, round(times[False], 3), "without GI", ""])
