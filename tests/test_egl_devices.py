@@ -28,6 +28,16 @@ def test_cuda_ordinal_numbering_skips_the_software_device():
     assert select_device(1, visible=["3", "5"], devices=devices)[0] == 1
 
 
+def test_one_gpu_shared_by_two_workers_is_the_gpu_for_both():
+    # The one-GPU machine (issue 17): Ray gives each of two workers half of GPU 0, so both see
+    # CUDA_VISIBLE_DEVICES=0; a worker given no GPU (share 0) sees it unset. Every case is the
+    # NVIDIA device, whether or not a software device is listed before it.
+    for devices, gpu in (([EglDevice(0, NV, 0)], 0), ([EglDevice(0, MESA), EglDevice(1, NV, 0)], 1)):
+        for visible in (["0"], None):
+            index, why = select_device(0, visible=visible, devices=devices)
+            assert index == gpu and "CUDA ordinal 0" in why, (devices, visible, why)
+
+
 def test_physical_numbering_matches_the_visible_id():
     # Every GPU answers, more than are visible: the values are physical, so visible "5" is 5.
     order = [3, 0, 7, 5, 1, 2, 6, 4]
