@@ -142,8 +142,9 @@ def variance_gradient(gl, keys, specular):
     res = program_resources(SVGF().compute_program(gl, "svgf_variance.comp", {"SVGF_SPECULAR": int(specular)}))
     history = np.zeros((L, H, W, 2), np.uint32)
     history[..., 1] = np.float32(8.0).view(np.uint32)
+    illum = np.zeros((L, H, W, 4), np.uint32 if specular else np.float16)
     made = [gl_texture(gl, history, 2, "u4"), gl_texture(gl, np.zeros((L, H, W, 4), np.float32), 4, "f4"),
-            gl_texture(gl, np.zeros((L, H, W, 4), np.uint32 if specular else np.float16), 4, "u4" if specular else "f2")]
+            gl_texture(gl, illum, 4, "u4" if specular else "f2")]
     made += [gl_texture(gl, np.zeros((L, H, W, 4), np.float16), 4, "f2") for _ in range(2)]
     gradient = gl_texture(gl, np.full((L, H, W, 2), np.nan, np.float16), 2, "f2")
     res.texture("key_cur", keys)

@@ -82,8 +82,8 @@ class SVGF(RenderPass):
     FILTER = ("filter0", "filter1")
     GRADIENT = "gradient"
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
-    PROPERTIES = {"iterations": 5, "kernel": 5, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2, "max_history": 32,
-                  "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
+    PROPERTIES = {"iterations": 5, "kernel": 3, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2,
+                  "max_history": 32, "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
     USES_SCENE = True
 
     def __init__(self, props: dict | None = None, **kwargs):
