@@ -9,11 +9,12 @@ Four stages, one compute shader each, run as dispatches of this one pass:
                 disocclusion test (depth against the view's previous view-projection, normal,
                 effect word); blend colour and luminance moments; count the history length
     variance    per-pixel variance from the moments; a 7x7 spatial estimate while the history
-                is shorter than 4 frames (in place: only those pixels write)
-                and the depth gradient of every pixel (it depends on this frame's key only: the
-                a-trous iterations fetch it, one texel, instead of four keys each)
-    a-trous     `iterations` passes of the edge-stopping wavelet filter, `kernel` 5x5 (the
-                paper's B3 spline, 25 taps) or 3x3 (9 taps), taps 1, 2, 4, ... pixels apart;
+                is shorter than 4 frames (in place: only those pixels write); and the depth
+                gradient of every pixel (`gradient`: it depends on this frame's key only, so
+                the a-trous iterations fetch it, one texel, instead of four keys each)
+    a-trous     `iterations` passes of the edge-stopping wavelet filter, `kernel` 3x3 (the
+                default, 9 taps) or 5x5 (the paper's B3 spline, 25 taps), taps 1, 2, 4, ...
+                pixels apart;
                 depth, normal and variance-scaled luminance weights
     modulate    filtered illumination x albedo + emission
 The a-trous stage is bound by texture fetches, so what it reads per tap is small: the filter
