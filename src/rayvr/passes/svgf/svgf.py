@@ -14,8 +14,7 @@ Four stages, one compute shader each, run as dispatches of this one pass:
                 the a-trous iterations fetch it, one texel, instead of four keys each)
     a-trous     `iterations` passes of the edge-stopping wavelet filter, `kernel` 3x3 (the
                 default, 9 taps) or 5x5 (the paper's B3 spline, 25 taps), taps 1, 2, 4, ...
-                pixels apart;
-                depth, normal and variance-scaled luminance weights
+                pixels apart; depth, normal and variance-scaled luminance weights
     modulate    filtered illumination x albedo + emission
 The a-trous stage is bound by texture fetches, so what it reads per tap is small: the filter
 key (`key0/1`, rg32ui: linear depth, 0 where nothing was drawn, and octahedral normal) and one
@@ -68,7 +67,8 @@ class SVGF(RenderPass):
     see the module docstring.
 
     Properties: `iterations` (a-trous passes, 0-8; 0 = temporal accumulation only), `kernel`
-    (the a-trous kernel's width: 5, the paper's 5x5 B3 spline, or 3, a 3x3 kernel of 9 taps),
+    (the a-trous kernel's width: 3, the default, a 3x3 kernel of 9 taps, or 5, the paper's 5x5
+    B3 spline),
     `feedback_tap` (the iteration whose output becomes the colour history; -1: the unfiltered
     temporal mean), `alpha` and
     `moments_alpha` (weights of the new frame's colour and moments, at least 1 / history length),
@@ -177,7 +177,9 @@ class SVGF(RenderPass):
         return self._atrous[kernel]
 
     def defines(self) -> dict:
-        return dict(getattr(self, "_defines", {}))
+        if not hasattr(self, "_defines"):
+            return {}
+        return {**self._defines, "SVGF_KERNEL": int(self.kernel)}   # the a-trous stage's kernel
 
     def _lighting_edited(self, ctx) -> bool:
         """Whether the materials or lights changed since the last frame (instances alone do not
