@@ -12,6 +12,10 @@ Two parts, one table (the `part` column):
   raw, 1 spp + SVGF, and 1 and 4 spp + OIDN, on each --scenes entry (default tauray/test.glb and
   the Cornell box), stereo. The static rows are judged after the study's warm-up and timed
   frames (SVGF's history is that long); the trajectory rows from the first frame of the path.
+`--kernels`: the SVGF settings both parts run, one row each: the a-trous kernel width (3 or 5;
+the SVGF pass's `kernel`), optionally with its iteration count after a colon (e.g. 3,5,3:6: the
+3x3 kernel, the 5x5, the 3x3 with 6 iterations; the rows say 'SVGF 3x3', 'SVGF 5x5',
+'SVGF 3x3 x6'). Without it, one row at the pass's defaults ('SVGF').
 `--quick`: small sizes for llvmpipe (time: 2 x 64x64 and 8 x 32x43; error: 2 x 32x32, a 32 x 8 spp
 reference, no bias floors). The H200 targets (SVGF <= 1.5 ms at 2 x 1440x1600; 1 spp + SVGF under
 raw 16 spp's error at < 1/10 of its GPU time) are judged from a full run on that GPU only.
@@ -41,6 +45,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--time-sizes", help="VIEWSxWIDTHxHEIGHT entries for the timing part, comma-separated "
                                              f"(default {','.join(TIME_SIZES)}; quick {','.join(QUICK_TIME_SIZES)})")
     parser.add_argument("--parts", default="time,error", help="time, error or both (default)")
+    parser.add_argument("--kernels", help="SVGF a-trous kernels to run, one row each, comma-separated: 3 or 5, "
+                                          "optionally :ITERATIONS (e.g. 3,5,3:6); default: the pass's defaults")
     parser.add_argument("--preset", default="index", help="headset whose pixels per degree FLIP uses")
     parser.add_argument("--views", type=int, default=2, help="views of the error part (default 2)")
     add_figure_options(parser, FIGURES)
@@ -57,7 +63,37 @@ def _entry(text: str) -> tuple[int, tuple[int, int]]:
     return int(views), parse_size(size)
 
 
-def time_rows(scene_spec: str, entries, frames: int, warmup: int) -> list[list]:
+def _kernel(text: str) -> tuple[int, int | None]:
+    """--kernels entry 'K' or 'K:ITERATIONS': (kernel, iterations or None for the pass's default)."""
+    from rayvr.errors import OptionError
+    from rayvr.passes.svgf.svgf import KERNELS, MAX_ITERATIONS
+
+    kernel, colon, iterations = str(text).partition(":")
+    ok = kernel.isdigit() and int(kernel) in KERNELS and (
+        not colon or iterations.isdigit() and 0 <= int(iterations) <= MAX_ITERATIONS)
+    if not ok:
+        raise OptionError(f"--kernels {text}: give 3 or 5 (the a-trous kernel width), optionally :ITERATIONS "
+                          f"from 0 to {MAX_ITERATIONS}, e.g. 3,5 or 3:6")
+    return int(kernel), int(iterations) if iterations else None
+
+
+DEFAULT_KERNELS = ((None, None),)   # no --kernels: the SVGF pass's defaults
+
+
+def svgf_props(kernel: int | None, iterations: int | None) -> dict:
+    """The SVGF pass properties of one --kernels entry (None: the pass's default)."""
+    return {**({} if kernel is None else {"kernel": kernel}),
+            **({} if iterations is None else {"iterations": iterations})}
+
+
+def svgf_label(kernel: int | None, iterations: int | None) -> str:
+    """'SVGF' with its kernel (and iterations when given): 'SVGF 3x3', 'SVGF 3x3 x6'; 'SVGF' at
+    the pass's defaults."""
+    return ("SVGF" + ("" if kernel is None else f" {kernel}x{kernel}")
+            + ("" if iterations is None else f" x{iterations}"))
+
+
+def time_rows(scene_spec: str, entries, frames: int, warmup: int, kernels=DEFAULT_KERNELS) -> list[list]:
     import rayvr as rv
     from rayvr.cli.options import load_scene_arg
     from rayvr.renderer import default_views
@@ -67,16 +103,21 @@ def time_rows(scene_spec: str, entries, frames: int, warmup: int) -> list[list]:
     scene = load_scene_arg(scene_spec)
     rows = []
     for views, size in entries:
-        graph = rv.graphs.path_traced(max_bounces=1, denoise="svgf")
-        with rv.Renderer(scene, graph, views=default_views(scene, views, size)) as r:
-            wall_ms_per_frame(r, frames, warmup)
-            prof = r.profile()
-            svgf_bytes = sum(res.bytes for name, res in r.compiled.plan.resources.items() if name.startswith("SVGF."))
-            svgf, taa = prof.passes["SVGF"].mean_ms, prof.passes["TAA"].mean_ms
-            total = sum(p.mean_ms for p in prof.passes.values())
-        rows.append(["time", scene.name, "1 spp + SVGF + TAA (1 bounce)", f"{views}x{size[0]}x{size[1]}",
-                     round(total, 3), round(svgf, 3), round(taa, 3), float(f"{svgf_bytes / 2 ** 20:.3g}"),
-                     _oidn_ms(size, views), "-", "-", "-", "-", "-"])
+        oidn = _oidn_ms(size, views)
+        for kernel, iterations in kernels:
+            graph = rv.graphs.path_traced(max_bounces=1, denoise="svgf")
+            if svgf_props(kernel, iterations):
+                graph.update_pass("SVGF", svgf_props(kernel, iterations))
+            with rv.Renderer(scene, graph, views=default_views(scene, views, size)) as r:
+                wall_ms_per_frame(r, frames, warmup)
+                prof = r.profile()
+                svgf_bytes = sum(res.bytes for name, res in r.compiled.plan.resources.items()
+                                 if name.startswith("SVGF."))
+                svgf, taa = prof.passes["SVGF"].mean_ms, prof.passes["TAA"].mean_ms
+                total = sum(p.mean_ms for p in prof.passes.values())
+            rows.append(["time", scene.name, f"1 spp + {svgf_label(kernel, iterations)} + TAA (1 bounce)",
+                         f"{views}x{size[0]}x{size[1]}", round(total, 3), round(svgf, 3), round(taa, 3),
+                         float(f"{svgf_bytes / 2 ** 20:.3g}"), oidn, "-", "-", "-", "-", "-"])
     return rows
 
 
@@ -99,19 +140,34 @@ def _oidn_ms(size, views: int):
     return round((time.perf_counter() - t0) * 1e3 * views, 1)
 
 
-def error_configs(oidn: bool):
+def _svgf_builder(kernel: int, iterations: int | None):
+    """The study's hybrid graph builder with SVGF's kernel (and iterations) set."""
+    from rayvr.tune.configs import hybrid_graph
+
+    def build(**options):
+        g = hybrid_graph(**options)
+        g.update_pass("SVGF", svgf_props(kernel, iterations))
+        return g
+
+    build.__name__ = f"hybrid_{svgf_label(kernel, iterations).lower().replace(' ', '_')}"
+    return build
+
+
+def error_configs(oidn: bool, kernels=DEFAULT_KERNELS):
     from rayvr import Effect
     from rayvr.tune import Config
 
     configs = [Config(f"PATH_TRACED {n} spp", Effect.PATH_TRACED, options={"spp": n}) for n in (1, 4, 16)]
-    configs.append(Config("PATH_TRACED 1 spp + SVGF", Effect.PATH_TRACED, options={"spp": 1, "denoise": "svgf"}))
+    configs += [Config(f"PATH_TRACED 1 spp + {svgf_label(k, i)}", Effect.PATH_TRACED,
+                       graph=_svgf_builder(k, i) if svgf_props(k, i) else None, options={"spp": 1, "denoise": "svgf"})
+                for k, i in kernels]
     if oidn:
         configs += [Config(f"PATH_TRACED {n} spp + OIDN", Effect.PATH_TRACED, options={"spp": n, "denoise": "oidn"})
                     for n in (1, 4)]
     return configs
 
 
-def error_rows(scene_spec: str, args, f: dict, quick: bool) -> tuple[list[list], list[str]]:
+def error_rows(scene_spec: str, args, f: dict, quick: bool, kernels=DEFAULT_KERNELS) -> tuple[list[list], list[str]]:
     from rayvr.cli.options import load_scene_arg, parse_size
     from rayvr.tune import Motion, ReferenceSettings, StudySettings, cached_reference, make_views, measure
     from rayvr.tune.configs import available_denoisers
@@ -127,7 +183,7 @@ def error_rows(scene_spec: str, args, f: dict, quick: bool) -> tuple[list[list],
                              warmup_s=0.0 if quick else GPU_WARM_UP_S, motion=motion, floors=not quick,
                              progressive_frames=0, preset=args.preset)
     ref = cached_reference(scene, view_set, ref_settings, args.cache)
-    configs = error_configs("oidn" in available_denoisers())
+    configs = error_configs("oidn" in available_denoisers(), kernels)
     for c in configs:   # the reference's bounces, as the study's standard set uses
         c.options.setdefault("path_bounces", ref_settings.max_bounces)
     results = measure(scene, configs, views=view_set, size=size, reference=ref, settings=settings,
@@ -154,14 +210,16 @@ def run(args) -> dict:
     f = resolve_figures(args, FIGURES)
     parts = set(parse_list(args.parts, "--parts", str))
     scenes = parse_list(args.scenes, "--scenes", str) if args.scenes else DEFAULT_SCENES
+    kernels = ([_kernel(e) for e in parse_list(args.kernels, "--kernels", str)] if args.kernels
+               else DEFAULT_KERNELS)
     entries = [_entry(e) for e in parse_list(args.time_sizes, "--time-sizes", str)] if args.time_sizes else \
         [_entry(e) for e in (QUICK_TIME_SIZES if quick else TIME_SIZES)]
     rows, notes = [], []
     if "time" in parts:
-        rows += time_rows(scenes[-1], entries, f["timing_frames"], f["warmup"])
+        rows += time_rows(scenes[-1], entries, f["timing_frames"], f["warmup"], kernels)
     if "error" in parts:
         for spec in scenes:
-            more, more_notes = error_rows(spec, args, f, quick)
+            more, more_notes = error_rows(spec, args, f, quick, kernels)
             rows += more
             notes += more_notes
     notes += ["time: SVGF ms and TAA ms are the passes' mean GPU time per frame (all views in one dispatch); "

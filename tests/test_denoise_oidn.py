@@ -131,3 +131,25 @@ def test_denoise_benchmark_smoke_run(gpu, tmp_path):
     assert rows[0]["SVGF ms"] > 0 and rows[0]["SVGF MB"] > 0
     svgf = next(r for r in rows if r["config"] == "PATH_TRACED 1 spp + SVGF")
     assert svgf["SVGF ms"] > 0 and svgf["FLIP"] != "-" and svgf["FLIP in motion"] != "-"
+
+
+def test_denoise_benchmark_times_each_svgf_kernel(gpu):
+    import argparse
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))   # the repository root holds benchmarks/
+    from benchmarks import denoise
+
+    parser = argparse.ArgumentParser()
+    denoise.add_arguments(parser)
+    args = parser.parse_args(["--scenes", "cornell_box", "--time-sizes", "2x8x8", "--parts", "time",
+                              "--kernels", "3,5,3:6", "--timing-frames", "1", "--warmup", "0"])
+    args.quick = True
+    rows = [dict(zip(r["columns"], row)) for r in [denoise.run(args)] for row in r["rows"]]
+    assert [r["config"] for r in rows] == ["1 spp + SVGF 3x3 + TAA (1 bounce)", "1 spp + SVGF 5x5 + TAA (1 bounce)",
+                                           "1 spp + SVGF 3x3 x6 + TAA (1 bounce)"]
+    assert all(r["SVGF ms"] > 0 and r["SVGF MB"] > 0 for r in rows)
+    for bad in ("4", "3:9", "5x5", "3:"):
+        args.kernels = bad
+        with pytest.raises(OptionError, match="--kernels"):
+            denoise.run(args)

@@ -1,9 +1,11 @@
 """One SVGF a-trous iteration (passes/svgf/svgf_atrous.comp) against a float64 numpy reference
-of the filter (Schied et al. 2017, section 4.3: 5x5 B3 kernel, depth / normal / luminance weights,
-the 3x3-blurred variance, the variance filtered with the squared weights), on a synthetic
-13x11 x 2-view key and illumination: steps 1, 2, 4
+of the filter (Schied et al. 2017, section 4.3: 5x5 B3 kernel, or the 3x3 kernel of `kernel` 3,
+depth / normal / luminance weights, the 3x3-blurred variance, the variance filtered with the
+squared weights), on a synthetic 13x11 x 2-view key and illumination: steps 1, 2, 4
 and 8 (taps fetched, most outside the view), with and without the specular lobe (rgba32ui float16
-pairs, rgba16f), and the colour history it writes."""
+pairs, rgba16f), and the colour history it writes. The depth gradient the iteration reads is the
+one the variance stage (svgf_variance.comp) writes once a frame from the key; the reference
+derives it from the key in float64 as each iteration did before."""
 import numpy as np
 import pytest
 
@@ -12,7 +14,7 @@ from rayvr.passes import SVGF
 
 W, H, L = 13, 11, 2          # partial workgroups in x and y, two views
 PHI = {"svgf_phi_color": 4.0, "svgf_phi_normal": 16.0, "svgf_phi_depth": 1.0}
-KERNEL = (3 / 8, 1 / 4, 1 / 16)
+KERNELS = {5: (3 / 8, 1 / 4, 1 / 16), 3: (1 / 2, 1 / 4)}
 LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
@@ -62,8 +64,26 @@ def synthetic():
     return key, d.astype(np.float64), s.astype(np.float64)
 
 
-def reference(key, d, s, step, specular):
+def depth_gradient(z):
+    """The depth gradient per pixel (svgf_depth_gradient) of depths z (L, H, W) in float64."""
+    def at(a, dx, dy):
+        big = np.zeros((L, H + 2, W + 2))
+        big[:, 1:1 + H, 1:1 + W] = a
+        return big[:, 1 + dy:1 + dy + H, 1 + dx:1 + dx + W]
+
+    def slope(before, after):
+        a = np.where(before > 0, z - before, 1e30)
+        b = np.where(after > 0, after - z, 1e30)
+        r = np.where(np.abs(a) < np.abs(b), a, b)
+        return np.where(r > 1e29, 0.0, r)
+
+    return np.stack([slope(at(z, -1, 0), at(z, 1, 0)), slope(at(z, 0, -1), at(z, 0, 1))], -1)
+
+
+def reference(key, d, s, step, specular, kernel=5):
     """The a-trous iteration in float64: (diffuse rgb + variance, specular rgb + variance)."""
+    KERNEL = KERNELS[kernel]
+    radius = len(KERNEL) - 1
     z = key[..., 0].view(np.float32).astype(np.float64)
     n = unpack_normals(key[..., 1])
     pad = 2 * step
@@ -75,13 +95,7 @@ def reference(key, d, s, step, specular):
         out[:] = big[:, pad + dy:pad + dy + H, pad + dx:pad + dx + W]
         return out
 
-    def slope(before, after):
-        a = np.where(before > 0, z - before, 1e30)
-        b = np.where(after > 0, after - z, 1e30)
-        r = np.where(np.abs(a) < np.abs(b), a, b)
-        return np.where(r > 1e29, 0.0, r)
-
-    gradient = np.stack([slope(at(z, -1, 0), at(z, 1, 0)), slope(at(z, 0, -1), at(z, 0, 1))], -1)
+    gradient = depth_gradient(z)
     inside = np.ones((L, H, W))
     var = np.stack([d[..., 3], s[..., 3]], -1)
     blur, total = 0.0, 0.0
@@ -96,8 +110,8 @@ def reference(key, d, s, step, specular):
     sums = []
     for lobe, (c, l) in enumerate(((d, lum[0]), (s, lum[1]))):
         sw, sc, sv = np.full((L, H, W), k0), k0 * c[..., :3], k0 * k0 * c[..., 3]
-        for dy in range(-2, 3):
-            for dx in range(-2, 3):
+        for dy in range(-radius, radius + 1):
+            for dx in range(-radius, radius + 1):
                 if dx == 0 and dy == 0:
                     continue
                 ox, oy = dx * step, dy * step
@@ -114,18 +128,50 @@ def reference(key, d, s, step, specular):
     return sums
 
 
-def dispatch(gl, key, d, s, step, specular):
-    """One iteration on the GPU, with the history written: (diffuse, specular, history diffuse,
-    history specular) as float64, rows as in the inputs."""
-    prog = SVGF().compute_program(gl, "svgf_atrous.comp", {"SVGF_SPECULAR": int(specular)})
-    res = program_resources(prog)
+def gl_texture(gl, data, components, dtype):
+    tex = gl.texture_array((W, H, L), components, data.tobytes() if data is not None else None, dtype=dtype)
+    if dtype in ("u4", "f2"):
+        import moderngl
+        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    return tex
 
+
+def variance_gradient(gl, keys, specular):
+    """The variance stage on `keys` (every history 8 frames long: it keeps the illumination and
+    writes only the depth gradient): its `gradient_out` texture (rg16f)."""
+    res = program_resources(SVGF().compute_program(gl, "svgf_variance.comp", {"SVGF_SPECULAR": int(specular)}))
+    history = np.zeros((L, H, W, 2), np.uint32)
+    history[..., 1] = np.float32(8.0).view(np.uint32)
+    illum = np.zeros((L, H, W, 4), np.uint32 if specular else np.float16)
+    made = [gl_texture(gl, history, 2, "u4"), gl_texture(gl, np.zeros((L, H, W, 4), np.float32), 4, "f4"),
+            gl_texture(gl, illum, 4, "u4" if specular else "f2")]
+    made += [gl_texture(gl, np.zeros((L, H, W, 4), np.float16), 4, "f2") for _ in range(2)]
+    gradient = gl_texture(gl, np.full((L, H, W, 2), np.nan, np.float16), 2, "f2")
+    res.texture("key_cur", keys)
+    res.texture("surface_cur", made[0])
+    res.texture("moments_cur", made[1])
+    res.image("illum", made[2], read=True, write=True)
+    res.image("history_diffuse", made[3])
+    res.image("history_specular", made[4])
+    res.image("gradient_out", gradient)
+    for name, value in PHI.items():
+        res.set(name, value)
+    res.set("svgf_write_history", False)
+    res.prog.run((W + 7) // 8, (H + 7) // 8, L)
+    gl.memory_barrier()
+    for t in made:
+        t.release()
+    return gradient
+
+
+def dispatch(gl, key, d, s, step, specular, kernel=5, gradient=None):
+    """One iteration on the GPU, with the history written: (diffuse, specular, history diffuse,
+    history specular) as float64, rows as in the inputs. The depth gradient: the variance
+    stage's from the key, or `gradient` (L, H, W, 2) as given."""
+    prog = SVGF().compute_program(gl, "svgf_atrous.comp", {"SVGF_SPECULAR": int(specular), "SVGF_KERNEL": kernel})
+    res = program_resources(prog)
     def texture(data, components, dtype):
-        tex = gl.texture_array((W, H, L), components, data.tobytes() if data is not None else None, dtype=dtype)
-        if dtype == "u4":
-            import moderngl
-            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        return tex
+        return gl_texture(gl, data, components, dtype)
 
     if specular:
         illum = np.stack([half_pairs(d[..., 0], d[..., 1]), half_pairs(d[..., 2], d[..., 3]),
@@ -134,8 +180,10 @@ def dispatch(gl, key, d, s, step, specular):
     else:
         src, dst = texture(d.astype(np.float16), 4, "f2"), texture(np.zeros((L, H, W, 4), np.float16), 4, "f2")
     keys = texture(key, 2, "u4")
+    grad = variance_gradient(gl, keys, specular) if gradient is None else texture(gradient.astype(np.float16), 2, "f2")
     history = [texture(np.zeros((L, H, W, 4), np.float16), 4, "f2") for _ in range(2)]
     res.texture("key_cur", keys)
+    res.texture("gradient_cur", grad)
     res.texture("src_illum", src)
     res.image("dst_illum", dst)
     res.image("history_diffuse", history[0])
@@ -154,17 +202,18 @@ def dispatch(gl, key, d, s, step, specular):
         out_d = np.frombuffer(dst.read(), np.float16).reshape(L, H, W, 4).astype(np.float64)
         out_s = np.zeros_like(out_d)
     hist = [np.frombuffer(h.read(), np.float16).reshape(L, H, W, 4).astype(np.float64) for h in history]
-    for t in (src, dst, keys, *history):
+    for t in (src, dst, keys, grad, *history):
         t.release()
     return out_d, out_s, hist[0], hist[1]
 
 
+@pytest.mark.parametrize("kernel", [5, 3])
 @pytest.mark.parametrize("specular", [True, False])
 @pytest.mark.parametrize("step", [1, 2, 4, 8])
-def test_atrous_iteration_matches_the_float64_reference(gl, step, specular):
+def test_atrous_iteration_matches_the_float64_reference(gl, step, specular, kernel):
     key, d, s = synthetic()
-    want_d, want_s = reference(key, d, s, step, specular)
-    out_d, out_s, hist_d, hist_s = dispatch(gl, key, d, s, step, specular)
+    want_d, want_s = reference(key, d, s, step, specular, kernel)
+    out_d, out_s, hist_d, hist_s = dispatch(gl, key, d, s, step, specular, kernel)
     # float32 arithmetic, then float16 storage (one ulp: 2^-10 relative, whichever rounding)
     np.testing.assert_allclose(out_d, want_d, rtol=2e-3, atol=1e-6)
     np.testing.assert_allclose(out_s, want_s, rtol=2e-3, atol=1e-6)
@@ -176,3 +225,32 @@ def test_atrous_iteration_matches_the_float64_reference(gl, step, specular):
     changed = np.abs(out_d - d).max(-1) > 0.05
     assert changed[drawn].mean() > 0.3                                # the filter did filter (measured 0.45-0.9)
     np.testing.assert_array_equal(out_d[~drawn], d[~drawn])           # and left the holes alone
+
+
+@pytest.mark.parametrize("specular", [True, False])
+def test_the_variance_stage_writes_the_depth_gradient_each_iteration_derived(gl, specular):
+    """The gradient the a-trous iterations read (rg16f, written once a frame) is the one each
+    iteration derived from four neighbours' keys before, within float16 rounding."""
+    key, _, _ = synthetic()
+    z = key[..., 0].view(np.float32).astype(np.float64)
+    keys = gl_texture(gl, key, 2, "u4")
+    tex = variance_gradient(gl, keys, specular)
+    got = np.frombuffer(tex.read(), np.float16).reshape(L, H, W, 2).astype(np.float64)
+    keys.release()
+    tex.release()
+    want = depth_gradient(z)
+    drawn = z > 0
+    np.testing.assert_allclose(got[drawn], want[drawn], rtol=1e-3, atol=1e-6)
+    assert np.abs(want[drawn]).max() > 0.5 and (np.abs(want[drawn]) > 0.02).mean() > 0.9   # steps and slopes
+    np.testing.assert_array_equal(got[~drawn], 0.0)
+
+
+def test_a_wrong_gradient_changes_the_output(gl):
+    """The iteration does read the gradient texture: a zero gradient (every depth difference
+    then weighs against depth alone) filters less across the slopes than the true one."""
+    key, d, s = synthetic()
+    want_d, _ = reference(key, d, s, 1, False)
+    right, _, _, _ = dispatch(gl, key, d, s, 1, False)
+    wrong, _, _, _ = dispatch(gl, key, d, s, 1, False, gradient=np.zeros((L, H, W, 2)))
+    np.testing.assert_allclose(right, want_d, rtol=2e-3, atol=1e-6)
+    assert np.abs(wrong - want_d).max() > 0.05

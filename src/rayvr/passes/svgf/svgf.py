@@ -9,9 +9,12 @@ Four stages, one compute shader each, run as dispatches of this one pass:
                 disocclusion test (depth against the view's previous view-projection, normal,
                 effect word); blend colour and luminance moments; count the history length
     variance    per-pixel variance from the moments; a 7x7 spatial estimate while the history
-                is shorter than 4 frames (in place: only those pixels write)
-    a-trous     `iterations` passes of the edge-stopping 5x5 wavelet filter (taps 1, 2, 4, ...
-                pixels apart; depth, normal and variance-scaled luminance weights)
+                is shorter than 4 frames (in place: only those pixels write); and the depth
+                gradient of every pixel (`gradient`: it depends on this frame's key only, so
+                the a-trous iterations fetch it, one texel, instead of four keys each)
+    a-trous     `iterations` passes of the edge-stopping wavelet filter, `kernel` 3x3 (the
+                default, 9 taps) or 5x5 (the paper's B3 spline, 25 taps), taps 1, 2, 4, ...
+                pixels apart; depth, normal and variance-scaled luminance weights
     modulate    filtered illumination x albedo + emission
 The a-trous stage is bound by texture fetches, so what it reads per tap is small: the filter
 key (`key0/1`, rg32ui: linear depth, 0 where nothing was drawn, and octahedral normal) and one
@@ -49,6 +52,7 @@ from ..gbuffer import channels
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 STAGES = ("reproject", "variance", "atrous", "modulate")
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
+KERNELS = (3, 5)     # a-trous kernel widths: 3x3 (1/2, 1/4 per axis), 5x5 (B3 spline 3/8, 1/4, 1/16)
 
 
 def lights_key(scene) -> tuple:
@@ -62,7 +66,9 @@ class SVGF(RenderPass):
     """Denoises `diffuse` (+ optional `specular`) first-vertex radiance into `color` (rgba16f);
     see the module docstring.
 
-    Properties: `iterations` (a-trous passes, 0-8; 0 = temporal accumulation only),
+    Properties: `iterations` (a-trous passes, 0-8; 0 = temporal accumulation only), `kernel`
+    (the a-trous kernel's width: 3, the default, a 3x3 kernel of 9 taps, or 5, the paper's 5x5
+    B3 spline),
     `feedback_tap` (the iteration whose output becomes the colour history; -1: the unfiltered
     temporal mean), `alpha` and
     `moments_alpha` (weights of the new frame's colour and moments, at least 1 / history length),
@@ -75,9 +81,10 @@ class SVGF(RenderPass):
     KEY = ("key0", "key1")
     SURFACE = ("surface0", "surface1")
     FILTER = ("filter0", "filter1")
+    GRADIENT = "gradient"
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
-    PROPERTIES = {"iterations": 5, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2, "max_history": 32,
-                  "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
+    PROPERTIES = {"iterations": 5, "kernel": 3, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2,
+                  "max_history": 32, "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
     USES_SCENE = True
 
     def __init__(self, props: dict | None = None, **kwargs):
@@ -93,6 +100,9 @@ class SVGF(RenderPass):
         if key == "iterations" and (int(value) != value or not 0 <= value <= MAX_ITERATIONS):
             raise OptionError(f"pass {self.name}: property 'iterations' must be an integer from 0 to "
                               f"{MAX_ITERATIONS}, got {value!r}")
+        if key == "kernel" and value not in KERNELS:
+            raise OptionError(f"pass {self.name}: property 'kernel' must be 3 (a 3x3 a-trous kernel, 9 taps) or 5 "
+                              f"(the 5x5 B3 spline, 25 taps), got {value!r}")
         low = {"feedback_tap": -1, "max_history": 1}.get(key)
         if low is not None and (int(value) != value or value < low):
             raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= {low}, got {value!r}")
@@ -103,7 +113,7 @@ class SVGF(RenderPass):
             raise OptionError(f"pass {self.name}: property '{key}' must be > 0, got {value!r}")
         if key == "phi_normal" and not value >= 0.0:
             raise OptionError(f"pass {self.name}: property 'phi_normal' must be >= 0, got {value!r}")
-        return int(value) if key in ("iterations", "feedback_tap", "max_history") else value
+        return int(value) if key in ("iterations", "kernel", "feedback_tap", "max_history") else value
 
     def reset(self) -> None:
         """Forget the history: the next frame starts it again."""
@@ -131,6 +141,8 @@ class SVGF(RenderPass):
                                "pairs (diffuse rg) (diffuse b, variance) (specular rg) (specular b, variance)"
                          if specular else "diffuse illumination + variance between the stages (scratch)"
                          ).format("rgba32ui" if specular else "rgba16f")
+        r.add_output(self.GRADIENT, "depth gradient per pixel, from this frame's filter key (scratch: the "
+                                    "variance stage writes it, the a-trous iterations read it)").format("rg16f")
         for name in self.MOMENTS:
             r.add_internal(name, "luminance moments: diffuse m1 m2, specular m1 m2 (used in turn)").format("rgba32f")
         for name in self.KEY:
@@ -143,8 +155,11 @@ class SVGF(RenderPass):
     def compile(self, ctx, cd):
         self._specular = self.SPECULAR in cd.input_formats
         self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular)}
+        self._gl = ctx.gl
         self._res = {stage: program_resources(self.compute_program(ctx.gl, f"svgf_{stage}.comp", self._defines))
-                     for stage in STAGES}
+                     for stage in STAGES if stage != "atrous"}
+        self._atrous = {}
+        self._atrous_program()
         self._groups = groups_2d(cd.size, cd.views)
         self._frames = 0
         self._scene_version = None
@@ -152,8 +167,19 @@ class SVGF(RenderPass):
         self.resets = 0
         self.reset()
 
+    def _atrous_program(self):
+        """The a-trous stage's program for the current `kernel` (built in compile(); a kernel set
+        after it is built on its first frame)."""
+        kernel = int(self.kernel)
+        if kernel not in self._atrous:
+            self._atrous[kernel] = program_resources(self.compute_program(
+                self._gl, "svgf_atrous.comp", {**self._defines, "SVGF_KERNEL": kernel}))
+        return self._atrous[kernel]
+
     def defines(self) -> dict:
-        return dict(getattr(self, "_defines", {}))
+        if not hasattr(self, "_defines"):
+            return {}
+        return {**self._defines, "SVGF_KERNEL": int(self.kernel)}   # the a-trous stage's kernel
 
     def _lighting_edited(self, ctx) -> bool:
         """Whether the materials or lights changed since the last frame (instances alone do not
@@ -216,14 +242,16 @@ class SVGF(RenderPass):
         res.texture("moments_cur", data[self.MOMENTS[cur]])
         res.texture("key_cur", data[self.KEY[cur]])
         res.texture("surface_cur", data[self.SURFACE[cur]])
+        res.image("gradient_out", data[self.GRADIENT])
         res.set("svgf_write_history", tap < 0)
         res.prog.run(*self._groups)
         ctx.barrier(*between)
 
         src = 0
-        res = self._res["atrous"]
+        res = self._atrous_program()
         self._set_common(res)
         res.texture("key_cur", data[self.KEY[cur]])
+        res.texture("gradient_cur", data[self.GRADIENT])
         self._histories(res, data)
         for i in range(iterations):
             res.texture("src_illum", scratch[src])

@@ -1,7 +1,10 @@
-// SVGF stage 3, one iteration of the edge-avoiding a-trous wavelet filter (section 4.3): a 5x5
-// B3-spline kernel with taps `svgf_step` pixels apart, each weighted by depth (against the depth
-// gradient), normal and luminance (against the 3x3 Gaussian of the variance); the variance is
+// SVGF stage 3, one iteration of the edge-avoiding a-trous wavelet filter (section 4.3): with
+// SVGF_KERNEL 5 the paper's 5x5 B3-spline kernel (3/8, 1/4, 1/16 per axis, 25 taps), with
+// SVGF_KERNEL 3 a 3x3 kernel (1/2, 1/4 per axis, 9 taps: A-SVGF's, Schied et al. 2018), taps
+// `svgf_step` pixels apart, each weighted by depth (against the depth gradient the variance stage
+// wrote), normal and luminance (against the 3x3 Gaussian of the variance); the variance is
 // filtered with the squared weights. With `svgf_write_history` the result is next frame's history.
+// Taps come in mirrored pairs (offsets o and -o), which share the depth weight's denominator.
 #define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
 
@@ -16,7 +19,22 @@ layout(rgba16f) writeonly uniform image2DArray history_specular;
 uniform int svgf_step;
 uniform bool svgf_write_history;
 
+#ifndef SVGF_KERNEL
+#define SVGF_KERNEL 5
+#endif
+#if SVGF_KERNEL == 3
+const int RADIUS = 1;
+const float KERNEL[2] = float[2](1.0 / 2.0, 1.0 / 4.0);
+#elif SVGF_KERNEL == 5
+const int RADIUS = 2;
 const float KERNEL[3] = float[3](3.0 / 8.0, 1.0 / 4.0, 1.0 / 16.0);
+#else
+#error SVGF_KERNEL must be 3 or 5
+#endif
+const float LOG2E = 1.4426950408889634;
+
+// this frame's depth gradient per pixel (the variance stage's, rg16f)
+uniform sampler2DArray gradient_cur;
 
 // The variance at p blurred by a 3x3 Gaussian (x diffuse, y specular): a steadier luminance scale.
 vec2 blurred_variance(ivec3 p, ivec2 size) {
@@ -33,15 +51,51 @@ vec2 blurred_variance(ivec3 p, ivec2 size) {
     return sum / total;
 }
 
+// The centre pixel and the sums its taps add to.
+float c_depth;
+vec3 c_n;
+vec2 c_lum, lum_scale;
+vec2 sum_w, sum_v;
+vec3 sum_d, sum_s;
+
+// Adds the tap at q: `depth_scale` is -log2(e) over the depth weight's denominator for its offset,
+// `log_k` log2 of its kernel weight. Every weight is one exp2 of a sum of exponents (depth,
+// normal, luminance: the same product as svgf_weight_depth * svgf_weight_normal * exp(-|dl| / phi)),
+// which spends half the special-function work of evaluating the factors one by one.
+void add_tap(ivec3 q, ivec2 size, float depth_scale, float log_k) {
+    if (!svgf_inside(q.xy, size)) return;
+    uvec2 key = texelFetch(key_cur, q, 0).xy;
+    float tap_depth = svgf_key_depth(key);
+    if (!(tap_depth > 0.0)) return;   // no geometry: weight 0
+    float e = abs(c_depth - tap_depth) * depth_scale + log_k;
+    if (svgf_phi_normal > 0.0) {
+        float c = dot(c_n, svgf_unpack_normal(key.y));
+        if (!(c > 0.0)) return;   // weight 0
+        e += svgf_phi_normal * log2(c);
+    }
+    SvgfIllum tap = texelFetch(src_illum, q, 0);
+    vec4 qd = svgf_illum_diffuse(tap);
+    float wd = exp2(e - abs(c_lum.x - luminance(qd.rgb)) * lum_scale.x);
+    sum_w.x += wd;
+    sum_d += wd * qd.rgb;
+    sum_v.x += wd * wd * qd.a;
+#if SVGF_SPECULAR
+    vec4 qs = svgf_illum_specular(tap);
+    float ws = exp2(e - abs(c_lum.y - luminance(qs.rgb)) * lum_scale.y);
+    sum_w.y += ws;
+    sum_s += ws * qs.rgb;
+    sum_v.y += ws * ws * qs.a;
+#endif
+}
+
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     ivec3 size = imageSize(dst_illum);
     if (any(greaterThanEqual(p, size))) return;
-    float depth;
-    vec3 n;
-    bool geometry = svgf_key_at(p, size.xy, depth, n);
+    uvec2 key = texelFetch(key_cur, p, 0).xy;
+    c_depth = svgf_key_depth(key);
     SvgfIllum centre = texelFetch(src_illum, p, 0);
-    if (!geometry) {   // nothing to filter: the texel as it came
+    if (!(c_depth > 0.0)) {   // nothing to filter: the texel as it came
         imageStore(dst_illum, p, centre);
         if (svgf_write_history) {
             imageStore(history_diffuse, p, vec4(svgf_illum_diffuse(centre).rgb, 0.0));
@@ -51,50 +105,29 @@ void main() {
         }
         return;
     }
+    c_n = svgf_unpack_normal(key.y);
     vec4 d = svgf_illum_diffuse(centre), s = svgf_illum_specular(centre);
     {
         vec2 phi = svgf_phi_color * sqrt(max(blurred_variance(p, size.xy), 0.0) + 1e-10);
-        vec2 gradient = svgf_depth_gradient(p, depth, size.xy);
-        // Every weight is one exp2 of a sum of exponents (depth, normal, luminance: the same
-        // product as svgf_weight_depth * svgf_weight_normal * exp(-|dl| / phi)), which spends
-        // half the special-function work of evaluating the factors one by one.
-        const float LOG2E = 1.4426950408889634;
-        vec2 lum_scale = LOG2E / phi;
-        float depth_eps = 1e-3 * depth + 1e-8;
+        vec2 gradient = texelFetch(gradient_cur, p, 0).xy;
+        lum_scale = LOG2E / phi;
+        float depth_eps = 1e-3 * c_depth + 1e-8;
         float grad_step = svgf_phi_depth * float(svgf_step);
-        float ld = luminance(d.rgb), ls = luminance(s.rgb);
+        c_lum = vec2(luminance(d.rgb), luminance(s.rgb));
         float k0 = KERNEL[0] * KERNEL[0];
-        vec2 sum_w = vec2(k0);
-        vec3 sum_d = k0 * d.rgb, sum_s = k0 * s.rgb;
-        vec2 sum_v = k0 * k0 * vec2(d.a, s.a);
-        for (int dy = -2; dy <= 2; ++dy)
-            for (int dx = -2; dx <= 2; ++dx) {
-                if (dx == 0 && dy == 0) continue;
-                ivec3 q = p + ivec3(dx * svgf_step, dy * svgf_step, 0);
-                float tap_depth;
-                vec3 tap_n;
-                if (!svgf_key_at(q, size.xy, tap_depth, tap_n)) continue;
-                float e = -LOG2E * abs(depth - tap_depth) / (grad_step * abs(gradient.x * float(dx) + gradient.y * float(dy))
-                                                             + depth_eps);
-                if (svgf_phi_normal > 0.0) {
-                    float c = dot(n, tap_n);
-                    if (!(c > 0.0)) continue;   // weight 0
-                    e += svgf_phi_normal * log2(c);
-                }
-                e += log2(KERNEL[abs(dx)] * KERNEL[abs(dy)]);
-                SvgfIllum tap = texelFetch(src_illum, q, 0);
-                vec4 qd = svgf_illum_diffuse(tap);
-                float wd = exp2(e - abs(ld - luminance(qd.rgb)) * lum_scale.x);
-                sum_w.x += wd;
-                sum_d += wd * qd.rgb;
-                sum_v.x += wd * wd * qd.a;
-#if SVGF_SPECULAR
-                vec4 qs = svgf_illum_specular(tap);
-                float ws = exp2(e - abs(ls - luminance(qs.rgb)) * lum_scale.y);
-                sum_w.y += ws;
-                sum_s += ws * qs.rgb;
-                sum_v.y += ws * ws * qs.a;
-#endif
+        sum_w = vec2(k0);
+        sum_d = k0 * d.rgb;
+        sum_s = k0 * s.rgb;
+        sum_v = k0 * k0 * vec2(d.a, s.a);
+        // one half of the offsets (dy > 0, or dy 0 and dx > 0), each with its mirror
+        for (int dy = 0; dy <= RADIUS; ++dy)
+            for (int dx = -RADIUS; dx <= RADIUS; ++dx) {
+                if (dy == 0 && dx <= 0) continue;
+                float depth_scale = -LOG2E / (grad_step * abs(gradient.x * float(dx) + gradient.y * float(dy)) + depth_eps);
+                float log_k = log2(KERNEL[abs(dx)] * KERNEL[dy]);
+                ivec3 o = ivec3(dx * svgf_step, dy * svgf_step, 0);
+                add_tap(p + o, size.xy, depth_scale, log_k);
+                add_tap(p - o, size.xy, depth_scale, log_k);
             }
         d = vec4(sum_d / sum_w.x, sum_v.x / (sum_w.x * sum_w.x));
         s = vec4(sum_s / sum_w.y, sum_v.y / (sum_w.y * sum_w.y));

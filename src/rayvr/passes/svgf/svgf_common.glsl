@@ -133,6 +133,10 @@ vec2 svgf_depth_gradient(float z, float left, float right, float below, float ab
     return vec2(svgf_depth_slope(z, left, right), svgf_depth_slope(z, below, above));
 }
 
+// The depth gradient as the a-trous iterations read it (the variance stage writes it once a
+// frame, rg16f): finite, so that a zero offset times it stays zero.
+vec2 svgf_gradient_store(vec2 gradient) { return clamp(gradient, vec2(-65504.0), vec2(65504.0)); }
+
 // w_z: depth difference against the depth gradient's prediction over `offset` pixels.
 float svgf_weight_depth(float zp, float zq, vec2 gradient, vec2 offset) {
     return exp(-abs(zp - zq) / (svgf_phi_depth * abs(dot(gradient, offset)) + 1e-3 * zp + 1e-8));

@@ -3,7 +3,9 @@
 // the variance of the moments of a 7x7 neighbourhood weighted by depth and normal, boosted by
 // 4 / history (section 4.2), in place in the reprojection's illumination texel. Their illumination
 // stays their own: the a-trous stage filters it. With `svgf_write_history` (no feedback from an
-// a-trous iteration) the temporal mean is also next frame's colour history.
+// a-trous iteration) the temporal mean is also next frame's colour history. Every pixel with
+// geometry also writes its depth gradient (`gradient_out`), which depends on this frame's key
+// only: the a-trous iterations fetch it instead of deriving it again each iteration.
 #define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
 
@@ -16,6 +18,8 @@ layout(rgba16f) writeonly uniform image2DArray history_diffuse;
 layout(rgba16f) writeonly uniform image2DArray history_specular;
 #endif
 uniform sampler2DArray moments_cur;
+// this frame's depth gradient, which the a-trous iterations read instead of four key fetches each
+layout(rg16f) writeonly uniform image2DArray gradient_out;
 uniform bool svgf_write_history;
 
 void main() {
@@ -30,8 +34,13 @@ void main() {
         imageStore(history_specular, p, vec4(svgf_illum_specular(centre).rgb, 0.0));
 #endif
     }
-    if (!(c.depth > 0.0) || c.history >= SVGF_MIN_HISTORY) return;   // the temporal variance
+    if (!(c.depth > 0.0)) {   // no geometry: the a-trous stage reads no gradient here
+        imageStore(gradient_out, p, vec4(0.0));
+        return;
+    }
     vec2 gradient = svgf_depth_gradient(p, c.depth, size.xy);
+    imageStore(gradient_out, p, vec4(svgf_gradient_store(gradient), 0.0, 0.0));
+    if (c.history >= SVGF_MIN_HISTORY) return;   // the temporal variance
     float sum_w = 0.0;
     vec4 sum_m = vec4(0.0);
     for (int dy = -3; dy <= 3; ++dy)
