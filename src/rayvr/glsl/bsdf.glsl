@@ -32,10 +32,6 @@
 //                                                        which take the same n and v
 //   vec3  bsdf_eval(b, n, v, l)                          f |cos|
 //   float bsdf_pdf(b, n, v, l)                           solid-angle pdf of bsdf_sample's non-delta lobes
-//   vec3  bsdf_eval_pdf(b, n, v, l, out pdf)             both at once (sharing the half vector, D, G1(v))
-//   vec3  bsdf_eval_pdf_parts(b, n, v, l, p, with_diffuse, out diffuse, out pdf)
-//                                                        the same over the lobes of probabilities p,
-//                                                        the diffuse part apart
 //   float bsdf_pdf_specular(b, n, v, l)                  the same of bsdf_sample_specular, l above
 //                                                        (its reflections: glass's share included)
 //   bool  bsdf_sample(b, n, v, u, out BsdfSample)        u in [0,1)^3
@@ -47,10 +43,7 @@
 
 layout(std430, binding = RAYVR_BSDF_TABLE_SSBO) readonly buffer BsdfTables {
     vec4 bsdf_table_info;   // mu size, roughness size, mu min, IOR size
-    // quads (bsdf_tables.table_floats): (A, B at mu_x, A, B at mu_x+1) per (roughness, mu), so a
-    // bilinear lookup is two loads; (Ā, B̄, C̄, D̄) per roughness; glass's albedo per (side, IOR,
-    // roughness, mu), four floats a quad
-    vec4 bsdf_table[];
+    float bsdf_table[];     // A, B per (roughness, mu); Ā, B̄, C̄, D̄ per roughness; glass per (side, IOR, roughness, mu)
 };
 
 const float BSDF_DELTA_ROUGHNESS = MATERIAL_DELTA_ROUGHNESS;   // below it lobes are deltas (scene.glsl)
@@ -72,7 +65,6 @@ struct BsdfParams {
     // and glass lobes (1 / E_ss-like divisors), the dielectric layer's albedo at n.v and its
     // hemispherical average, the lobes' sampling probabilities
     float nv;
-    float lambda_v;        // Smith's Lambda of v (G1(v) = 1 / (1 + lambda_v))
     vec2 ab_v;
     float ess_v;
     float glass_comp_v;
@@ -96,7 +88,6 @@ BsdfParams bsdf_params(MaterialParams m) {
     b.thin = !m.volume;
     b.inside = false;
     b.nv = 0.0;
-    b.lambda_v = 0.0;
     b.ab_v = vec2(0.0);
     b.ess_v = 1.0;
     b.glass_comp_v = 1.0;
@@ -125,18 +116,24 @@ vec2 bsdf_table_ab(float mu, float roughness) {
     float fy = clamp(roughness, 0.0, 1.0) * float(nr - 1);
     int x0 = min(int(fx), nm - 2), y0 = min(int(fy), nr - 2);
     float tx = fx - float(x0), ty = fy - float(y0);
-    vec4 r0 = bsdf_table[y0 * nm + x0], r1 = bsdf_table[(y0 + 1) * nm + x0];
-    return mix(mix(r0.xy, r0.zw, tx), mix(r1.xy, r1.zw, tx), ty);
+    int i00 = 2 * (y0 * nm + x0), i10 = i00 + 2 * nm;
+    vec2 a = mix(vec2(bsdf_table[i00], bsdf_table[i00 + 1]), vec2(bsdf_table[i00 + 2], bsdf_table[i00 + 3]), tx);
+    vec2 c = mix(vec2(bsdf_table[i10], bsdf_table[i10 + 1]), vec2(bsdf_table[i10 + 2], bsdf_table[i10 + 3]), tx);
+    return mix(a, c, ty);
 }
 
 // Ā, B̄, C̄, D̄ at a roughness.
 vec4 bsdf_table_averages(float roughness) {
     int nm = int(bsdf_table_info.x), nr = int(bsdf_table_info.y);
-    int base = nm * nr;
+    int base = 2 * nm * nr;
     float fy = clamp(roughness, 0.0, 1.0) * float(nr - 1);
     int y0 = min(int(fy), nr - 2);
     float ty = fy - float(y0);
-    return mix(bsdf_table[base + y0], bsdf_table[base + y0 + 1], ty);
+    vec4 a = vec4(bsdf_table[base + 4 * y0], bsdf_table[base + 4 * y0 + 1], bsdf_table[base + 4 * y0 + 2],
+                  bsdf_table[base + 4 * y0 + 3]);
+    vec4 c = vec4(bsdf_table[base + 4 * y0 + 4], bsdf_table[base + 4 * y0 + 5], bsdf_table[base + 4 * y0 + 6],
+                  bsdf_table[base + 4 * y0 + 7]);
+    return mix(a, c, ty);
 }
 
 const float BSDF_TABLE_IOR_MAX = 3.0;
@@ -145,7 +142,7 @@ const float BSDF_TABLE_IOR_MAX = 3.0;
 // the glass or leaving it; trilinear.
 float bsdf_glass_albedo(float mu, float roughness, float ior, bool leaving) {
     int nm = int(bsdf_table_info.x), nr = int(bsdf_table_info.y), ni = int(bsdf_table_info.w);
-    int base = 4 * (nm * nr + nr) + (leaving ? ni * nr * nm : 0);   // in floats
+    int base = 2 * nm * nr + 4 * nr + (leaving ? ni * nr * nm : 0);
     float fx = clamp((mu - bsdf_table_info.z) / (1.0 - bsdf_table_info.z), 0.0, 1.0) * float(nm - 1);
     float fy = clamp(roughness, 0.0, 1.0) * float(nr - 1);
     float fz = clamp((ior - 1.0) / (BSDF_TABLE_IOR_MAX - 1.0), 0.0, 1.0) * float(ni - 1);
@@ -155,7 +152,7 @@ float bsdf_glass_albedo(float mu, float roughness, float ior, bool leaving) {
     for (int k = 0; k < 4; ++k) {
         int z = z0 + (k >> 1), y = y0 + (k & 1);
         int i = base + (z * nr + y) * nm + x0;
-        v[k] = mix(bsdf_table[i >> 2][i & 3], bsdf_table[(i + 1) >> 2][(i + 1) & 3], tx);
+        v[k] = mix(bsdf_table[i], bsdf_table[i + 1], tx);
     }
     return max(mix(mix(v[0], v[1], ty), mix(v[2], v[3], ty), tz), 1e-3);
 }
@@ -227,33 +224,22 @@ vec3 bsdf_weights(BsdfParams b) {
 float bsdf_dielectric_layer(BsdfParams b, vec2 ab) { return max3(bsdf_layer_albedo(b.f0, b.f90, ab)); }
 
 // ---- the lobes, evaluated ------------------------------------------------------------------
-// f |n.l| of the specular reflections (dielectric layer, metal, glass), for l above the surface,
-// and `pdf` the solid-angle density of a reflection about a visible normal there, D_v(h) / (4 v.h)
-// (non-delta): one half vector, one D and bsdf_set_view's G1(v) serve both.
-vec3 bsdf_reflection_eval_pdf(BsdfParams b, vec3 n, vec3 v, vec3 l, out float pdf) {
-    pdf = 0.0;
+// f |n.l| of the specular reflections (dielectric layer, metal, glass), for l above the surface.
+vec3 bsdf_eval_reflection(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     float nv = dot(n, v), nl = dot(n, l);
-    if (nl <= 0.0 || bsdf_is_delta(b)) return vec3(0.0);
+    if (nv <= 0.0 || nl <= 0.0 || bsdf_is_delta(b)) return vec3(0.0);
+    vec3 w = bsdf_weights(b);
     float alpha = bsdf_alpha(b);
+    float ess_v = b.ess_v;
     vec3 h = normalize(v + l);
     float vh = max(dot(v, h), 0.0);
-    float d = ggx_d(max(dot(n, h), 0.0), sin2_between(n, h), alpha);
-    pdf = vh * d / ((1.0 + b.lambda_v) * max(nv, 1e-8)) / (4.0 * max(vh, 1e-8));
-    if (nv <= 0.0) return vec3(0.0);
-    vec3 w = bsdf_weights(b);
-    float ess_v = b.ess_v;
-    float g2 = 1.0 / (1.0 + b.lambda_v + smith_lambda(nl, sin2_between(n, l), alpha));
-    float fss = d * g2 / (4.0 * nv * nl);
+    float g2 = 1.0 / (1.0 + smith_lambda(nv, sin2_between(n, v), alpha) + smith_lambda(nl, sin2_between(n, l), alpha));
+    float fss = ggx_d(max(dot(n, h), 0.0), sin2_between(n, h), alpha) * g2 / (4.0 * nv * nl);
     vec3 fresnel = w.x * fresnel_schlick(b.f0, b.f90, vh) * (1.0 + b.f0 * (1.0 / ess_v - 1.0))
                  + w.z * fresnel_schlick(b.base_color, vh) * (1.0 + b.base_color * (1.0 / ess_v - 1.0));
     if (w.y > 0.0)   // glass, compensated over its reflected and transmitted energy together
         fresnel += w.y * bsdf_glass_fresnel(b, vh) / b.glass_comp_v;
     return fresnel * fss * nl;
-}
-
-vec3 bsdf_eval_reflection(BsdfParams b, vec3 n, vec3 v, vec3 l) {
-    float pdf;
-    return bsdf_reflection_eval_pdf(b, n, v, l, pdf);
 }
 
 // f |n.l| of the dielectric's Lambert base under its specular layer, for l above the surface.
@@ -292,7 +278,7 @@ vec3 bsdf_eval_transmission(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     // thin walls: the reflected lobe mirrored, compensated as reflection is; volumes: the glass table
     float comp = b.glass_comp_v;
     float vh = dot(v, h);
-    float g2 = 1.0 / (1.0 + b.lambda_v + smith_lambda(anl, sin2_between(n, l), alpha));
+    float g2 = 1.0 / (1.0 + smith_lambda(nv, sin2_between(n, v), alpha) + smith_lambda(anl, sin2_between(n, l), alpha));
     float d = ggx_d(dot(n, h), sin2_between(n, h), alpha);
     float f;
     if (b.thin) {
@@ -314,7 +300,6 @@ vec3 bsdf_eval(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     if (dot(n, l) > 0.0) return bsdf_eval_reflection(b, n, v, l) + bsdf_eval_diffuse(b, n, v, l);
     return bsdf_eval_transmission(b, n, v, l);
 }
-
 
 // ---- the lobes, sampled -----------------------------------------------------------------------
 // Three lobes are chosen among by their probabilities at mu_v (bsdf_set_view): 0 the specular
@@ -346,7 +331,6 @@ vec3 bsdf_lobe_probabilities_at(BsdfParams b, float nv, vec2 ab) {
 
 void bsdf_set_view(inout BsdfParams b, vec3 n, vec3 v) {
     b.nv = clamp(dot(n, v), 0.0, 1.0);
-    b.lambda_v = smith_lambda(dot(n, v), sin2_between(n, v), bsdf_alpha(b));
     b.ab_v = bsdf_table_ab(b.nv, b.roughness);
     b.ess_v = bsdf_ess(b.ab_v);
     b.glass_comp_v = b.ess_v;
@@ -379,8 +363,9 @@ float bsdf_glass_reflect_probability(BsdfParams b, float c) {
 // Pdf of the GGX visible normal h for v: G1(v) max(v.h, 0) D(h) / n.v.
 float bsdf_vndf_pdf(BsdfParams b, vec3 n, vec3 v, vec3 h) {
     float nv = dot(n, v);
-    float g1 = 1.0 / (1.0 + b.lambda_v);
-    return g1 * max(dot(v, h), 0.0) * ggx_d(max(dot(n, h), 0.0), sin2_between(n, h), bsdf_alpha(b)) / max(nv, 1e-8);
+    float alpha = bsdf_alpha(b);
+    float g1 = 1.0 / (1.0 + smith_lambda(nv, sin2_between(n, v), alpha));
+    return g1 * max(dot(v, h), 0.0) * ggx_d(max(dot(n, h), 0.0), sin2_between(n, h), alpha) / max(nv, 1e-8);
 }
 
 vec3 bsdf_sample_vndf(BsdfParams b, vec3 n, vec3 v, vec2 u) {
@@ -391,9 +376,9 @@ vec3 bsdf_sample_vndf(BsdfParams b, vec3 n, vec3 v, vec2 u) {
 
 // Solid-angle pdf of a reflection about a visible normal, D_v(h) / (4 v.h), for l above (non-delta).
 float bsdf_pdf_reflection(BsdfParams b, vec3 n, vec3 v, vec3 l) {
-    float pdf;
-    bsdf_reflection_eval_pdf(b, n, v, l, pdf);
-    return pdf;
+    if (bsdf_is_delta(b) || dot(n, l) <= 0.0) return 0.0;
+    vec3 h = normalize(v + l);
+    return bsdf_vndf_pdf(b, n, v, h) / (4.0 * max(dot(v, h), 1e-8));
 }
 
 // Glass lobe's probability of reflecting towards l above: F(v.h) at l's half vector.
@@ -425,47 +410,19 @@ float bsdf_pdf_transmission(BsdfParams b, vec3 n, vec3 v, vec3 l) {
 #endif
 }
 
-// f |n.l| of the non-diffuse lobes (reflections; transmission for l below) towards l, `diffuse`
-// the Lambert base's (0 unless p.y > 0 or `with_diffuse`), and `pdf` the density of
-// bsdf_sample_lobes's direction l among the lobes of probabilities p (summing to 1): one pass
-// over the half vector where bsdf_eval and bsdf_pdf each made their own.
-vec3 bsdf_eval_pdf_parts(BsdfParams b, vec3 n, vec3 v, vec3 l, vec3 p, bool with_diffuse, out vec3 diffuse,
-                         out float pdf) {
-    diffuse = vec3(0.0);
-    pdf = 0.0;
+// Pdf of bsdf_sample_lobes's direction l among the lobes of probabilities p (summing to 1).
+float bsdf_pdf_lobes(BsdfParams b, vec3 n, vec3 v, vec3 l, vec3 p) {
     float nv = dot(n, v), nl = dot(n, l);
-    if (nv <= 0.0 || nl == 0.0) return vec3(0.0);
-    if (nl < 0.0) {
-        pdf = p.z * bsdf_pdf_transmission(b, n, v, l);
-        return bsdf_eval_transmission(b, n, v, l);
-    }
+    if (nv <= 0.0 || nl == 0.0) return 0.0;
+    if (nl < 0.0) return p.z * bsdf_pdf_transmission(b, n, v, l);
     float reflect_p = p.x;
 #if SCENE_HAS_TRANSMISSION
     if (p.z > 0.0) reflect_p += p.z * bsdf_glass_reflect_probability_to(b, v, l);
 #endif
-    float pdf_r;
-    vec3 f = bsdf_reflection_eval_pdf(b, n, v, l, pdf_r);
-    if (with_diffuse) diffuse = bsdf_eval_diffuse(b, n, v, l);
-    pdf = reflect_p * pdf_r + p.y * nl / RAYVR_PI;
-    return f;
-}
-
-// Pdf of bsdf_sample_lobes's direction l among the lobes of probabilities p (summing to 1).
-float bsdf_pdf_lobes(BsdfParams b, vec3 n, vec3 v, vec3 l, vec3 p) {
-    vec3 diffuse;
-    float pdf;
-    bsdf_eval_pdf_parts(b, n, v, l, p, false, diffuse, pdf);
-    return pdf;
+    return reflect_p * bsdf_pdf_reflection(b, n, v, l) + p.y * nl / RAYVR_PI;
 }
 
 float bsdf_pdf(BsdfParams b, vec3 n, vec3 v, vec3 l) { return bsdf_pdf_lobes(b, n, v, l, b.lobe_p); }
-
-// bsdf_eval and bsdf_pdf together.
-vec3 bsdf_eval_pdf(BsdfParams b, vec3 n, vec3 v, vec3 l, out float pdf) {
-    vec3 diffuse;
-    vec3 f = bsdf_eval_pdf_parts(b, n, v, l, b.lobe_p, true, diffuse, pdf);
-    return f + diffuse;
-}
 
 // The lobe probabilities of bsdf_sample_specular: the diffuse lobe left out.
 vec3 bsdf_specular_lobe_probabilities(BsdfParams b) {
@@ -484,7 +441,6 @@ float bsdf_pdf_specular(BsdfParams b, vec3 n, vec3 v, vec3 l) {
 struct BsdfSample {
     vec3 l;             // sampled direction
     vec3 weight;        // f |cos| / pdf
-    vec3 weight_diffuse;   // the Lambert base's share of it (f_diffuse |cos| / pdf)
     float pdf;          // solid angle, of the lobes the sampler chose among; 0 for a delta lobe
     bool delta;
     bool transmitted;   // l is below the surface (refracted or passed through)
@@ -561,7 +517,6 @@ bool bsdf_sample_lobes(BsdfParams b, vec3 n, vec3 v, vec3 u, bool with_diffuse, 
     s.transmitted = false;
     s.pdf = 0.0;
     s.weight = vec3(0.0);
-    s.weight_diffuse = vec3(0.0);
     s.l = n;
     float nv = dot(n, v);
     if (nv <= 0.0) return false;
@@ -580,11 +535,14 @@ bool bsdf_sample_lobes(BsdfParams b, vec3 n, vec3 v, vec3 u, bool with_diffuse, 
                                  : bsdf_delta_reflectance(b, nv) / (p.x + p.z * bsdf_glass_reflect_probability(b, nv));
         return max3(s.weight) > 0.0;
     }
-    vec3 diffuse;
-    vec3 f = bsdf_eval_pdf_parts(b, n, v, s.l, p, with_diffuse, diffuse, s.pdf);
+    s.pdf = bsdf_pdf_lobes(b, n, v, s.l, p);
+    vec3 f;
+    if (s.transmitted)
+        f = bsdf_eval_transmission(b, n, v, s.l);
+    else
+        f = bsdf_eval_reflection(b, n, v, s.l) + (with_diffuse ? bsdf_eval_diffuse(b, n, v, s.l) : vec3(0.0));
     if (!(s.pdf > 0.0)) return false;
-    s.weight = (f + diffuse) / s.pdf;
-    s.weight_diffuse = diffuse / s.pdf;
+    s.weight = f / s.pdf;
     return true;
 }
 

@@ -37,13 +37,12 @@ void pt_trace_parts(PathVertex s, inout Rng rng, const bool split, out vec3 diff
 #if SCENE_HAS_LIGHTS
         LightSample ls = sample_light(s.pos, rng_next3(rng));
         if (ls.valid && dot(ls.direction, s.ng) > 0.0) {
-            vec3 f_diffuse;
-            float pdf;
-            vec3 f = bsdf_eval_pdf_parts(s.bsdf, s.n, s.v, ls.direction, s.bsdf.lobe_p, true, f_diffuse, pdf) + f_diffuse;
+            vec3 f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
             if (max3(f) > 0.0) {
-                float w = ls.pdf > 0.0 ? power_heuristic(ls.pdf, pdf) : 1.0;
+                float w = ls.pdf > 0.0 ? power_heuristic(ls.pdf, bsdf_pdf(s.bsdf, s.n, s.v, ls.direction)) : 1.0;
                 nee = beta * f * ls.weight * w;
-                if (split && bounce == 0) nee_diffuse = f_diffuse * ls.weight * w;
+                if (split && bounce == 0)
+                    nee_diffuse = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction) * ls.weight * w;
                 nee_dir = ls.direction;
                 nee_dist = ls.distance * (1.0 - 1e-4);
             }
@@ -55,7 +54,8 @@ void pt_trace_parts(PathVertex s, inout Rng rng, const bool split, out vec3 diff
         float side = dot(bs.l, s.ng);
         if (scattered && (bs.transmitted ? side >= 0.0 : side <= 0.0)) scattered = false;
         if (scattered && split && bounce == 0 && !bs.delta && !bs.transmitted)
-            share = clamp(bs.weight_diffuse / max(bs.weight, vec3(1e-30)), vec3(0.0), vec3(1.0));
+            share = clamp(bsdf_eval_diffuse(s.bsdf, s.n, s.v, bs.l) / (bs.pdf * max(bs.weight, vec3(1e-30))),
+                          vec3(0.0), vec3(1.0));
         if (scattered && bs.transmitted && !s.bsdf.thin) medium = s.bsdf.inside ? vec3(0.0) : s.attenuation;
         if (nee_dist >= 0.0 && !trace_occluded(offset_ray_origin(s.pos, s.ng), nee_dir, nee_dist)) {
             radiance += nee;

@@ -87,48 +87,37 @@ vec3 probe_gi_irradiance(vec3 p, vec3 n, vec3 v) {
     vec3 g = (biased - vol.origin.xyz) / vol.spacing.xyz;
     ivec3 base = clamp(ivec3(floor(g)), ivec3(0), max(last - 1, ivec3(0)));
     vec3 alpha = clamp(g - vec3(base), 0.0, 1.0);
-    // All 24 fetches of the 8 probes are issued before any weight is formed, with no branch
-    // between them: as a loop that skipped inactive probes and fetched the depth moments in a
-    // branch, each probe's fetches waited for the previous probe's (3.6 ms of a stereo 1440x1600
-    // frame on the H200, for work worth a fraction of that). Inactive probes get weight 0.
-    uint probe[8];
-    vec3 at[8];
-    vec3 irradiance[8];
-    vec2 moments[8];
-    bool live[8];
-    for (int i = 0; i < 8; ++i) {
-        ivec3 cell = min(base + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1), last);
-        probe[i] = vol.counts.w + uint(cell.x) + vol.counts.x * (uint(cell.y) + vol.counts.y * uint(cell.z));
-        at[i] = vol.origin.xyz + vec3(cell) * vol.spacing.xyz;
-        live[i] = probe_active(probe[i]);
-        irradiance[i] = textureLod(probe_irradiance_tex, probe_tile_uv(probe_irradiance_tex, probe[i], n,
-                                                                       PROBE_IRRADIANCE_TILE), 0.0).rgb;
-        vec3 from_probe = biased - at[i];
-        float d = length(from_probe);
-        moments[i] = visibility ? textureLod(probe_depth_tex, probe_tile_uv(probe_depth_tex, probe[i],
-                                             d > 0.0 ? from_probe / d : n, PROBE_DEPTH_TILE), 0.0).xy : vec2(0.0);
-    }
     vec3 sum = vec3(0.0);
     float total = 0.0;
     for (int i = 0; i < 8; ++i) {
-        vec3 tri = mix(1.0 - alpha, alpha, vec3(ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1)));
+        ivec3 offset = ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+        ivec3 cell = min(base + offset, last);
+        uint probe = vol.counts.w + uint(cell.x) + vol.counts.x * (uint(cell.y) + vol.counts.y * uint(cell.z));
+        if (!probe_active(probe)) continue;
+        vec3 at = vol.origin.xyz + vec3(cell) * vol.spacing.xyz;
+        vec3 tri = mix(1.0 - alpha, alpha, vec3(offset));
         // Probes behind the surface count less (smoothly, so the weights never all vanish).
-        float facing = (dot(normalize(at[i] - p), n) + 1.0) * 0.5;
+        float facing = (dot(normalize(at - p), n) + 1.0) * 0.5;
         float w = facing * facing + 0.2;
-        float d = length(biased - at[i]);
-        vec2 m = moments[i];
-        if (visibility && d > m.x) {   // farther than the probe's mean distance that way: Chebyshev's bound
-            float variance = abs(m.y - m.x * m.x);
-            float beyond = d - m.x;
-            float chebyshev = variance / (variance + beyond * beyond);
-            w *= chebyshev * chebyshev * chebyshev;
+        if (visibility) {
+            vec3 from_probe = biased - at;
+            float d = length(from_probe);
+            vec2 m = texture(probe_depth_tex, probe_tile_uv(probe_depth_tex, probe, d > 0.0 ? from_probe / d : n,
+                                                            PROBE_DEPTH_TILE)).xy;
+            if (d > m.x) {   // farther than the probe's mean distance that way: Chebyshev's bound
+                float variance = abs(m.y - m.x * m.x);
+                float beyond = d - m.x;
+                float chebyshev = variance / (variance + beyond * beyond);
+                w *= chebyshev * chebyshev * chebyshev;
+            }
         }
         w = max(w, 1e-6);
         const float crush = 0.2;   // tiny weights to nearly nothing: no faint light behind walls
         if (w < crush) w *= w * w / (crush * crush);
         w *= tri.x * tri.y * tri.z;
-        sum += live[i] ? w * irradiance[i] : vec3(0.0);
-        total += live[i] ? w : 0.0;
+        sum += w * texture(probe_irradiance_tex, probe_tile_uv(probe_irradiance_tex, probe, n,
+                                                               PROBE_IRRADIANCE_TILE)).rgb;
+        total += w;
     }
     return total > 0.0 ? sum / total : vec3(0.0);
 }

@@ -30,15 +30,12 @@ vec3 shade_direct_mis(PathVertex s, inout Rng rng, bool specular_traced) {
         LightSample ls = sample_light(s.pos, rng_next3(rng));
         if (!ls.valid || dot(ls.direction, s.ng) <= 0.0) continue;
         vec3 f;
-        if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0) {
-            vec3 f_diffuse;
-            float pdf_specular;   // bsdf_pdf_specular's
-            f = bsdf_eval_pdf_parts(s.bsdf, s.n, s.v, ls.direction, bsdf_specular_lobe_probabilities(s.bsdf), true,
-                                    f_diffuse, pdf_specular);
-            f = f_diffuse + power_heuristic(ls.pdf, pdf_specular) * f;
-        } else {
+        if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0)
+            f = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction)
+              + power_heuristic(ls.pdf, bsdf_pdf_specular(s.bsdf, s.n, s.v, ls.direction))
+              * bsdf_eval_reflection(s.bsdf, s.n, s.v, ls.direction);
+        else
             f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
-        }
         if (f.x + f.y + f.z <= 0.0) continue;
 #if SHADE_SHADOWS
         if (trace_occluded(origin, ls.direction, ls.distance * (1.0 - 1e-4))) continue;

@@ -190,15 +190,12 @@ def compute_tables() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
 
 
 def table_floats() -> np.ndarray:
-    """The tables as the shaders read them (glsl/bsdf.glsl, vec4s after a 4-float header): A, B at
-    mu_x and at mu_x+1 per (roughness, mu) (so a bilinear lookup is two 16-byte loads, not eight
-    floats), the averages per roughness, then glass's albedo per (side, IOR, roughness, mu)."""
+    """The tables as the shaders read them: header, A/B per (roughness, mu), averages per
+    roughness, glass's albedo per (side, IOR, roughness, mu)."""
     _, _, terms, averages = tables()
     header = np.array([MU_SIZE, ROUGHNESS_SIZE, MU_MIN, IOR_SIZE], np.float32)
-    paired = np.concatenate([terms, np.concatenate([terms[:, 1:], terms[:, -1:]], axis=1)], axis=2)
-    glass = glass_tables().astype(np.float32).reshape(-1)
-    glass = np.concatenate([glass, np.zeros(-len(glass) % 4, np.float32)])
-    return np.concatenate([header, paired.astype(np.float32).reshape(-1), averages.astype(np.float32).reshape(-1), glass])
+    return np.concatenate([header, terms.astype(np.float32).reshape(-1), averages.astype(np.float32).reshape(-1),
+                           glass_tables().astype(np.float32).reshape(-1)])
 
 
 def _lookup(grid_x, grid_y, values, x, y):
