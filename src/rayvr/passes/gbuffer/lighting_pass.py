@@ -61,6 +61,11 @@ class GBufferLightingPass(RenderPass):
     def shader_defines(self) -> dict:
         return {}
 
+    def probe_defines(self, cd) -> dict:
+        """The defines of the pass's program when the probe inputs are bound: the lookups in it
+        (PROBE_GI), unless the pass defers them to a dispatch of its own (RTReflections)."""
+        return {"PROBE_GI": 1}
+
     def compile(self, ctx, cd):
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
         self._group = ray_group(cd.views, self.TILE, self.VIEW_GROUP)
@@ -72,7 +77,7 @@ class GBufferLightingPass(RenderPass):
         if self._probes:
             import moderngl
 
-            self._defines["PROBE_GI"] = 1
+            self._defines.update(self.probe_defines(cd))
             self._probe_sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR),
                                                           repeat_x=False, repeat_y=False))
         self._prog = self.compute_program(ctx.gl, self.SHADER, self._defines)
@@ -97,16 +102,25 @@ class GBufferLightingPass(RenderPass):
     def execute(self, ctx, data):
         res = self._res
         self.set_uniforms(res)
-        channels.bind_inputs(res, data)
+        self.bind_pixels(res, data)
         res.image("dst", data[self.OUTPUT])
         if self._probes:
             probe_inputs.bind(res, data, self._probe_sampler)
-        if self.PIXEL_LIST and not self._pixels_2d:
-            pixels = data[self.PIXEL_LIST]
-            res.buffer("PixelList", pixels)
-            self._prog.run_indirect(pixels, DISPATCH_OFFSET)
-        else:   # the shader declares no list (the compaction pass was pruned)
-            self._prog.run(*self._groups)
+        self.dispatch(self._prog, data)
         if self._probes:
             probe_inputs.unbind(res)
+
+    def bind_pixels(self, res, data) -> None:
+        """Bind what a program of the pass needs to find its pixels and their surfaces: the G-buffer
+        channels and, when it reads one, the pixel list."""
+        channels.bind_inputs(res, data)
+        if self.PIXEL_LIST and not self._pixels_2d:
+            res.buffer("PixelList", data[self.PIXEL_LIST])
+
+    def dispatch(self, prog, data) -> None:
+        """Run `prog` over the pass's pixels: the list's indirect dispatch, or the whole image."""
+        if self.PIXEL_LIST and not self._pixels_2d:
+            prog.run_indirect(data[self.PIXEL_LIST], DISPATCH_OFFSET)
+        else:   # the shader declares no list (the compaction pass was pruned)
+            prog.run(*self._groups)
 

@@ -5,15 +5,20 @@
 // shadowed direct light, continue up to MAX_BOUNCES through reflective hits (absorbing inside
 // volumes). Light a rough lobe's ray finds (emitters, the environment) and the light sample of
 // the vertex it left share it by the power heuristic (shading.glsl shade_direct_mis). Output: that radiance weighted by the specular lobes, which the composite adds to the
-// direct light (the diffuse part is the direct-light passes'). With PROBE_GI each hit adds the
-// probes' indirect diffuse light, and a path stopped by MAX_BOUNCES on a reflective surface their
-// glossy fallback.
+// direct light (the diffuse part is the direct-light passes'). Each hit adds the probes' indirect
+// diffuse light, and a path stopped by MAX_BOUNCES on a reflective surface their glossy fallback:
+// with PROBE_RECORDS (the graph's way) this kernel only records what the lookups need
+// (glsl/probe_records.glsl: one record per view and bounce, an empty one past the path's end) and
+// rt_reflections_probes.comp, dispatched after it over the same pixels, looks them up and adds
+// them (the lookup's registers here cost the traversal its occupancy: 6.15 ms against 1.73 ms
+// without probes, tauray on the H200); with PROBE_GI instead they are looked up in this kernel
+// (only tests compile that, as the reference).
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "pixel_list.glsl"
 #include "shading.glsl"
-#include "probe_gi.glsl"
+#include "probe_records.glsl"   // and probe_gi.glsl
 #include "nonfinite.glsl"
 
 #if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
@@ -22,6 +27,19 @@ layout(local_size_x = RAY_GROUP_SIZE) in;
 layout(local_size_x = PIXEL_LIST_GROUP) in;
 #endif
 layout(rgba16f) writeonly uniform image2DArray dst;
+#ifndef PROBE_RECORDS
+#define PROBE_RECORDS 0
+#endif
+#if PROBE_RECORDS
+layout(rgba32ui) writeonly uniform uimage2DArray probe_hits;
+layout(rgba32ui) writeonly uniform uimage2DArray probe_factors;
+
+void store_probe_record(ivec3 p, int bounce, ProbeRecord r) {
+    ivec3 q = ivec3(p.xy, probe_record_layer(p.z, bounce, imageSize(dst).z));
+    imageStore(probe_hits, q, probe_record_hit(r));
+    imageStore(probe_factors, q, probe_record_factors(r));
+}
+#endif
 
 void main() {
     ivec3 p;
@@ -32,6 +50,9 @@ void main() {
     vec3 throughput = vec3(1.0);
     vec3 radiance = vec3(0.0);
     vec3 medium = vec3(0.0);
+#if PROBE_RECORDS
+    int recorded = 0;   // records stored; the rest are stored empty after the loop
+#endif
     for (int bounce = 0; bounce < MAX_BOUNCES; ++bounce) {
         BsdfSample bs;
         if (!bsdf_sample_specular(s.bsdf, s.n, s.v, rng_next3(rng), bs)) break;
@@ -63,10 +84,18 @@ void main() {
 #endif
         // Only surfaces that are themselves reflective carry the path further.
         bool continues = mp.effect >= EFFECT_REFLECTIONS;
+#if PROBE_RECORDS   // stored before the shadow rays: nothing of it stays live across their traversal
+        store_probe_record(p, bounce, probe_record_at(s, throughput, continues && bounce == MAX_BOUNCES - 1));
+        recorded = bounce + 1;
+#endif
+        // (probe_gi_diffuse and probe_gi_glossy are 0 unless PROBE_GI: the in-kernel reference)
         radiance += throughput * (emitted + shade_direct_mis(s, rng, continues && bounce + 1 < MAX_BOUNCES)
                                   + probe_gi_diffuse(s));
         if (!continues) break;
         if (bounce == MAX_BOUNCES - 1) radiance += throughput * probe_gi_glossy(s);
     }
+#if PROBE_RECORDS
+    for (int b = recorded; b < MAX_BOUNCES; ++b) store_probe_record(p, b, probe_record_none());
+#endif
     imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(radiance)), 1.0));   // the target is rgba16f
 }
