@@ -1,23 +1,14 @@
 // PathTracer: `pt_samples` paths per pixel for every view in one dispatch.
-//   PT_FROM_GBUFFER 0: full screen from the camera (view_primary_ray, random sub-pixel offsets).
-//   PT_FROM_GBUFFER 1: only PATH_TRACED pixels, starting at the G-buffer surface; with
-//     PIXEL_LIST_INPUT 1 the dispatch is indirect over the compaction pass's pixel list.
-//   PT_LOBES 1: also the first vertex's diffuse and specular parts (path.glsl pt_trace_parts) into
-//     dst_diffuse / dst_specular, emission excluded (where a camera ray escapes, the background
-//     is in dst_diffuse); dst is still their sum with the emission.
+// The megakernel: every bounce's rays in one invocation (the wavefront form, pt_wave_*.comp,
+// gives them dispatches of their own). pt_pixel.glsl has the modes (PT_FROM_GBUFFER,
+// PIXEL_LIST_INPUT, PT_LOBES: emission excluded from dst_diffuse / dst_specular, where a camera ray
+// escapes the background is in dst_diffuse; dst is still their sum with the emission).
 //   PT_SAMPLE_SLICES N > 0 (llvmpipe): a dispatch traces paths [pt_sample_first, + N) of the
 //     pt_samples and adds their share of the mean to what the earlier dispatches of the frame
 //     stored. llvmpipe ends all of an invocation's loops once they have run 65,535 iterations
 //     together, silently (every traversal step is one), so many long paths in one invocation
 //     would lose light; one path per invocation stays far below it.
-#if PT_FROM_GBUFFER
-#define GBUF_READER 1
-#endif
-#include "views.glsl"
-#include "gbuffer.glsl"
-#include "pixel_list.glsl"
-#include "path.glsl"
-#include "ray_group.glsl"
+#include "pt_pixel.glsl"
 
 #if PIXEL_LIST_INPUT
 layout(local_size_x = PIXEL_LIST_GROUP) in;
@@ -38,21 +29,10 @@ uniform int pt_sample_first;   // this dispatch's first path
 #define PT_K1 pt_samples
 #endif
 layout(rgba32f) PT_DST_ACCESS uniform image2DArray dst;
-uniform int pt_samples;
-uniform float pt_clamp;
-uniform bool pt_pixel_jitter;
 #if PT_LOBES
 layout(rgba16f) PT_DST_ACCESS uniform image2DArray dst_diffuse;
 layout(rgba16f) PT_DST_ACCESS uniform image2DArray dst_specular;
 #endif
-
-// Sample `sample_index`'s generator; it also seeds the sample's alphaMode BLEND decisions.
-Rng pt_rng(ivec3 p, int sample_index) {
-    Rng r = rng_init_sample(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT, uint(sample_index),
-                            uint(pt_samples));
-    rq_blend_begin(r);
-    return r;
-}
 
 #if PT_FROM_GBUFFER
 vec3 pt_pixel(ivec3 p) {
@@ -69,19 +49,12 @@ vec3 pt_pixel(ivec3 p) {
 // The first vertex of a camera path through pixel p and the radiance it emits towards the eye;
 // false (`emitted` = the background) when the ray escapes.
 bool pt_camera_vertex(ivec3 p, inout Rng rng, out PathVertex s, out vec3 emitted) {
-    // random sub-pixel positions (anti-aliasing once accumulated), else the centre moved by the
-    // views' TAA jitter so the rays register with a jittered raster
-    vec2 offset = pt_pixel_jitter ? rng_next2(rng) : vec2(0.5) + views[p.z].jitter.xy;
     vec3 o, d;
-    view_primary_ray(uint(p.z), vec2(p.xy) + offset, o, d);
+    pt_camera_ray(p, rng, o, d);
     Hit hit;
     emitted = environment_radiance(d);
     if (!trace_closest(o, d, 1e30, hit)) return false;
-    float spread = view_pixel_spread(uint(p.z));
-    SurfacePoint sp;
-    MaterialParams mp;
-    s = path_vertex_at_hit(hit, d, hit.t * spread, spread, sp, mp);
-    emitted = (sp.front_face || mp.double_sided) ? mp.emissive : vec3(0.0);
+    s = pt_camera_vertex_at(p, d, hit, emitted);
     return true;
 }
 
@@ -128,13 +101,10 @@ vec3 pt_pixel_lobes(ivec3 p, out vec3 diffuse, out vec3 specular) {
             e = vec3(0.0);
         }
 #endif
-        if (!(is_finite(e) && is_finite(d) && is_finite(r))) {
-            nonfinite_count();
-            continue;
-        }
-        emitted += pt_finite(e, pt_clamp);
-        diffuse += pt_finite(d, pt_clamp);
-        specular += pt_finite(r, pt_clamp);
+        if (!pt_sample_parts_finite(e, d, r)) continue;
+        emitted += e;
+        diffuse += d;
+        specular += r;
     }
     float n = float(max(pt_samples, 1));
     diffuse /= n;

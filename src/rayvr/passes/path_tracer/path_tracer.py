@@ -29,6 +29,9 @@ from ..effects import effect_defines, scene_defines, unused_effect_reason
 from ..gbuffer import channels
 
 MODES = ("full", "gbuffer")
+KERNELS = ("megakernel", "wavefront")
+# The wavefront form's state per path slot (pt_wave.glsl): 11 fields of 16 bytes, 4 more with lobes.
+WAVE_FIELDS, WAVE_LOBE_FIELDS, WAVE_FIELD_BYTES = 11, 4, 16
 SAMPLERS = {"sobol": 1, "pcg": 0}   # glsl/sampling.glsl RAYVR_SAMPLER
 # Paths per invocation per dispatch on software renderers (path_tracer.comp PT_SAMPLE_SLICES):
 # llvmpipe stops an invocation's loops after 65,535 iterations in all, so a frame's paths are
@@ -49,14 +52,18 @@ class PathTracer(RenderPass):
     jitter), `mode` ("full" or "gbuffer"), `sampler` ("sobol": hash-based Owen-scrambled Sobol,
     the default; "pcg": independent PCG hash samples, for comparisons), `lobes` (also the
     `diffuse` and `specular` outputs; then Russian roulette never ends a path at its first
-    vertex, and `clamp` caps each lobe of a sample on its own)."""
+    vertex, and `clamp` caps each lobe of a sample on its own), `kernel` ("megakernel": all of a
+    path's rays in one invocation; "wavefront": the rays of every path's vertex in a dispatch of
+    their own, between dispatches that do the rest (pt_wave_*.comp), through a state buffer of
+    176 bytes a pixel (240 with lobes), the `paths` scratch output; the same paths either way)."""
 
     COLOR = "color"
     DIFFUSE, SPECULAR = "diffuse", "specular"
     PIXELS = "pixels"
+    PATHS = "paths"
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
-                  "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol", "lobes": False}
+                  "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol", "lobes": False, "kernel": "megakernel"}
     USES_SCENE = True
 
     def validate_property(self, key, value):
@@ -64,6 +71,9 @@ class PathTracer(RenderPass):
         if key == "sampler" and value not in SAMPLERS:
             raise OptionError(f"pass {self.name}: property 'sampler' is {value!r}; use 'sobol' (Owen-scrambled "
                               f"Sobol, the default) or 'pcg'")
+        if key == "kernel" and value not in KERNELS:
+            raise OptionError(f"pass {self.name}: property 'kernel' is {value!r}; use 'megakernel' (a path's rays "
+                              f"in one invocation) or 'wavefront' (each vertex's rays in a dispatch of their own)")
         if key == "mode" and value not in MODES:
             raise OptionError(f"pass {self.name}: property 'mode' is {value!r}; use 'full' or 'gbuffer'")
         if key == "samples_per_pixel" and (int(value) != value or value < 1):
@@ -85,7 +95,23 @@ class PathTracer(RenderPass):
             r.add_output(self.DIFFUSE, "what the first vertex's diffuse lobe reflects (emission excluded; "
                                        "the background where a camera ray escapes)").format("rgba16f")
             r.add_output(self.SPECULAR, "what its specular lobe reflects").format("rgba16f")
+        if self.kernel == "wavefront":
+            r.add_output(self.PATHS, "the wavefront's path state between its dispatches (scratch)").buffer(
+                self.wave_slots(cd.size, cd.views) * self.wave_slot_bytes())
         return r
+
+    def wave_slot_bytes(self) -> int:
+        """Bytes of the wavefront's state per path slot."""
+        return (WAVE_FIELDS + (WAVE_LOBE_FIELDS if self.lobes else 0)) * WAVE_FIELD_BYTES
+
+    def wave_slots(self, size, views: int) -> int:
+        """Path slots of the wavefront's state: one per pixel of the list, or per invocation of the
+        image-wide dispatch (its workgroups cover the image's edges)."""
+        if self.mode == "gbuffer":   # the list's length, at most one entry a pixel
+            return int(size[0]) * int(size[1]) * int(views)
+        group = ray_group(views)
+        gx, gy, gz = groups_2d(size, views, group)
+        return gx * gy * gz * group[0] * group[1] * group[2]
 
     def skip_reason(self, cd):
         if self.mode != "gbuffer":
@@ -103,9 +129,20 @@ class PathTracer(RenderPass):
         self._listed = listed
         self._group = ray_group(cd.views)
         self._defines.update(ray_group_defines(self._group))
-        self._prog = self.compute_program(ctx.gl, "path_tracer.comp", self._defines)
-        self._res = program_resources(self._prog)
         self._groups = groups_2d(cd.size, cd.views, self._group)
+        self._wave = self.kernel == "wavefront"
+        if self._wave:   # one ray per invocation and dispatch: llvmpipe's loop limit is never near
+            self._defines["PT_SAMPLE_SLICES"] = 0
+            self._slice = 0
+            self._shade = self.compute_program(ctx.gl, "pt_wave_shade.comp", self._defines)
+            self._trace = self.compute_program(ctx.gl, "pt_wave_trace.comp", self._defines)
+            self._res = program_resources(self._shade)
+            self._trace_res = program_resources(self._trace)
+            self._slots = self.wave_slots(cd.size, cd.views)
+            self._wave_size = (int(cd.size[0]), int(cd.size[1]), int(cd.views))
+        else:
+            self._prog = self.compute_program(ctx.gl, "path_tracer.comp", self._defines)
+            self._res = program_resources(self._prog)
 
     def defines(self) -> dict:
         return dict(getattr(self, "_defines", {}))
@@ -120,6 +157,9 @@ class PathTracer(RenderPass):
             res.set(key, value)   # skipped where the GLSL compiler dropped the uniform
 
     def execute(self, ctx, data):
+        if self._wave:
+            self._execute_wavefront(ctx, data)
+            return
         res = self._res
         self._set_uniforms(res)
         if self.mode == "gbuffer":
@@ -140,4 +180,41 @@ class PathTracer(RenderPass):
                 self._prog.run_indirect(pixels, DISPATCH_OFFSET)
             else:
                 self._prog.run(*self._groups)
+
+    def _run(self, prog, pixels) -> None:
+        if pixels is not None:
+            prog.run_indirect(pixels, DISPATCH_OFFSET)
+        else:
+            prog.run(*self._groups)
+
+    def _execute_wavefront(self, ctx, data) -> None:
+        """Per sample: a shade dispatch that begins the paths, then (trace, shade) per bounce; the
+        camera ray (mode "full") takes one more pair. The last shade adds the sample to the outputs."""
+        shade, trace = self._res, self._trace_res
+        self._set_uniforms(shade)
+        if self.mode == "gbuffer":
+            channels.bind_inputs(shade, data)
+        shade.image("dst", data[self.COLOR], read=True)   # samples after the first add to it
+        if self.lobes:
+            shade.image("dst_diffuse", data[self.DIFFUSE], read=True)
+            shade.image("dst_specular", data[self.SPECULAR], read=True)
+        pixels = data.get(self.PIXELS) if self._listed else None
+        for res in (shade, trace):
+            res.buffer("PtWave", data[self.PATHS])
+            res.set("pt_wave_paths", self._slots)
+            res.set("pt_wave_size", self._wave_size)
+            if pixels is not None:
+                res.buffer("PixelList", pixels)
+        rays = int(self.max_bounces) + (0 if self.mode == "gbuffer" else 1)
+        for k in range(int(self.samples_per_pixel)):
+            shade.set("pt_sample", k)
+            for stage in range(rays + 1):
+                shade.set("pt_stage", stage)
+                shade.set("pt_last", stage == rays)
+                self._run(self._shade, pixels)
+                if stage < rays:
+                    ctx.barrier(Access.STORAGE)
+                    self._run(self._trace, pixels)
+                    ctx.barrier(Access.STORAGE)
+            ctx.barrier(Access.IMAGE, Access.STORAGE)   # the next sample adds to the outputs
 

@@ -1,0 +1,111 @@
+"""The path tracer's wavefront form (each vertex's rays in a dispatch of their own, pt_wave_*.comp)
+against its megakernel: both run path.glsl's steps on the same random numbers, so they trace the
+same paths and their images agree to float rounding, in every mode: from the camera or the
+G-buffer (over the whole image or the compaction's pixel list), with the lobes split for SVGF,
+several samples a frame, alphaMode BLEND's stochastic decisions and glass."""
+import numpy as np
+import pytest
+
+import rayvr as rv
+from rayvr.errors import OptionError
+from rayvr.scene import builtin
+
+SIZE = (24, 24)
+
+
+def images(scene, graph, outputs, kernel, frames=2, views=2):
+    graph.get_pass("PathTracer").set_properties({"kernel": kernel})
+    with rv.Renderer(scene, graph, size=SIZE, views=views) as r:
+        for _ in range(frames):
+            r.render()
+        report = str(r.report())
+        return [np.asarray(r.read_output(o))[..., :3].astype(np.float64) for o in outputs], report
+
+
+def assert_same(scene, make_graph, outputs, **kw):
+    mega, _ = images(scene, make_graph(), outputs, "megakernel", **kw)
+    wave, report = images(scene, make_graph(), outputs, "wavefront", **kw)
+    for name, a, b in zip(outputs, mega, wave):
+        assert np.isfinite(b).all()
+        assert a.mean() > 0.0, f"{name}: nothing rendered"
+        np.testing.assert_allclose(b, a, rtol=1e-5, atol=1e-6 * max(a.max(), 1e-6), err_msg=name)
+    return report
+
+
+def glossy_cornell():
+    s = builtin.cornell_box()
+    floor = s.materials["Floor"]
+    floor.roughness, floor.metallic, floor.specular = 0.3, 0.5, 1.0
+    return s
+
+
+def glass_and_blend_scene():
+    s = builtin.cornell_box()
+    glass = s.materials["TallBox"]
+    glass.transmission, glass.roughness, glass.base_color = 1.0, 0.2, (1.0, 1.0, 1.0, 0.5)
+    glass.alpha_mode = "BLEND"
+    return s
+
+
+@pytest.mark.parametrize("spp, bounces", [(1, 4), (3, 2), (1, 0), (2, 1)])
+def test_full_screen_paths_are_the_megakernels(gpu, spp, bounces):
+    assert_same(builtin.cornell_box(), lambda: rv.graphs.path_traced(samples_per_pixel=spp, max_bounces=bounces),
+                ["Accumulate.dst"])
+
+
+LOBES = ["PathTracer.color", "PathTracer.diffuse", "PathTracer.specular"]
+
+
+def lobes_graph():
+    g = rv.graphs.path_traced(denoise="svgf", max_bounces=3)
+    for pin in LOBES:
+        g.mark_output(pin)
+    return g
+
+
+def test_lobes_for_svgf_are_the_megakernels(gpu):
+    assert_same(glossy_cornell(), lobes_graph, LOBES, frames=1)
+
+
+def test_glass_and_stochastic_transparency_are_the_megakernels(gpu):
+    assert_same(glass_and_blend_scene(), lambda: rv.graphs.path_traced(samples_per_pixel=2, max_bounces=6),
+                ["Accumulate.dst"])
+
+
+@pytest.mark.parametrize("listed", [True, False])
+def test_gbuffer_paths_are_the_megakernels(gpu, listed):
+    scene = glossy_cornell()
+    for name in ("TallBox", "Floor"):
+        scene.materials[name].effect = rv.Effect.PATH_TRACED
+
+    def graph():
+        g = rv.graphs.hybrid(path_bounces=3)
+        g.mark_output("PathTracer.color")
+        if not listed:   # the whole image, pixels of other effects left at 0
+            g.remove_edge("Compaction.pathPixels", "PathTracer.pixels")
+        return g
+
+    assert_same(scene, graph, ["PathTracer.color"], frames=1)
+
+
+def test_the_state_buffer_is_scratch_of_the_wavefront_alone(gpu):
+    scene = builtin.cornell_box()
+    _, wave = images(scene, rv.graphs.path_traced(), ["Accumulate.dst"], "wavefront", frames=1, views=1)
+    _, mega = images(scene, rv.graphs.path_traced(), ["Accumulate.dst"], "megakernel", frames=1, views=1)
+    assert "PathTracer.paths" in wave and "PathTracer.paths" not in mega
+    g = rv.graphs.path_traced()
+    pt = g.get_pass("PathTracer")
+    pt.set_properties({"kernel": "wavefront"})
+    assert pt.wave_slots(SIZE, 1) >= SIZE[0] * SIZE[1] and pt.wave_slot_bytes() == 176
+    pt.set_properties({"lobes": True})
+    assert pt.wave_slot_bytes() == 240
+
+
+def test_kernel_property_round_trips_and_rejects_others(tmp_path):
+    g = rv.graphs.path_traced()
+    pt = g.get_pass("PathTracer")
+    pt.set_properties({"kernel": "wavefront"})
+    for name in ("g.json", "g.py"):
+        assert rv.RenderGraph.load(g.save(tmp_path / name)).get_pass("PathTracer").kernel == "wavefront"
+    with pytest.raises(OptionError, match="property 'kernel'.*'megakernel'.*'wavefront'"):
+        pt.set_properties({"kernel": "persistent"})
