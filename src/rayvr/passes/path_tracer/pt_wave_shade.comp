@@ -29,13 +29,13 @@ uint ptw_flags(PtRays r) {
          | (r.transmitted ? PTW_TRANSMITTED : 0u);
 }
 
-void ptw_store_state(uint i, PtPath path, PtRays r, uint flags, Rng rng) {
+void ptw_store_state(uint i, PtPath path, PtRays r, uint flags, Rng rng, uint blend_seed) {
     ptw_storef(PTW_RADIANCE, i, path.radiance, r.pdf);
     ptw_storef(PTW_BETA, i, path.beta, r.cone_width);
     ptw_storef(PTW_MEDIUM, i, path.medium, r.cone_spread);
     ptw_storef(PTW_NEE, i, r.nee, r.nee_dist);
     ptw_storefu(PTW_POS, i, r.pos, flags);
-    ptw_store(PTW_NG, i, uvec4(floatBitsToUint(r.ng), ptw_load(PTW_NG, i).w));
+    ptw_store(PTW_NG, i, uvec4(floatBitsToUint(r.ng), blend_seed));
     ptw_storefu(PTW_NEE_DIR, i, r.nee_dir, rng.state);
     ptw_storefu(PTW_DIR, i, r.dir, rng.group);
 #if PT_LOBES
@@ -46,7 +46,7 @@ void ptw_store_state(uint i, PtPath path, PtRays r, uint flags, Rng rng) {
 #endif
 }
 
-void ptw_load_state(uint i, out PtPath path, out PtRays r, out uint flags, inout Rng rng) {
+void ptw_load_state(uint i, out PtPath path, out PtRays r, out uint flags, inout Rng rng, out uint blend_seed) {
     vec4 a = ptw_loadf(PTW_RADIANCE, i), b = ptw_loadf(PTW_BETA, i), m = ptw_loadf(PTW_MEDIUM, i);
     vec4 nee = ptw_loadf(PTW_NEE, i);
     uvec4 pos = ptw_load(PTW_POS, i), ng = ptw_load(PTW_NG, i), nd = ptw_load(PTW_NEE_DIR, i), d = ptw_load(PTW_DIR, i);
@@ -62,6 +62,7 @@ void ptw_load_state(uint i, out PtPath path, out PtRays r, out uint flags, inout
     r.pos = uintBitsToFloat(pos.xyz);
     flags = pos.w;
     r.ng = uintBitsToFloat(ng.xyz);
+    blend_seed = ng.w;
     r.nee_dir = uintBitsToFloat(nd.xyz);
     rng.state = nd.w;
     r.dir = uintBitsToFloat(d.xyz);
@@ -141,10 +142,10 @@ void main() {
     uint flags;
     vec3 emitted;
     Rng rng;
+    uint blend_seed;
     if (pt_stage == 0) {
         rng = pt_rng(p, pt_sample);
-        // the BLEND decisions of the path's rays (pt_wave_trace.comp) and its Rng index
-        ptw_store(PTW_NG, i, uvec4(0u, 0u, 0u, rng.state));
+        blend_seed = rng.state;   // the BLEND decisions of the path's rays (pt_wave_trace.comp)
         ptw_store(PTW_ANSWER, i, uvec4(0u));
         path = pt_path_begin();
         r = ptw_no_rays();
@@ -169,14 +170,27 @@ void main() {
         r.dir = d;
         flags = PTW_ALIVE | PTW_SCATTERED | PTW_CAMERA;
 #endif
-        ptw_store_state(i, path, r, flags, rng);
+        ptw_store_state(i, path, r, flags, rng, blend_seed);
         ptw_storefu(PTW_EMITTED, i, emitted, rng.index);
     } else {
+        flags = ptw_load(PTW_POS, i).w;
         uvec4 e = ptw_load(PTW_EMITTED, i);
         emitted = uintBitsToFloat(e.xyz);
+        if ((flags & PTW_ALIVE) == 0u) {   // an ended path waits for the last stage with its light
+            if (!pt_last) return;
+            path = pt_path_begin();
+            path.radiance = ptw_loadf(PTW_RADIANCE, i).xyz;
+#if PT_LOBES
+            path.first_diffuse = ptw_loadf(PTW_FIRST_DIFFUSE, i).xyz;
+            path.first_total = ptw_loadf(PTW_FIRST_TOTAL, i).xyz;
+            path.share = ptw_loadf(PTW_SHARE, i).xyz;
+#endif
+            ptw_output(p, path, flags, emitted);
+            return;
+        }
         rng.index = e.w;
-        ptw_load_state(i, path, r, flags, rng);
-        if ((flags & PTW_ALIVE) != 0u) {
+        ptw_load_state(i, path, r, flags, rng, blend_seed);
+        {
             uvec4 h = ptw_load(PTW_HIT, i), answer = ptw_load(PTW_ANSWER, i);
             Hit hit;
             hit.t = uintBitsToFloat(h.x);
@@ -208,7 +222,7 @@ void main() {
                     flags = 0u;
                 }
             }
-            ptw_store_state(i, path, r, flags, rng);
+            ptw_store_state(i, path, r, flags, rng, blend_seed);
         }
     }
     if (pt_last) ptw_output(p, path, flags, emitted);
