@@ -19,8 +19,9 @@ from .metrics import LOWER_IS_BETTER, METRICS
 
 
 def summarize(samples: dict) -> dict:
-    """{metric: [per-view arrays, one per judged frame]} -> {metric: {"mean", "std", "per_view"}}:
-    mean and sample standard deviation over every (frame, view) value, and the mean per view."""
+    """{metric: [per-view arrays, one per judged frame]} -> {metric: {"mean", "std", "per_view", "n"}}:
+    mean and sample standard deviation over every (frame, view) value, the mean per view, and
+    how many values there were (frames x views)."""
     out = {}
     for metric, frames in samples.items():
         a = np.asarray(frames, dtype=np.float64)           # (frames, views)
@@ -29,7 +30,7 @@ def summarize(samples: dict) -> dict:
         std = float(flat.std(ddof=1)) if flat.size > 1 else 0.0
         if not np.isfinite(flat).all():
             std = float("nan")
-        out[metric] = {"mean": mean, "std": std, "per_view": [float(v) for v in a.mean(axis=0)]}
+        out[metric] = {"mean": mean, "std": std, "per_view": [float(v) for v in a.mean(axis=0)], "n": int(flat.size)}
     return out
 
 

@@ -31,9 +31,13 @@ class LocalRunner:
         return probe.probe_cost_model(scene, view_set, builder, options, judge, **kwargs)
 
     def rows(self, study, configs, reference, motion_references: dict) -> list:
-        """One Row per configuration, in order (rayvr.tune.measure.Study.row)."""
-        return [study.row(c, reference, motion_references) for c in configs]
+        """One Row per configuration, in order (rayvr.tune.measure.Study.row): each configuration
+        renders while the metric pool judges the ones before (rayvr.tune.pool)."""
+        finish = [study.row_later(c, reference, motion_references) for c in configs]
+        return [f() for f in finish]
 
     def curves(self, study, reference) -> list:
-        """The progressive curves (rayvr.tune.measure.Study.curve), in order."""
-        return [study.curve(name, options, reference) for name, options in study.curve_graphs()]
+        """The progressive curves (rayvr.tune.measure.Study.curve), in order, rendered while the
+        metric pool judges."""
+        finish = [study.curve_later(name, options, reference) for name, options in study.curve_graphs()]
+        return [f() for f in finish]
