@@ -114,6 +114,8 @@ def run(args) -> dict:
             folder = write_report(results, Path(args.out) / f"error_vs_time_{slug(scene.name)}", budget_ms=budgets[0],
                                   image_step=image_step)
             notes.append(f"{scene.name}: report {folder}")
+        # each scene's table as soon as it is made (a later scene cut short by a timeout leaves this one)
+        print(f"error_vs_time {scene.name}:\n{results.table()}", flush=True)
         for r in results.rows:
             floor = r.floor or {}
             rows.append([scene.name, r.name, f"{len(view_set)}x{size[0]}x{size[1]}", round(r.gpu_ms, 3),

@@ -89,3 +89,20 @@ def test_study_rows_are_identical_with_the_metric_pool(gpu):
         timed = ("wall_s", "gpu_s")
         assert [{k: v for k, v in p.items() if k not in timed} for p in a.points] == \
                [{k: v for k, v in p.items() if k not in timed} for p in b.points]
+
+
+def test_hdrflip_frames_limits_hdr_flip_to_the_first_judged_frames(gpu):
+    size = (12, 12)
+    scene = rv.scenes.cornell_box()
+    ref = rv.tune.cached_reference(scene, default_views(scene, 1, size), ReferenceSettings(frames=4, spp=1,
+                                                                                           max_bounces=2), False, gpu)
+    settings = StudySettings(frames=3, timing_frames=1, warmup=0, warmup_s=0.0, motion=Motion(frames=2, samples=1),
+                             floor_fraction=0.5, progressive_frames=2, hdrflip_frames=1)
+    res = measure(scene, [Config("all SHADOWS", Effect.SHADOWS, options={"path_bounces": 2})], views=1, size=size,
+                  reference=ref, settings=settings, cache_dir=False, progress=False, gpu=gpu)
+    row = res.rows[0]
+    assert row.errors["hdrflip"]["n"] == 1 and row.errors["flip"]["n"] == 3
+    assert "hdrflip" not in row.motion and "flip" in row.motion
+    assert "hdrflip" not in row.floor and "flip" in row.floor
+    assert all("hdrflip" not in p and "flip" in p for c in res.curves for p in c.points)
+    assert res.study["settings"]["hdrflip_frames"] == 1

@@ -22,7 +22,7 @@ import contextlib
 import time
 
 # Relative seconds per unit before any step of the kind was timed (llvmpipe's ratios).
-PRIOR = {"render": 2.5e-6, "metric": 1.5e-6, "setup": 0.4, "curve": 1.0}
+PRIOR = {"render": 2.5e-6, "metric": 2.5e-6, "setup": 0.4, "curve": 1.0}
 
 
 class StudyProgress:
