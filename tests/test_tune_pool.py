@@ -106,3 +106,18 @@ def test_hdrflip_frames_limits_hdr_flip_to_the_first_judged_frames(gpu):
     assert "hdrflip" not in row.floor and "flip" in row.floor
     assert all("hdrflip" not in p and "flip" in p for c in res.curves for p in c.points)
     assert res.study["settings"]["hdrflip_frames"] == 1
+
+
+def test_an_interrupted_study_stops_its_workers_at_once():
+    import time
+
+    test, ref = _images(0, views=2, h=600, w=600)
+    display = Display().fixed(ref)
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        with MetricPool(2) as pool:
+            pool.judge(test, ref, display, 14.0, 1e-2, ("image", "reference"), tuple(METRICS), units=1.0)
+            processes = list(pool.executor._processes.values())
+            raise KeyboardInterrupt
+    assert time.perf_counter() - t0 < 20
+    assert processes and all(not p.is_alive() for p in processes)

@@ -95,10 +95,15 @@ class MetricPool:
         if self.executor is not None:
             if exc_type is None:
                 self.drain()
-            if exc_type is not None:
+            if exc_type is not None:     # interrupted: stop the judging now (an HDR-FLIP takes a minute)
                 for p in self.outstanding:
                     p.future.cancel()
-            self.executor.shutdown(wait=True, cancel_futures=exc_type is not None)
+                processes = list(getattr(self.executor, "_processes", {}).values())
+                for process in processes:
+                    process.terminate()
+                for process in processes:
+                    process.join(5)
+            self.executor.shutdown(wait=exc_type is None, cancel_futures=exc_type is not None)
             self.executor = None
             self.folder.cleanup()
             self.progress.concurrent("metric", 0)
