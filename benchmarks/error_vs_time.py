@@ -34,7 +34,7 @@ DEVICE = {"timing_frames": 12, "warmup": 2, "reference_frames": 64, "motion_fram
           "progressive_frames": 64}
 DEVICE_FLOOR_FRACTION = 0.125  # floors of 128 spp (the full run: 0.25 of 4096)
 DEVICE_IMAGE_STEP = 8        # the report's images at every 8th pixel: 360x200 per stereo pair, a few MB per scene
-DEVICE_HDRFLIP_FRAMES = 1     # HDR-FLIP (~88 CPU-s per stereo 1440x1600 image) on each configuration's first judged frame
+DEVICE_HDRFLIP_FRAMES = 1     # HDR-FLIP (~88 CPU-s a stereo 1440x1600 image) on each configuration's first frame
 
 
 def add_arguments(parser) -> None:

@@ -1,28 +1,29 @@
 """The error study's image metrics in worker processes, while the GPU renders on.
 
-At 2 x 1440x1600 one judged image costs seconds of CPU (HDR-FLIP runs LDR-FLIP at several
-exposures; SSIM and FLIP are single-threaded), against milliseconds of GPU. `MetricPool` hands
-every judgement (rayvr.tune.metrics.evaluate of one read-back image) to a process pool sized by
-os.cpu_count() (less one for the process driving the GPU) and gives back a `Pending` whose `get()` waits for it, so that the study renders
-the next frames, configurations and curves while earlier images are judged. Results are those of
+At 2 x 1440x1600 one judged image costs ~100 CPU-seconds (88 of them HDR-FLIP, which runs
+LDR-FLIP at each of the reference's exposures; SSIM and the tone mapping are single-threaded),
+against milliseconds of GPU. `MetricPool` hands every judgement (rayvr.tune.metrics.evaluate of
+one read-back image) to a process pool sized by os.cpu_count() (less one for the process driving
+the GPU) and gives back a `Pending` whose `get()` waits for it, so that the study renders the
+next frames, configurations and curves while earlier images are judged. Results are those of
 the same `evaluate` call in this process: each worker evaluates the whole image (views one after
 the other, its own threads off), with the same inputs (the read-back float32 RGB values and the
 reference), so that the serial path (`workers=0`: judged at once, here) and the parallel one give
 identical numbers (tests/test_tune_pool.py).
 
 References (the static one and one per trajectory frame) go to the workers once, as .npy files in
-a temporary folder that each worker maps and keeps; test images travel with their task. At most
+a temporary folder that each worker loads once and keeps (with its displayed image); test images travel with their task. At most
 `2 x workers` judgements are outstanding: a render that would queue more waits for the oldest
-(bounded memory: 74 MB per stereo 1440x1600 RGBA float32 image). The study's progress bar
+(bounded memory: 55 MB per stereo 1440x1600 RGB float32 image). The study's progress bar
 (rayvr.tune.progress) counts metric work by the workers' own seconds, divided by the workers.
 """
 from __future__ import annotations
 
 import collections
 import os
-import warnings
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
