@@ -70,6 +70,7 @@ def run(args) -> dict:
     from rayvr.tune.report import slug
     from rayvr.tune.results import effects_text
     from rayvr.tune.timing import GPU_WARM_UP_S
+    from rayvr.tune.runner import LocalRunner
     from rayvr.tune.tuner import tuned_study
     from rayvr.xr.presets import get_preset
 
@@ -96,12 +97,19 @@ def run(args) -> dict:
                              floor_fraction=floor_fraction, metric_workers=args.metric_workers,
                              hdrflip_frames=hdrflip_frames)
     rows, notes = [], [figures_note(args.figures, f, args.frames, floor_fraction, hdrflip_frames)]
-    for spec in scenes:
-        scene = load_scene_arg(spec)
+    loaded = [load_scene_arg(spec) for spec in scenes]
+    if len(loaded) > 1:
+        notes.append("each scene's references were rendered while the scene before it was still being judged "
+                     "(the GPU idles then; the same references, from the cache)")
+    for n, scene in enumerate(loaded):
         view_set = make_views(scene, args.views, size)
         ref = cached_reference(scene, view_set, ref_settings, args.cache)
+        following = loaded[n + 1] if n + 1 < len(loaded) else None
+        runner = LocalRunner(before_wait=(lambda s=following: prefetch_references(s, args.views, size, ref_settings,
+                                                                                  motion, args.cache))
+                             if following is not None else None)
         results, tuned = tuned_study(scene, view_set, ref, settings, standard_configs(scene, ref_settings), budgets,
-                                     cache_dir=args.cache)
+                                     cache_dir=args.cache, runner=runner)
         notes.append(f"{scene.name}: reference {ref.verdict()}")
         study = results.study
         notes.append(f"{scene.name}: study {study['seconds']:.0f} s wall; images judged by "
@@ -127,6 +135,21 @@ def run(args) -> dict:
                  f"frames {motion.sample_frames()}; floor = the configuration converged against the reference")
     return {"columns": ["scene", "config", "views x size", "GPU ms", "FLIP", "HDR-FLIP", "PSNR dB", "SSIM", "relMSE",
                         "FLIP in motion", "floor relMSE", "floor bias"], "rows": rows, "notes": notes}
+
+
+def prefetch_references(scene, views: int, size, ref_settings, motion, cache_dir) -> None:
+    """Render `scene`'s references (the static view's and one per judged trajectory frame) into
+    the cache, as the study would (same views, seeds and settings), so that they are rendered
+    while the GPU would otherwise wait for the previous scene's metrics."""
+    from rayvr.tune import cached_reference, make_views
+    from rayvr.tune.motion import trajectory_views
+    from rayvr.xr.views import ViewSet
+
+    view_set = make_views(scene, views, size)
+    cached_reference(scene, view_set, ref_settings, cache_dir)
+    frames = trajectory_views(view_set, motion)
+    for k, i in enumerate(motion.sample_frames()):
+        cached_reference(scene, ViewSet(frames[i]), ref_settings, cache_dir, sample=k + 1)
 
 
 def figures_note(figures: str, f: dict, frames: int, floor_fraction: float, hdrflip_frames=None) -> str:
