@@ -28,8 +28,8 @@ FIGURES = {"size": ("1440x1600", "32x32"), "timing_frames": (50, 10), "warmup": 
            "reference_spp": (16, 16), "motion_frames": (32, 16), "motion_samples": (3, 2),
            "progressive_frames": (256, 16)}
 # --figures device: what differs from the full run, to fit both scenes into one device call of
-# 10 minutes (benchmarks/RESULTS.md, "error study": projected ~6 minutes on the H200); every
-# metric is still computed on every judged frame and view
+# 10 minutes (benchmarks/RESULTS.md, "Where the error study's time goes": ~8.8 minutes projected);
+# FLIP, PSNR, SSIM and relMSE on every judged frame and view, HDR-FLIP on the first (DEVICE_HDRFLIP_FRAMES)
 DEVICE = {"timing_frames": 12, "warmup": 2, "reference_frames": 64, "motion_frames": 16, "motion_samples": 1,
           "progressive_frames": 64}
 DEVICE_FLOOR_FRACTION = 0.125  # floors of 128 spp (the full run: 0.25 of 4096)
