@@ -9,6 +9,10 @@ motion, and its bias floor. One table row per (scene, configuration); the full r
 scene (report.md, report.html, results.json, plots, images) goes to OUT/error_vs_time_<scene>/.
 `--quick`: the Cornell box alone at llvmpipe's study sizes (those of rayvr.tune.defaults: 2 x
 32x32, a 64 x 16 spp reference), for a smoke run on llvmpipe; options given still win.
+`--figures device`: the full size with the reduced figures of DEVICE, which fit both scenes into
+one 10-minute call on the lent H200 (tools/gpu-bench study); the notes say which figures ran.
+The images are judged by `--metric-workers` processes (default os.cpu_count() at this size)
+while the GPU renders on (rayvr.tune.pool): the same numbers as judged one after the other.
 """
 from __future__ import annotations
 
@@ -23,6 +27,14 @@ DEFAULT_SCENES = [str(Path(__file__).resolve().parents[2] / "shared" / "scenes" 
 FIGURES = {"size": ("1440x1600", "32x32"), "timing_frames": (50, 10), "warmup": (10, 2), "reference_frames": (256, 64),
            "reference_spp": (16, 16), "motion_frames": (32, 16), "motion_samples": (3, 2),
            "progressive_frames": (256, 16)}
+# --figures device: what differs from the full run, to fit both scenes into one device call of
+# 10 minutes (benchmarks/RESULTS.md, "Where the error study's time goes": ~8.8 minutes projected);
+# FLIP, PSNR, SSIM and relMSE on every judged frame and view, HDR-FLIP on the first (DEVICE_HDRFLIP_FRAMES)
+DEVICE = {"timing_frames": 12, "warmup": 2, "reference_frames": 64, "motion_frames": 16, "motion_samples": 1,
+          "progressive_frames": 64}
+DEVICE_FLOOR_FRACTION = 0.125  # floors of 128 spp (the full run: 0.25 of 4096)
+DEVICE_IMAGE_STEP = 8        # the report's images at every 8th pixel: 360x200 per stereo pair, a few MB per scene
+DEVICE_HDRFLIP_FRAMES = 1     # HDR-FLIP (~88 CPU-s a stereo 1440x1600 image) on each configuration's first frame
 
 
 def add_arguments(parser) -> None:
@@ -33,6 +45,20 @@ def add_arguments(parser) -> None:
     parser.add_argument("--budgets", default="11.1,5.5", help="tuner budgets in GPU ms, comma-separated")
     parser.add_argument("--frames", type=int, default=4, help="judged frames per configuration")
     add_figure_options(parser, FIGURES)
+    parser.add_argument("--figures", choices=("full", "device"), default="full",
+                        help="full: the defaults above; device: the reduced figures that fit one call on the H200 "
+                             f"({', '.join(f'{k} {v}' for k, v in DEVICE.items())}); options given still win")
+    parser.add_argument("--floor-fraction", type=float,
+                        help="bias floors render this fraction of the reference's paths per pixel (default 0.25; "
+                             f"device figures: {DEVICE_FLOOR_FRACTION})")
+    parser.add_argument("--hdrflip-frames", type=int,
+                        help="HDR-FLIP on the first N judged frames of each configuration and its floor only, not "
+                             "in motion nor on the curves (default: everywhere; device figures: 1)")
+    parser.add_argument("--report-image-step", type=int,
+                        help="the report's images at every Nth pixel (default 1; device figures: 8, a few MB)")
+    parser.add_argument("--metric-workers", type=int,
+                        help="processes judging the images while the GPU renders (default: os.cpu_count() from "
+                             "256x256 per view, else 0 = one after the other here)")
     parser.add_argument("--cache", help="reference cache folder (default ~/.cache/rayvr/references)")
 
 
@@ -44,11 +70,22 @@ def run(args) -> dict:
     from rayvr.tune.report import slug
     from rayvr.tune.results import effects_text
     from rayvr.tune.timing import GPU_WARM_UP_S
+    from rayvr.tune.runner import LocalRunner
     from rayvr.tune.tuner import tuned_study
     from rayvr.xr.presets import get_preset
 
+    from rayvr.errors import OptionError
+
     quick = args.quick
+    if quick and args.figures != "full":
+        raise OptionError("error_vs_time: --quick and --figures device are two different sets of figures; give one")
     f = resolve_figures(args, FIGURES)
+    if args.figures == "device":
+        f.update({k: v for k, v in DEVICE.items() if getattr(args, k) is None})
+    floor_fraction = args.floor_fraction or (DEVICE_FLOOR_FRACTION if args.figures == "device" else 0.25)
+    image_step = args.report_image_step or (DEVICE_IMAGE_STEP if args.figures == "device" else 1)
+    hdrflip_frames = args.hdrflip_frames if args.hdrflip_frames is not None else (
+        DEVICE_HDRFLIP_FRAMES if args.figures == "device" else None)
     scenes = parse_list(args.scenes, "--scenes", str) if args.scenes else (["cornell_box"] if quick else DEFAULT_SCENES)
     size = parse_size(f["size"])
     budgets = parse_list(args.budgets, "--budgets", float)
@@ -56,21 +93,37 @@ def run(args) -> dict:
     motion = Motion("turn", f["motion_frames"], f["motion_samples"], get_preset(args.preset).default_refresh)
     settings = StudySettings(frames=args.frames, timing_frames=f["timing_frames"], warmup=f["warmup"],
                              warmup_s=0.0 if quick else GPU_WARM_UP_S, motion=motion,
-                             progressive_frames=f["progressive_frames"], preset=args.preset)
-    rows, notes = [], []
-    for spec in scenes:
-        scene = load_scene_arg(spec)
+                             progressive_frames=f["progressive_frames"], preset=args.preset,
+                             floor_fraction=floor_fraction, metric_workers=args.metric_workers,
+                             hdrflip_frames=hdrflip_frames)
+    rows, notes = [], [figures_note(args.figures, f, args.frames, floor_fraction, hdrflip_frames)]
+    loaded = [load_scene_arg(spec) for spec in scenes]
+    if len(loaded) > 1:
+        notes.append("each scene's references were rendered while the scene before it was still being judged "
+                     "(the GPU idles then; the same references, from the cache)")
+    for n, scene in enumerate(loaded):
         view_set = make_views(scene, args.views, size)
         ref = cached_reference(scene, view_set, ref_settings, args.cache)
+        following = loaded[n + 1] if n + 1 < len(loaded) else None
+        runner = LocalRunner(before_wait=(lambda s=following: prefetch_references(s, args.views, size, ref_settings,
+                                                                                  motion, args.cache))
+                             if following is not None else None)
         results, tuned = tuned_study(scene, view_set, ref, settings, standard_configs(scene, ref_settings), budgets,
-                                     cache_dir=args.cache)
+                                     cache_dir=args.cache, runner=runner)
         notes.append(f"{scene.name}: reference {ref.verdict()}")
+        study = results.study
+        notes.append(f"{scene.name}: study {study['seconds']:.0f} s wall; images judged by "
+                     + (f"{study['metric_workers']} worker processes ({study['metric_worker_s']:.0f} s of their time)"
+                        if study.get("metric_workers") else "this process, one after the other"))
         notes += [f"{scene.name}: tuned for {b:g} ms (predicted {t.predicted_ms:.3g} ms, measured {t.measured_ms:.3g}): "
                   f"{effects_text({m: e.name for m, e in t.assignment.items()})}"
                   + (f" ({'; '.join(t.notes)})" if t.notes else "") for b, t in tuned.items()]
         if not args.no_save:
-            folder = write_report(results, Path(args.out) / f"error_vs_time_{slug(scene.name)}", budget_ms=budgets[0])
+            folder = write_report(results, Path(args.out) / f"error_vs_time_{slug(scene.name)}", budget_ms=budgets[0],
+                                  image_step=image_step)
             notes.append(f"{scene.name}: report {folder}")
+        # each scene's table as soon as it is made (a later scene cut short by a timeout leaves this one)
+        print(f"error_vs_time {scene.name}:\n{results.table()}", flush=True)
         for r in results.rows:
             floor = r.floor or {}
             rows.append([scene.name, r.name, f"{len(view_set)}x{size[0]}x{size[1]}", round(r.gpu_ms, 3),
@@ -82,6 +135,34 @@ def run(args) -> dict:
                  f"frames {motion.sample_frames()}; floor = the configuration converged against the reference")
     return {"columns": ["scene", "config", "views x size", "GPU ms", "FLIP", "HDR-FLIP", "PSNR dB", "SSIM", "relMSE",
                         "FLIP in motion", "floor relMSE", "floor bias"], "rows": rows, "notes": notes}
+
+
+def prefetch_references(scene, views: int, size, ref_settings, motion, cache_dir) -> None:
+    """Render `scene`'s references (the static view's and one per judged trajectory frame) into
+    the cache, as the study would (same views, seeds and settings), so that they are rendered
+    while the GPU would otherwise wait for the previous scene's metrics."""
+    from rayvr.tune import cached_reference, make_views
+    from rayvr.tune.motion import trajectory_views
+    from rayvr.xr.views import ViewSet
+
+    view_set = make_views(scene, views, size)
+    cached_reference(scene, view_set, ref_settings, cache_dir)
+    frames = trajectory_views(view_set, motion)
+    for k, i in enumerate(motion.sample_frames()):
+        cached_reference(scene, ViewSet(frames[i]), ref_settings, cache_dir, sample=k + 1)
+
+
+def figures_note(figures: str, f: dict, frames: int, floor_fraction: float, hdrflip_frames=None) -> str:
+    """What this run computed, on how many frames (the table's statistics depend on it)."""
+    ref = f"reference {f['reference_frames']} x {f['reference_spp']} spp"
+    metrics = ("every metric (FLIP, HDR-FLIP, PSNR, SSIM, relMSE)" if hdrflip_frames is None else
+               f"FLIP, PSNR, SSIM, relMSE on all, HDR-FLIP on the first {min(hdrflip_frames, frames)} (not in "
+               f"motion, on the floors nor on the curves) of")
+    return (f"figures '{figures}': {ref}; GPU ms over {f['timing_frames']} frames after {f['warmup']}; {metrics} "
+            f"{frames} judged frames x every view; in motion "
+            f"{f['motion_frames']} frames, judged at {f['motion_samples']}; floors at {floor_fraction:g} of the "
+            f"reference's paths; progressive curves to {f['progressive_frames']} frames"
+            + (" (reduced from the full run's defaults to fit one device call)" if figures == "device" else ""))
 
 
 def _round(value, digits: int = 4):

@@ -42,11 +42,11 @@ def test_results_json_has_the_issues_shape(results, tmp_path):
     for row in doc["rows"]:
         assert row["gpu_ms"] > 0 and row["frames"] == 2 and row["views"] == 2 and row["size"] == [12, 12]
         for metric in ("flip", "hdrflip", "psnr", "ssim", "relmse"):
-            assert set(row[metric]) == {"mean", "std"}
+            assert set(row[metric]) == {"mean", "std", "n"} and row[metric]["n"] == 2 * 2
             assert len(row["per_view"][metric]) == 2
         assert {"graph", "spp", "bounces", "light_samples", "frames_accumulated", "denoiser", "gi",
                 "effects"} <= set(row["settings"])
-        assert set(row["motion"]["flip"]) == {"mean", "std", "per_view"}
+        assert set(row["motion"]["flip"]) == {"mean", "std", "per_view", "n"}
         assert row["floor"]["relmse"] > 0
     assert doc["progressive"][0]["points"][-1]["frames"] == 2
     assert doc["study"]["ppd"] == pytest.approx(14.0, abs=0.05) and doc["study"]["eps"] == 0.01

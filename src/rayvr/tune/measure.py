@@ -33,10 +33,11 @@ from ..errors import OptionError
 from ..materials.effect import Effect
 from . import seeds
 from .configs import Config, effects_restored, path_traced_graph
-from .display import Display, clamp_negative
+from .display import Display
 from .floor import bias_floor, even_frames, floor_path, load_floor, store_floor
-from .metrics import DEFAULT_EPS, METRICS, check_metrics, evaluate
+from .metrics import DEFAULT_EPS, METRICS, check_metrics
 from .motion import Motion, along, trajectory_views
+from .pool import MetricPool, default_workers
 from .progress import StudyProgress
 from .reference import Reference, ReferenceSettings, is_cached
 from .results import Results, Row, summarize
@@ -45,8 +46,10 @@ from .timing import default_warmup_s, make_views, timed_frames
 
 MOTION_FIRST_FRAME = seeds.TEST + seeds.RANGE // 2     # inside the test range, apart from the static frames
 PROGRESSIVE_FIRST_FRAME = seeds.TEST + seeds.RANGE // 4
-# Relative CPU cost per pixel of each metric (HDR-FLIP runs LDR-FLIP at several exposures).
-METRIC_COST = {"flip": 1.0, "hdrflip": 6.0, "ssim": 0.5, "psnr": 0.1, "relmse": 0.1}
+# Relative CPU cost per pixel of each metric, measured on the Cornell box (benchmarks/RESULTS.md,
+# "Where the error study's time goes"; FLIP's includes the tone mapping, 2.5 us per pixel on one
+# core; HDR-FLIP runs LDR-FLIP at each of the reference's exposures).
+METRIC_COST = {"flip": 1.0, "hdrflip": 7.5, "ssim": 0.25, "psnr": 0.01, "relmse": 0.03}
 # Relative GPU cost per pixel and frame of an effect level, in paths of the reference's length.
 EFFECT_COST = {Effect.RASTER: 0.3, Effect.SHADOWS: 0.5, Effect.REFLECTIONS: 0.8}
 
@@ -61,7 +64,12 @@ class StudySettings:
     bias floors, at `floor_fraction` of the reference's samples per pixel; `progressive_frames`:
     length of the progressive curves (0: none); `preset`/`ppd`: FLIP's pixels per degree (ppd
     None: the preset's); `eps`: relMSE's epsilon; `display`: the tone mapping of the displayed
-    images."""
+    images; `metric_workers`: processes judging the images while the GPU renders on
+    (rayvr.tune.pool; 0: here, one after the other; None: os.cpu_count() from 256x256 pixels per
+    view, else 0); the numbers are the same either way. `hdrflip_frames`: HDR-FLIP (the costliest
+    metric: LDR-FLIP at each of the reference's exposures, ~8x its cost on the Cornell box) on the
+    first N judged frames of each configuration only, not in motion, on the floors nor on the
+    progressive curves (None: everywhere)."""
 
     frames: int = 4
     timing_frames: int = 20
@@ -76,12 +84,20 @@ class StudySettings:
     eps: float = DEFAULT_EPS
     display: Display = Display()
     metrics: tuple = tuple(METRICS)
+    metric_workers: int | None = None
+    hdrflip_frames: int | None = None
 
     def __post_init__(self):
         for key, low in (("frames", 1), ("timing_frames", 1), ("warmup", 0), ("progressive_frames", 0)):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise OptionError(f"study {key}: must be an integer >= {low}, got {value!r}")
+        if self.metric_workers is not None and (isinstance(self.metric_workers, bool)
+                                                or not isinstance(self.metric_workers, int) or self.metric_workers < 0):
+            raise OptionError(f"study metric_workers: must be an integer >= 0 or None, got {self.metric_workers!r}")
+        if self.hdrflip_frames is not None and (isinstance(self.hdrflip_frames, bool)
+                                                or not isinstance(self.hdrflip_frames, int) or self.hdrflip_frames < 1):
+            raise OptionError(f"study hdrflip_frames: must be an integer >= 1 or None, got {self.hdrflip_frames!r}")
         if self.ppd is not None and not self.ppd > 0:
             raise OptionError(f"study ppd: pixels per degree must be > 0, got {self.ppd!r}")
         if not 0 < self.floor_fraction <= 1:
@@ -100,6 +116,7 @@ class StudySettings:
         d["motion"] = self.motion.as_dict() if self.motion else None
         d["display"] = self.display.as_dict()
         d["metrics"] = list(self.metrics)
+        d.pop("metric_workers")         # where the metrics ran, not what they are (the report's study info says)
         return d
 
 
@@ -160,7 +177,9 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
     study = Study(scene, view_set, ref_settings, settings, ppd, warmup_s, cache_dir, gpu,
                   StudyProgress(progress and not runner.shows_progress, f"error study {scene.name}"), runner)
     study.plan(configs, given is None, curves)
-    with effects_restored(scene), study.progress:
+    # rows and curves on a cluster judge their images there; only a local study needs the pool
+    study.pool = MetricPool(study.metric_workers() if isinstance(runner, LocalRunner) else 0, study.progress)
+    with effects_restored(scene), study.progress, study.pool:
         ref = given or study.reference(0, view_set, "reference")
         study.display = settings.display.fixed(ref.image)
         halves, _, _ = study.judge(ref.half_a, ref.half_b, "reference half A")
@@ -174,6 +193,7 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
             "display": study.display.as_dict(), "display_text": study.display.describe(), "eps": settings.eps,
             "timing": study.method or "?", "warmup_s": warmup_s, "device": gpu.caps.renderer,
             "software": bool(gpu.caps.is_software), "workers": sorted({r.timed_on for r in rows if r.timed_on}),
+            "metric_workers": study.pool.workers, "metric_worker_s": study.pool.worker_s,
             "settings": settings.as_dict(), "notes": list(notes),
             "reference_halves": {m: float(np.mean(v)) for m, v in halves.items()},
             "seconds": time.perf_counter() - t0, "metric_descriptions": {m: d for m, d in _descriptions().items()
@@ -210,6 +230,7 @@ class Study:
         self.motion_frames = motion_frames          # the views of every trajectory frame
         self.display = None
         self.method = None
+        self.pool = MetricPool(0, progress)     # measure() gives it workers
         self.keep_floors = False        # keep floors rendered without a cache in new_floors
         self.new_floors: dict = {}      # configuration name -> Floor
 
@@ -230,6 +251,11 @@ class Study:
         study.keep_floors = True
         return study
 
+    def metric_workers(self) -> int:
+        """Processes that judge the images (StudySettings.metric_workers; None: by view size)."""
+        w = self.s.metric_workers
+        return default_workers(self.view_set.size[0] * self.view_set.size[1]) if w is None else w
+
     # -- planning ----------------------------------------------------------------------------
     def _reference_units(self) -> float:
         r = self.ref_settings
@@ -239,6 +265,7 @@ class Study:
         p, s = self.progress, self.s
         if render_reference and not is_cached(self.scene, self.view_set, self.ref_settings, self.cache_dir):
             p.plan("render", self._reference_units())
+        p.plan("metric", self.metric_units)          # the reference's halves
         if s.motion:
             for k, i in enumerate(s.motion.sample_frames()):
                 if not is_cached(self.scene, _views(self.motion_frames[i]), self.ref_settings, self.cache_dir, k + 1):
@@ -247,25 +274,30 @@ class Study:
             cost = frame_cost(c, self.scene) * self.pixels
             p.plan("setup", 1)
             p.plan("render", cost * (s.warmup + s.timing_frames + s.frames * c.accumulate))
-            p.plan("metric", self.metric_units * s.frames)
+            p.plan("metric", sum(self._units(self._hdrflip(k)) for k in range(s.frames)))
             if s.motion:
                 p.plan("setup", 1)
                 p.plan("render", cost * s.motion.frames)
-                p.plan("metric", self.metric_units * s.motion.samples)
-            if s.floors and not self._floor_cached(c):
-                p.plan("render", cost * floor_frames(c, self.ref_settings, s.floor_fraction))
+                p.plan("metric", self._units(s.hdrflip_frames is None) * s.motion.samples)
+            if s.floors:
+                if not self._floor_cached(c):
+                    p.plan("render", cost * floor_frames(c, self.ref_settings, s.floor_fraction))
+                p.plan("metric", self._units(s.hdrflip_frames is None))
         if curves and s.progressive_frames:
+            from .progressive import snapshot_counts
+
             for _ in self.curve_graphs():
-                p.plan("curve", self._curve_units())
+                p.plan("setup", 1)
+                p.plan("render", self._curve_cost() * (s.warmup + s.timing_frames + s.progressive_frames))
+                p.plan("metric", self._units(s.hdrflip_frames is None) * len(snapshot_counts(s.progressive_frames)))
 
-    def _curve_units(self) -> float:
-        """A progressive curve renders and judges in one step: its units are prior seconds."""
-        from .progress import PRIOR
-        from .progressive import snapshot_counts
+    def _hdrflip(self, k: int) -> bool:
+        """Whether the k-th judged frame of a configuration gets HDR-FLIP (StudySettings.hdrflip_frames)."""
+        return self.s.hdrflip_frames is None or k < self.s.hdrflip_frames
 
-        s = self.s
-        return (PRIOR["render"] * self.pixels * (s.warmup + s.timing_frames + s.progressive_frames)
-                + PRIOR["metric"] * self.metric_units * len(snapshot_counts(s.progressive_frames)))
+    def _curve_cost(self) -> float:
+        """GPU cost per frame of a progressive curve (1 spp path tracing), as frame_cost counts it."""
+        return (1 + 0.3) * self.pixels
 
     def _floor_frames(self, config) -> int:
         return floor_frames(config, self.ref_settings, self.s.floor_fraction)
@@ -299,14 +331,35 @@ class Study:
     def judge(self, image, reference_image, name: str, maps: bool = False):
         """(per-view metrics, maps, negative values) of `image`: negative radiance is judged as
         the tone mapper shows it (0), and counted."""
-        image, negatives = clamp_negative(image)
-        per_view, maps = evaluate(image, reference_image, self.display, self.ppd, self.s.eps,
-                                  names=(name, "reference"), which=self.s.metrics, maps=maps)
-        return per_view, maps, negatives
+        return self.judge_later(image, reference_image, name, maps).get()
+
+    def judge_later(self, image, reference_image, name: str, maps: bool = False, hdrflip: bool = True):
+        """`judge` handed to the metric pool (rayvr.tune.pool): a Pending whose get() is judge's
+        answer; the study renders on meanwhile. `hdrflip` False: without HDR-FLIP (where
+        StudySettings.hdrflip_frames leaves it out)."""
+        which = self.s.metrics if hdrflip else tuple(m for m in self.s.metrics if m != "hdrflip") or self.s.metrics
+        units = self.metric_units if which == self.s.metrics else self.pixels * sum(METRIC_COST[m] for m in which)
+        return self.pool.judge(image, reference_image, self.display, self.ppd, self.s.eps, (name, "reference"),
+                               which, maps, units=units)
+
+    def judge_curve(self, image, reference_image, name: str):
+        """judge_later for a progressive curve's snapshot (no HDR-FLIP when hdrflip_frames is set)."""
+        return self.judge_later(image, reference_image, name, hdrflip=self.s.hdrflip_frames is None)
+
+    def _units(self, hdrflip: bool) -> float:
+        """Metric units of one judged image with or without HDR-FLIP."""
+        which = [m for m in self.s.metrics if hdrflip or m != "hdrflip"] or list(self.s.metrics)
+        return self.pixels * sum(METRIC_COST[m] for m in which)
 
     def row(self, config: Config, ref: Reference, motion_refs: dict, floor=None) -> Row:
         """`config` measured: timing, the judged frames, in motion, its bias floor (`floor`: one
         already loaded, else from the cache or rendered)."""
+        return self.row_later(config, ref, motion_refs, floor)()
+
+    def row_later(self, config: Config, ref: Reference, motion_refs: dict, floor=None):
+        """`row` with its images rendered and handed to the metric pool: returns the function
+        that waits for their judgements and makes the Row (LocalRunner renders the next
+        configuration before calling it)."""
         from ..renderer import Renderer
 
         s, p = self.s, self.progress
@@ -315,7 +368,7 @@ class Study:
         graph = config.build_graph()
         pin = config.output_pin(graph)
         name = f"config '{config.name}' {pin}"
-        samples, first, first_maps, negatives = {m: [] for m in s.metrics}, None, {}, 0
+        judged, first = [], None
         with p.step("setup", 1, config.name):
             r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=seeds.TEST)
         with r:
@@ -331,29 +384,43 @@ class Study:
                     for _ in range(config.accumulate):
                         r.render()
                     image = r.read_output(pin, flip_y=True)
-                with p.step("metric", self.metric_units, config.name):
-                    per_view, maps, bad = self.judge(image, ref.image, name, maps=k == 0)
+                judged.append(self.judge_later(image, ref.image, name, maps=k == 0, hdrflip=self._hdrflip(k)))
+                if k == 0:
+                    first = image
+        settings = config.settings(self.scene)
+        motion = self.motion_row(config, motion_refs, cost) if s.motion else None
+        floor = self.floor_row(config, ref, cost, floor) if s.floors else None
+
+        def finish() -> Row:
+            samples, negatives, first_maps = {m: [] for m in s.metrics}, 0, {}
+            for k, pending in enumerate(judged):
+                per_view, maps, bad = pending.get()
                 negatives += bad
                 for m, v in per_view.items():
                     samples[m].append(v)
                 if k == 0:
-                    first, first_maps = image, maps
-        row = Row(config.name, config.settings(self.scene), timing.frame_ms, timing.pass_ms, timing.cpu_ms,
-                  s.frames, len(self.view_set), tuple(self.view_set.size), summarize(samples), image=first,
-                  maps=first_maps, negative_values=negatives)
-        if s.motion:
-            row.motion, row.motion_image = self.motion_row(config, motion_refs, cost)
-        if s.floors:
-            row.floor, row.floor_image = self.floor_row(config, ref, cost, floor)
-        return row
+                    first_maps = maps
+            samples = {m: v for m, v in samples.items() if v}
+            row = Row(config.name, settings, timing.frame_ms, timing.pass_ms, timing.cpu_ms, s.frames,
+                      len(self.view_set), tuple(self.view_set.size), summarize(samples), image=first,
+                      maps=first_maps, negative_values=negatives)
+            if motion:
+                row.motion, row.motion_image = motion()
+            if floor:
+                row.floor, row.floor_image = floor()
+            return row
+
+        return finish
 
     def motion_row(self, config: Config, motion_refs: dict, cost: float):
+        """`config` along the trajectory, its sampled frames handed to the metric pool: returns
+        the function that waits for them and gives (motion dict, last judged image)."""
         from ..renderer import Renderer
 
         s, p = self.s, self.progress
         graph = config.build_graph()
         pin = config.output_pin(graph)
-        samples, last, negatives = {m: [] for m in s.metrics}, None, 0
+        judged, last = [], None
         label = f"{config.name} in motion"
         with p.step("setup", 1, label):
             r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=MOTION_FIRST_FRAME)
@@ -363,15 +430,25 @@ class Study:
                     r.render(views)
                     image = r.read_output(pin, flip_y=True) if i in motion_refs else None
                 if image is not None:
-                    with p.step("metric", self.metric_units, label):
-                        per_view, _, bad = self.judge(image, motion_refs[i].image, f"config '{config.name}' frame {i}")
-                    negatives += bad
-                    for m, v in per_view.items():
-                        samples[m].append(v)
+                    judged.append(self.judge_later(image, motion_refs[i].image, f"config '{config.name}' frame {i}",
+                                                   hdrflip=s.hdrflip_frames is None))
                     last = image
-        return {**s.motion.as_dict(), **summarize(samples), "negative_values": negatives}, last
+
+        def finish():
+            samples, negatives = {m: [] for m in s.metrics}, 0
+            for pending in judged:
+                per_view, _, bad = pending.get()
+                negatives += bad
+                for m, v in per_view.items():
+                    samples[m].append(v)
+            samples = {m: v for m, v in samples.items() if v}
+            return {**s.motion.as_dict(), **summarize(samples), "negative_values": negatives}, last
+
+        return finish
 
     def floor_row(self, config: Config, ref: Reference, cost: float, floor=None):
+        """`config`'s bias floor (rayvr.tune.floor), judged in the metric pool: returns the
+        function that waits for it and gives (floor dict, floor image)."""
         frames = self._floor_frames(config)
         label = f"{config.name} converged (bias floor)"
         if floor is None and self._floor_cached(config):
@@ -383,9 +460,15 @@ class Study:
             if self.keep_floors and self.cache_dir is False:
                 self.new_floors[config.name] = floor
         out = floor.against(ref)
-        per_view, _, _ = self.judge(floor.image, ref.image, f"floor of '{config.name}'")
-        out.update({m: float(np.mean(v)) for m, v in per_view.items()})
-        return out, floor.image
+        pending = self.judge_later(floor.image, ref.image, f"floor of '{config.name}'",
+                                   hdrflip=self.s.hdrflip_frames is None)
+
+        def finish():
+            per_view, _, _ = pending.get()
+            out.update({m: float(np.mean(v)) for m, v in per_view.items()})
+            return out, floor.image
+
+        return finish
 
     # -- progressive curves ------------------------------------------------------------------
     def curve_graphs(self) -> list:
@@ -400,11 +483,18 @@ class Study:
 
     def curve(self, name: str, options: dict, ref: Reference):
         """The progressive curve of `path_traced_graph(**options)` (rayvr.tune.progressive)."""
+        return self.curve_later(name, options, ref)()
+
+    def curve_later(self, name: str, options: dict, ref: Reference):
+        """`curve` rendered, its snapshots handed to the metric pool: returns the function that
+        waits for their judgements and gives the Curve."""
         from .progressive import progressive_curve
 
-        s = self.s
-        with self.progress.step("curve", self._curve_units(), name) as tick:
-            return progressive_curve(self.scene, name, path_traced_graph(**options), options, self.view_set,
-                                     s.progressive_frames, ref, self.judge, s.timing_frames, s.warmup,
-                                     self.warmup_s, PROGRESSIVE_FIRST_FRAME, self.gpu,
-                                     tick=lambda n: tick(n / s.progressive_frames))
+        s, cost = self.s, self._curve_cost()
+
+        def step(kind, units, label):
+            return self.progress.step(kind, units * cost if kind == "render" else units, label)
+
+        return progressive_curve(self.scene, name, path_traced_graph(**options), options, self.view_set,
+                                 s.progressive_frames, ref, self.judge_curve, s.timing_frames, s.warmup,
+                                 self.warmup_s, PROGRESSIVE_FIRST_FRAME, self.gpu, step=step, later=True)

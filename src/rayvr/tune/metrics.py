@@ -223,17 +223,21 @@ def check_metrics(which) -> tuple[str, ...]:
 
 
 def evaluate(test, reference, display, ppd: float | None = None, eps: float = DEFAULT_EPS,
-             names=("test", "reference"), which=tuple(METRICS), maps: bool = False):
+             names=("test", "reference"), which=tuple(METRICS), maps: bool = False, shown_reference=None):
     """The study's metrics of linear `test` against linear `reference`, each per view:
     ({metric: (views,) array}, {metric: (views, h, w) map} when `maps`).
 
     `display` (a fixed rayvr.tune.display.Display) makes the displayed images that FLIP, PSNR
     and SSIM judge; HDR-FLIP and relMSE take the linear radiance. `ppd`: pixels per degree for
-    both FLIPs (None: FLIP's 67)."""
+    both FLIPs (None: FLIP's 67). `shown_reference`: display(reference), when the caller keeps
+    it for many tests (the same values; the study's metric pool does)."""
     t, r = pair(test, reference, names)
     which = check_metrics(which)
     need = set(which) | (set(MAP_METRICS) if maps else set())
-    shown = (display(t), display(r)) if need & {"flip", "psnr", "ssim"} else None
+    if need & {"flip", "psnr", "ssim"}:
+        shown = (display(t), display(r) if shown_reference is None else shown_reference)
+    else:
+        shown = None
     per_map = {}
     if "flip" in need:
         per_map["flip"] = flip_map(*shown, "ldr", ppd, names)

@@ -58,10 +58,12 @@ class ErrorJudge:
         self.reference, self.display, self.ppd, self.metric, self.eps = reference, display, ppd, metric, eps
 
     def map(self, image, name: str) -> np.ndarray:
-        from .metrics import evaluate
+        from .metrics import evaluate, pair
 
+        if self.metric == "flip" and getattr(self, "_shown", None) is None:    # the displayed reference, made once
+            self._shown = self.display(pair(self.reference.image, self.reference.image)[1])
         _, maps = evaluate(image, self.reference.image, self.display, self.ppd, self.eps, names=(name, "reference"),
-                           which=(self.metric,), maps=True)
+                           which=(self.metric,), maps=True, shown_reference=getattr(self, "_shown", None))
         return maps[self.metric]
 
     def mean_map(self, renderer, pin: str, trials: int, name: str) -> np.ndarray:

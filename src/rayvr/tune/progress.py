@@ -8,6 +8,13 @@ seconds per unit of each kind are learned from the steps themselves; a kind not 
 assumed to cost like the others in proportion to PRIOR. The bar counts seconds: done = the seconds
 spent, total = those plus the remaining steps' units at the learned rates, so tqdm's
 "remaining" is that estimate.
+
+A kind can run concurrently with the rest (`concurrent(kind, workers)`: the error metrics in
+rayvr.tune.pool's worker processes). Its steps are not timed here: each reports the seconds its
+worker spent (`finished(kind, units, seconds)`), which teach its rate, and its remaining units
+take rate x units / workers of wall time, overlapped with the other kinds: the remaining time
+is the larger of the two. The time this process waits for it is a step of kind "wait" (counted
+as spent, never planned).
 """
 from __future__ import annotations
 
@@ -15,7 +22,7 @@ import contextlib
 import time
 
 # Relative seconds per unit before any step of the kind was timed (llvmpipe's ratios).
-PRIOR = {"render": 2.5e-6, "metric": 1.5e-6, "setup": 0.4, "curve": 1.0}
+PRIOR = {"render": 2.5e-6, "metric": 2.5e-6, "setup": 0.4, "curve": 1.0}
 
 
 class StudyProgress:
@@ -31,6 +38,7 @@ class StudyProgress:
         self.bar = None
         self._partial = 0.0                      # seconds into the current step
         self._shown = 0.0
+        self.workers: dict[str, int] = {}        # concurrent kind -> its workers
 
     def plan(self, kind: str, units: float) -> None:
         """Add a step of `units` of `kind` to the plan."""
@@ -44,8 +52,32 @@ class StudyProgress:
         scale = sum(self.done_s[k] for k in seen) / sum(PRIOR[k] * self.done_units[k] for k in seen) if seen else 1.0
         return PRIOR.get(kind, 1e-6) * scale
 
+    def concurrent(self, kind: str, workers: int) -> None:
+        """`kind` runs on `workers` workers beside this process from now on (0: here again)."""
+        if workers > 0:
+            self.workers[kind] = int(workers)
+        else:
+            self.workers.pop(kind, None)
+
+    def in_flight(self, kind: str, units: float) -> None:
+        """A concurrent step of `units` was handed to a worker (its units stay planned until it finishes)."""
+        self._refresh()
+
+    def finished(self, kind: str, units: float, seconds: float) -> None:
+        """A concurrent step of `units` finished after `seconds` of its worker's time (unplanned
+        work, 0 units, teaches no rate)."""
+        if not units:
+            return
+        self.planned[kind] = max(0.0, self.planned.get(kind, 0.0) - units)
+        self.done_units[kind] = self.done_units.get(kind, 0.0) + units
+        self.done_s[kind] = self.done_s.get(kind, 0.0) + float(seconds)
+        self._refresh()
+
     def remaining_s(self) -> float:
-        return sum(units * self.rate(kind) for kind, units in self.planned.items())
+        here = sum(units * self.rate(kind) for kind, units in self.planned.items() if kind not in self.workers)
+        beside = sum(units * self.rate(kind) / self.workers[kind] for kind, units in self.planned.items()
+                     if kind in self.workers)
+        return max(here, beside)
 
     def _refresh(self, force: bool = False) -> None:
         if self.bar is None:
@@ -89,9 +121,10 @@ class StudyProgress:
             yield tick
         finally:
             took = time.perf_counter() - t0
-            self.planned[kind] = max(0.0, self.planned.get(kind, 0.0) - units)
-            self.done_units[kind] = self.done_units.get(kind, 0.0) + units
-            self.done_s[kind] = self.done_s.get(kind, 0.0) + took
+            if units:
+                self.planned[kind] = max(0.0, self.planned.get(kind, 0.0) - units)
+                self.done_units[kind] = self.done_units.get(kind, 0.0) + units
+                self.done_s[kind] = self.done_s.get(kind, 0.0) + took
             self.spent += took
             self._partial = 0.0
             self._refresh(force=True)

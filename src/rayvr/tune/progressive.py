@@ -111,26 +111,48 @@ def hdr_output(graph) -> str:
 
 
 def progressive_curve(scene, name: str, graph, settings: dict, view_set, frames: int, reference, judge,
-                      timing_frames: int, warmup: int, warmup_s: float, first_frame: int, gpu=None, tick=None):
+                      timing_frames: int, warmup: int, warmup_s: float, first_frame: int, gpu=None, tick=None,
+                      step=None, later: bool = False):
     """Error against accumulated time of a progressive render (Lift's figure): the graph's HDR
     output read after 1, 2, 4, ... `frames` frames and judged by `judge(image, reference_image,
-    name)` (-> per-view metrics first). Wall seconds are measured (GPU finished, readback and metrics
-    not counted); GPU seconds are frames x the GPU ms per frame timed first (`timing_frames`
-    after the warm-up), after which the accumulation and every history (TAA, SVGF) restart."""
+    name)` (-> per-view metrics first, or a rayvr.tune.pool.Pending of them). Wall seconds are
+    measured (GPU finished, readback and metrics not counted); GPU seconds are frames x the GPU
+    ms per frame timed first (`timing_frames` after the warm-up), after which the accumulation
+    and every history (TAA, SVGF) restart. `step(kind, units, label)`: a progress step around the
+    renderer's setup ("setup", 1) and each stretch of rendering ("render", frames). `later`:
+    return the function that waits for the judgements and gives the Curve (the caller renders
+    on meanwhile) instead of the Curve."""
+    import contextlib
+
     from ..renderer import Renderer
     from .results import Curve
     from .timing import timed_frames
 
+    step = step or (lambda kind, units, label: contextlib.nullcontext(lambda fraction: None))
     pin = hdr_output(graph)
     counts = snapshot_counts(frames)
-    points = []
-    with Renderer(scene, graph, views=view_set, gpu=gpu, first_frame=first_frame) as r:
-        timing = timed_frames(r, timing_frames, warmup, warmup_s)
+    shots = []
+    with step("setup", 1, name):
+        r = Renderer(scene, graph, views=view_set, gpu=gpu, first_frame=first_frame)
+    with r:
+        with step("render", warmup + timing_frames, name):
+            timing = timed_frames(r, timing_frames, warmup, warmup_s)
         for p in r.compiled.passes.values():
             if hasattr(p, "reset"):   # Accumulate, and the history of TAA and SVGF
                 p.reset()
-        for shot in read_after(r, pin, counts, tick):
-            per_view = judge(shot.image, reference.image, f"{name} after {shot.frames} frames")[0]
+        readings, done = read_after(r, pin, counts, tick), 0
+        for count in counts:
+            with step("render", count - done, name):
+                shot = next(readings)
+            done = count
+            shots.append((shot, judge(shot.image, reference.image, f"{name} after {shot.frames} frames")))
+
+    def finish():
+        points = []
+        for shot, judged in shots:
+            per_view = (judged.get() if hasattr(judged, "get") else judged)[0]
             points.append({"frames": shot.frames, "wall_s": shot.wall_s, "gpu_s": shot.frames * timing.frame_ms / 1e3,
                            **{m: float(np.mean(v)) for m, v in per_view.items()}})
-    return Curve(name, {"graph": "path_traced", "output": pin, **settings}, timing.frame_ms, points)
+        return Curve(name, {"graph": "path_traced", "output": pin, **settings}, timing.frame_ms, points)
+
+    return finish if later else finish()

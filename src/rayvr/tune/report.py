@@ -46,10 +46,20 @@ def colour_map(values: np.ndarray, vmax: float = 1.0) -> np.ndarray:
 
 
 class _Images:
-    """PNGs of the report: written under images/ and kept as bytes for the HTML."""
+    """PNGs of the report: written under images/ and kept as bytes for the HTML; with `step` > 1
+    every step-th pixel of each view, row and column (smaller documents; the metrics are of the
+    full images)."""
 
-    def __init__(self, folder: Path, display: Display):
-        self.folder, self.display, self.data = folder, display, {}
+    def __init__(self, folder: Path, display: Display, step: int = 1):
+        self.folder, self.display, self.data, self.step = folder, display, {}, max(1, int(step))
+
+    def thin(self, views: np.ndarray) -> np.ndarray:
+        """(views, h, w, ...) at every step-th row and column."""
+        return np.asarray(views)[:, ::self.step, ::self.step]
+
+    def errors(self, name: str, values: np.ndarray, vmax: float = 1.0) -> str:
+        """A per-pixel error map (views, h, w) in magma."""
+        return self.add(name, colour_map(self.thin(values), vmax))
 
     def add(self, name: str, pixels: np.ndarray) -> str:
         rel = f"images/{name}.png"
@@ -59,7 +69,7 @@ class _Images:
         return rel
 
     def shown(self, name: str, linear: np.ndarray) -> str:
-        return self.add(name, side_by_side(to_uint8(self.display(linear))))
+        return self.add(name, side_by_side(to_uint8(self.display(self.thin(linear)))))
 
 
 def _figure():
@@ -173,7 +183,7 @@ def sections(results, images: _Images, plots: dict, budget_ms=None, title: str |
         + ": the smallest error this reference can tell apart from its own noise.",
         f"Source: {ref.source}."])]
     ref_blocks.append(("images", [(images.shown("reference", ref.image), "reference (displayed)"),
-                                  (images.add("reference-noise", colour_map(np.sqrt(ref.noise_map()))),
+                                  (images.errors("reference-noise", np.sqrt(ref.noise_map())),
                                    "its predicted relative RMS error per pixel, from the halves (0..100%)")]))
     if results.motion_references:
         ref_blocks.append(("list", [f"Trajectory frame {i}: {r.verdict()}" for i, r in results.motion_references]))
@@ -185,7 +195,12 @@ def sections(results, images: _Images, plots: dict, budget_ms=None, title: str |
             f"Pixels per degree: {s['ppd']:.1f}, {s['ppd_source']}; relMSE eps {s['eps']:g}.",
             f"Static view: {st['frames']} judged frames per configuration (each after its own accumulation), "
             f"mean ± sample standard deviation over those frames and the views; GPU ms over {st['timing_frames']} "
-            f"timed frames after {st['warmup']} untimed."]
+            f"timed frames after {st['warmup']} untimed."
+            + (f" HDR-FLIP (FLIP at many exposures, the costliest metric) on the first {st['hdrflip_frames']} of "
+               f"the judged frames only, not in motion, on the floors nor on the progressive curves."
+               if st.get("hdrflip_frames") else "")
+            + (f" The images were judged by {s['metric_workers']} worker processes while the GPU rendered on "
+               f"(the same numbers as judged one after the other)." if s.get("metric_workers") else "")]
     if motion:
         how.append(f"In motion: the views carried along the '{motion['trajectory']}' trajectory at "
                    f"{motion['refresh_hz']:g} Hz for {motion['frames']} frames; frames {motion['sampled_frames']} "
@@ -223,15 +238,18 @@ def sections(results, images: _Images, plots: dict, budget_ms=None, title: str |
             ("table", *results.curve_data()),
             ("images", [(plots["convergence"], "error against accumulated wall (solid) and GPU (dashed) seconds")])]))
     gallery = []
+    if images.step > 1:
+        gallery.append(("p", f"Images at every {images.step}th pixel of each row and column (the metrics are of the "
+                             f"full images)."))
     for r in results.rows:
         if r.image is None:
             continue
         name = slug(r.name)
         shots = [(images.shown(name, r.image), f"{r.name} (displayed)")]
         if "flip" in r.maps:
-            shots.append((images.add(f"{name}-flip", colour_map(r.maps["flip"])), "FLIP per pixel (0..1)"))
+            shots.append((images.errors(f"{name}-flip", r.maps["flip"]), "FLIP per pixel (0..1)"))
         if "relmse" in r.maps:
-            shots.append((images.add(f"{name}-relmse", colour_map(np.sqrt(r.maps["relmse"]))),
+            shots.append((images.errors(f"{name}-relmse", np.sqrt(r.maps["relmse"])),
                           "relative RMS error per pixel (0..100%)"))
         if r.floor_image is not None:
             shots.append((images.shown(f"{name}-floor", r.floor_image), "converged (bias floor)"))
@@ -296,12 +314,16 @@ def to_html(secs, data: dict) -> str:
     return "\n".join(parts) + "\n"
 
 
-def write_report(results, folder, budget_ms: float | None = None, title: str | None = None, extra=None) -> Path:
+def write_report(results, folder, budget_ms: float | None = None, title: str | None = None, extra=None,
+                 image_step: int = 1) -> Path:
     """Write the report folder (module docstring) atomically; returns its path. `extra`:
-    {relative name: text} more files to put in it (e.g. the tuner's JSON)."""
+    {relative name: text} more files to put in it (e.g. the tuner's JSON). `image_step`: the
+    images at every image_step-th pixel (e.g. 8 for 2 x 1440x1600: the report stays a few MB)."""
     with atomic_folder(folder) as tmp:
         d = results.study["display"]
-        images = _Images(tmp, Display(d["operator"], d["exposure_stops"]))
+        images = _Images(tmp, Display(d["operator"], d["exposure_stops"]), image_step)
+        if images.step > 1:
+            results.study["report_image_step"] = images.step
         plots = {"pareto": "pareto.png"}
         images.data["pareto.png"] = pareto_plot(results, tmp / "pareto.png", "flip" if "flip" in results.metrics()
                                                 else results.metrics()[0], budget_ms)

@@ -2,7 +2,7 @@
 
 `Results.as_dict()` is results.json (docs/CONTRACTS.md): {"reference": {...}, "rows": [...],
 "progressive": [...], "study": {...}} and, after `rayvr tune`, "tuned". Each row: `name`,
-`gpu_ms`, every metric as {"mean", "std"} over the judged frames and views, `frames`, `views`,
+`gpu_ms`, every metric as {"mean", "std", "n"} over the judged frames and views, `frames`, `views`,
 `size`, `settings`, and `motion` (the same metrics along the trajectory), `floor` (the
 configuration's converged image against the reference) and `timed_on` (the cluster worker that
 measured it; None in one process).
@@ -19,8 +19,9 @@ from .metrics import LOWER_IS_BETTER, METRICS
 
 
 def summarize(samples: dict) -> dict:
-    """{metric: [per-view arrays, one per judged frame]} -> {metric: {"mean", "std", "per_view"}}:
-    mean and sample standard deviation over every (frame, view) value, and the mean per view."""
+    """{metric: [per-view arrays, one per judged frame]} -> {metric: {"mean", "std", "per_view", "n"}}:
+    mean and sample standard deviation over every (frame, view) value, the mean per view, and
+    how many values there were (frames x views)."""
     out = {}
     for metric, frames in samples.items():
         a = np.asarray(frames, dtype=np.float64)           # (frames, views)
@@ -29,7 +30,7 @@ def summarize(samples: dict) -> dict:
         std = float(flat.std(ddof=1)) if flat.size > 1 else 0.0
         if not np.isfinite(flat).all():
             std = float("nan")
-        out[metric] = {"mean": mean, "std": std, "per_view": [float(v) for v in a.mean(axis=0)]}
+        out[metric] = {"mean": mean, "std": std, "per_view": [float(v) for v in a.mean(axis=0)], "n": int(flat.size)}
     return out
 
 
@@ -61,7 +62,7 @@ class Row:
 
     def as_dict(self) -> dict:
         d = {"name": self.name, "gpu_ms": self.gpu_ms, "pass_ms": dict(self.pass_ms), "cpu_ms": self.cpu_ms}
-        d.update({m: {"mean": v["mean"], "std": v["std"]} for m, v in self.errors.items()})
+        d.update({m: {"mean": v["mean"], "std": v["std"], "n": v.get("n")} for m, v in self.errors.items()})
         d["per_view"] = {m: v["per_view"] for m, v in self.errors.items()}
         d.update({"frames": self.frames, "views": self.views, "size": list(self.size), "settings": self.settings,
                   "motion": self.motion, "floor": self.floor, "tuned": self.tuned,

@@ -17,6 +17,11 @@ class LocalRunner:
 
     shows_progress = False      # the study's own progress bar covers every step
 
+    def __init__(self, before_wait=None):
+        # called once, after the rows are rendered and before waiting for their judgements: GPU
+        # work to overlap with the metric pool's (e.g. the next scene's references)
+        self.before_wait = before_wait
+
     def reference(self, scene, view_set, settings, cache_dir=None, sample: int = 0, eps: float = DEFAULT_EPS,
                   gpu=None, tick=None):
         """rayvr.tune.reference.cached_reference: from the cache, else rendered and stored."""
@@ -31,9 +36,17 @@ class LocalRunner:
         return probe.probe_cost_model(scene, view_set, builder, options, judge, **kwargs)
 
     def rows(self, study, configs, reference, motion_references: dict) -> list:
-        """One Row per configuration, in order (rayvr.tune.measure.Study.row)."""
-        return [study.row(c, reference, motion_references) for c in configs]
+        """One Row per configuration, in order (rayvr.tune.measure.Study.row): each configuration
+        renders while the metric pool judges the ones before (rayvr.tune.pool)."""
+        finish = [study.row_later(c, reference, motion_references) for c in configs]
+        if self.before_wait is not None:
+            before_wait, self.before_wait = self.before_wait, None
+            with study.progress.step("wait", 0.0, "other GPU work while the images are judged"):
+                before_wait()
+        return [f() for f in finish]
 
     def curves(self, study, reference) -> list:
-        """The progressive curves (rayvr.tune.measure.Study.curve), in order."""
-        return [study.curve(name, options, reference) for name, options in study.curve_graphs()]
+        """The progressive curves (rayvr.tune.measure.Study.curve), in order, rendered while the
+        metric pool judges."""
+        finish = [study.curve_later(name, options, reference) for name, options in study.curve_graphs()]
+        return [f() for f in finish]
