@@ -32,11 +32,11 @@ def view_set(eye, target, fov, size=SIZE) -> ViewSet:
     return ViewSet([View(look_at(eye, target), Fov.symmetric(fov, 1.0), size, size, 0.01, 100.0)])
 
 
-def render(scene, views, spp, frames, bounces) -> np.ndarray:
+def render(scene, views, spp, frames, bounces, kernel="auto") -> np.ndarray:
     """The path tracer's mean radiance (h, w, 3) float64 after `frames` frames of `spp` paths,
     Russian roulette off (it is unbiased but adds noise); checked finite and >= 0."""
     g = rv.graphs.path_traced(samples_per_pixel=spp, max_bounces=bounces, rr_start=bounces)
-    g.update_pass("PathTracer", {"pixel_jitter": False})
+    g.update_pass("PathTracer", {"pixel_jitter": False, "kernel": kernel})
     with Renderer(scene, g, views=views) as r:
         for _ in range(frames):
             r.render()
@@ -157,9 +157,10 @@ def test_a_coarse_smooth_sphere_keeps_its_rim_in_a_furnace(gpu, metallic):
 
 def test_many_long_paths_in_one_frame_keep_their_light(gpu, monkeypatch):
     """128 paths of up to 64 bounces through a rough glass volume in one frame: the mean stays 1.
-    On llvmpipe, whose invocations stop every loop after 65,535 iterations in all, this holds
-    because the path tracer traces a frame's paths one per dispatch there
-    (SOFTWARE_PATHS_PER_DISPATCH); in one dispatch the same frame loses light in whole rows."""
+    On llvmpipe, whose invocations stop every loop after 65,535 iterations in all, the megakernel
+    (what "auto" picks there) keeps it because it traces a frame's paths one per dispatch there
+    (SOFTWARE_PATHS_PER_DISPATCH); in one dispatch the same frame loses light in whole rows. The
+    wavefront traces one ray per invocation and dispatch and never nears the limit."""
     from rayvr.passes.path_tracer import path_tracer
 
     mat = white(metallic=0.0, roughness=0.3, transmission=1.0, ior=1.5, thickness=2.0)
@@ -168,13 +169,14 @@ def test_many_long_paths_in_one_frame_keep_their_light(gpu, monkeypatch):
     assert img[..., 0].mean() == pytest.approx(1.0, abs=0.015)
     if gpu.caps.is_software:
         monkeypatch.setattr(path_tracer, "SOFTWARE_PATHS_PER_DISPATCH", 0)   # all paths in one dispatch
-        one = render(furnace_scene(mat), views, GLASS_SPP * GLASS_FRAMES, 1, GLASS_BOUNCES)
+        one = render(furnace_scene(mat), views, GLASS_SPP * GLASS_FRAMES, 1, GLASS_BOUNCES, "megakernel")
         assert one[..., 0].mean() < 0.9, "llvmpipe kept the light of 128 long paths in one invocation"
 
 
 def test_paths_traced_in_slices_equal_one_dispatch(gpu, monkeypatch):
-    """The sliced dispatches draw the same paths (the sample index runs over the frame's paths) and
-    add their shares of the mean: the image equals one dispatch's, up to float32 summation."""
+    """The megakernel's sliced dispatches draw the same paths (the sample index runs over the
+    frame's paths) and add their shares of the mean: the image equals one dispatch's, up to float32
+    summation."""
     from rayvr.passes.path_tracer import path_tracer
 
     scene = rv.scenes.cornell_box()
@@ -182,7 +184,7 @@ def test_paths_traced_in_slices_equal_one_dispatch(gpu, monkeypatch):
     images = {}
     for per_dispatch in (0, 1, 3):
         monkeypatch.setattr(path_tracer, "SOFTWARE_PATHS_PER_DISPATCH", per_dispatch)
-        images[per_dispatch] = render(scene, views, 4, 2, 4)
+        images[per_dispatch] = render(scene, views, 4, 2, 4, "megakernel")
     if not gpu.caps.is_software:
         pytest.skip("only software renderers slice a frame's paths")
     assert images[0].max() > 0.05

@@ -1,5 +1,5 @@
-"""The path tracer's wavefront form (each vertex's rays in a dispatch of their own, pt_wave_*.comp)
-against its megakernel: both run path.glsl's steps on the same random numbers, so they trace the
+"""The path tracer's wavefront form (each vertex's rays in a dispatch of their own, pt_wave_*.comp;
+what kernel="auto" picks on GPUs) against its megakernel (llvmpipe's pick): both run path.glsl's steps on the same random numbers, so they trace the
 same paths and their images agree to float rounding, in every mode: from the camera or the
 G-buffer (over the whole image or the compaction's pixel list), with the lobes split for SVGF,
 several samples a frame, alphaMode BLEND's stochastic decisions and glass."""
@@ -107,5 +107,16 @@ def test_kernel_property_round_trips_and_rejects_others(tmp_path):
     pt.set_properties({"kernel": "wavefront"})
     for name in ("g.json", "g.py"):
         assert rv.RenderGraph.load(g.save(tmp_path / name)).get_pass("PathTracer").kernel == "wavefront"
-    with pytest.raises(OptionError, match="property 'kernel'.*'megakernel'.*'wavefront'"):
+    with pytest.raises(OptionError, match="property 'kernel'.*'auto'.*'wavefront'.*'megakernel'"):
         pt.set_properties({"kernel": "persistent"})
+
+
+def test_auto_picks_the_wavefront_on_gpus_and_the_megakernel_on_software(gpu):
+    """llvmpipe's dispatches cost more than a GPU's, so the megakernel is its faster form; a GPU's
+    traversal loses its occupancy to the BSDF's registers in the megakernel."""
+    g = rv.graphs.path_traced()
+    assert g.get_pass("PathTracer").kernel == "auto"
+    with rv.Renderer(builtin.cornell_box(), g, size=SIZE) as r:
+        r.render()
+        assert r.compiled.passes["PathTracer"].defines()["PT_WAVEFRONT"] == int(not gpu.caps.is_software)
+        assert "PathTracer.paths" in str(r.report())

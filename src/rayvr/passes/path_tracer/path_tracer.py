@@ -10,7 +10,7 @@ Two modes (property `mode`):
   it the pass runs over the screen and writes 0 where the effect is not PATH_TRACED.
 
 The output is the mean of `samples_per_pixel` paths (rgba32f); feed it to Accumulate for a
-progressive render. Paths are seeded by pixel, view, frame index and sample index (PCG).
+progressive render. The `kernel` property picks the wavefront form (the default) or the megakernel. Paths are seeded by pixel, view, frame index and sample index (PCG).
 With `lobes` the pass also writes what the first vertex's diffuse and specular lobes reflect
 (`diffuse`, `specular`, rgba16f, emission excluded; where a camera ray escapes, `diffuse` is the
 background) for a denoiser that demodulates them apart (rayvr.passes.SVGF); without it those
@@ -29,7 +29,7 @@ from ..effects import effect_defines, scene_defines, unused_effect_reason
 from ..gbuffer import channels
 
 MODES = ("full", "gbuffer")
-KERNELS = ("megakernel", "wavefront")
+KERNELS = ("auto", "wavefront", "megakernel")
 # The wavefront form's state per path slot (pt_wave.glsl): 11 fields of 16 bytes, 4 more with lobes.
 WAVE_FIELDS, WAVE_LOBE_FIELDS, WAVE_FIELD_BYTES = 11, 4, 16
 SAMPLERS = {"sobol": 1, "pcg": 0}   # glsl/sampling.glsl RAYVR_SAMPLER
@@ -52,10 +52,13 @@ class PathTracer(RenderPass):
     jitter), `mode` ("full" or "gbuffer"), `sampler` ("sobol": hash-based Owen-scrambled Sobol,
     the default; "pcg": independent PCG hash samples, for comparisons), `lobes` (also the
     `diffuse` and `specular` outputs; then Russian roulette never ends a path at its first
-    vertex, and `clamp` caps each lobe of a sample on its own), `kernel` ("megakernel": all of a
-    path's rays in one invocation; "wavefront": the rays of every path's vertex in a dispatch of
-    their own, between dispatches that do the rest (pt_wave_*.comp), through a state buffer of
-    176 bytes a pixel (240 with lobes), the `paths` scratch output; the same paths either way)."""
+    vertex, and `clamp` caps each lobe of a sample on its own), `kernel` ("wavefront": the rays of every
+    path's vertex in a dispatch of their own, between dispatches that do the rest
+    (pt_wave_*.comp), through a state buffer of 176 bytes a pixel (240 with lobes), the `paths`
+    scratch output; on the H200 1.4-1.8x faster than "megakernel": all of a path's rays in one
+    invocation, no state buffer, and on llvmpipe the faster one, whose dispatches cost more than
+    a GPU's; "auto", the default: the wavefront on GPUs, the megakernel on software renderers,
+    the `paths` buffer declared either way; the same paths in every form)."""
 
     COLOR = "color"
     DIFFUSE, SPECULAR = "diffuse", "specular"
@@ -63,7 +66,7 @@ class PathTracer(RenderPass):
     PATHS = "paths"
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
-                  "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol", "lobes": False, "kernel": "megakernel"}
+                  "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol", "lobes": False, "kernel": "auto"}
     USES_SCENE = True
 
     def validate_property(self, key, value):
@@ -72,8 +75,9 @@ class PathTracer(RenderPass):
             raise OptionError(f"pass {self.name}: property 'sampler' is {value!r}; use 'sobol' (Owen-scrambled "
                               f"Sobol, the default) or 'pcg'")
         if key == "kernel" and value not in KERNELS:
-            raise OptionError(f"pass {self.name}: property 'kernel' is {value!r}; use 'megakernel' (a path's rays "
-                              f"in one invocation) or 'wavefront' (each vertex's rays in a dispatch of their own)")
+            raise OptionError(f"pass {self.name}: property 'kernel' is {value!r}; use 'auto' (the wavefront on "
+                              f"GPUs, the megakernel on software renderers), 'wavefront' (each vertex's rays in a "
+                              f"dispatch of their own) or 'megakernel' (a path's rays in one invocation)")
         if key == "mode" and value not in MODES:
             raise OptionError(f"pass {self.name}: property 'mode' is {value!r}; use 'full' or 'gbuffer'")
         if key == "samples_per_pixel" and (int(value) != value or value < 1):
@@ -95,7 +99,7 @@ class PathTracer(RenderPass):
             r.add_output(self.DIFFUSE, "what the first vertex's diffuse lobe reflects (emission excluded; "
                                        "the background where a camera ray escapes)").format("rgba16f")
             r.add_output(self.SPECULAR, "what its specular lobe reflects").format("rgba16f")
-        if self.kernel == "wavefront":
+        if self.kernel != "megakernel":
             r.add_output(self.PATHS, "the wavefront's path state between its dispatches (scratch)").buffer(
                 self.wave_slots(cd.size, cd.views) * self.wave_slot_bytes())
         return r
@@ -124,13 +128,14 @@ class PathTracer(RenderPass):
                          "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PIXEL_LIST_INPUT": int(listed),
                          "RAYVR_SAMPLER": SAMPLERS[self.sampler], "PT_LOBES": int(bool(self.lobes))}
         software = getattr(getattr(ctx, "caps", None), "is_software", False)
+        self._wave = self.kernel == "wavefront" or (self.kernel == "auto" and not software)
+        self._defines["PT_WAVEFRONT"] = int(self._wave)   # named in the compile report
         self._slice = int(SOFTWARE_PATHS_PER_DISPATCH) if software else 0
         self._defines["PT_SAMPLE_SLICES"] = self._slice
         self._listed = listed
         self._group = ray_group(cd.views)
         self._defines.update(ray_group_defines(self._group))
         self._groups = groups_2d(cd.size, cd.views, self._group)
-        self._wave = self.kernel == "wavefront"
         if self._wave:   # one ray per invocation and dispatch: llvmpipe's loop limit is never near
             self._defines["PT_SAMPLE_SLICES"] = 0
             self._slice = 0
