@@ -343,8 +343,8 @@ def test_graphs_list_the_denoiser_and_allocate_nothing_without_it(gpu):
             assert "Accumulate" not in r.compiled.plan.order
     with Renderer(scene, rv.graphs.path_traced(), size=(8, 8)) as r:
         assert r.compiled.plan.order == ["PathTracer", "Accumulate", "ToneMap"]
-        assert set(r.compiled.resources) == {"PathTracer.color", "Accumulate.dst", "Accumulate.sum",
-                                             "Accumulate.compensation", "ToneMap.dst"}
+        assert set(r.compiled.resources) == {"PathTracer.color", "PathTracer.paths", "Accumulate.dst",
+                                             "Accumulate.sum", "Accumulate.compensation", "ToneMap.dst"}
 
 
 def test_hybrid_svgf_improves_with_frames(gpu):
