@@ -57,15 +57,30 @@ struct PtRays {
     float cone_spread;
 };
 
-// Vertex s at `bounce` (everything before its rays, so that nothing of the BSDF is live while
-// they are traced): the light sample and its value, the BSDF sample, the medium entered, the
-// throughput after it and Russian roulette.
-PtRays pt_vertex(inout PtPath path, PathVertex s, int bounce, inout Rng rng, const bool split) {
+// No rays: no light sample, no BSDF sample.
+PtRays pt_no_rays() {
     PtRays r;
     r.nee = vec3(0.0);
     r.nee_diffuse = vec3(0.0);
     r.nee_dir = vec3(0.0);
     r.nee_dist = -1.0;
+    r.pos = vec3(0.0);
+    r.ng = vec3(0.0);
+    r.dir = vec3(0.0);
+    r.pdf = 0.0;
+    r.scattered = false;
+    r.delta = false;
+    r.transmitted = false;
+    r.cone_width = 0.0;
+    r.cone_spread = 0.0;
+    return r;
+}
+
+// Vertex s at `bounce` (everything before its rays, so that nothing of the BSDF is live while
+// they are traced): the light sample and its value, the BSDF sample, the medium entered, the
+// throughput after it and Russian roulette.
+PtRays pt_vertex(inout PtPath path, PathVertex s, int bounce, inout Rng rng, const bool split) {
+    PtRays r = pt_no_rays();
     r.pos = s.pos;
     r.ng = s.ng;
     r.cone_width = s.cone_width;

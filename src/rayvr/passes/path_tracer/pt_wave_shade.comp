@@ -79,24 +79,6 @@ void ptw_load_state(uint i, out PtPath path, out PtRays r, out uint flags, inout
 #endif
 }
 
-PtRays ptw_no_rays() {
-    PtRays r;
-    r.nee = vec3(0.0);
-    r.nee_diffuse = vec3(0.0);
-    r.nee_dir = vec3(0.0);
-    r.nee_dist = -1.0;
-    r.pos = vec3(0.0);
-    r.ng = vec3(0.0);
-    r.dir = vec3(0.0);
-    r.pdf = 0.0;
-    r.scattered = false;
-    r.delta = false;
-    r.transmitted = false;
-    r.cone_width = 0.0;
-    r.cone_spread = 0.0;
-    return r;
-}
-
 // The pixel's share of this sample: what the path brought, as the megakernel sums it.
 void ptw_output(ivec3 p, PtPath path, uint flags, vec3 emitted) {
     float share = 1.0 / float(max(pt_samples, 1));
@@ -148,7 +130,7 @@ void main() {
         blend_seed = rng.state;   // the BLEND decisions of the path's rays (pt_wave_trace.comp)
         ptw_store(PTW_ANSWER, i, uvec4(0u));
         path = pt_path_begin();
-        r = ptw_no_rays();
+        r = pt_no_rays();
         flags = 0u;
         emitted = vec3(0.0);
 #if PT_FROM_GBUFFER
