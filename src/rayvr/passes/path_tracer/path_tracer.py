@@ -10,7 +10,9 @@ Two modes (property `mode`):
   it the pass runs over the screen and writes 0 where the effect is not PATH_TRACED.
 
 The output is the mean of `samples_per_pixel` paths (rgba32f); feed it to Accumulate for a
-progressive render. The `kernel` property picks the wavefront form (the default) or the megakernel. Paths are seeded by pixel, view, frame index and sample index (PCG).
+progressive render. Paths are seeded by pixel, view, frame index and sample index. The `kernel`
+property picks the form: the wavefront (what "auto", the default, runs on GPUs) or the megakernel
+(what it runs on software renderers).
 With `lobes` the pass also writes what the first vertex's diffuse and specular lobes reflect
 (`diffuse`, `specular`, rgba16f, emission excluded; where a camera ray escapes, `diffuse` is the
 background) for a denoiser that demodulates them apart (rayvr.passes.SVGF); without it those
@@ -162,18 +164,19 @@ class PathTracer(RenderPass):
             res.set(key, value)   # skipped where the GLSL compiler dropped the uniform
 
     def execute(self, ctx, data):
-        if self._wave:
-            self._execute_wavefront(ctx, data)
-            return
         res = self._res
         self._set_uniforms(res)
         if self.mode == "gbuffer":
             channels.bind_inputs(res, data)
-        res.image("dst", data[self.COLOR])
+        adds = self._wave or bool(self._slice)   # later dispatches add to what earlier ones stored
+        res.image("dst", data[self.COLOR], read=adds)
         if self.lobes:
-            res.image("dst_diffuse", data[self.DIFFUSE])
-            res.image("dst_specular", data[self.SPECULAR])
+            res.image("dst_diffuse", data[self.DIFFUSE], read=adds)
+            res.image("dst_specular", data[self.SPECULAR], read=adds)
         pixels = data.get(self.PIXELS) if self._listed else None
+        if self._wave:
+            self._execute_wavefront(ctx, data, pixels)
+            return
         if pixels is not None:
             res.buffer("PixelList", pixels)
         spp = int(self.samples_per_pixel)
@@ -181,10 +184,7 @@ class PathTracer(RenderPass):
             if first:
                 ctx.barrier(Access.IMAGE)   # the slice before stored its share
             res.set("pt_sample_first", first)
-            if pixels is not None:
-                self._prog.run_indirect(pixels, DISPATCH_OFFSET)
-            else:
-                self._prog.run(*self._groups)
+            self._run(self._prog, pixels)
 
     def _run(self, prog, pixels) -> None:
         if pixels is not None:
@@ -192,18 +192,10 @@ class PathTracer(RenderPass):
         else:
             prog.run(*self._groups)
 
-    def _execute_wavefront(self, ctx, data) -> None:
+    def _execute_wavefront(self, ctx, data, pixels) -> None:
         """Per sample: a shade dispatch that begins the paths, then (trace, shade) per bounce; the
         camera ray (mode "full") takes one more pair. The last shade adds the sample to the outputs."""
         shade, trace = self._res, self._trace_res
-        self._set_uniforms(shade)
-        if self.mode == "gbuffer":
-            channels.bind_inputs(shade, data)
-        shade.image("dst", data[self.COLOR], read=True)   # samples after the first add to it
-        if self.lobes:
-            shade.image("dst_diffuse", data[self.DIFFUSE], read=True)
-            shade.image("dst_specular", data[self.SPECULAR], read=True)
-        pixels = data.get(self.PIXELS) if self._listed else None
         for res in (shade, trace):
             res.buffer("PtWave", data[self.PATHS])
             res.set("pt_wave_paths", self._slots)
