@@ -19,7 +19,7 @@ LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
 def pack_normals(n):
-    """svgf_pack_normal: octahedral, snorm16 x (low), y (high)."""
+    """oct_pack_snorm16 (glsl/octahedral.glsl): octahedral, snorm16 x (low), y (high)."""
     n = n / np.abs(n).sum(-1, keepdims=True)
     sign = np.where(n[..., :2] >= 0, 1.0, -1.0)
     e = np.where(n[..., 2:] >= 0, n[..., :2], (1 - np.abs(n[..., 1::-1])) * sign)
@@ -28,7 +28,7 @@ def pack_normals(n):
 
 
 def unpack_normals(bits):
-    """svgf_unpack_normal in float64."""
+    """oct_unpack_snorm16 in float64."""
     e = np.stack([(bits & 0xFFFF).astype(np.uint16).view(np.int16),
                   (bits >> 16).astype(np.uint16).view(np.int16)], -1) / 32767.0
     e = np.clip(e, -1, 1)

@@ -20,6 +20,7 @@
 // drop out too.
 #pragma once
 #include "path_vertex.glsl"
+#include "octahedral.glsl"
 
 #ifndef PROBE_GI
 #define PROBE_GI 0
@@ -28,19 +29,6 @@
 #define PROBE_IRRADIANCE_TILE 8   // texels per side of a probe's tile, one-texel border included
 #define PROBE_DEPTH_TILE 16
 #define PROBE_FLAG_VISIBILITY 1u
-
-// Unit direction -> octahedral coordinates in [-1, 1]^2 and back.
-vec2 probe_oct_encode(vec3 d) {
-    vec2 p = d.xy / (abs(d.x) + abs(d.y) + abs(d.z));
-    if (d.z < 0.0) p = (1.0 - abs(p.yx)) * vec2(p.x >= 0.0 ? 1.0 : -1.0, p.y >= 0.0 ? 1.0 : -1.0);
-    return p;
-}
-
-vec3 probe_oct_decode(vec2 e) {
-    vec3 d = vec3(e, 1.0 - abs(e.x) - abs(e.y));
-    if (d.z < 0.0) d.xy = (1.0 - abs(d.yx)) * vec2(d.x >= 0.0 ? 1.0 : -1.0, d.y >= 0.0 ? 1.0 : -1.0);
-    return normalize(d);
-}
 
 #if PROBE_GI
 struct ProbeVolume {
@@ -72,7 +60,7 @@ uint probe_volume_at(vec3 p) {
 
 // Texture coordinates of direction d in probe `probe`'s tile of an atlas of `tile`-texel tiles.
 vec3 probe_tile_uv(sampler2DArray atlas, uint probe, vec3 d, int tile) {
-    vec2 texel = vec2(probe_tile(probe) * tile) + 1.0 + (probe_oct_encode(d) * 0.5 + 0.5) * float(tile - 2);
+    vec2 texel = vec2(probe_tile(probe) * tile) + 1.0 + (oct_encode(d) * 0.5 + 0.5) * float(tile - 2);
     return vec3(texel / vec2(textureSize(atlas, 0).xy), 0.0);
 }
 

@@ -34,10 +34,6 @@ struct ProbeRecord {
     vec3 glossy;    // throughput x specular albedo (probe_gi_glossy's), 0 where the path goes on
 };
 
-// A unit vector as octahedral coordinates in two snorm16 (about 1e-4 radians at worst).
-uint probe_pack_unit(vec3 d) { return packSnorm2x16(probe_oct_encode(d)); }
-vec3 probe_unpack_unit(uint bits) { return probe_oct_decode(unpackSnorm2x16(bits)); }
-
 ProbeRecord probe_record_none() {
     ProbeRecord r;
     r.pos = vec3(0.0);
@@ -60,21 +56,21 @@ ProbeRecord probe_record_at(PathVertex s, vec3 throughput, bool glossy) {
     return r;
 }
 
-uvec4 probe_record_hit(ProbeRecord r) { return uvec4(floatBitsToUint(r.pos), probe_pack_unit(r.n)); }
+uvec4 probe_record_hit(ProbeRecord r) { return uvec4(floatBitsToUint(r.pos), oct_pack_snorm16(r.n)); }
 
 uvec4 probe_record_factors(ProbeRecord r) {
     // non-finite factors are kept (the lookup side scrubs and counts them); finite ones clamp
     // into float16's range
     vec3 d = is_finite(r.diffuse) ? to_half_range(r.diffuse) : r.diffuse;
     vec3 g = is_finite(r.glossy) ? to_half_range(r.glossy) : r.glossy;
-    return uvec4(probe_pack_unit(r.v), packHalf2x16(d.rg), packHalf2x16(vec2(d.b, g.r)), packHalf2x16(g.gb));
+    return uvec4(oct_pack_snorm16(r.v), packHalf2x16(d.rg), packHalf2x16(vec2(d.b, g.r)), packHalf2x16(g.gb));
 }
 
 ProbeRecord probe_record_unpack(uvec4 hit, uvec4 factors) {
     ProbeRecord r;
     r.pos = uintBitsToFloat(hit.xyz);
-    r.n = probe_unpack_unit(hit.w);
-    r.v = probe_unpack_unit(factors.x);
+    r.n = oct_unpack_snorm16(hit.w);
+    r.v = oct_unpack_snorm16(factors.x);
     vec2 a = unpackHalf2x16(factors.y), b = unpackHalf2x16(factors.z), c = unpackHalf2x16(factors.w);
     r.diffuse = vec3(a, b.x);
     r.glossy = vec3(b.y, c);

@@ -161,7 +161,7 @@ def random_rotation(seed) -> np.ndarray:
 
 # -- decoding readbacks (tests, benchmarks) -------------------------------------------------------
 def oct_encode(d) -> np.ndarray:
-    """Unit directions (..., 3) -> octahedral coordinates in [-1, 1]^2 (glsl probe_oct_encode)."""
+    """Unit directions (..., 3) -> octahedral coordinates in [-1, 1]^2 (octahedral.glsl oct_encode)."""
     d = np.asarray(d, np.float64)
     p = d[..., :2] / np.abs(d).sum(axis=-1, keepdims=True)
     sign = np.where(p >= 0.0, 1.0, -1.0)

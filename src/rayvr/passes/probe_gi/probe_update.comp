@@ -41,7 +41,7 @@ ivec2 border_source(ivec2 t, int tile) {
 }
 
 vec3 texel_direction(ivec2 t, int tile) {
-    return probe_oct_decode((vec2(t - 1) + 0.5) / float(tile - 2) * 2.0 - 1.0);
+    return oct_decode((vec2(t - 1) + 0.5) / float(tile - 2) * 2.0 - 1.0);
 }
 
 void main() {

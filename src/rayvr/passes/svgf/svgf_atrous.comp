@@ -69,7 +69,7 @@ void add_tap(ivec3 q, ivec2 size, float depth_scale, float log_k) {
     if (!(tap_depth > 0.0)) return;   // no geometry: weight 0
     float e = abs(c_depth - tap_depth) * depth_scale + log_k;
     if (svgf_phi_normal > 0.0) {
-        float c = dot(c_n, svgf_unpack_normal(key.y));
+        float c = dot(c_n, oct_unpack_snorm16(key.y));
         if (!(c > 0.0)) return;   // weight 0
         e += svgf_phi_normal * log2(c);
     }
@@ -105,7 +105,7 @@ void main() {
         }
         return;
     }
-    c_n = svgf_unpack_normal(key.y);
+    c_n = oct_unpack_snorm16(key.y);
     vec4 d = svgf_illum_diffuse(centre), s = svgf_illum_specular(centre);
     {
         vec2 phi = svgf_phi_color * sqrt(max(blurred_variance(p, size.xy), 0.0) + 1e-10);

@@ -11,6 +11,7 @@
 #include "gbuffer.glsl"
 #include "path_vertex.glsl"
 #include "nonfinite.glsl"
+#include "octahedral.glsl"
 
 // Demodulation divides by max(albedo, SVGF_ALBEDO_EPS) and remodulation multiplies by the same,
 // so a black lobe round-trips exactly.
@@ -35,31 +36,16 @@ struct SvgfSurface {
     float history;    // frames in this pixel's history (0: none)
 };
 
-vec2 svgf_sign(vec2 v) { return vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0); }
-
-uint svgf_pack_normal(vec3 n) {
-    n /= abs(n.x) + abs(n.y) + abs(n.z) + 1e-20;
-    vec2 e = n.z >= 0.0 ? n.xy : (1.0 - abs(n.yx)) * svgf_sign(n.xy);
-    return packSnorm2x16(e);
-}
-
-vec3 svgf_unpack_normal(uint bits) {
-    vec2 e = unpackSnorm2x16(bits);
-    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
-    if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * svgf_sign(n.xy);
-    return normalize(n);
-}
-
 // The filter key: linear depth (float bits; 0: no geometry, a drawn point's depth being
 // positive) and the octahedral normal (snorm16x2), 64 bits a tap.
-uvec2 svgf_pack_key(SvgfSurface s) { return uvec2(floatBitsToUint(s.depth), svgf_pack_normal(s.n)); }
+uvec2 svgf_pack_key(SvgfSurface s) { return uvec2(floatBitsToUint(s.depth), oct_pack_snorm16(s.n)); }
 // The rest: effect word and history length (float bits).
 uvec2 svgf_pack_tag(SvgfSurface s) { return uvec2(s.word, floatBitsToUint(s.history)); }
 
 SvgfSurface svgf_unpack(uvec2 key, uvec2 tag) {
     SvgfSurface s;
     s.depth = uintBitsToFloat(key.x);
-    s.n = svgf_unpack_normal(key.y);
+    s.n = oct_unpack_snorm16(key.y);
     s.word = tag.x;
     s.history = uintBitsToFloat(tag.y);
     return s;
@@ -156,7 +142,7 @@ uniform usampler2DArray surface_cur;
 bool svgf_key_at(ivec3 q, ivec2 size, out float depth, out vec3 n) {
     uvec2 key = svgf_inside(q.xy, size) ? texelFetch(key_cur, q, 0).xy : uvec2(0u);
     depth = svgf_key_depth(key);
-    n = depth > 0.0 ? svgf_unpack_normal(key.y) : vec3(0.0, 0.0, 1.0);
+    n = depth > 0.0 ? oct_unpack_snorm16(key.y) : vec3(0.0, 0.0, 1.0);
     return depth > 0.0;
 }
 
