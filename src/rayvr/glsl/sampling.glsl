@@ -80,6 +80,25 @@ Rng rng_init_sample(uvec2 pixel, uint view, uint frame, uint salt, uint k, uint 
 
 Rng rng_init(uvec2 pixel, uint view, uint frame, uint salt) { return rng_init_sample(pixel, view, frame, salt, 0u, 1u); }
 
+// The one word of a generator that its draws change (Sobol: the dimension group; PCG: the
+// state): with the generator it started as, all that a path must keep to go on drawing.
+uint rng_word(Rng r) {
+#if RAYVR_SAMPLER
+    return r.group;
+#else
+    return r.state;
+#endif
+}
+
+Rng rng_resume(Rng start, uint word) {
+#if RAYVR_SAMPLER
+    start.group = word;
+#else
+    start.state = word;
+#endif
+    return start;
+}
+
 // A uniform float in [0, 1) from the top 24 bits.
 float rng_unit(uint bits) { return float(bits >> 8u) * (1.0 / 16777216.0); }
 

@@ -32,8 +32,9 @@ from ..gbuffer import channels
 
 MODES = ("full", "gbuffer")
 KERNELS = ("auto", "wavefront", "megakernel")
-# The wavefront form's state per path slot (pt_wave.glsl): 11 fields of 16 bytes, 4 more with lobes.
-WAVE_FIELDS, WAVE_LOBE_FIELDS, WAVE_FIELD_BYTES = 11, 4, 16
+# The wavefront form's state per path slot (pt_wave.glsl): 10 fields of 16 bytes, one more where
+# the scene transmits (the path's medium), 4 more with lobes.
+WAVE_FIELDS, WAVE_MEDIUM_FIELDS, WAVE_LOBE_FIELDS, WAVE_FIELD_BYTES = 10, 1, 4, 16
 SAMPLERS = {"sobol": 1, "pcg": 0}   # glsl/sampling.glsl RAYVR_SAMPLER
 # Paths per invocation per dispatch on software renderers (path_tracer.comp PT_SAMPLE_SLICES):
 # llvmpipe stops an invocation's loops after 65,535 iterations in all, so a frame's paths are
@@ -103,12 +104,15 @@ class PathTracer(RenderPass):
             r.add_output(self.SPECULAR, "what its specular lobe reflects").format("rgba16f")
         if self.kernel != "megakernel":
             r.add_output(self.PATHS, "the wavefront's path state between its dispatches (scratch)").buffer(
-                self.wave_slots(cd.size, cd.views) * self.wave_slot_bytes())
+                self.wave_slots(cd.size, cd.views) * self.wave_slot_bytes(cd.scene))
         return r
 
-    def wave_slot_bytes(self) -> int:
-        """Bytes of the wavefront's state per path slot."""
-        return (WAVE_FIELDS + (WAVE_LOBE_FIELDS if self.lobes else 0)) * WAVE_FIELD_BYTES
+    def wave_slot_bytes(self, scene=None) -> int:
+        """Bytes of the wavefront's state per path slot (a medium field unless `scene` is known
+        not to transmit)."""
+        medium = scene is None or "SCENE_HAS_TRANSMISSION" in scene.features
+        return (WAVE_FIELDS + (WAVE_MEDIUM_FIELDS if medium else 0)
+                + (WAVE_LOBE_FIELDS if self.lobes else 0)) * WAVE_FIELD_BYTES
 
     def wave_slots(self, size, views: int) -> int:
         """Path slots of the wavefront's state: one per pixel of the list, or per invocation of the
@@ -193,25 +197,32 @@ class PathTracer(RenderPass):
             prog.run(*self._groups)
 
     def _execute_wavefront(self, ctx, data, pixels) -> None:
-        """Per sample: a shade dispatch that begins the paths, then (trace, shade) per bounce; the
-        camera ray (mode "full") takes one more pair. The last shade adds the sample to the outputs."""
+        """Per sample, stages of (shade, trace): shade answers the last rays and makes the next
+        vertex's, trace traces them. From the camera stage 0 is the trace kernel's camera ray
+        alone; from the G-buffer it begins with the first vertex's shade. The last shade adds the
+        sample to the outputs."""
         shade, trace = self._res, self._trace_res
+        self._set_uniforms(trace)   # the camera ray's
         for res in (shade, trace):
             res.buffer("PtWave", data[self.PATHS])
             res.set("pt_wave_paths", self._slots)
             res.set("pt_wave_size", self._wave_size)
             if pixels is not None:
                 res.buffer("PixelList", pixels)
-        rays = int(self.max_bounces) + (0 if self.mode == "gbuffer" else 1)
+        gbuffer = self.mode == "gbuffer"
+        rays = int(self.max_bounces) + (0 if gbuffer else 1)
         for k in range(int(self.samples_per_pixel)):
             shade.set("pt_sample", k)
+            trace.set("pt_sample", k)
             for stage in range(rays + 1):
-                shade.set("pt_stage", stage)
-                shade.set("pt_last", stage == rays)
-                self._run(self._shade, pixels)
+                if stage or gbuffer:
+                    shade.set("pt_stage", stage)
+                    shade.set("pt_last", stage == rays)
+                    self._run(self._shade, pixels)
                 if stage < rays:
-                    ctx.barrier(Access.STORAGE)
+                    if stage or gbuffer:
+                        ctx.barrier(Access.STORAGE)
+                    trace.set("pt_stage", stage)
                     self._run(self._trace, pixels)
                     ctx.barrier(Access.STORAGE)
             ctx.barrier(Access.IMAGE, Access.STORAGE)   # the next sample adds to the outputs
-

@@ -9,30 +9,32 @@
 layout(std430) buffer PtWave { uvec4 pt_wave[]; };
 uniform uint pt_wave_paths;   // slots in all: the stride between fields
 
+// Fields the shade kernel keeps for itself, then what the trace kernel reads and answers. A path's
+// generator is kept as its one changing word (rng_word): the rest is the pixel's and the sample's.
 #define PTW_RADIANCE 0u   // path radiance, rays' pdf
 #define PTW_BETA 1u       // path beta, rays' cone width
-#define PTW_MEDIUM 2u     // path medium, rays' cone spread
-#define PTW_NEE 3u        // rays' light sample contribution and shadow distance (< 0: none)
-#define PTW_POS 4u        // rays' vertex (the camera's eye for a camera ray), flags
-#define PTW_NG 5u         // rays' geometric normal, the path's BLEND seed
-#define PTW_NEE_DIR 6u    // shadow ray direction, Rng state
-#define PTW_DIR 7u        // BSDF ray direction, Rng group
-#define PTW_EMITTED 8u    // what the first vertex emits towards the eye (or the background), Rng index
-#define PTW_HIT 9u        // trace kernel: t, barycentrics, instance
-#define PTW_ANSWER 10u    // trace kernel: primitive, PTW_FOUND | PTW_OCCLUDED, BLEND rays traced so far
-#define PTW_FIRST_DIFFUSE 11u   // PT_LOBES: the split's fields
-#define PTW_FIRST_TOTAL 12u
-#define PTW_SHARE 13u
-#define PTW_NEE_DIFFUSE 14u
+#define PTW_NEE 2u        // rays' light sample contribution, rng_word
+#define PTW_POS 3u        // rays' vertex, flags (both kernels)
+#define PTW_DIR 4u        // BSDF ray direction (both kernels), rays' cone spread
+#define PTW_NG 5u         // trace kernel: rays' geometric normal, shadow distance (< 0: none)
+#define PTW_NEE_DIR 6u    // trace kernel: shadow ray direction
+#define PTW_EMITTED 7u    // what the first vertex emits towards the eye (or the background)
+#define PTW_HIT 8u        // trace kernel's answer: t, barycentrics, instance
+#define PTW_ANSWER 9u     // trace kernel's answer: primitive, PTW_FOUND | PTW_OCCLUDED | PTW_SHADOW, BLEND rays traced so far
+#define PTW_MEDIUM 10u    // SCENE_HAS_TRANSMISSION: path medium
+#define PTW_FIRST_DIFFUSE (10u + uint(SCENE_HAS_TRANSMISSION))   // PT_LOBES: the split's fields
+#define PTW_FIRST_TOTAL (PTW_FIRST_DIFFUSE + 1u)
+#define PTW_SHARE (PTW_FIRST_DIFFUSE + 2u)
+#define PTW_NEE_DIFFUSE (PTW_FIRST_DIFFUSE + 3u)
 
 #define PTW_ALIVE 1u         // the path goes on
 #define PTW_SCATTERED 2u     // rays.scattered: its BSDF ray is to be traced
 #define PTW_DELTA 4u
 #define PTW_TRANSMITTED 8u
-#define PTW_CAMERA 16u       // the BSDF ray slot holds the camera ray
 #define PTW_ESCAPED 32u      // the camera ray escaped: PTW_EMITTED is the background
 #define PTW_FOUND 1u
 #define PTW_OCCLUDED 2u
+#define PTW_SHADOW 4u        // a shadow ray was traced
 
 uvec4 ptw_load(uint field, uint i) { return pt_wave[field * pt_wave_paths + i]; }
 void ptw_store(uint field, uint i, uvec4 v) { pt_wave[field * pt_wave_paths + i] = v; }
