@@ -18,17 +18,12 @@ void main() {
     if (!ptw_pixel(p)) return;
     uint i = ptw_slot();
     uint answer = 0u;
-    Hit hit;
-    hit.t = 0.0;
-    hit.barycentrics = vec2(0.0);
-    hit.instance = 0u;
-    hit.primitive = 0u;
+    vec3 o, d;
+    bool closest = true;   // a BSDF or camera ray to trace (one call site: the traversal is inlined once)
 #if !PT_FROM_GBUFFER
     if (pt_stage == 0) {
         Rng rng = pt_rng(p, pt_sample);   // also the BLEND decisions' seed
-        vec3 o, d;
         pt_camera_ray(p, rng, o, d);
-        if (trace_closest(o, d, 1e30, hit)) answer |= PTW_FOUND;
     } else
 #endif
     {
@@ -46,11 +41,18 @@ void main() {
             if (trace_occluded(offset_ray_origin(from, ng.xyz), ptw_loadf(PTW_NEE_DIR, i).xyz, ng.w))
                 answer |= PTW_OCCLUDED;
         }
-        if ((flags & PTW_SCATTERED) != 0u) {
-            vec3 o = offset_ray_origin(from, (flags & PTW_TRANSMITTED) != 0u ? -ng.xyz : ng.xyz);
-            if (trace_closest(o, ptw_loadf(PTW_DIR, i).xyz, 1e30, hit)) answer |= PTW_FOUND;
+        closest = (flags & PTW_SCATTERED) != 0u;
+        if (closest) {
+            o = offset_ray_origin(from, (flags & PTW_TRANSMITTED) != 0u ? -ng.xyz : ng.xyz);
+            d = ptw_loadf(PTW_DIR, i).xyz;
         }
     }
+    Hit hit;
+    hit.t = 0.0;
+    hit.barycentrics = vec2(0.0);
+    hit.instance = 0u;
+    hit.primitive = 0u;
+    if (closest && trace_closest(o, d, 1e30, hit)) answer |= PTW_FOUND;
     ptw_store(PTW_HIT, i, uvec4(floatBitsToUint(hit.t), floatBitsToUint(hit.barycentrics), hit.instance));
     uint rays = 0u;
 #if SCENE_HAS_ALPHA_BLEND
