@@ -149,6 +149,10 @@ class PathTracer(RenderPass):
             self._trace = self.compute_program(ctx.gl, "pt_wave_trace.comp", self._defines)
             self._res = program_resources(self._shade)
             self._trace_res = program_resources(self._trace)
+            self._camera = self._camera_res = None
+            if self.mode != "gbuffer":   # the camera rays: their code would cost the bounces' traversal registers
+                self._camera = self.compute_program(ctx.gl, "pt_wave_trace.comp", {**self._defines, "PTW_CAMERA_RAYS": 1})
+                self._camera_res = program_resources(self._camera)
             self._slots = self.wave_slots(cd.size, cd.views)
             self._wave_size = (int(cd.size[0]), int(cd.size[1]), int(cd.views))
         else:
@@ -201,28 +205,30 @@ class PathTracer(RenderPass):
         vertex's, trace traces them. From the camera stage 0 is the trace kernel's camera ray
         alone; from the G-buffer it begins with the first vertex's shade. The last shade adds the
         sample to the outputs."""
-        shade, trace = self._res, self._trace_res
-        self._set_uniforms(trace)   # the camera ray's
-        for res in (shade, trace):
+        shade, trace, camera = self._res, self._trace_res, self._camera_res
+        gbuffer = camera is None
+        programs = (shade, trace) if gbuffer else (shade, trace, camera)
+        for res in programs:
             res.buffer("PtWave", data[self.PATHS])
             res.set("pt_wave_paths", self._slots)
             res.set("pt_wave_size", self._wave_size)
             if pixels is not None:
                 res.buffer("PixelList", pixels)
-        gbuffer = self.mode == "gbuffer"
+        for res in programs[1:]:   # their generators' (the camera's, BLEND decisions')
+            self._set_uniforms(res)
         rays = int(self.max_bounces) + (0 if gbuffer else 1)
         for k in range(int(self.samples_per_pixel)):
-            shade.set("pt_sample", k)
-            trace.set("pt_sample", k)
-            for stage in range(rays + 1):
-                if stage or gbuffer:
-                    shade.set("pt_stage", stage)
-                    shade.set("pt_last", stage == rays)
-                    self._run(self._shade, pixels)
+            for res in programs:
+                res.set("pt_sample", k)
+            if not gbuffer:
+                self._run(self._camera, pixels)
+                ctx.barrier(Access.STORAGE)
+            for stage in range(0 if gbuffer else 1, rays + 1):
+                shade.set("pt_stage", stage)
+                shade.set("pt_last", stage == rays)
+                self._run(self._shade, pixels)
                 if stage < rays:
-                    if stage or gbuffer:
-                        ctx.barrier(Access.STORAGE)
-                    trace.set("pt_stage", stage)
+                    ctx.barrier(Access.STORAGE)
                     self._run(self._trace, pixels)
                     ctx.barrier(Access.STORAGE)
             ctx.barrier(Access.IMAGE, Access.STORAGE)   # the next sample adds to the outputs

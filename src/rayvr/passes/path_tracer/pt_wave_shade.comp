@@ -62,9 +62,9 @@ void ptw_store_state(uint i, PtPath path, PtRays r, uint flags, Rng rng) {
 #endif
 }
 
-// A live path as the last stage stored it, its generator resumed from `start`; what only the
+// A live path as the last stage stored it, its generator resumed from its word; what only the
 // trace kernel needs (the rays' normal and shadow direction) is not read.
-void ptw_load_state(uint i, Rng start, out PtPath path, out PtRays r, out uint flags, out Rng rng) {
+void ptw_load_state(uint i, ivec3 p, out PtPath path, out PtRays r, out uint flags, out Rng rng) {
     vec4 a = ptw_loadf(PTW_RADIANCE, i), b = ptw_loadf(PTW_BETA, i), d = ptw_loadf(PTW_DIR, i);
     uvec4 nee = ptw_load(PTW_NEE, i), pos = ptw_load(PTW_POS, i);
     path = pt_path_begin();
@@ -74,7 +74,7 @@ void ptw_load_state(uint i, Rng start, out PtPath path, out PtRays r, out uint f
     r.pdf = a.w;
     r.cone_width = b.w;
     r.nee = uintBitsToFloat(nee.xyz);
-    rng = rng_resume(start, nee.w);
+    rng = rng_resume(pt_rng(p, pt_sample), nee.w);
     r.pos = uintBitsToFloat(pos.xyz);
     flags = pos.w;
     r.dir = d.xyz;
@@ -131,8 +131,7 @@ void main() {
     ivec3 p;
     if (!ptw_pixel(p)) return;
     uint i = ptw_slot();
-    Rng start = pt_rng(p, pt_sample);
-    Rng rng = start;
+    Rng rng;   // drawn only for a path that goes on
     PtPath path = pt_path_begin();
     PtRays r = pt_no_rays();
     uint flags = 0u;
@@ -147,6 +146,7 @@ void main() {
 #endif
         {
             GSurface g = gbuf_load(p);
+            rng = pt_rng(p, pt_sample);
             emitted = g.emissive;
             if (pt_max_bounces > 0) {
                 r = pt_vertex(path, path_vertex_at_gbuffer(g, uint(p.z)), 0, rng, SPLIT);
@@ -157,38 +157,42 @@ void main() {
     } else
 #endif
     {
-        uvec4 h = ptw_load(PTW_HIT, i), answer = ptw_load(PTW_ANSWER, i);
-        Hit hit;
-        hit.t = uintBitsToFloat(h.x);
-        hit.barycentrics = uintBitsToFloat(h.yz);
-        hit.instance = h.w;
-        hit.primitive = answer.x;
-        bool found = (answer.y & PTW_FOUND) != 0u;
-        if (PT_FROM_GBUFFER == 0 && pt_stage == 1) {   // the camera ray's answer: the first vertex
-            vec3 o;
-            pt_camera_ray(p, rng, o, r.dir);   // the trace kernel's ray, drawn again
-            if (!found) {
-                emitted = environment_radiance(r.dir);
-                flags = PTW_ESCAPED;
-            } else {
-                PathVertex s = pt_camera_vertex_at(p, r.dir, hit, emitted);
-                if (pt_max_bounces > 0) {
-                    r = pt_vertex(path, s, 0, rng, SPLIT);
-                    flags = ptw_flags(r);
-                }
-            }
-            if (!pt_last) ptw_storef(PTW_EMITTED, i, emitted, 0.0);
-        } else {
+        bool camera = PT_FROM_GBUFFER == 0 && pt_stage == 1;   // the camera ray's answer: the first vertex
+        if (!camera) {
             flags = ptw_load(PTW_POS, i).w;
             if ((flags & PTW_ALIVE) == 0u && !pt_last) return;   // an ended path waits for the last stage
             if (pt_last) emitted = ptw_loadf(PTW_EMITTED, i).xyz;
-            if ((flags & PTW_ALIVE) == 0u) {
-                path.radiance = ptw_loadf(PTW_RADIANCE, i).xyz;
+        }
+        if (!camera && (flags & PTW_ALIVE) == 0u) {
+            path.radiance = ptw_loadf(PTW_RADIANCE, i).xyz;
 #if PT_LOBES
-                ptw_load_lobes(i, path);
+            ptw_load_lobes(i, path);
 #endif
+        } else {
+            uvec4 h = ptw_load(PTW_HIT, i), answer = ptw_load(PTW_ANSWER, i);
+            Hit hit;
+            hit.t = uintBitsToFloat(h.x);
+            hit.barycentrics = uintBitsToFloat(h.yz);
+            hit.instance = h.w;
+            hit.primitive = answer.x;
+            bool found = (answer.y & PTW_FOUND) != 0u;
+            if (camera) {
+                vec3 o;
+                rng = pt_rng(p, pt_sample);
+                pt_camera_ray(p, rng, o, r.dir);   // the camera kernel's ray, drawn again
+                if (!found) {
+                    emitted = environment_radiance(r.dir);
+                    flags = PTW_ESCAPED;
+                } else {
+                    PathVertex s = pt_camera_vertex_at(p, r.dir, hit, emitted);
+                    if (pt_max_bounces > 0) {
+                        r = pt_vertex(path, s, 0, rng, SPLIT);
+                        flags = ptw_flags(r);
+                    }
+                }
+                if (!pt_last) ptw_storef(PTW_EMITTED, i, emitted, 0.0);
             } else {
-                ptw_load_state(i, start, path, r, flags, rng);
+                ptw_load_state(i, p, path, r, flags, rng);
                 int bounce = pt_stage - (PT_FROM_GBUFFER != 0 ? 1 : 2);   // whose rays were answered
                 r.nee_dist = (answer.y & PTW_SHADOW) != 0u ? 0.0 : -1.0;
                 pt_shadow_answer(path, r, (answer.y & PTW_OCCLUDED) != 0u, bounce, SPLIT);

@@ -1,7 +1,8 @@
 // PathTracer, wavefront form: the rays of every live path's vertex (pt_wave.glsl): its light
-// sample's shadow ray, then its BSDF ray, answered in the path's slot; from the camera (mode
-// "full") stage 0 makes and traces the camera ray itself, so no state precedes it. Only traversal
-// and the camera: no BSDF, light or material code, so no register of theirs.
+// sample's shadow ray, then its BSDF ray, answered in the path's slot. Built with PTW_CAMERA_RAYS 1
+// it is mode "full"'s stage 0 instead: it makes and traces the camera rays, so no state precedes
+// them. Only traversal (and the camera): no BSDF, light or material code, so no register of
+// theirs; the camera's code is a program of its own for the same reason.
 #include "pt_pixel.glsl"
 #include "pt_wave.glsl"
 
@@ -10,7 +11,6 @@ layout(local_size_x = PIXEL_LIST_GROUP) in;
 #else
 layout(local_size_x = RAY_GROUP_SIZE) in;
 #endif
-uniform int pt_stage;   // whose rays: stage 0 (from the camera: the camera ray) or the vertex a shade stage left
 uniform int pt_sample;
 
 void main() {
@@ -20,12 +20,10 @@ void main() {
     uint answer = 0u;
     vec3 o, d;
     bool closest = true;   // a BSDF or camera ray to trace (one call site: the traversal is inlined once)
-#if !PT_FROM_GBUFFER
-    if (pt_stage == 0) {
-        Rng rng = pt_rng(p, pt_sample);   // also the BLEND decisions' seed
-        pt_camera_ray(p, rng, o, d);
-    } else
-#endif
+#if PTW_CAMERA_RAYS
+    Rng rng = pt_rng(p, pt_sample);   // also the BLEND decisions' seed
+    pt_camera_ray(p, rng, o, d);
+#else
     {
         uvec4 pos = ptw_load(PTW_POS, i);
         uint flags = pos.w;
@@ -47,6 +45,7 @@ void main() {
             d = ptw_loadf(PTW_DIR, i).xyz;
         }
     }
+#endif
     Hit hit;
     hit.t = 0.0;
     hit.barycentrics = vec2(0.0);
