@@ -183,3 +183,30 @@ def test_render_with_workers_sums_the_shares_non_finite_counts(gpu, monkeypatch,
     cluster_cli.render(args, "quad", scene, rv.graphs.hybrid(), views, hdr=True)
     err = capsys.readouterr().err
     assert err == "rayvr: warning: 5 non-finite samples in pass Direct were set to 0\n"
+
+
+class _ReleasingRay:
+    """Ray as a Cluster sees it just after another closed: its one GPU comes back after `polls`."""
+
+    def __init__(self, polls: int, total: float = 1.0):
+        self.polls, self.total, self.calls = polls, total, 0
+
+    def cluster_resources(self):
+        return {"GPU": self.total, "CPU": 16.0}
+
+    def available_resources(self):
+        self.calls += 1
+        return {"GPU": self.total if self.calls > self.polls else 0.0, "CPU": 16.0}
+
+
+def test_workers_wait_for_a_gpu_that_ray_is_still_releasing():
+    from rayvr.cluster.pool import worker_shares
+
+    ray = _ReleasingRay(polls=3)
+    assert worker_shares(ray, 2, None, wait_s=5.0)[:2] == (2, 0.5)   # two workers share the one GPU
+    assert ray.calls == 4
+    assert worker_shares(_ReleasingRay(polls=2), 1, 1.0, wait_s=5.0)[:2] == (1, 1.0)
+    with pytest.raises(ClusterError, match="all in use; free one or wait"):
+        worker_shares(_ReleasingRay(polls=10**9), 2, None, wait_s=0.3)
+    with pytest.raises(ClusterError, match="2 workers x 1 GPU need 2 GPUs; the cluster has 1 free"):
+        worker_shares(_ReleasingRay(polls=0), 2, 1.0, wait_s=0.3)

@@ -32,6 +32,34 @@ from .worker import RenderWorker
 
 POLL_S = 0.25            # the driver's loop: wait for a result at most this long, then poll progress
 START_TIMEOUT_S = 300.0  # workers must be up (context, device) within this
+RELEASE_WAIT_S = 30.0    # Ray returns a killed worker's GPU a moment later: wait this long for it
+
+
+def worker_shares(ray, workers: int | None, gpus_per_worker: float | None,
+                  wait_s: float = RELEASE_WAIT_S) -> tuple[int, float, dict]:
+    """How many workers to start, the Ray GPUs each asks for, and the free resources: a GPU per
+    worker where the cluster has as many, else a share of them, none without GPUs (see Cluster).
+    GPUs that workers closed just before still hold (another Cluster of this process, a job's
+    previous Cluster) are waited for up to `wait_s`, since Ray frees them asynchronously."""
+    total = float(ray.cluster_resources().get("GPU", 0.0))
+    count = int(workers) if workers else max(1, int(total))
+    if count < 1:
+        raise ClusterError(f"--workers {workers}: need at least 1 worker")
+    want = min(total, count) if gpus_per_worker is None else float(gpus_per_worker) * count
+    deadline = time.monotonic() + wait_s
+    free = ray.available_resources()
+    while float(free.get("GPU", 0.0)) + 1e-9 < want and want <= total + 1e-9 and time.monotonic() < deadline:
+        time.sleep(0.25)
+        free = ray.available_resources()
+    gpus = float(free.get("GPU", 0.0))
+    if gpus_per_worker is None:
+        if total and not gpus:
+            raise ClusterError(f"the cluster's {total:g} GPUs are all in use; free one or wait")
+        gpus_per_worker = 1.0 if gpus >= count else gpus / count
+    if gpus_per_worker * count > gpus + 1e-9:
+        raise ClusterError(f"{count} workers x {gpus_per_worker:g} GPU need {gpus_per_worker * count:g} GPUs; "
+                           f"the cluster has {gpus:g} free: ask for fewer workers or a share of a GPU each")
+    return count, float(gpus_per_worker), free
 
 
 @dataclasses.dataclass
@@ -69,19 +97,8 @@ class Cluster:
                 raise ClusterError(f"cannot start or reach {where}: {exc}; check the address "
                                    f"(ray status on the head node) or leave --address out for a local one") from None
             self._owns_ray = True
-        free = ray.available_resources()      # another Cluster of this process may hold some
+        count, gpus_per_worker, free = worker_shares(ray, workers, gpus_per_worker)
         self.cluster_gpus = float(ray.cluster_resources().get("GPU", 0.0))
-        gpus = float(free.get("GPU", 0.0))
-        count = int(workers) if workers else max(1, int(gpus))
-        if count < 1:
-            raise ClusterError(f"--workers {workers}: need at least 1 worker")
-        if gpus_per_worker is None:
-            if self.cluster_gpus and not gpus:
-                raise ClusterError(f"the cluster's {self.cluster_gpus:g} GPUs are all in use; free one or wait")
-            gpus_per_worker = 1.0 if gpus >= count else gpus / count
-        if gpus_per_worker * count > gpus + 1e-9:
-            raise ClusterError(f"{count} workers x {gpus_per_worker:g} GPU need {gpus_per_worker * count:g} GPUs; "
-                               f"the cluster has {gpus:g} free: ask for fewer workers or a share of a GPU each")
         self.gpus_per_worker = float(gpus_per_worker)
         # CPUs only place the workers (llvmpipe uses every core anyway): what is free, shared.
         self.cpus_per_worker = min(1.0, float(free.get("CPU", 0.0)) / count)

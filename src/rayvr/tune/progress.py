@@ -15,10 +15,16 @@ worker spent (`finished(kind, units, seconds)`), which teach its rate, and its r
 take rate x units / workers of wall time, overlapped with the other kinds: the remaining time
 is the larger of the two. The time this process waits for it is a step of kind "wait" (counted
 as spent, never planned).
+
+With RAYVR_STUDY_LOG set (e.g. to "-": stderr, or a file path) every step and every concurrent
+step's report is also logged as one line, with the seconds since the study began: where a long
+study's time goes, readable from a log that a timeout cut short.
 """
 from __future__ import annotations
 
 import contextlib
+import os
+import sys
 import time
 
 # Relative seconds per unit before any step of the kind was timed (llvmpipe's ratios).
@@ -39,6 +45,19 @@ class StudyProgress:
         self._partial = 0.0                      # seconds into the current step
         self._shown = 0.0
         self.workers: dict[str, int] = {}        # concurrent kind -> its workers
+        self._t0 = time.perf_counter()
+        self._log_to = os.environ.get("RAYVR_STUDY_LOG")
+
+    def _log(self, text: str) -> None:
+        if not self._log_to:
+            return
+        line = f"[{time.perf_counter() - self._t0:8.1f} s] {self.desc}: {text}\n"
+        if self._log_to == "-":
+            sys.stderr.write(line)
+            sys.stderr.flush()
+        else:
+            with open(self._log_to, "a") as f:
+                f.write(line)
 
     def plan(self, kind: str, units: float) -> None:
         """Add a step of `units` of `kind` to the plan."""
@@ -66,6 +85,7 @@ class StudyProgress:
     def finished(self, kind: str, units: float, seconds: float) -> None:
         """A concurrent step of `units` finished after `seconds` of its worker's time (unplanned
         work, 0 units, teaches no rate)."""
+        self._log(f"{kind} done in a worker: {units:.3g} units, {seconds:.2f} s")
         if not units:
             return
         self.planned[kind] = max(0.0, self.planned.get(kind, 0.0) - units)
@@ -126,6 +146,7 @@ class StudyProgress:
                 self.done_units[kind] = self.done_units.get(kind, 0.0) + units
                 self.done_s[kind] = self.done_s.get(kind, 0.0) + took
             self.spent += took
+            self._log(f"{kind} {label or '-'}: {units:.3g} units, {took:.2f} s; ~{self.remaining_s():.0f} s left")
             self._partial = 0.0
             self._refresh(force=True)
 
