@@ -354,7 +354,8 @@ class OpenSpy:
         def spy(file, *args, **kwargs):
             mode = args[0] if args else kwargs.get("flags" if flags_api else "mode", 0 if flags_api else "r")
             reads = (mode & (os.O_WRONLY | os.O_CREAT)) == 0 if flags_api else ("r" in mode or "+" in mode)
-            if reads and isinstance(file, (str, bytes, os.PathLike)):
+            # os.devnull: subprocess's stdin for the driver lookup (ldconfig -p) on the first GL context
+            if reads and isinstance(file, (str, bytes, os.PathLike)) and os.fsdecode(file) != os.devnull:
                 self.paths.append(Path(os.fsdecode(file)))
             return original(file, *args, **kwargs)
         return spy

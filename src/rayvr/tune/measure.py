@@ -7,7 +7,9 @@
 For each configuration (rayvr.tune.configs.Config):
 - **time**: GPU ms per frame from the graph's profile over `timing_frames` frames after a
   warm-up (rayvr.tune.timing);
-- **error, static view**: `frames` frames (each after the configuration's own accumulation), every
+- **error, static view**: `frames` frames (each after the configuration's own accumulation), the
+  first after `warmup + timing_frames` frames of history (a count: the judged frames and their
+  seeds never depend on the GPU's speed; the timing follows them), every
   metric of rayvr.tune.metrics.evaluate per frame and view against the reference; reported as the
   mean and standard deviation over those frames and views;
 - **error in motion**: the views carried along a headset trajectory (rayvr.tune.motion), the
@@ -273,7 +275,7 @@ class Study:
         for c in configs:
             cost = frame_cost(c, self.scene) * self.pixels
             p.plan("setup", 1)
-            p.plan("render", cost * (s.warmup + s.timing_frames + s.frames * c.accumulate))
+            p.plan("render", cost * (self.history_frames + s.warmup + s.timing_frames + s.frames * c.accumulate))
             p.plan("metric", sum(self._units(self._hdrflip(k)) for k in range(s.frames)))
             if s.motion:
                 p.plan("setup", 1)
@@ -290,6 +292,11 @@ class Study:
                 p.plan("setup", 1)
                 p.plan("render", self._curve_cost() * (s.warmup + s.timing_frames + s.progressive_frames))
                 p.plan("metric", self._units(s.hdrflip_frames is None) * len(snapshot_counts(s.progressive_frames)))
+
+    @property
+    def history_frames(self) -> int:
+        """Frames every configuration renders before its first judged one: a count, never a time."""
+        return self.s.warmup + self.s.timing_frames
 
     def _hdrflip(self, k: int) -> bool:
         """Whether the k-th judged frame of a configuration gets HDR-FLIP (StudySettings.hdrflip_frames)."""
@@ -373,9 +380,13 @@ class Study:
             r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=seeds.TEST)
         with r:
             accumulators = [n for n, q in r.compiled.passes.items() if type(q).__name__ == "Accumulate"]
-            with p.step("render", cost * (s.warmup + s.timing_frames), config.name):
-                timing = timed_frames(r, s.timing_frames, s.warmup, self.warmup_s)
-            self.method = timing.method
+            # The judged frames come first, after a counted history (what the timed frames would
+            # leave behind on llvmpipe): a warm-up timed in seconds renders as many frames as the
+            # GPU manages, so after it a temporal method's history and the frames' seeds would
+            # depend on the GPU's speed and load (two workers sharing a GPU judged other frames).
+            with p.step("render", cost * self.history_frames, config.name):
+                for _ in range(self.history_frames):
+                    r.render()
             for k in range(s.frames):
                 with p.step("render", cost * config.accumulate, config.name):
                     if config.accumulate > 1:
@@ -387,6 +398,9 @@ class Study:
                 judged.append(self.judge_later(image, ref.image, name, maps=k == 0, hdrflip=self._hdrflip(k)))
                 if k == 0:
                     first = image
+            with p.step("render", cost * (s.warmup + s.timing_frames), config.name):
+                timing = timed_frames(r, s.timing_frames, s.warmup, self.warmup_s)
+            self.method = timing.method
         settings = config.settings(self.scene)
         motion = self.motion_row(config, motion_refs, cost) if s.motion else None
         floor = self.floor_row(config, ref, cost, floor) if s.floors else None

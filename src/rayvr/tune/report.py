@@ -193,8 +193,9 @@ def sections(results, images: _Images, plots: dict, budget_ms=None, title: str |
     how += [f"Displayed image: {s['display_text']} (CPU, the curves of tonemap.comp; one fixed exposure for test "
             f"and reference, not quantised).",
             f"Pixels per degree: {s['ppd']:.1f}, {s['ppd_source']}; relMSE eps {s['eps']:g}.",
-            f"Static view: {st['frames']} judged frames per configuration (each after its own accumulation), "
-            f"mean ± sample standard deviation over those frames and the views; GPU ms over {st['timing_frames']} "
+            f"Static view: {st['frames']} judged frames per configuration (each after its own accumulation; the "
+            f"first after {st['warmup'] + st['timing_frames']} frames of history, a count that no GPU's speed "
+            f"changes), mean ± sample standard deviation over those frames and the views; GPU ms over {st['timing_frames']} "
             f"timed frames after {st['warmup']} untimed."
             + (f" HDR-FLIP (FLIP at many exposures, the costliest metric) on the first {st['hdrflip_frames']} of "
                f"the judged frames only, not in motion, on the floors nor on the progressive curves."
