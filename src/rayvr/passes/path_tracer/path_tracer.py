@@ -57,8 +57,9 @@ class PathTracer(RenderPass):
     `diffuse` and `specular` outputs; then Russian roulette never ends a path at its first
     vertex, and `clamp` caps each lobe of a sample on its own), `kernel` ("wavefront": the rays of every
     path's vertex in a dispatch of their own, between dispatches that do the rest
-    (pt_wave_*.comp), through a state buffer of 176 bytes a pixel (240 with lobes), the `paths`
-    scratch output; on the H200 1.4-1.8x faster than "megakernel": all of a path's rays in one
+    (pt_wave_*.comp), through a state buffer of 160 bytes a pixel (176 where the scene transmits,
+    64 more with lobes), the `paths` scratch output; on the H200 1.6-2.6x faster than
+    "megakernel": all of a path's rays in one
     invocation, no state buffer, and on llvmpipe the faster one, whose dispatches cost more than
     a GPU's; "auto", the default: the wavefront on GPUs, the megakernel on software renderers,
     the `paths` buffer declared either way; the same paths in every form)."""
