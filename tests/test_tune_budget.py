@@ -108,3 +108,26 @@ def test_as_dict_round_trips_names():
     d = choose_effects(m, 5.0).as_dict()
     assert d["assignment"] == {"A": "SHADOWS"} and d["steps"][0]["to"] == "SHADOWS"
     assert d["model"]["ms"]["A"]["SHADOWS"] == 1.0
+
+
+def test_choose_among_option_sets_takes_the_least_error_that_fits():
+    from rayvr.tune.budget import choose_among
+
+    plain = model({"A": {R: 0, S: 4.0}}, {"A": {R: 1.0, S: 0.5}})
+    gi = model({"A": {R: 0, S: 4.0}}, {"A": {R: 0.3, S: 0.2}}, base=3.0)   # lower error everywhere, 1 ms more
+    a, b = choose_effects(plain, 10.0), choose_effects(gi, 10.0)
+    a.options, b.options = {}, {"gi": "probes"}
+    best = choose_among([a, b])
+    assert best is b and best.predicted_error == pytest.approx(0.2) and best.assignment == {"A": S}
+    assert "gi=probes: predicted 7 ms" in best.notes[-1] and "the graph's defaults: predicted 6 ms" in best.notes[-1]
+    assert "graph options: gi=probes" in best.table()
+    assert best.as_dict()["options"] == {"gi": "probes"}
+    # at 3.5 ms GI's base alone leaves no room for SHADOWS: its RASTER (0.3) still beats plain RASTER (1.0)
+    a, b = choose_effects(plain, 3.5), choose_effects(gi, 3.5)
+    a.options, b.options = {}, {"gi": "probes"}
+    assert choose_among([a, b]) is b and b.assignment == {"A": R}
+    # nothing fits: the fastest
+    a, b = choose_effects(plain, 1.0), choose_effects(gi, 1.0)
+    assert not a.fits and not b.fits and choose_among([a, b]) is a
+    with pytest.raises(OptionError, match="no choices"):
+        choose_among([])

@@ -167,3 +167,18 @@ def test_tune_effects_is_still_where_it_was_imported_from():
     from rayvr.tune.tuner import tune_effects as moved
 
     assert tune_effects is moved and rv.tune.tune_effects is moved
+
+
+def test_tune_effects_tries_the_graph_options_and_keeps_what_pays(gpu, scene, reference):
+    kw = {"size": SIZE, "views": 1, "levels": [Effect.RASTER, Effect.SHADOWS], "frames": 2, "warmup": 4,
+          "trials": 1, "reference": reference, "progress": False, "metric": "relmse", "gpu": gpu, "apply": False}
+    both = rv.tune.tune_effects(scene, budget_ms=1e4, option_sets=[{}, {"gi": "probes"}], **kw)
+    # the box's indirect light is most of its radiance: the probes cut the error, whatever they cost
+    assert both.options == {"gi": "probes"} and "graph options chosen among gi=probes" in both.notes[-1]
+    plain = rv.tune.tune_effects(scene, budget_ms=1e4, option_sets=[{}], **kw)
+    assert plain.options == {} and plain.predicted_error > 2 * both.predicted_error
+    assert both.measured_error < plain.measured_error      # the verification renders with the options
+    with pytest.raises(OptionError, match="option_sets: expected dicts"):
+        rv.tune.tune_effects(scene, budget_ms=1e4, option_sets=["gi"], **kw)
+    from rayvr.tune.tuner import option_sets_for
+    assert option_sets_for(rv.tune.path_traced_graph, {"spp": 1}) == [{"spp": 1}, {"spp": 1, "denoise": "svgf"}]

@@ -19,6 +19,10 @@ budget (an upgrade that costs nothing and reduces error goes first); stop when n
 Ratio-greedy alone can miss one large upgrade (the 0/1 knapsack counter-example), so it also
 runs once starting from the largest single error reduction that fits and keeps the better.
 If even the lowest levels exceed the budget it returns them, marked `fits=False`, with a note.
+
+The graph's own options (probe GI, a denoiser) change every material's time and error at once, so
+the tuner measures one CostModel per option set and `choose_among` keeps the set whose choice
+fits with the least predicted error.
 """
 from __future__ import annotations
 
@@ -112,6 +116,7 @@ class TuneResult:
     measured_ms: float | None = None
     measured_error: float | None = None
     method: str = "model"
+    options: dict = dataclasses.field(default_factory=dict)   # the graph options the model was measured with
 
     def table(self) -> str:
         """Markdown: each material's effect, pixels, predicted ms and error share; then totals."""
@@ -123,6 +128,8 @@ class TuneResult:
         lines.append("")
         lines.append(f"budget {self.budget_ms:g} ms: predicted {self.predicted_ms:.4g} ms, {m.metric} "
                      f"{self.predicted_error:.4g}" + ("" if self.fits else " (does NOT fit)"))
+        if self.options:
+            lines.append("graph options: " + ", ".join(f"{k}={v}" for k, v in sorted(self.options.items())))
         if self.measured_ms is not None:
             lines.append(f"measured {self.measured_ms:.4g} ms ({self.method}), {m.metric} {self.measured_error:.4g}")
         lines += [f"note: {n}" for n in self.notes]
@@ -143,10 +150,30 @@ class TuneResult:
         return {"assignment": {k: v.name for k, v in self.assignment.items()}, "budget_ms": self.budget_ms,
                 "predicted_ms": self.predicted_ms, "predicted_error": self.predicted_error, "fits": self.fits,
                 "measured_ms": self.measured_ms, "measured_error": self.measured_error, "method": self.method,
-                "notes": list(self.notes),
+                "options": dict(self.options), "notes": list(self.notes),
                 "steps": [{"material": s.material, "from": s.old.name, "to": s.new.name, "added_ms": s.added_ms,
                            "error_reduction": s.error_reduction, "frame_ms": s.frame_ms} for s in self.steps],
                 "model": self.model.as_dict()}
+
+
+def choose_among(results) -> TuneResult:
+    """Of choices made on several CostModels (one per graph option set), the one that fits with the
+    least predicted error (ties: the faster); when none fits, the fastest. A note names the others."""
+    results = list(results)
+    if not results:
+        raise OptionError("choose_among: no choices to compare")
+    fitting = [r for r in results if r.fits]
+    best = (min(fitting, key=lambda r: (r.predicted_error, r.predicted_ms)) if fitting
+            else min(results, key=lambda r: r.predicted_ms))
+    others = [r for r in results if r is not best]
+    if others:
+        def name(r):
+            return ", ".join(f"{k}={v}" for k, v in sorted(r.options.items())) or "the graph's defaults"
+
+        best.notes.append("graph options chosen among " + "; ".join(
+            f"{name(r)}: predicted {r.predicted_ms:.3g} ms, {r.model.metric} {r.predicted_error:.4g}"
+            + ("" if r.fits else " (over)") for r in [best] + others))
+    return best
 
 
 def choose_effects(model: CostModel, budget_ms: float = FRAME_BUDGET_MS, levels=tuple(Effect), fixed: dict | None = None) -> TuneResult:

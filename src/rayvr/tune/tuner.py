@@ -8,13 +8,34 @@ from __future__ import annotations
 
 from ..errors import OptionError
 from ..materials.effect import Effect
-from .budget import FRAME_BUDGET_MS, TuneResult, choose_effects
+from .budget import FRAME_BUDGET_MS, TuneResult, choose_among, choose_effects
 from .configs import accepts, hybrid_graph, set_effects
 from .display import Display
 from .metrics import DEFAULT_EPS
 from .probe import ErrorJudge, probe_cost_model, render_assignment
 from .reference import Reference, ReferenceSettings, cached_reference
 from .timing import make_views
+
+
+# The graph options the tuner tries beside each material's effect (those the graph builder takes):
+# probe GI lights RASTER, SHADOWS and REFLECTIONS materials indirectly, SVGF denoises PATH_TRACED ones.
+OPTION_SETS = ({}, {"gi": "probes"}, {"denoise": "svgf"})
+# The keys of a study's configurations that tuned_study tries (OIDN, offline, never: it is no GPU time).
+TUNED_OPTIONS = ("gi", "denoise")
+
+
+def option_sets_for(builder, options: dict, option_sets=None) -> list[dict]:
+    """`options` merged with each of `option_sets` (default OPTION_SETS) that `builder` accepts,
+    without repeats: the graph option sets the tuner measures a cost model for."""
+    out = []
+    for extra in OPTION_SETS if option_sets is None else option_sets:
+        if not isinstance(extra, dict):
+            raise OptionError(f"option_sets: expected dicts of graph options such as {{'gi': 'probes'}}, got {extra!r}")
+        if all(accepts(builder, k) for k in extra):
+            merged = {**options, **extra}
+            if merged not in out:
+                out.append(merged)
+    return out or [dict(options)]
 
 
 def make_judge(scene, view_set, metric: str, reference=None, cache_dir=None, display: Display = Display(),
@@ -35,7 +56,7 @@ def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=Non
                  frames: int = 10, warmup: int = 3, warmup_s: float | None = None, trials: int = 2,
                  reference=None, cache_dir=None, display: Display = Display(), preset: str = "index",
                  ppd: float | None = None, verify: bool = True, apply: bool = True, progress: bool = True,
-                 gpu=None) -> TuneResult:
+                 gpu=None, option_sets=None) -> TuneResult:
     """Measure a CostModel on the GPU (`rayvr.tune.probe.probe_cost_model`: one render per effect
     level, timed after `warmup_s` seconds of warm-up, default 0.5 s on GPUs with timer queries),
     choose effects with `choose_effects`, then (with `verify`) render the choice and record its
@@ -45,18 +66,25 @@ def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=Non
     rv.Renderer (its scene, views and graph; `graph` then defaults to a copy of its graph; with a
     sink, views from the scene's camera at the sink's view count and size).
     `graph`: a builder `graph(**options)` (default rayvr.tune.hybrid_graph; its PATH_TRACED
-    materials get the reference's bounces). `reference`: a Reference or ReferenceSettings."""
+    materials get the reference's bounces). `reference`: a Reference or ReferenceSettings.
+    `option_sets`: graph options tried beside the effects (default OPTION_SETS, those `graph`
+    takes; [{}]: `options` alone): one cost model each, and the choice that fits with the least
+    predicted error wins (its `options` say which)."""
     scene, view_set, builder, gpu = _target(renderer_or_scene, size, views, graph, gpu)
     judge = make_judge(scene, view_set, metric, reference, cache_dir, display, preset, ppd, gpu=gpu)
     options = dict(options or {})
     if accepts(builder, "path_bounces"):
         options.setdefault("path_bounces", judge.reference.settings.max_bounces)
-    model, _ = probe_cost_model(scene, view_set, builder, options, judge, levels, frames, warmup, warmup_s, trials,
-                                progress, gpu)
-    result = choose_effects(model, budget_ms, levels, fixed)
+    choices = []
+    for opts in option_sets_for(builder, options, option_sets):
+        model, _ = probe_cost_model(scene, view_set, builder, opts, judge, levels, frames, warmup, warmup_s, trials,
+                                    progress, gpu)
+        choices.append(choose_effects(model, budget_ms, levels, fixed))
+        choices[-1].options = {k: v for k, v in opts.items() if k not in options or options[k] != v}
+    result = choose_among(choices)
     if verify:
-        result.record_measurement(*render_assignment(scene, view_set, builder, options, result.assignment, judge,
-                                                     frames, warmup, warmup_s, trials, gpu))
+        result.record_measurement(*render_assignment(scene, view_set, builder, {**options, **result.options},
+                                                     result.assignment, judge, frames, warmup, warmup_s, trials, gpu))
     if apply:
         set_effects(scene, result.assignment)
     return result
@@ -83,13 +111,15 @@ def _target(renderer_or_scene, size, views, graph, gpu):
 
 def tuned_study(scene, view_set, reference: Reference, settings, configs, budgets=(FRAME_BUDGET_MS,), metric: str = "flip",
                 levels=tuple(Effect), trials: int = 2, cache_dir=None, progress: bool = True, gpu=None,
-                notes=(), budget_option: str = "budget_ms", runner=None):
+                notes=(), budget_option: str = "budget_ms", runner=None, option_sets=None):
     """The error study with the tuner on top: probe a cost model against `reference` (judged as
     the study judges), choose effects for each of `budgets`, and measure `configs` plus one
     "tuned for B ms" row per budget alike. Returns (Results, {budget: TuneResult}); each
     TuneResult records its row's measured ms and error (a note names `budget_option` when the
     row runs over), and Results.tuned is the first. `runner`: where the probe and the study run
-    (default here; rayvr.cluster.StudyRunner: the probe on one worker, the rows over all)."""
+    (default here; rayvr.cluster.StudyRunner: the probe on one worker, the rows over all).
+    `option_sets`: the graph options tuned beside the effects (default: those of `configs` on the
+    hybrid graph, e.g. probe GI and SVGF, and none), one cost model each (tune_effects)."""
     from .configs import Config
     from .measure import measure
     from .runner import LocalRunner
@@ -98,12 +128,27 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
     judge = ErrorJudge(reference, settings.display.fixed(reference.image), settings.pixels_per_degree(), metric,
                        settings.eps)
     options = {"path_bounces": reference.settings.max_bounces}
-    model, _ = runner.probe(scene, view_set, hybrid_graph, options, judge, levels=levels, frames=settings.timing_frames,
-                            warmup=settings.warmup, warmup_s=settings.warmup_s, trials=trials, progress=progress,
-                            gpu=gpu)
-    tuned = {float(b): choose_effects(model, b, levels) for b in budgets}
+    if option_sets is None:
+        option_sets = [{}] + [{k: v for k, v in c.options.items() if k in TUNED_OPTIONS}
+                              for c in configs if c.builder is hybrid_graph and c.options.get("denoise") != "oidn"]
+    models = []
+    for opts in option_sets_for(hybrid_graph, options, option_sets):
+        model, _ = runner.probe(scene, view_set, hybrid_graph, opts, judge, levels=levels,
+                                frames=settings.timing_frames, warmup=settings.warmup, warmup_s=settings.warmup_s,
+                                trials=trials, progress=progress, gpu=gpu)
+        models.append((opts, model))
+
+    def choose(budget):
+        choices = []
+        for opts, model in models:
+            choices.append(choose_effects(model, budget, levels))
+            choices[-1].options = {k: v for k, v in opts.items() if k not in options}
+        return choose_among(choices)
+
+    tuned = {float(b): choose(b) for b in budgets}
     names = {b: f"tuned for {b:g} ms" for b in tuned}
-    rows = list(configs) + [Config(names[b], dict(t.assignment), options=dict(options)) for b, t in tuned.items()]
+    rows = list(configs) + [Config(names[b], dict(t.assignment), options={**options, **t.options})
+                            for b, t in tuned.items()]
     results = measure(scene, rows, views=view_set, reference=reference, settings=settings, cache_dir=cache_dir,
                       progress=progress, gpu=gpu, notes=notes, runner=runner)
     for b, t in tuned.items():
