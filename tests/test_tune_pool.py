@@ -65,6 +65,21 @@ def test_progress_counts_concurrent_work_by_worker_seconds_over_workers():
     assert p.remaining_s() == pytest.approx(5.0 + 20.0)
 
 
+def test_untimed_rendering_is_estimated_as_a_gpu_renders_it_beside_the_judging():
+    from rayvr.tune.progress import HARDWARE_RENDER_SCALE
+
+    left = {}
+    for hardware in (False, True):
+        p = StudyProgress(False, hardware=hardware)
+        p.plan("render", 1e9)
+        p.plan("metric", 2e7)
+        p.finished("metric", 1e7, 10.0)            # the first thing timed: a judgement, 1e-6 s a unit
+        left[hardware] = p.remaining_s()
+    # llvmpipe renders a unit at the metrics' pace: 1e9 x 1e-6 s; a GPU about 500x faster
+    assert left[False] == pytest.approx(1e9 * 1e-6 + 1e7 * 1e-6)
+    assert left[True] == pytest.approx(1e9 * 1e-6 * HARDWARE_RENDER_SCALE + 1e7 * 1e-6)
+
+
 def test_study_rows_are_identical_with_the_metric_pool(gpu):
     size, ref_settings = (12, 12), ReferenceSettings(frames=8, spp=2, max_bounces=3)
     scene = rv.scenes.cornell_box()

@@ -177,7 +177,8 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
                           f"{view_set.size[0]}x{view_set.size[1]}")
     motion = settings.motion
     study = Study(scene, view_set, ref_settings, settings, ppd, warmup_s, cache_dir, gpu,
-                  StudyProgress(progress and not runner.shows_progress, f"error study {scene.name}"), runner)
+                  StudyProgress(progress and not runner.shows_progress, f"error study {scene.name}",
+                                hardware=not gpu.caps.is_software), runner)
     study.plan(configs, given is None, curves)
     # rows and curves on a cluster judge their images there; only a local study needs the pool
     study.pool = MetricPool(study.metric_workers() if isinstance(runner, LocalRunner) else 0, study.progress)

@@ -3,8 +3,8 @@
 At 2 x 1440x1600 one judged image costs ~100 CPU-seconds (88 of them HDR-FLIP, which runs
 LDR-FLIP at each of the reference's exposures; SSIM and the tone mapping are single-threaded),
 against milliseconds of GPU. `MetricPool` hands every judgement (rayvr.tune.metrics.evaluate of
-one read-back image) to a process pool sized by os.cpu_count() (less one for the process driving
-the GPU) and gives back a `Pending` whose `get()` waits for it, so that the study renders the
+one read-back image) to a process pool sized by os.cpu_count() (less two for the process driving
+the GPU and its driver) and gives back a `Pending` whose `get()` waits for it, so that the study renders the
 next frames, configurations and curves while earlier images are judged. Results are those of
 the same `evaluate` call in this process: each worker evaluates the whole image (views one after
 the other, its own threads off), with the same inputs (the read-back float32 RGB values and the
@@ -34,13 +34,14 @@ PARALLEL_VIEW_PIXELS = 256 * 256    # smaller views (llvmpipe's study sizes): th
 
 
 def default_workers(view_pixels: int) -> int:
-    """Workers for views of `view_pixels` pixels: os.cpu_count() - 1, at least 1 (one core stays
-    with the process that drives the GPU; RAYVR_METRIC_WORKERS wins), 0 (judged here) below
-    PARALLEL_VIEW_PIXELS."""
+    """Workers for views of `view_pixels` pixels: os.cpu_count() - 2, at least 1 (two cores stay
+    with the process that drives the GPU and its driver's thread: with 15 workers on 16 cores the
+    H200 study's frames took 36-50 ms of wall time for 0.6 ms of GPU work; RAYVR_METRIC_WORKERS
+    wins), 0 (judged here) below PARALLEL_VIEW_PIXELS."""
     env = os.environ.get("RAYVR_METRIC_WORKERS")
     if env is not None and env.strip():
         return max(0, int(env))
-    return max(1, (os.cpu_count() or 1) - 1) if view_pixels >= PARALLEL_VIEW_PIXELS else 0
+    return max(1, (os.cpu_count() or 1) - 2) if view_pixels >= PARALLEL_VIEW_PIXELS else 0
 
 
 class Pending:

@@ -29,13 +29,21 @@ import time
 
 # Relative seconds per unit before any step of the kind was timed (llvmpipe's ratios).
 PRIOR = {"render": 2.5e-6, "metric": 2.5e-6, "setup": 0.4, "curve": 1.0}
+# A GPU renders a unit this much faster, relative to a CPU core's metrics, than llvmpipe (H200,
+# Cornell study at 2x1440x1600: 2.8e-9 s a unit for the reference, 1.3e-6 for a judged image's
+# metrics, on one core each; without it the first ETA, learned from a judgement, said 60,497 s
+# for a 335 s study).
+HARDWARE_RENDER_SCALE = 2e-3
 
 
 class StudyProgress:
     """Planned steps and their progress; `step(kind, units)` wraps one as it runs."""
 
-    def __init__(self, enabled: bool = True, desc: str = "error study"):
+    def __init__(self, enabled: bool = True, desc: str = "error study", hardware: bool = False):
         self.enabled = enabled
+        self.prior = dict(PRIOR)
+        if hardware:   # rendering on a GPU, not on the CPU cores (llvmpipe) that judge the images
+            self.prior["render"] *= HARDWARE_RENDER_SCALE
         self.desc = desc
         self.planned: dict[str, float] = {}     # kind -> units still to do
         self.done_units: dict[str, float] = {}
@@ -67,9 +75,10 @@ class StudyProgress:
         """Seconds per unit of `kind`: learned, else the prior scaled like the learned kinds."""
         if self.done_units.get(kind):
             return self.done_s[kind] / self.done_units[kind]
-        seen = [k for k in self.done_units if self.done_units[k] and k in PRIOR]
-        scale = sum(self.done_s[k] for k in seen) / sum(PRIOR[k] * self.done_units[k] for k in seen) if seen else 1.0
-        return PRIOR.get(kind, 1e-6) * scale
+        prior = self.prior
+        seen = [k for k in self.done_units if self.done_units[k] and k in prior]
+        scale = sum(self.done_s[k] for k in seen) / sum(prior[k] * self.done_units[k] for k in seen) if seen else 1.0
+        return prior.get(kind, 1e-6) * scale
 
     def concurrent(self, kind: str, workers: int) -> None:
         """`kind` runs on `workers` workers beside this process from now on (0: here again)."""
