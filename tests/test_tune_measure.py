@@ -139,7 +139,8 @@ def test_probed_model_splits_time_and_error_by_material(gpu, scene, reference):
 
 def test_tune_effects_fits_the_budget_or_says_why(gpu, scene, reference):
     kw = {"size": SIZE, "views": 1, "levels": [Effect.RASTER, Effect.SHADOWS], "frames": 1, "warmup": 1,
-          "trials": 1, "reference": reference, "progress": False, "metric": "relmse", "gpu": gpu}
+          "trials": 1, "reference": reference, "progress": False, "metric": "relmse", "gpu": gpu,
+          "option_sets": [{}]}   # the graph's own options: the next test tries others
     tight = rv.tune.tune_effects(scene, budget_ms=1e-3, apply=False, **kw)
     assert not tight.fits and set(tight.assignment.values()) == {Effect.RASTER}
     assert "exceeds" in tight.notes[0] and tight.measured_ms is not None
@@ -182,3 +183,17 @@ def test_tune_effects_tries_the_graph_options_and_keeps_what_pays(gpu, scene, re
         rv.tune.tune_effects(scene, budget_ms=1e4, option_sets=["gi"], **kw)
     from rayvr.tune.tuner import option_sets_for
     assert option_sets_for(rv.tune.path_traced_graph, {"spp": 1}) == [{"spp": 1}, {"spp": 1, "denoise": "svgf"}]
+
+
+def test_judged_frames_do_not_depend_on_a_timed_warm_up(gpu, scene, reference):
+    # a warm-up timed in seconds renders as many frames as the GPU manages; the judged frames (and a
+    # temporal method's history before them) must not follow it
+    views = default_views(scene, 1, SIZE)
+    configs = [Config("svgf", Effect.PATH_TRACED, options={"path_bounces": 4, "denoise": "svgf"})]
+    rows = []
+    for warmup_s in (0.0, 0.3):
+        settings = StudySettings(frames=2, timing_frames=2, warmup=1, warmup_s=warmup_s, motion=None, floors=False,
+                                 progressive_frames=0, metrics=("relmse", "psnr"))
+        rows.append(measure(scene, configs, views=views, reference=reference, settings=settings, progress=False,
+                            gpu=gpu, curves=False)["svgf"])
+    assert rows[0].errors == rows[1].errors and rows[0].mean("relmse") > 0

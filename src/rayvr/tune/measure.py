@@ -9,7 +9,8 @@ For each configuration (rayvr.tune.configs.Config):
   warm-up (rayvr.tune.timing);
 - **error, static view**: `frames` frames (each after the configuration's own accumulation), the
   first after `warmup + timing_frames` frames of history (a count: the judged frames and their
-  seeds never depend on the GPU's speed; the timing follows them), every
+  seeds never depend on the GPU's speed; with a warm-up timed in seconds the timing follows
+  them, else the timed frames are the history), every
   metric of rayvr.tune.metrics.evaluate per frame and view against the reference; reported as the
   mean and standard deviation over those frames and views;
 - **error in motion**: the views carried along a headset trajectory (rayvr.tune.motion), the
@@ -276,7 +277,8 @@ class Study:
         for c in configs:
             cost = frame_cost(c, self.scene) * self.pixels
             p.plan("setup", 1)
-            p.plan("render", cost * (self.history_frames + s.warmup + s.timing_frames + s.frames * c.accumulate))
+            timed = self.history_frames if self.warmup_s else 0   # the history, then the timing apart
+            p.plan("render", cost * (self.history_frames + timed + s.frames * c.accumulate))
             p.plan("metric", sum(self._units(self._hdrflip(k)) for k in range(s.frames)))
             if s.motion:
                 p.plan("setup", 1)
@@ -381,13 +383,18 @@ class Study:
             r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=seeds.TEST)
         with r:
             accumulators = [n for n, q in r.compiled.passes.items() if type(q).__name__ == "Accumulate"]
-            # The judged frames come first, after a counted history (what the timed frames would
-            # leave behind on llvmpipe): a warm-up timed in seconds renders as many frames as the
-            # GPU manages, so after it a temporal method's history and the frames' seeds would
-            # depend on the GPU's speed and load (two workers sharing a GPU judged other frames).
+            # The judged frames come after a counted history of warmup + timing_frames frames. A
+            # warm-up timed in seconds renders as many frames as the GPU manages, so after it a
+            # temporal method's history and the frames' seeds would depend on the GPU's speed and
+            # load (two workers sharing a GPU judged other frames): there the history is rendered
+            # first and the timing follows the judged frames; without one the timed frames are it.
+            timed_first = not self.warmup_s
             with p.step("render", cost * self.history_frames, config.name):
-                for _ in range(self.history_frames):
-                    r.render()
+                if timed_first:
+                    timing = timed_frames(r, s.timing_frames, s.warmup, 0.0)
+                else:
+                    for _ in range(self.history_frames):
+                        r.render()
             for k in range(s.frames):
                 with p.step("render", cost * config.accumulate, config.name):
                     if config.accumulate > 1:
@@ -399,8 +406,9 @@ class Study:
                 judged.append(self.judge_later(image, ref.image, name, maps=k == 0, hdrflip=self._hdrflip(k)))
                 if k == 0:
                     first = image
-            with p.step("render", cost * (s.warmup + s.timing_frames), config.name):
-                timing = timed_frames(r, s.timing_frames, s.warmup, self.warmup_s)
+            if not timed_first:
+                with p.step("render", cost * self.history_frames, config.name):
+                    timing = timed_frames(r, s.timing_frames, s.warmup, self.warmup_s)
             self.method = timing.method
         settings = config.settings(self.scene)
         motion = self.motion_row(config, motion_refs, cost) if s.motion else None
