@@ -1,6 +1,8 @@
 """rayvr.tune.pool: the error study's metrics in worker processes give the numbers the serial
 path gives (the same evaluate, the same inputs), the study's rows too; the progress bar counts
 the workers' seconds over the workers."""
+import os
+
 import numpy as np
 import pytest
 
@@ -78,6 +80,14 @@ def test_untimed_rendering_is_estimated_as_a_gpu_renders_it_beside_the_judging()
     # llvmpipe renders a unit at the metrics' pace: 1e9 x 1e-6 s; a GPU about 500x faster
     assert left[False] == pytest.approx(1e9 * 1e-6 + 1e7 * 1e-6)
     assert left[True] == pytest.approx(1e9 * 1e-6 * HARDWARE_RENDER_SCALE + 1e7 * 1e-6)
+
+
+def test_metric_workers_yield_to_the_process_that_drives_the_gpu():
+    from rayvr.tune.pool import WORKER_NICENESS
+
+    with MetricPool(1) as pool:
+        niceness = pool.executor.submit(os.nice, 0).result(timeout=120)
+    assert niceness == min(os.nice(0) + WORKER_NICENESS, 19)
 
 
 def test_study_rows_are_identical_with_the_metric_pool(gpu):

@@ -30,6 +30,7 @@ import numpy as np
 
 from .display import clamp_negative
 
+WORKER_NICENESS = 10   # the metric workers' scheduling priority below the study's own process
 PARALLEL_VIEW_PIXELS = 256 * 256    # smaller views (llvmpipe's study sizes): the pool costs more than it saves
 
 
@@ -215,6 +216,10 @@ _SHOWN: dict[tuple, np.ndarray] = {}
 
 def _worker_init() -> None:
     os.environ.setdefault("OMP_NUM_THREADS", "1")
+    try:   # the process that drives the GPU comes first: its driver's waits yield the core
+        os.nice(WORKER_NICENESS)
+    except (AttributeError, OSError):
+        pass
     from . import metrics
 
     metrics.THREADED_VIEW_PIXELS = float("inf")     # the pool is the parallelism: views one after the other
