@@ -120,3 +120,23 @@ def test_auto_picks_the_wavefront_on_gpus_and_the_megakernel_on_software(gpu):
         r.render()
         assert r.compiled.passes["PathTracer"].defines()["PT_WAVEFRONT"] == int(not gpu.caps.is_software)
         assert "PathTracer.paths" in str(r.report())
+
+
+def test_the_state_keeps_a_medium_exactly_where_its_buffer_has_room():
+    # the GpuScene keeps the features of its upload; the state's size and the shaders follow the
+    # scene as compiled, so a glass removed later cannot make the shaders write past the buffer
+    scene = glass_and_blend_scene()
+    g = rv.graphs.path_traced(max_bounces=2)
+    g.get_pass("PathTracer").set_properties({"kernel": "wavefront"})
+    with rv.Renderer(scene, g, size=SIZE, views=1) as r:
+        r.render()
+        pt = r.compiled.passes["PathTracer"]
+        assert pt.defines()["PTW_HAS_MEDIUM"] == 1 and pt.wave_slot_bytes(scene) == 11 * 16
+        scene.materials["TallBox"].transmission = 0.0
+        scene.materials["TallBox"].alpha_mode = "OPAQUE"
+        r.recompile()
+        r.render()
+        pt = r.compiled.passes["PathTracer"]
+        assert "SCENE_HAS_TRANSMISSION" in r.gpu_scene.features                  # the upload's
+        assert pt.defines()["PTW_HAS_MEDIUM"] == 0 and pt.wave_slot_bytes(scene) == 10 * 16
+        assert np.isfinite(np.asarray(r.read_output("Accumulate.dst"))).all()

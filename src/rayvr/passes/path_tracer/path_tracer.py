@@ -108,11 +108,16 @@ class PathTracer(RenderPass):
                 self.wave_slots(cd.size, cd.views) * self.wave_slot_bytes(cd.scene))
         return r
 
+    @staticmethod
+    def wave_has_medium(scene) -> bool:
+        """Whether the wavefront's state keeps a path's medium: unless `scene` is known not to
+        transmit. The buffer's size and the shaders' PTW_HAS_MEDIUM both follow it (the
+        GpuScene's features are those of its upload, not of later material edits)."""
+        return scene is None or "SCENE_HAS_TRANSMISSION" in scene.features
+
     def wave_slot_bytes(self, scene=None) -> int:
-        """Bytes of the wavefront's state per path slot (a medium field unless `scene` is known
-        not to transmit)."""
-        medium = scene is None or "SCENE_HAS_TRANSMISSION" in scene.features
-        return (WAVE_FIELDS + (WAVE_MEDIUM_FIELDS if medium else 0)
+        """Bytes of the wavefront's state per path slot (wave_has_medium: one field more)."""
+        return (WAVE_FIELDS + (WAVE_MEDIUM_FIELDS if self.wave_has_medium(scene) else 0)
                 + (WAVE_LOBE_FIELDS if self.lobes else 0)) * WAVE_FIELD_BYTES
 
     def wave_slots(self, size, views: int) -> int:
@@ -145,6 +150,7 @@ class PathTracer(RenderPass):
         self._groups = groups_2d(cd.size, cd.views, self._group)
         if self._wave:   # one ray per invocation and dispatch: llvmpipe's loop limit is never near
             self._defines["PT_SAMPLE_SLICES"] = 0
+            self._defines["PTW_HAS_MEDIUM"] = int(self.wave_has_medium(cd.scene))
             self._slice = 0
             self._shade = self.compute_program(ctx.gl, "pt_wave_shade.comp", self._defines)
             self._trace = self.compute_program(ctx.gl, "pt_wave_trace.comp", self._defines)

@@ -21,8 +21,8 @@ uniform uint pt_wave_paths;   // slots in all: the stride between fields
 #define PTW_EMITTED 7u    // what the first vertex emits towards the eye (or the background)
 #define PTW_HIT 8u        // trace kernel's answer: t, barycentrics, instance
 #define PTW_ANSWER 9u     // trace kernel's answer: primitive, PTW_FOUND | PTW_OCCLUDED | PTW_SHADOW, BLEND rays traced so far
-#define PTW_MEDIUM 10u    // SCENE_HAS_TRANSMISSION: path medium
-#define PTW_FIRST_DIFFUSE (10u + uint(SCENE_HAS_TRANSMISSION))   // PT_LOBES: the split's fields
+#define PTW_MEDIUM 10u    // PTW_HAS_MEDIUM: path medium
+#define PTW_FIRST_DIFFUSE (10u + uint(PTW_HAS_MEDIUM))   // PT_LOBES: the split's fields
 #define PTW_FIRST_TOTAL (PTW_FIRST_DIFFUSE + 1u)
 #define PTW_SHARE (PTW_FIRST_DIFFUSE + 2u)
 #define PTW_NEE_DIFFUSE (PTW_FIRST_DIFFUSE + 3u)

@@ -54,7 +54,7 @@ void ptw_store_state(uint i, PtPath path, PtRays r, uint flags, Rng rng) {
     ptw_storef(PTW_DIR, i, r.dir, r.cone_spread);
     ptw_storef(PTW_NG, i, r.ng, r.nee_dist);
     ptw_storef(PTW_NEE_DIR, i, r.nee_dir, 0.0);
-#if SCENE_HAS_TRANSMISSION
+#if PTW_HAS_MEDIUM
     ptw_storef(PTW_MEDIUM, i, path.medium, 0.0);
 #endif
 #if PT_LOBES
@@ -82,7 +82,7 @@ void ptw_load_state(uint i, ivec3 p, out PtPath path, out PtRays r, out uint fla
     r.scattered = (flags & PTW_SCATTERED) != 0u;
     r.delta = (flags & PTW_DELTA) != 0u;
     r.transmitted = (flags & PTW_TRANSMITTED) != 0u;
-#if SCENE_HAS_TRANSMISSION
+#if PTW_HAS_MEDIUM
     path.medium = ptw_loadf(PTW_MEDIUM, i).xyz;
 #endif
 #if PT_LOBES
