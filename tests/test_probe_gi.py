@@ -411,3 +411,37 @@ def test_error_study_has_probe_rows():
     rows = [c for c in configs.standard_configs(scene) if c.settings(scene)["gi"] == "probes"]
     assert [c.name for c in rows][:2] == ["all RASTER + probes GI", "all SHADOWS + probes GI"]
     assert "Probes" in rows[1].build_graph().passes
+
+
+def _material_mean(image, words, material_index):
+    mask = (words >> 8) == material_index
+    assert mask.sum() > 20
+    return float(image[..., :3][mask].mean())
+
+
+def test_untraced_glossy_light_comes_from_the_probes(gpu):
+    # a rough metal box under SHADOWS (its reflections not traced) takes its indirect light about
+    # the mirror direction from the probes: near what a path tracer finds, where diffuse GI alone
+    # (a metal has none) would leave it with its direct highlight only
+    from rayvr.tune.probe import effect_pin
+
+    scene = rv.scenes.cornell_box()
+    tall = scene.materials["TallBox"]
+    tall.metallic, tall.roughness, tall.base_color = 1.0, 0.5, (0.9, 0.9, 0.9, 1.0)
+    index = scene.materials.names().index("TallBox")
+    for m in scene.materials:
+        m.effect = rv.Effect.SHADOWS
+    g = rv.graphs.hybrid(gi="probes")
+    pin = effect_pin(g)
+    g.mark_output(pin)
+    with rv.Renderer(scene, g, views=1, size=(32, 32), jitter=False) as r:
+        for _ in range(32):                    # the probes' hysteresis settles
+            r.render()
+        words = r.read_output(pin)[..., 0]
+        hybrid = _material_mean(np.asarray(r.read_output("Composite.color"), np.float64), words, index)
+    pt = rv.tune.path_traced_graph(spp=4, max_bounces=6)
+    with rv.Renderer(scene, pt, views=1, size=(32, 32), jitter=False) as r:
+        for _ in range(64):
+            r.render()
+        reference = _material_mean(np.asarray(r.read_output("Accumulate.dst"), np.float64), words, index)
+    assert 0.7 < hybrid / reference < 1.3, (hybrid, reference)

@@ -8,6 +8,8 @@
 //       radiance leaving s towards s.v
 //   vec3 probe_gi_glossy(PathVertex s)    specular albedo x irradiance about the mirror direction
 //       / pi: the glossy fallback for a reflection path that stops at s
+//   vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy)   both from one lookup: the
+//       composite's indirect light for pixels whose reflections are not traced
 //
 // Both return 0 unless PROBE_GI is 1; then the shader declares the samplers probe_irradiance_tex
 // (rgba32f), probe_depth_tex (rg32f: mean distance, mean squared distance) and probe_state_tex
@@ -66,7 +68,10 @@ vec3 probe_tile_uv(sampler2DArray atlas, uint probe, vec3 d, int tile) {
 
 bool probe_active(uint probe) { return texelFetch(probe_state_tex, ivec3(probe_tile(probe), 0), 0).y > 0.5; }
 
-vec3 probe_gi_irradiance(vec3 p, vec3 n, vec3 v) {
+// The irradiance about n at p, and with `both` also about direction r (`along_r`) from the same
+// probes and weights: one more fetch per probe, not a second lookup.
+vec3 probe_gi_irradiance_at(vec3 p, vec3 n, vec3 v, const bool both, vec3 r, out vec3 along_r) {
+    along_r = vec3(0.0);
     if (probe_info.x == 0u) return vec3(0.0);
     ProbeVolume vol = probe_volumes[probe_volume_at(p)];
     bool visibility = (probe_info.w & PROBE_FLAG_VISIBILITY) != 0u;
@@ -105,9 +110,18 @@ vec3 probe_gi_irradiance(vec3 p, vec3 n, vec3 v) {
         w *= tri.x * tri.y * tri.z;
         sum += w * texture(probe_irradiance_tex, probe_tile_uv(probe_irradiance_tex, probe, n,
                                                                PROBE_IRRADIANCE_TILE)).rgb;
+        if (both)
+            along_r += w * texture(probe_irradiance_tex, probe_tile_uv(probe_irradiance_tex, probe, r,
+                                                                       PROBE_IRRADIANCE_TILE)).rgb;
         total += w;
     }
+    along_r = total > 0.0 ? along_r / total : vec3(0.0);
     return total > 0.0 ? sum / total : vec3(0.0);
+}
+
+vec3 probe_gi_irradiance(vec3 p, vec3 n, vec3 v) {
+    vec3 unused;
+    return probe_gi_irradiance_at(p, n, v, false, n, unused);
 }
 #endif
 
@@ -116,6 +130,21 @@ vec3 probe_gi_diffuse(PathVertex s) {
     vec3 diffuse, specular;
     bsdf_albedo(s.bsdf, s.n, s.v, diffuse, specular);
     return diffuse * probe_gi_irradiance(s.pos, s.n, s.v) * (1.0 / RAYVR_PI);
+#else
+    return vec3(0.0);
+#endif
+}
+
+// Both at once, from one lookup: probe_gi_diffuse's value, and probe_gi_glossy's in `glossy`
+// (a surface whose reflections are not traced: RASTER and SHADOWS pixels).
+vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy) {
+    glossy = vec3(0.0);
+#if PROBE_GI
+    vec3 diffuse, specular, e_r;
+    bsdf_albedo(s.bsdf, s.n, s.v, diffuse, specular);
+    vec3 e_n = probe_gi_irradiance_at(s.pos, s.n, s.v, true, reflect(-s.v, s.n), e_r);
+    glossy = specular * e_r * (1.0 / RAYVR_PI);
+    return diffuse * e_n * (1.0 / RAYVR_PI);
 #else
     return vec3(0.0);
 #endif

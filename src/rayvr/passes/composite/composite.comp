@@ -8,7 +8,9 @@
 // reflections, or the path tracer's specular part. (Direct light's specular highlights stay in
 // the diffuse lobe: the lighting passes return them summed.)
 // With PROBE_GI the probes' indirect diffuse light of the G-buffer surface is added here for
-// RASTER, SHADOWS and REFLECTIONS pixels (to the diffuse lobe with SPLIT_LOBES): this pass traces
+// RASTER, SHADOWS and REFLECTIONS pixels (to the diffuse lobe with SPLIT_LOBES), and for RASTER
+// and SHADOWS pixels, whose reflections are not traced, their glossy light about the mirror
+// direction (probe_gi_diffuse_glossy; to the specular lobe): a metal is no longer black. This pass traces
 // no rays, so the lookup's registers cost no BVH traversal its occupancy, as they did in
 // RTShadows (the probe update measured 2.2x from the same split).
 #define GBUF_READER 1
@@ -51,8 +53,16 @@ void main() {
         if (effect >= EFFECT_REFLECTIONS) reflected = texelFetch(reflection_tex, p, 0).rgb;
 #endif
 #if PROBE_GI
-        if (effect < EFFECT_PATH_TRACED)
-            c += finite_or_zero(probe_gi_diffuse(path_vertex_at_gbuffer(gbuf_load(p), uint(p.z))));
+        if (effect < EFFECT_PATH_TRACED) {
+            PathVertex s = path_vertex_at_gbuffer(gbuf_load(p), uint(p.z));
+            if (effect < EFFECT_REFLECTIONS) {   // untraced reflections: the probes' glossy light
+                vec3 glossy;
+                c += finite_or_zero(probe_gi_diffuse_glossy(s, glossy));
+                reflected = finite_or_zero(glossy);
+            } else {
+                c += finite_or_zero(probe_gi_diffuse(s));
+            }
+        }
 #endif
     }
 #if SPLIT_LOBES
