@@ -109,7 +109,8 @@ def run(args) -> dict:
                                                                                   motion, args.cache))
                              if following is not None else None)
         results, tuned = tuned_study(scene, view_set, ref, settings, standard_configs(scene, ref_settings), budgets,
-                                     cache_dir=args.cache, runner=runner)
+                                     cache_dir=args.cache, runner=runner,
+                                     option_sets=[{}] if quick else None)   # quick: the graph's own options
         notes.append(f"{scene.name}: reference {ref.verdict()}")
         study = results.study
         notes.append(f"{scene.name}: study {study['seconds']:.0f} s wall; images judged by "

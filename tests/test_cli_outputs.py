@@ -229,7 +229,8 @@ def test_a_tune_report_that_fails_half_way_leaves_no_report(gpu, tmp_path, capsy
     _fail_on(monkeypatch, Path, "write_text", 1, OSError(errno.EIO, "Input/output error"))   # results.json
     code, _, err = run(capsys, "tune", "--size", "8x8", "--views", "1", "--frames", "1", "--warmup", "0", "--spp", "1",
                        "--reference-frames", "2", "--reference-spp", "1", "--levels", "raster", "--metrics", "relmse",
-                       "--metric", "relmse", "--quiet", "--cache", str(tmp_path / "cache"), "--report", str(report))
+                       "--metric", "relmse", "--graph-options", "none", "--quiet", "--cache", str(tmp_path / "cache"),
+                       "--report", str(report))
     assert code == 2, err
     one_error_line(err, "results.json", "Input/output error")
     assert not report.exists()

@@ -3,8 +3,8 @@ material's effect to fit a GPU frame budget, from the error study's sound measur
 the choice beside every uniform configuration.
 
 The tuner probes a cost model (one render per effect level, timed after a warm-up; per-pixel
-error against the converged, checked reference, split by material), chooses greedily
-(rayvr.tune.budget), then the study (`rayvr converge`) measures the standard configurations and
+error against the converged, checked reference, split by material) for each graph option set
+(--graph-options), chooses greedily (rayvr.tune.budget) and keeps the best that fits, then the study (`rayvr converge`) measures the standard configurations and
 the tuned assignment alike. Prints the table and the assignment; with --report writes the study's
 report (report.md, report.html, results.json, plots, images) plus tune.json into DIR, all at
 once (a failure or Ctrl-C leaves none of it). Options are checked before any rendering, as
@@ -33,6 +33,9 @@ def register(sub) -> None:
                    help="error the tuner minimises (default flip: displayed-image FLIP)")
     p.add_argument("--levels", default="raster,shadows,reflections,path_traced",
                    help="effects the tuner may choose, comma-separated (default all four)")
+    p.add_argument("--graph-options", default="auto", choices=("auto", "none"),
+                   help="graph options the tuner tries beside the effects: auto (those of the study's hybrid "
+                        "configurations: probe GI, SVGF; one cost model each) or none (the graph's defaults)")
     p.set_defaults(func=run)
 
 
@@ -59,7 +62,8 @@ def run(args) -> int:
         ref = runner.reference(scene, view_set, plan.reference, plan.cache, eps=plan.settings.eps, gpu=gpu, tick=tick)
         results, by_budget = tuned_study(scene, view_set, ref, plan.settings, configs, [args.budget_ms], args.metric,
                                          levels, cache_dir=plan.cache, progress=plan.progress, gpu=gpu,
-                                         notes=plan.notes(), budget_option="--budget-ms", runner=runner)
+                                         notes=plan.notes(), budget_option="--budget-ms", runner=runner,
+                                         option_sets=[{}] if args.graph_options == "none" else None)
     tuned = by_budget[float(args.budget_ms)]
     print_summary(results)
     print()
