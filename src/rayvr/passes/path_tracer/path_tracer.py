@@ -120,11 +120,11 @@ class PathTracer(RenderPass):
         return (WAVE_FIELDS + (WAVE_MEDIUM_FIELDS if self.wave_has_medium(scene) else 0)
                 + (WAVE_LOBE_FIELDS if self.lobes else 0)) * WAVE_FIELD_BYTES
 
-    def wave_slots(self, size, views: int) -> int:
-        """Path slots of the wavefront's state: one per pixel of the list, or per invocation of the
-        image-wide dispatch (its workgroups cover the image's edges)."""
-        if self.mode == "gbuffer":   # the list's length, at most one entry a pixel
-            return int(size[0]) * int(size[1]) * int(views)
+    @staticmethod
+    def wave_slots(size, views: int) -> int:
+        """Path slots of the wavefront's state: one per invocation of the image-wide dispatch (its
+        workgroups cover the image's edges, and a slot is its invocation's index), which is also
+        at least a pixel list's length (one entry a pixel at most)."""
         group = ray_group(views)
         gx, gy, gz = groups_2d(size, views, group)
         return gx * gy * gz * group[0] * group[1] * group[2]
@@ -142,16 +142,15 @@ class PathTracer(RenderPass):
         software = getattr(getattr(ctx, "caps", None), "is_software", False)
         self._wave = self.kernel == "wavefront" or (self.kernel == "auto" and not software)
         self._defines["PT_WAVEFRONT"] = int(self._wave)   # named in the compile report
-        self._slice = int(SOFTWARE_PATHS_PER_DISPATCH) if software else 0
+        # the wavefront traces one ray per invocation and dispatch: llvmpipe's loop limit is never near
+        self._slice = int(SOFTWARE_PATHS_PER_DISPATCH) if software and not self._wave else 0
         self._defines["PT_SAMPLE_SLICES"] = self._slice
         self._listed = listed
         self._group = ray_group(cd.views)
         self._defines.update(ray_group_defines(self._group))
         self._groups = groups_2d(cd.size, cd.views, self._group)
-        if self._wave:   # one ray per invocation and dispatch: llvmpipe's loop limit is never near
-            self._defines["PT_SAMPLE_SLICES"] = 0
+        if self._wave:
             self._defines["PTW_HAS_MEDIUM"] = int(self.wave_has_medium(cd.scene))
-            self._slice = 0
             self._shade = self.compute_program(ctx.gl, "pt_wave_shade.comp", self._defines)
             self._trace = self.compute_program(ctx.gl, "pt_wave_trace.comp", self._defines)
             self._res = program_resources(self._shade)
