@@ -38,6 +38,17 @@ def option_sets_for(builder, options: dict, option_sets=None) -> list[dict]:
     return out or [dict(options)]
 
 
+def choose_with_options(models, base: dict, budget_ms: float, levels, fixed: dict | None = None) -> TuneResult:
+    """`choose_effects` on each (graph options, CostModel) of `models`, each choice's `options`
+    being what its set adds to `base`, then `choose_among` them."""
+    choices = []
+    for opts, model in models:
+        choice = choose_effects(model, budget_ms, levels, fixed)
+        choice.options = {k: v for k, v in opts.items() if k not in base or base[k] != v}
+        choices.append(choice)
+    return choose_among(choices)
+
+
 def make_judge(scene, view_set, metric: str, reference=None, cache_dir=None, display: Display = Display(),
                preset: str = "index", ppd: float | None = None, eps: float = DEFAULT_EPS, gpu=None) -> ErrorJudge:
     """The tuner's error maps: against `reference` (a Reference, or ReferenceSettings to load or
@@ -75,13 +86,10 @@ def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=Non
     options = dict(options or {})
     if accepts(builder, "path_bounces"):
         options.setdefault("path_bounces", judge.reference.settings.max_bounces)
-    choices = []
-    for opts in option_sets_for(builder, options, option_sets):
-        model, _ = probe_cost_model(scene, view_set, builder, opts, judge, levels, frames, warmup, warmup_s, trials,
-                                    progress, gpu)
-        choices.append(choose_effects(model, budget_ms, levels, fixed))
-        choices[-1].options = {k: v for k, v in opts.items() if k not in options or options[k] != v}
-    result = choose_among(choices)
+    models = [(opts, probe_cost_model(scene, view_set, builder, opts, judge, levels, frames, warmup, warmup_s,
+                                      trials, progress, gpu)[0])
+              for opts in option_sets_for(builder, options, option_sets)]
+    result = choose_with_options(models, options, budget_ms, levels, fixed)
     if verify:
         result.record_measurement(*render_assignment(scene, view_set, builder, {**options, **result.options},
                                                      result.assignment, judge, frames, warmup, warmup_s, trials, gpu))
@@ -131,21 +139,11 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
     if option_sets is None:
         option_sets = [{}] + [{k: v for k, v in c.options.items() if k in TUNED_OPTIONS}
                               for c in configs if c.builder is hybrid_graph and c.options.get("denoise") != "oidn"]
-    models = []
-    for opts in option_sets_for(hybrid_graph, options, option_sets):
-        model, _ = runner.probe(scene, view_set, hybrid_graph, opts, judge, levels=levels,
-                                frames=settings.timing_frames, warmup=settings.warmup, warmup_s=settings.warmup_s,
-                                trials=trials, progress=progress, gpu=gpu)
-        models.append((opts, model))
-
-    def choose(budget):
-        choices = []
-        for opts, model in models:
-            choices.append(choose_effects(model, budget, levels))
-            choices[-1].options = {k: v for k, v in opts.items() if k not in options}
-        return choose_among(choices)
-
-    tuned = {float(b): choose(b) for b in budgets}
+    models = [(opts, runner.probe(scene, view_set, hybrid_graph, opts, judge, levels=levels,
+                                  frames=settings.timing_frames, warmup=settings.warmup, warmup_s=settings.warmup_s,
+                                  trials=trials, progress=progress, gpu=gpu)[0])
+              for opts in option_sets_for(hybrid_graph, options, option_sets)]
+    tuned = {float(b): choose_with_options(models, options, b, levels) for b in budgets}
     names = {b: f"tuned for {b:g} ms" for b in tuned}
     rows = list(configs) + [Config(names[b], dict(t.assignment), options={**options, **t.options})
                             for b, t in tuned.items()]
