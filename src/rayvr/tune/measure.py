@@ -228,7 +228,6 @@ class Study:
         self.ppd, self.warmup_s, self.cache_dir, self.gpu, self.progress = ppd, warmup_s, cache_dir, gpu, progress
         self.runner = runner or LocalRunner()
         self.pixels = len(view_set) * view_set.size[0] * view_set.size[1]
-        self.metric_units = self.pixels * sum(METRIC_COST[m] for m in settings.metrics)
         if motion_frames is None:
             motion_frames = trajectory_views(view_set, settings.motion) if settings.motion else []
         self.motion_frames = motion_frames          # the views of every trajectory frame
@@ -269,7 +268,7 @@ class Study:
         p, s = self.progress, self.s
         if render_reference and not is_cached(self.scene, self.view_set, self.ref_settings, self.cache_dir):
             p.plan("render", self._reference_units())
-        p.plan("metric", self.metric_units)          # the reference's halves
+        p.plan("metric", self._units(True))          # the reference's halves
         if s.motion:
             for k, i in enumerate(s.motion.sample_frames()):
                 if not is_cached(self.scene, _views(self.motion_frames[i]), self.ref_settings, self.cache_dir, k + 1):
@@ -347,19 +346,21 @@ class Study:
         """`judge` handed to the metric pool (rayvr.tune.pool): a Pending whose get() is judge's
         answer; the study renders on meanwhile. `hdrflip` False: without HDR-FLIP (where
         StudySettings.hdrflip_frames leaves it out)."""
-        which = self.s.metrics if hdrflip else tuple(m for m in self.s.metrics if m != "hdrflip") or self.s.metrics
-        units = self.metric_units if which == self.s.metrics else self.pixels * sum(METRIC_COST[m] for m in which)
         return self.pool.judge(image, reference_image, self.display, self.ppd, self.s.eps, (name, "reference"),
-                               which, maps, units=units)
+                               self._which(hdrflip), maps, units=self._units(hdrflip))
 
     def judge_curve(self, image, reference_image, name: str):
         """judge_later for a progressive curve's snapshot (no HDR-FLIP when hdrflip_frames is set)."""
         return self.judge_later(image, reference_image, name, hdrflip=self.s.hdrflip_frames is None)
 
+    def _which(self, hdrflip: bool) -> tuple:
+        """The metrics of one judged image with or without HDR-FLIP (all of them where HDR-FLIP is
+        the only one)."""
+        return tuple(m for m in self.s.metrics if hdrflip or m != "hdrflip") or tuple(self.s.metrics)
+
     def _units(self, hdrflip: bool) -> float:
         """Metric units of one judged image with or without HDR-FLIP."""
-        which = [m for m in self.s.metrics if hdrflip or m != "hdrflip"] or list(self.s.metrics)
-        return self.pixels * sum(METRIC_COST[m] for m in which)
+        return self.pixels * sum(METRIC_COST[m] for m in self._which(hdrflip))
 
     def row(self, config: Config, ref: Reference, motion_refs: dict, floor=None) -> Row:
         """`config` measured: timing, the judged frames, in motion, its bias floor (`floor`: one
