@@ -68,7 +68,7 @@ class StudySettings:
     length of the progressive curves (0: none); `preset`/`ppd`: FLIP's pixels per degree (ppd
     None: the preset's); `eps`: relMSE's epsilon; `display`: the tone mapping of the displayed
     images; `metric_workers`: processes judging the images while the GPU renders on
-    (rayvr.tune.pool; 0: here, one after the other; None: os.cpu_count() from 256x256 pixels per
+    (rayvr.tune.pool; 0: here, one after the other; None: pool.default_workers, os.cpu_count() - 2 from 256x256 pixels per
     view, else 0); the numbers are the same either way. `hdrflip_frames`: HDR-FLIP (the costliest
     metric: LDR-FLIP at each of the reference's exposures, ~8x its cost on the Cornell box) on the
     first N judged frames of each configuration only, not in motion, on the floors nor on the
