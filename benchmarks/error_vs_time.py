@@ -11,7 +11,7 @@ scene (report.md, report.html, results.json, plots, images) goes to OUT/error_vs
 32x32, a 64 x 16 spp reference), for a smoke run on llvmpipe; options given still win.
 `--figures device`: the full size with the reduced figures of DEVICE, which fit both scenes into
 one 10-minute call on the lent H200 (tools/gpu-bench study); the notes say which figures ran.
-The images are judged by `--metric-workers` processes (default os.cpu_count() at this size)
+The images are judged by `--metric-workers` processes (default os.cpu_count() - 2 at this size)
 while the GPU renders on (rayvr.tune.pool): the same numbers as judged one after the other.
 """
 from __future__ import annotations
@@ -57,7 +57,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--report-image-step", type=int,
                         help="the report's images at every Nth pixel (default 1; device figures: 8, a few MB)")
     parser.add_argument("--metric-workers", type=int,
-                        help="processes judging the images while the GPU renders (default: os.cpu_count() from "
+                        help="processes judging the images while the GPU renders (default: os.cpu_count() - 2 from "
                              "256x256 per view, else 0 = one after the other here)")
     parser.add_argument("--cache", help="reference cache folder (default ~/.cache/rayvr/references)")
 
