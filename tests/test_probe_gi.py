@@ -419,15 +419,17 @@ def _material_mean(image, words, material_index):
     return float(image[..., :3][mask].mean())
 
 
-def test_untraced_glossy_light_comes_from_the_probes(gpu):
+@pytest.mark.parametrize("roughness", [0.5, 1.0])
+def test_untraced_glossy_light_comes_from_the_probes(gpu, roughness):
     # a rough metal box under SHADOWS (its reflections not traced) takes its indirect light about
-    # the mirror direction from the probes: near what a path tracer finds, where diffuse GI alone
-    # (a metal has none) would leave it with its direct highlight only
+    # the lobe's dominant direction from the probes (at roughness 1 the normal's irradiance, the
+    # lookup's shortcut): near what a path tracer finds, where diffuse GI alone (a metal has none)
+    # would leave it with its direct highlight only
     from rayvr.tune.probe import effect_pin
 
     scene = rv.scenes.cornell_box()
     tall = scene.materials["TallBox"]
-    tall.metallic, tall.roughness, tall.base_color = 1.0, 0.5, (0.9, 0.9, 0.9, 1.0)
+    tall.metallic, tall.roughness, tall.base_color = 1.0, roughness, (0.9, 0.9, 0.9, 1.0)
     index = scene.materials.names().index("TallBox")
     for m in scene.materials:
         m.effect = rv.Effect.SHADOWS

@@ -12,9 +12,10 @@ from __future__ import annotations
 from ...rendergraph.render_pass import Reflection
 
 # reader input pin -> (ProbeGI output, GLSL name in probe_gi.glsl)
+# (a probe's active flag travels in its irradiance alpha: ProbeGI's `state` output has no reader)
 PINS = {"probeIrradiance": ("irradiance", "probe_irradiance_tex"), "probeDepth": ("depth", "probe_depth_tex"),
-        "probeState": ("state", "probe_state_tex"), "probeVolumes": ("volumes", "ProbeVolumes")}
-TEXTURES = ("probeIrradiance", "probeDepth", "probeState")
+        "probeVolumes": ("volumes", "ProbeVolumes")}
+TEXTURES = ("probeIrradiance", "probeDepth")
 
 
 def add_inputs(r: Reflection, unused: str | None = None) -> None:

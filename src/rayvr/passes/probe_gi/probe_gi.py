@@ -36,9 +36,12 @@ from . import layout as L
 RNG_SALT = 11
 MAX_GROUPS_X = 65535
 RAY_RECORD_BYTES = 48   # one ProbeRay (probe_rays.glsl): radiance, hit, ids
-# pin -> (format, texels per probe side)
-MAPS = {"irradiance": ("rgba32f", L.IRRADIANCE_TILE), "depth": ("rg32f", L.DEPTH_TILE),
-        "state": ("rg32f", L.STATE_TILE)}
+# pin -> (output format, history format, texels per probe side). The readers sample the irradiance
+# as float16 (half the texture traffic of the lookups every pixel makes); the update blends in
+# float32 history, where float16's rounding would stall the hysteresis 1% short of its target.
+# Depth moments stay float32: a variance is a difference of two of them.
+MAPS = {"irradiance": ("rgba16f", "rgba32f", L.IRRADIANCE_TILE), "depth": ("rg32f", "rg32f", L.DEPTH_TILE),
+        "state": ("rg32f", "rg32f", L.STATE_TILE)}
 
 
 @register_pass
@@ -109,12 +112,12 @@ class ProbeGI(RenderPass):
     def reflect(self, cd):
         r = Reflection()
         atlas = self.atlas()
-        for name, (fmt, tile) in MAPS.items():
+        for name, (fmt, history_fmt, tile) in MAPS.items():
             w, h = atlas.size(tile)
             r.add_output(name, f"probe {name} atlas (one layer for every view)").format(fmt).texture_size(w, h).views(1)
             for k in (0, 1):
                 r.add_internal(self.history_pin(name, k), f"probe {name}, kept between updates (used in turn)") \
-                    .format(fmt).texture_size(w, h).views(1)
+                    .format(history_fmt).texture_size(w, h).views(1)
         r.add_internal(self.RAYS, "each probe ray's hit and direct light, from the trace stage to the update "
                                   "stage").buffer(self.rays_per_frame() * RAY_RECORD_BYTES)
         n = len(self.volumes) or 1
@@ -137,8 +140,9 @@ class ProbeGI(RenderPass):
         self._sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR), repeat_x=False,
                                                 repeat_y=False))
         # each map three times (output and two histories), the ray records and the volumes block
-        self._memory = sum(3 * math.prod(self._atlas.size(tile)) * get_format(fmt).bytes_per_texel
-                           for fmt, tile in MAPS.values()) + L.volume_bytes(len(self._volumes)) \
+        self._memory = sum(math.prod(self._atlas.size(tile)) * (get_format(fmt).bytes_per_texel
+                                                                + 2 * get_format(history_fmt).bytes_per_texel)
+                           for fmt, history_fmt, tile in MAPS.values()) + L.volume_bytes(len(self._volumes)) \
             + self.rays_per_frame() * RAY_RECORD_BYTES
         self.reset()
 
