@@ -2,6 +2,10 @@
 //
 //   bool trace_closest(vec3 o, vec3 d, float tmax, out Hit hit)   closest hit in (0, tmax)
 //   bool trace_occluded(vec3 o, vec3 d, float tmax)               any hit in (0, tmax), exits early
+//   float trace_transmittance(vec3 o, vec3 d, float tmax)         the fraction of light from tmax
+//       that reaches o: 0 behind an opaque (or MASK-passing) hit, else the product of (1 - alpha)
+//       over the BLEND surfaces in (0, tmax), each counted once, no random decision (a shadow
+//       ray's expected visibility, where trace_occluded decides each BLEND surface by a coin)
 //   vec3 offset_ray_origin(vec3 p, vec3 ng)                       self-intersection-free origin
 //
 // Render space; d need not be normalised (t is in units of d) but |d| should be ~1 and
@@ -265,9 +269,13 @@ uint rq_stat_instances = 0u;   // BLAS entries (instance transforms)
 #endif
 
 // Stochastic transparency (SCENE_HAS_ALPHA_BLEND): the path's seed and sample index, and the
-// number of the ray being traced along it (rq_begin counts them).
+// number of the ray being traced along it (rq_begin counts them). A trace_transmittance query
+// multiplies rq_transmittance by (1 - alpha) at each BLEND surface instead of deciding it.
 #if SCENE_HAS_ALPHA_BLEND
 uint rq_blend_seed = 0u, rq_blend_index = 0u, rq_blend_ray = 0u;
+bool rq_fractional = false;
+float rq_transmittance = 1.0;
+const float RQ_OPAQUE_BELOW = 1e-4;   // a product this small blocks the ray (and ends its traversal)
 #endif
 
 // Seed this invocation's BLEND decisions with its path's generator (call it where the path's Rng
@@ -307,7 +315,15 @@ bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, i
 #if SCENE_HAS_ALPHA_MASK || SCENE_HAS_ALPHA_BLEND
         uint tri = scene_triangle(instance, prim);
         uint m = scene_triangle_materials[tri];
-        if (scene_materials[m].flags.y != ALPHA_MODE_OPAQUE && !rq_alpha_passes(m, tri, instance, t, b)) continue;
+        if (scene_materials[m].flags.y != ALPHA_MODE_OPAQUE) {
+#if SCENE_HAS_ALPHA_BLEND
+            if (rq_fractional && scene_materials[m].flags.y == ALPHA_MODE_BLEND) {
+                rq_transmittance *= 1.0 - clamp(material_alpha(m, triangle_uv(tri, b)), 0.0, 1.0);
+                if (rq_transmittance >= RQ_OPAQUE_BELOW) continue;   // dimmed, not blocked
+            } else
+#endif
+            if (!rq_alpha_passes(m, tri, instance, t, b)) continue;
+        }
 #endif
         tmax = t;
         hit.t = t;
@@ -468,4 +484,16 @@ bool trace_closest(vec3 o, vec3 d, float tmax, out Hit hit) { return rq_trace(o,
 bool trace_occluded(vec3 o, vec3 d, float tmax) {
     Hit h;
     return rq_trace(o, d, tmax, true, h);
+}
+
+float trace_transmittance(vec3 o, vec3 d, float tmax) {
+#if SCENE_HAS_ALPHA_BLEND
+    rq_fractional = true;
+    rq_transmittance = 1.0;
+    bool blocked = trace_occluded(o, d, tmax);
+    rq_fractional = false;
+    return blocked ? 0.0 : rq_transmittance;
+#else
+    return trace_occluded(o, d, tmax) ? 0.0 : 1.0;
+#endif
 }

@@ -38,7 +38,11 @@ vec3 shade_direct_mis(PathVertex s, inout Rng rng, bool specular_traced) {
             f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
         if (f.x + f.y + f.z <= 0.0) continue;
 #if SHADE_SHADOWS
-        if (trace_occluded(origin, ls.direction, ls.distance * (1.0 - 1e-4))) continue;
+        // the shadow ray's expected visibility through BLEND surfaces, not a coin toss per
+        // surface: a light behind a half-transparent leaf is half visible in every pixel
+        float visible = trace_transmittance(origin, ls.direction, ls.distance * (1.0 - 1e-4));
+        if (visible <= 0.0) continue;
+        f *= visible;
 #endif
         sum += f * ls.weight;   // weight = radiance / pdf (lights.glsl)
     }
