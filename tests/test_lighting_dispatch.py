@@ -56,7 +56,9 @@ def test_whole_image_dispatch_lights_the_same_pixels_as_the_list(gpu, monkeypatc
     served = {"Shadows.shadowed": drawn & (effect >= int(rv.Effect.SHADOWS)),
               "Reflections.reflection": drawn & (effect >= int(rv.Effect.REFLECTIONS)),
               "Composite.color": np.ones_like(drawn)}
-    for name, lit in zip(OUTPUTS, (0.25, 0.02, 0.35)):   # enough lit pixels for the comparison to mean something
+    # enough lit pixels for the comparison to mean something (the sun is shut out of the box: the
+    # pixels whose two light samples both chose it are black)
+    for name, lit in zip(OUTPUTS, (0.2, 0.02, 0.3)):
         a, b = listed[name][served[name]], tiled[name][served[name]]
         assert np.isfinite(a).all()
         assert (a[..., :3].max(axis=-1) > 0).mean() > lit, f"{name}: too few lit pixels to compare"

@@ -94,6 +94,41 @@ def test_ten_thousand_point_lights_match_the_float64_sum(gpu):
     assert abs(got.mean() / want.mean() - 1.0) < 0.03, (got.mean(), want.mean())
 
 
+def test_a_spot_that_does_not_reach_a_point_takes_none_of_its_light_samples(gpu):
+    """A sun (E = 2 lux, straight down) and a narrow bright spot aimed off the plane's centre: in a
+    scene of few punctual lights the light is drawn by its unshadowed irradiance at the point, so a
+    pixel outside the spot's cone gets the sun's rho E / pi in every frame (drawn by power alone,
+    over a quarter of the samples went to the spot and left those pixels black), and the mean
+    inside the cone is still the float64 sum of both lights."""
+    scene = plane_scene(albedo=0.5)
+    spot_at = np.array([0.6, 0.0, 0.6])
+    spot_pos = spot_at + np.array([0.0, 1.0, 0.0])
+    scene.lights = [Light("directional", direction=(0.0, -1.0, 0.0), intensity=2.0),
+                    Light("spot", position=spot_pos, direction=(0.0, -1.0, 0.0), intensity=200.0,
+                          inner_cone_angle=0.15, outer_cone_angle=0.2)]
+    for m in scene.materials:
+        m.effect = rv.Effect.SHADOWS
+    views = down_view()
+    pts = plane_points(views)
+    to = spot_pos[None, None] - pts
+    dist = np.linalg.norm(to, axis=-1)
+    cos_axis = to[..., 1] / dist
+    k = np.clip((cos_axis - math.cos(0.2)) / (math.cos(0.15) - math.cos(0.2)), 0, 1)
+    spot = 200.0 * k * k / dist ** 2 * cos_axis            # irradiance on the plane (cos at the plane = cos_axis)
+    sun = 0.5 / math.pi * 2.0
+    outside, inside = cos_axis < math.cos(0.2) - 0.01, k > 0.99
+    assert outside.sum() > 100 and inside.sum() >= 4
+    frames = []
+    with rv.Renderer(scene, rv.graphs.hybrid(), views=views) as r:
+        for _ in range(16):
+            r.render()
+            frames.append(r.read_output("Composite.color")[0, ..., 0].astype(np.float64))
+    frames = np.array(frames)
+    np.testing.assert_allclose(frames[:, outside], sun, rtol=2e-3)
+    want = sun + 0.5 / math.pi * spot[inside]
+    np.testing.assert_allclose(frames.mean(0)[inside], want, rtol=0.15)
+
+
 @pytest.mark.parametrize("albedo", [0.5, 0.01])
 @pytest.mark.parametrize("effect", [rv.Effect.RASTER, rv.Effect.SHADOWS, rv.Effect.PATH_TRACED])
 def test_lambert_plane_under_a_uniform_environment_is_albedo_times_radiance(gpu, effect, albedo):

@@ -10,11 +10,19 @@
 //         emissive triangle seen from p
 //   LightSample eval_punctual_light(uint i, vec3 p)   light i alone, weight without selection
 //
+// Which punctual light: the table draws the punctual lights' group by their share of the power;
+// in a scene of at most LOCAL_PUNCTUAL_MAX of them the light within the group is then drawn by its
+// unshadowed irradiance at p (distance falloff, range window, spot cone), so a point outside a
+// spot's cone never spends its sample on the spot (tauray/test.glb: a sun and a 10-degree spot,
+// the sun-lit walls had half their pixels black in every frame). Unbiased: the weight divides by
+// that probability, and a light whose irradiance at p is 0 adds nothing either way.
+//
 // A LightSample's `weight` is the incident radiance divided by the sample's pdf (solid angle,
 // selection included) so a shader adds bsdf(wi = direction) * cos * weight, after a shadow ray
 // trace_occluded(origin, direction, distance * (1 - 1e-4)). For punctual lights pdf = 0 (delta).
 #pragma once
 #include "scene.glsl"
+#include "color.glsl"
 
 #ifndef SCENE_HAS_PUNCTUAL_LIGHTS
 #define SCENE_HAS_PUNCTUAL_LIGHTS 0
@@ -107,6 +115,33 @@ LightSample eval_punctual_light(uint i, vec3 p) {
     }
     s.weight = L.intensity.rgb * att;
     s.valid = att > 0.0;
+    return s;
+}
+
+#ifndef LOCAL_PUNCTUAL_MAX
+#define LOCAL_PUNCTUAL_MAX 8
+#endif
+
+// One of the n (2..LOCAL_PUNCTUAL_MAX) punctual lights, drawn by its unshadowed irradiance at p
+// with r in [0, 1); `share`: the probability with which the table drew the punctual group.
+LightSample sample_punctual_local(vec3 p, uint n, float r, float share) {
+    float w[LOCAL_PUNCTUAL_MAX];
+    float total = 0.0;
+    for (uint i = 0u; i < n; ++i) {
+        LightSample c = eval_punctual_light(i, p);
+        w[i] = c.valid ? luminance(c.weight) : 0.0;
+        total += w[i];
+    }
+    if (!(total > 0.0) || !(share > 0.0)) return no_light_sample();
+    float x = r * total, acc = 0.0;
+    uint j = n;
+    for (uint i = 0u; i < n && j == n; ++i) {
+        acc += w[i];
+        if (x < acc) j = i;
+    }
+    if (j == n || !(w[j] > 0.0)) return no_light_sample();   // rounding past the last light
+    LightSample s = eval_punctual_light(j, p);
+    s.weight *= total / (w[j] * share);
     return s;
 }
 #endif
@@ -278,6 +313,12 @@ LightSample sample_light(vec3 p, vec3 u) {
     float p_select = e.select.y;
 #if SCENE_HAS_PUNCTUAL_LIGHTS
     if (e.ids.x == LIGHT_KIND_PUNCTUAL) {
+        uint np = punctual_light_count();
+        if (np > 1u && np <= uint(LOCAL_PUNCTUAL_MAX)) {
+            float share = 0.0;   // the table lists the punctual lights first
+            for (uint i = 0u; i < np; ++i) share += light_entries[i].select.y;
+            return sample_punctual_local(p, np, u.y, share);
+        }
         LightSample s = eval_punctual_light(e.ids.y, p);
         s.weight /= p_select;
         return s;
