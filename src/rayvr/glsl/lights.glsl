@@ -123,26 +123,30 @@ LightSample eval_punctual_light(uint i, vec3 p) {
 #endif
 
 // One of the n (2..LOCAL_PUNCTUAL_MAX) punctual lights, drawn by its unshadowed irradiance at p
-// with r in [0, 1); `share`: the probability with which the table drew the punctual group.
+// with r in [0, 1); `share`: the probability with which the table drew the punctual group. One
+// pass, no array (a small shader: llvmpipe compiles every pass that lights): light i replaces the
+// pick so far with probability w_i / (w_0 + ... + w_i), r rescaled to stay uniform.
 LightSample sample_punctual_local(vec3 p, uint n, float r, float share) {
-    float w[LOCAL_PUNCTUAL_MAX];
-    float total = 0.0;
+    LightSample pick = no_light_sample();
+    float total = 0.0, w_pick = 0.0;
     for (uint i = 0u; i < n; ++i) {
         LightSample c = eval_punctual_light(i, p);
-        w[i] = c.valid ? luminance(c.weight) : 0.0;
-        total += w[i];
+        float w = c.valid ? luminance(c.weight) : 0.0;
+        if (!(w > 0.0)) continue;
+        total += w;
+        float q = w / total;
+        if (r < q) {
+            pick = c;
+            w_pick = w;
+            r = r / q;
+        } else {
+            r = (r - q) / (1.0 - q);
+        }
+        r = min(r, 0.99999994);
     }
-    if (!(total > 0.0) || !(share > 0.0)) return no_light_sample();
-    float x = r * total, acc = 0.0;
-    uint j = n;
-    for (uint i = 0u; i < n && j == n; ++i) {
-        acc += w[i];
-        if (x < acc) j = i;
-    }
-    if (j == n || !(w[j] > 0.0)) return no_light_sample();   // rounding past the last light
-    LightSample s = eval_punctual_light(j, p);
-    s.weight *= total / (w[j] * share);
-    return s;
+    if (!(w_pick > 0.0) || !(share > 0.0)) return no_light_sample();
+    pick.weight *= total / (w_pick * share);
+    return pick;
 }
 #endif
 
