@@ -13,10 +13,10 @@
 //       about the lobe's dominant direction, probe_gi_glossy_direction)
 //
 // Both return 0 unless PROBE_GI is 1; then the shader declares the samplers probe_irradiance_tex
-// (rgba32f; alpha: 1 where the probe is active, 0 where it is disabled inside geometry) and
-// probe_depth_tex (rg32f: mean distance, mean squared distance), 2D arrays of one layer sampled
-// linearly, clamped to their edges, and the storage block ProbeVolumes (layout in
-// rayvr/passes/probe_gi/layout.py).
+// (rgba16f, the update reads its float32 history instead; alpha: 1 where the probe is active, 0
+// where it is disabled inside geometry) and probe_depth_tex (rg32f: mean distance, mean squared
+// distance), 2D arrays of one layer sampled linearly, clamped to their edges, and the storage
+// block ProbeVolumes (layout in rayvr/passes/probe_gi/layout.py).
 //
 // The 8 probes around p are weighted trilinearly, by how much they face the surface, and by
 // Chebyshev's bound on the probe seeing p (its depth moments): a probe behind a wall sees the wall

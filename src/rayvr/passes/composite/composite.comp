@@ -9,10 +9,10 @@
 // the diffuse lobe: the lighting passes return them summed.)
 // With PROBE_GI the probes' indirect diffuse light of the G-buffer surface is added here for
 // RASTER, SHADOWS and REFLECTIONS pixels (to the diffuse lobe with SPLIT_LOBES), and for RASTER
-// and SHADOWS pixels, whose reflections are not traced, their glossy light about the mirror
-// direction (probe_gi_diffuse_glossy; to the specular lobe): a metal is no longer black. This pass traces
-// no rays, so the lookup's registers cost no BVH traversal its occupancy, as they did in
-// RTShadows (the probe update measured 2.2x from the same split).
+// and SHADOWS pixels, whose reflections are not traced, their glossy light about the lobe's
+// dominant direction (probe_gi_diffuse_glossy; to the specular lobe): a metal is no longer black.
+// This pass traces no rays, so the lookup's registers cost no BVH traversal its occupancy, as
+// they did in RTShadows (the probe update measured 2.2x from the same split).
 #define GBUF_READER 1
 #include "gbuffer.glsl"
 #include "probe_gi.glsl"
