@@ -38,6 +38,9 @@ def test_light_table_sums_to_one_and_leaves_out_dark_lights():
     assert t.probability_of(KIND_EMISSIVE) == pytest.approx(0.4)
     assert t.probability_of(KIND_ENVIRONMENT) == pytest.approx(0.1)
     np.testing.assert_allclose(alias_probabilities(t.threshold, t.alias), t.probabilities, rtol=1e-12)
+    # each punctual entry carries the punctual lights' share (lights.glsl's local selection), others 0
+    share = t.packed()[2::2, 2]
+    np.testing.assert_allclose(share, np.where(t.kinds == KIND_PUNCTUAL, 0.5, 0.0), rtol=1e-6)
 
 
 def plane_scene(albedo=0.5) -> Scene:

@@ -60,7 +60,8 @@ LightSample no_light_sample() {
 #if SCENE_HAS_LIGHTS
 struct LightEntry {
     uvec4 ids;        // kind, index within the kind, alias entry
-    vec4 select;      // alias threshold, selection probability
+    vec4 select;      // alias threshold, selection probability, the punctual lights' summed
+                      // probability (on a punctual entry)
 };
 layout(std430, binding = RAYVR_LIGHT_TABLE_SSBO) readonly buffer LightTable {
     vec4 light_table_info;   // x: count (uint bits), y: total power, z: environment probability, w: 1 / total
@@ -318,11 +319,7 @@ LightSample sample_light(vec3 p, vec3 u) {
 #if SCENE_HAS_PUNCTUAL_LIGHTS
     if (e.ids.x == LIGHT_KIND_PUNCTUAL) {
         uint np = punctual_light_count();
-        if (np > 1u && np <= uint(LOCAL_PUNCTUAL_MAX)) {
-            float share = 0.0;   // the table lists the punctual lights first
-            for (uint i = 0u; i < np; ++i) share += light_entries[i].select.y;
-            return sample_punctual_local(p, np, u.y, share);
-        }
+        if (np > 1u && np <= uint(LOCAL_PUNCTUAL_MAX)) return sample_punctual_local(p, np, u.y, e.select.z);
         LightSample s = eval_punctual_light(e.ids.y, p);
         s.weight /= p_select;
         return s;

@@ -110,7 +110,8 @@ class LightTable:
     def packed(self) -> np.ndarray:
         """The SSBO rows of glsl/lights.glsl: header vec4 (count bits, total power, environment
         probability, 1 / total), then per entry uvec4 (kind, index, alias, -) and vec4 (threshold,
-        probability, -, -), as float32 with uint fields as bits."""
+        probability, the punctual lights' summed probability on a punctual entry else 0, -), as
+        float32 with uint fields as bits."""
         out = np.zeros((1 + 2 * max(self.count, 1), 4), np.float32)
         bits = out.view(np.uint32)
         bits[0, 0] = self.count
@@ -120,6 +121,7 @@ class LightTable:
         rows = 1 + 2 * np.arange(self.count)
         bits[rows, 0], bits[rows, 1], bits[rows, 2] = self.kinds, self.indices, self.alias
         out[rows + 1, 0], out[rows + 1, 1] = self.threshold, self.probabilities
+        out[rows + 1, 2] = np.where(self.kinds == KIND_PUNCTUAL, self.probability_of(KIND_PUNCTUAL), 0.0)
         return out
 
 
