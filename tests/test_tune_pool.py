@@ -147,3 +147,22 @@ def test_an_interrupted_study_stops_its_workers_at_once():
             raise KeyboardInterrupt
     assert time.perf_counter() - t0 < 20
     assert processes and all(not p.is_alive() for p in processes)
+
+
+def test_the_tuners_probe_gives_the_same_error_model_with_the_metric_pool(gpu):
+    from rayvr.tune.probe import ErrorJudge, probe_cost_model
+
+    size = (12, 12)
+    scene = rv.scenes.cornell_box()
+    views = default_views(scene, 1, size)
+    ref = rv.tune.cached_reference(scene, views, ReferenceSettings(frames=4, spp=1, max_bounces=2), False, gpu)
+    models = []
+    for workers in (0, 2):
+        with MetricPool(workers) as pool:
+            judge = ErrorJudge(ref, Display().fixed(ref.image), 14.0, "flip", 1e-2, pool=pool if workers else None)
+            models.append(probe_cost_model(scene, views, rv.tune.hybrid_graph, {"path_bounces": 2}, judge,
+                                           levels=[Effect.RASTER, Effect.SHADOWS], frames=1, warmup=1, warmup_s=0.0,
+                                           trials=2, progress=False, gpu=gpu)[0])
+    serial, parallel = models
+    assert serial.error == parallel.error and serial.rest_error == parallel.rest_error
+    assert serial.error["BackWall"][Effect.SHADOWS] > 0

@@ -52,28 +52,48 @@ def check_metric(metric: str) -> str:
 
 
 class ErrorJudge:
-    """Per-pixel error maps against a reference: `metric` of rayvr.tune.metrics.evaluate."""
+    """Per-pixel error maps against a reference: `metric` of rayvr.tune.metrics.evaluate. With a
+    `pool` (a rayvr.tune.pool.MetricPool) the maps are made in its worker processes while the
+    GPU renders on (the same numbers)."""
 
-    def __init__(self, reference, display, ppd: float, metric: str, eps: float):
+    def __init__(self, reference, display, ppd: float, metric: str, eps: float, pool=None):
         self.reference, self.display, self.ppd, self.metric, self.eps = reference, display, ppd, metric, eps
+        self.pool = pool
+
+    def __getstate__(self):     # a cluster worker's copy judges in its own process
+        return {**self.__dict__, "pool": None}
 
     def map(self, image, name: str) -> np.ndarray:
+        from .display import clamp_negative
         from .metrics import evaluate, pair
 
+        image, _ = clamp_negative(image)   # judged as displayed (0), as the study judges
         if self.metric == "flip" and getattr(self, "_shown", None) is None:    # the displayed reference, made once
             self._shown = self.display(pair(self.reference.image, self.reference.image)[1])
         _, maps = evaluate(image, self.reference.image, self.display, self.ppd, self.eps, names=(name, "reference"),
                            which=(self.metric,), maps=True, shown_reference=getattr(self, "_shown", None))
         return maps[self.metric]
 
-    def mean_map(self, renderer, pin: str, trials: int, name: str) -> np.ndarray:
-        """The error map averaged over the next `trials` frames."""
-        total = None
+    def map_later(self, image, name: str):
+        """`map` as a function that waits for it (made in the pool's workers meanwhile, if any)."""
+        if self.pool is None:
+            made = self.map(image, name)
+            return lambda: made
+        pending = self.pool.judge(image, self.reference.image, self.display, self.ppd, self.eps, (name, "reference"),
+                                  (self.metric,), maps=True)
+        return lambda: pending.get()[1][self.metric]
+
+    def mean_map_later(self, renderer, pin: str, trials: int, name: str):
+        """The error map averaged over the next `trials` frames, as a function that waits for it."""
+        later = []
         for _ in range(trials):
             renderer.render()
-            m = self.map(renderer.read_output(pin, flip_y=True), name)
-            total = m if total is None else total + m
-        return total / trials
+            later.append(self.map_later(renderer.read_output(pin, flip_y=True), name))
+        return lambda: sum(f() for f in later) / trials
+
+    def mean_map(self, renderer, pin: str, trials: int, name: str) -> np.ndarray:
+        """The error map averaged over the next `trials` frames."""
+        return self.mean_map_later(renderer, pin, trials, name)()
 
 
 def probe_cost_model(scene, view_set, builder, options: dict, judge: ErrorJudge, levels=tuple(Effect),
@@ -103,9 +123,10 @@ def probe_cost_model(scene, view_set, builder, options: dict, judge: ErrorJudge,
             for m in scene.materials:
                 m.effect = level
             times[level] = timed_frames(r, frames, max(1, warmup), warmup_s)   # >= 1: the level may recompile
-            errors[level] = judge.mean_map(r, pin, trials, f"all {level.name} {pin}")
+            errors[level] = judge.mean_map_later(r, pin, trials, f"all {level.name} {pin}")
             if level == Effect.RASTER:
                 words = r.read_output(ids_pin, flip_y=True)[..., 0]
+    errors = {level: made() for level, made in errors.items()}
     geometry = (words & 0xFF) != NO_GEOMETRY
     material = (words >> 8)[geometry].astype(np.int64)
     total = words.size
