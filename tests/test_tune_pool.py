@@ -166,3 +166,29 @@ def test_the_tuners_probe_gives_the_same_error_model_with_the_metric_pool(gpu):
     serial, parallel = models
     assert serial.error == parallel.error and serial.rest_error == parallel.rest_error
     assert serial.error["BackWall"][Effect.SHADOWS] > 0
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/stat"), reason="reads process states from /proc")
+def test_quiet_stops_the_workers_while_the_gpu_is_timed_and_continues_them():
+    def state(pid, want=None):
+        """The process's state letter (waiting up to 2 s for `want`: a signal lands asynchronously)."""
+        import time
+
+        until = time.monotonic() + 2.0
+        while True:
+            with open(f"/proc/{pid}/stat") as f:
+                s = f.read().rsplit(")", 1)[1].split()[0]
+            if want is None or (s == "T") == (want == "T") or time.monotonic() > until:
+                return s
+            time.sleep(0.01)
+
+    with MetricPool(2) as pool:
+        pool.executor.submit(os.getpid).result(timeout=120)    # the workers are up
+        pids = [p.pid for p in pool.executor._processes.values()]
+        assert len(pids) == 2
+        with pool.quiet():
+            assert [state(pid, "T") for pid in pids] == ["T", "T"]
+        assert all(state(pid, "running") != "T" for pid in pids)
+        assert pool.executor.submit(os.getpid).result(timeout=60) in pids   # and they still work
+    with MetricPool(0).quiet():      # no workers: nothing to stop
+        pass

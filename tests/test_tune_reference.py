@@ -172,3 +172,19 @@ def test_displayed_flip_of_1_spp_against_1024_spp_is_plausible(gpu):
         flips[spp] = M.all_metrics(image, ref.image, display, ppd, which=("flip",))["flip"]
     assert 0.35 < flips[1] < 0.75
     assert 0.12 < flips[16] < flips[1] - 0.1
+
+
+def test_a_reference_whose_halves_are_identical_is_refused_and_not_cached(gpu, scene, tmp_path, monkeypatch):
+    """Disjoint seeds never give equal path-traced halves: equal ones mean the second was not
+    rendered (as a deep queue of frames on the H200 once left it), and the study must not judge
+    against them."""
+    from rayvr.errors import RayvrError
+    from rayvr.tune import progressive
+
+    views = default_views(scene, 1, SIZE)
+    tiny = ReferenceSettings(frames=2, spp=1, max_bounces=2)
+    same = np.full((1, SIZE[1], SIZE[0], 4), 0.5, np.float32)
+    monkeypatch.setattr(progressive, "render_mean", lambda *a, **k: [progressive.Snapshot(1, same.copy(), 0.0)])
+    with pytest.raises(RayvrError, match="two halves came out identical"):
+        R.cached_reference(scene, views, tiny, tmp_path, gpu)
+    assert not R.is_cached(scene, views, tiny, tmp_path)

@@ -14,9 +14,8 @@
 //
 // Both return 0 unless PROBE_GI is 1; then the shader declares the samplers probe_irradiance_tex
 // (rgba16f, the update reads its float32 history instead; alpha: 1 where the probe is active, 0
-// where it is disabled inside geometry) and probe_depth_tex (rg16f, the history rg32f: mean
-// distance and mean squared distance over the volume's maximum distance D = lo.w and D^2), 2D
-// arrays of one layer sampled linearly, clamped to their edges, and the storage
+// where it is disabled inside geometry) and probe_depth_tex (rg32f: mean distance, mean squared
+// distance), 2D arrays of one layer sampled linearly, clamped to their edges, and the storage
 // block ProbeVolumes (layout in rayvr/passes/probe_gi/layout.py).
 //
 // The 8 probes around p are weighted trilinearly, by how much they face the surface, and by
@@ -93,11 +92,9 @@ vec3 probe_gi_irradiance_at(vec3 p, vec3 n, vec3 v, const bool both, vec3 r, out
         float w = facing * facing + 0.2;
         if (visibility) {
             vec3 from_probe = biased - at;
-            float dist = length(from_probe);
-            vec2 m = texture(probe_depth_tex, probe_tile_uv(probe_depth_tex, probe,
-                                                            dist > 0.0 ? from_probe / dist : n,
+            float d = length(from_probe);
+            vec2 m = texture(probe_depth_tex, probe_tile_uv(probe_depth_tex, probe, d > 0.0 ? from_probe / d : n,
                                                             PROBE_DEPTH_TILE)).xy;
-            float d = dist / vol.lo.w;   // the moments' units (Chebyshev's ratio does not depend on them)
             if (d > m.x) {   // farther than the probe's mean distance that way: Chebyshev's bound
                 float variance = abs(m.y - m.x * m.x);
                 float beyond = d - m.x;

@@ -394,7 +394,7 @@ class Study:
             timed_first = not self.warmup_s
             with p.step("render", cost * self.history_frames, config.name):
                 if timed_first:
-                    timing = timed_frames(r, s.timing_frames, s.warmup, 0.0)
+                    timing = timed_frames(r, s.timing_frames, s.warmup, 0.0, self.pool.quiet)
                 else:
                     for _ in range(self.history_frames):
                         r.render()
@@ -411,7 +411,7 @@ class Study:
                     first = image
             if not timed_first:
                 with p.step("render", cost * self.history_frames, config.name):
-                    timing = timed_frames(r, s.timing_frames, s.warmup, self.warmup_s)
+                    timing = timed_frames(r, s.timing_frames, s.warmup, self.warmup_s, self.pool.quiet)
             self.method = timing.method
         settings = config.settings(self.scene)
         motion = self.motion_row(config, motion_refs, cost) if s.motion else None
@@ -523,4 +523,5 @@ class Study:
 
         return progressive_curve(self.scene, name, path_traced_graph(**options), options, self.view_set,
                                  s.progressive_frames, ref, self.judge_curve, s.timing_frames, s.warmup,
-                                 self.warmup_s, PROGRESSIVE_FIRST_FRAME, self.gpu, step=step, later=True)
+                                 self.warmup_s, PROGRESSIVE_FIRST_FRAME, self.gpu, step=step, later=True,
+                                 quiet=self.pool.quiet)

@@ -20,7 +20,9 @@ a temporary folder that each worker loads once and keeps (with its displayed ima
 from __future__ import annotations
 
 import collections
+import contextlib
 import os
+import signal
 import tempfile
 import time
 import warnings
@@ -110,6 +112,31 @@ class MetricPool:
             self.executor = None
             self.folder.cleanup()
             self.progress.concurrent("metric", 0)
+
+    @contextlib.contextmanager
+    def quiet(self):
+        """The workers stopped (SIGSTOP, where the OS has it) while the block runs, then continued:
+        for timing the GPU. Timer queries count the GPU's idle time between a pass's commands, and
+        busy workers starve the thread that submits them: on the H200 the first rows of the tauray
+        study, timed while 14 workers judged, took 1.5-2x their GPU time (G-buffer 1.08 and 1.01
+        against 0.64 ms, direct light 0.78 against 0.06)."""
+        stop = getattr(signal, "SIGSTOP", None)
+        processes = list(getattr(self.executor, "_processes", {}).values()) if self.executor is not None else []
+        stopped = []
+        try:
+            for process in processes if stop is not None else ():
+                try:
+                    os.kill(process.pid, stop)
+                    stopped.append(process.pid)
+                except (ProcessLookupError, PermissionError):
+                    pass
+            yield
+        finally:
+            for pid in stopped:
+                try:
+                    os.kill(pid, signal.SIGCONT)
+                except (ProcessLookupError, PermissionError):
+                    pass
 
     def _reference_path(self, reference: np.ndarray) -> str:
         key = id(reference)

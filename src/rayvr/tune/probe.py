@@ -63,6 +63,11 @@ class ErrorJudge:
     def __getstate__(self):     # a cluster worker's copy judges in its own process
         return {**self.__dict__, "pool": None}
 
+    @property
+    def quiet(self):
+        """The pool's `quiet` (its workers paused while the GPU is timed), or None."""
+        return self.pool.quiet if self.pool is not None else None
+
     def map(self, image, name: str) -> np.ndarray:
         from .display import clamp_negative
         from .metrics import evaluate, pair
@@ -122,7 +127,7 @@ def probe_cost_model(scene, view_set, builder, options: dict, judge: ErrorJudge,
         for level in tqdm(probe_levels, desc="effect levels", unit="level", disable=not progress, leave=False):
             for m in scene.materials:
                 m.effect = level
-            times[level] = timed_frames(r, frames, max(1, warmup), warmup_s)   # >= 1: the level may recompile
+            times[level] = timed_frames(r, frames, max(1, warmup), warmup_s, judge.quiet)   # >= 1: the level may recompile
             errors[level] = judge.mean_map_later(r, pin, trials, f"all {level.name} {pin}")
             if level == Effect.RASTER:
                 words = r.read_output(ids_pin, flip_y=True)[..., 0]
@@ -166,6 +171,6 @@ def render_assignment(scene, view_set, builder, options: dict, assignment: dict,
         graph = config.build_graph()
         pin = config.output_pin(graph)
         with Renderer(scene, graph, views=view_set, gpu=gpu) as r:
-            timing = timed_frames(r, frames, max(1, warmup), warmup_s)
+            timing = timed_frames(r, frames, max(1, warmup), warmup_s, judge.quiet)
             error = float(judge.mean_map(r, pin, trials, f"tuned {pin}").mean())
     return timing.frame_ms, error, timing.method

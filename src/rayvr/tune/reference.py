@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import OptionError
+from ..errors import OptionError, RayvrError
 from ..fileio import atomic_write
 from . import seeds
 from .display import LUMINANCE
@@ -208,16 +208,23 @@ def render_reference(scene, view_set, settings: ReferenceSettings = ReferenceSet
     first = seeds.reference_first_frame() if first_frame is None else int(first_frame)
     half, check = settings.frames // 2, settings.bounce_check_frames
     t0 = time.perf_counter()
-    shots = render_mean(scene, reference_graph(settings), PIN, view_set, settings.frames, first,
-                        snapshots=(check, half), gpu=gpu, tick=tick)
-    by_frames = {s.frames: s.image for s in shots}
-    a, b = split_halves(by_frames[half], by_frames[settings.frames])
+    # each half its own render (frames [first, first + half) and [first + half, first + frames))
+    shots = render_mean(scene, reference_graph(settings), PIN, view_set, half, first, snapshots=(check,), gpu=gpu,
+                        tick=tick)
+    a, at_check = shots[-1].image, next(s.image for s in shots if s.frames == check)
+    b = render_mean(scene, reference_graph(settings), PIN, view_set, half, first + half, gpu=gpu,
+                    tick=None if tick is None else (lambda n: tick(half + n)))[-1].image
+    if np.array_equal(a, b):
+        # path-traced halves from disjoint seeds are never equal
+        raise RayvrError(f"reference of {scene.name}: its two halves came out identical (the renderer repeated its "
+                         f"random numbers or did not render); not using it, nothing cached")
+    image = ((a.astype(np.float64) + b) * 0.5).astype(np.float32)
+    a, b = split_halves(a, image)    # B as the cache gives it back (2 image - A, in float32)
     more = render_mean(scene, reference_graph(settings, settings.max_bounces + 1), PIN, view_set,
                        check, first, gpu=gpu,
                        tick=None if tick is None else (lambda n: tick(settings.frames + n)))[-1].image
-    change = relative_change(more, by_frames[check])
-    return Reference(by_frames[settings.frames], a, b, settings, first, change, time.perf_counter() - t0,
-                     "rendered", eps)
+    change = relative_change(more, at_check)
+    return Reference(image, a, b, settings, first, change, time.perf_counter() - t0, "rendered", eps)
 
 
 def relative_change(image: np.ndarray, base: np.ndarray) -> float:

@@ -7,6 +7,7 @@ which matters on llvmpipe: it compiles a shader at its first dispatch).
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import time
 
@@ -35,11 +36,17 @@ def warm_up(renderer, seconds: float) -> None:
         renderer.gl.finish()
 
 
-def timed_frames(renderer, frames: int, warmup: int, warmup_s: float = 0.0) -> Timing:
+def timed_frames(renderer, frames: int, warmup: int, warmup_s: float = 0.0, quiet=None) -> Timing:
     """Render untimed frames for `warmup_s` seconds (warm_up) and then `warmup` more, then
-    `frames` timed frames; the per-pass means of the timed ones."""
+    `frames` timed frames; the per-pass means of the timed ones. `quiet`: a context manager
+    factory held around all of it (rayvr.tune.pool.MetricPool.quiet: the metric workers paused)."""
     if frames < 1 or warmup < 0:
         raise OptionError(f"measure: frames must be >= 1 and warmup >= 0, got frames={frames}, warmup={warmup}")
+    with quiet() if quiet is not None else contextlib.nullcontext():
+        return _timed(renderer, frames, warmup, warmup_s)
+
+
+def _timed(renderer, frames: int, warmup: int, warmup_s: float) -> Timing:
     warm_up(renderer, warmup_s)
     for _ in range(warmup):
         renderer.render()

@@ -40,7 +40,7 @@ RAY_RECORD_BYTES = 48   # one ProbeRay (probe_rays.glsl): radiance, hit, ids
 # as float16 (half the texture traffic of the lookups every pixel makes); the update blends in
 # float32 history, where float16's rounding would stall the hysteresis 1% short of its target.
 # Depth moments stay float32: a variance is a difference of two of them.
-MAPS = {"irradiance": ("rgba16f", "rgba32f", L.IRRADIANCE_TILE), "depth": ("rg16f", "rg32f", L.DEPTH_TILE),
+MAPS = {"irradiance": ("rgba16f", "rgba32f", L.IRRADIANCE_TILE), "depth": ("rg32f", "rg32f", L.DEPTH_TILE),
         "state": ("rg32f", "rg32f", L.STATE_TILE)}
 
 

@@ -14,7 +14,7 @@
 layout(local_size_x = PROBE_RAYS) in;
 layout(rgba16f) writeonly uniform image2DArray irradiance_out;    // what the lookups sample
 layout(rgba32f) writeonly uniform image2DArray irradiance_next;   // the history, blended in float32
-layout(rg16f) writeonly uniform image2DArray depth_out;          // moments over (D, D^2): in [0, 1]
+layout(rg32f) writeonly uniform image2DArray depth_out;
 layout(rg32f) writeonly uniform image2DArray depth_next;
 layout(rg32f) writeonly uniform image2DArray state_out;
 layout(rg32f) writeonly uniform image2DArray state_next;
@@ -123,9 +123,7 @@ void main() {
             sum += w * vec2(d, d * d);
             total += w;
         }
-        // in units of the maximum distance D (probe_gi.glsl): float16 keeps the variance of a
-        // sharp wall at ~1e-4 D^2 whatever the scene's scale
-        vec2 moments = total > 1e-12 ? sum / total / vec2(max_depth, max_depth * max_depth) : vec2(1.0);
+        vec2 moments = total > 1e-12 ? sum / total : vec2(max_depth, max_depth * max_depth);
         if (history) moments = mix(moments, texelFetch(probe_depth_tex, ivec3(tile * DT + src, 0), 0).xy, h);
         ivec3 texel = ivec3(tile * DT + t, 0);
         imageStore(depth_out, texel, vec4(moments, 0.0, 0.0));
