@@ -197,3 +197,43 @@ def test_judged_frames_do_not_depend_on_a_timed_warm_up(gpu, scene, reference):
         rows.append(measure(scene, configs, views=views, reference=reference, settings=settings, progress=False,
                             gpu=gpu, curves=False)["svgf"])
     assert rows[0].errors == rows[1].errors and rows[0].mean("relmse") > 0
+
+
+class _RampingRenderer:
+    """A renderer whose frames get 10% faster each (a GPU's clocks rising) from 8 ms until they
+    reach 1 ms (frame ~20), or never when `ramp` is False after `settles` frames."""
+
+    def __init__(self, settles: int = 10 ** 6, start_s: float = 0.008, end_s: float = 0.001):
+        import types
+
+        self.frames, self.settles, self.start_s, self.end_s = 0, settles, start_s, end_s
+        self.gl = types.SimpleNamespace(finish=lambda: None)
+
+    def render(self):
+        import time
+
+        time.sleep(max(self.end_s, self.start_s * 0.9 ** min(self.frames, self.settles)))
+        self.frames += 1
+
+
+def test_warm_up_renders_on_until_the_frame_time_settles(monkeypatch):
+    import time
+
+    from rayvr.tune import timing
+
+    monkeypatch.setattr(timing, "SETTLE_WINDOW_S", 0.02)
+    monkeypatch.setattr(timing, "MAX_SETTLE_S", 5.0)
+    ramp = _RampingRenderer()
+    timing.warm_up(ramp, 0.01)
+    assert ramp.frames >= 20           # not before the frames stopped getting faster
+    steady = _RampingRenderer(settles=0)
+    timing.warm_up(steady, 0.01)
+    assert steady.frames < 15          # a steady GPU: the seconds, then two windows
+    monkeypatch.setattr(timing, "MAX_SETTLE_S", 0.1)
+    slow = _RampingRenderer(end_s=0.0)   # ever faster: never settles
+    t0 = time.perf_counter()
+    timing.warm_up(slow, 0.01)
+    assert time.perf_counter() - t0 < 0.5     # bounded
+    none = _RampingRenderer(settles=0)
+    timing.warm_up(none, 0.0)
+    assert none.frames == 0            # no warm-up asked (llvmpipe): nothing rendered

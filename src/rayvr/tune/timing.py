@@ -14,6 +14,9 @@ import time
 from ..errors import OptionError
 
 GPU_WARM_UP_S = 0.5    # an idle H100 clocks at ~345 MHz and needs a moment of load to reach ~1980 MHz
+SETTLE_WINDOW_S = 0.1  # after the warm-up's seconds, frames are timed (wall clock) in windows this long...
+SETTLE_TOLERANCE = 0.03   # ...until two windows' mean frame times agree this closely
+MAX_SETTLE_S = 1.0     # at most this long more
 
 
 @dataclasses.dataclass
@@ -29,11 +32,32 @@ class Timing:
 
 def warm_up(renderer, seconds: float) -> None:
     """Render until `seconds` have passed, so that a GPU which idled (an H100 drops to ~345 MHz)
-    has its clocks up before anything is timed."""
+    has its clocks up before anything is timed; then on, in windows of SETTLE_WINDOW_S, until
+    two windows' mean frame times agree within SETTLE_TOLERANCE or MAX_SETTLE_S more have passed
+    (the H200 study's first rows, after a fixed 0.5 s, read up to 1.3x the later rows' G-buffer
+    time)."""
+    if seconds <= 0:
+        return
     until = time.perf_counter() + seconds
     while time.perf_counter() < until:
         renderer.render()
         renderer.gl.finish()
+    settle_until, last = time.perf_counter() + MAX_SETTLE_S, None
+    while time.perf_counter() < settle_until:
+        mean = _window_frame_s(renderer)
+        if last is not None and abs(mean - last) <= SETTLE_TOLERANCE * last:
+            return
+        last = mean
+
+
+def _window_frame_s(renderer) -> float:
+    """Mean wall seconds per finished frame over one window of at least SETTLE_WINDOW_S (and 2 frames)."""
+    t0, n = time.perf_counter(), 0
+    while n < 2 or time.perf_counter() - t0 < SETTLE_WINDOW_S:
+        renderer.render()
+        renderer.gl.finish()
+        n += 1
+    return (time.perf_counter() - t0) / n
 
 
 def timed_frames(renderer, frames: int, warmup: int, warmup_s: float = 0.0, quiet=None) -> Timing:
