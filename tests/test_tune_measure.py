@@ -237,3 +237,23 @@ def test_warm_up_renders_on_until_the_frame_time_settles(monkeypatch):
     none = _RampingRenderer(settles=0)
     timing.warm_up(none, 0.0)
     assert none.frames == 0            # no warm-up asked (llvmpipe): nothing rendered
+
+
+def test_a_level_on_every_material_is_predicted_as_the_probe_timed_it(gpu, scene, reference, monkeypatch):
+    """Direct lighting shrinks where rays light the pixels instead: the base's passes change with
+    the level, and the model shares that change by pixels like the ray passes' time."""
+    from rayvr.tune import probe as P
+    from rayvr.tune.timing import Timing
+
+    frames = iter([{"GBuffer": 1.0, "Direct": 0.5, "Composite": 0.1},                  # all RASTER
+                   {"GBuffer": 1.0, "Direct": 0.1, "Shadows": 2.0, "Composite": 0.1}])   # all SHADOWS
+    monkeypatch.setattr(P, "timed_frames", lambda *a, **k: (lambda ms: Timing(sum(ms.values()), ms, 0.0, "given",
+                                                                              1))(next(frames)))
+    views = default_views(scene, 1, SIZE)
+    model, _ = probe_cost_model(scene, views, rv.tune.hybrid_graph, {"path_bounces": 4}, _judge(reference),
+                                levels=[Effect.RASTER, Effect.SHADOWS], frames=1, warmup=1, trials=1, progress=False,
+                                gpu=gpu)
+    every = {n: Effect.SHADOWS for n in model.materials}
+    assert model.predict_ms(every) == pytest.approx(3.2)      # not 1.6 + 2.0: Direct's 0.4 less counts
+    assert model.predict_ms({n: Effect.RASTER for n in model.materials}) == pytest.approx(1.6)
+    assert model.ms["BackWall"][Effect.SHADOWS] == pytest.approx(1.6 * model.pixels["BackWall"] / SIZE[0] / SIZE[1])
