@@ -108,8 +108,9 @@ def run(args) -> dict:
         runner = LocalRunner(before_wait=(lambda s=following: prefetch_references(s, args.views, size, ref_settings,
                                                                                   motion, args.cache))
                              if following is not None else None)
-        results, tuned = tuned_study(scene, view_set, ref, settings, standard_configs(scene, ref_settings), budgets,
-                                     cache_dir=args.cache, runner=runner,
+        configs = standard_configs(scene, ref_settings, denoised_levels=args.figures != "device")
+        results, tuned = tuned_study(scene, view_set, ref, settings, configs, budgets, cache_dir=args.cache,
+                                     runner=runner,
                                      option_sets=[{}] if quick else None)   # quick: the graph's own options
         notes.append(f"{scene.name}: reference {ref.verdict()}")
         study = results.study
@@ -163,7 +164,9 @@ def figures_note(figures: str, f: dict, frames: int, floor_fraction: float, hdrf
             f"{frames} judged frames x every view; in motion "
             f"{f['motion_frames']} frames, judged at {f['motion_samples']}; floors at {floor_fraction:g} of the "
             f"reference's paths; progressive curves to {f['progressive_frames']} frames"
-            + (" (reduced from the full run's defaults to fit one device call)" if figures == "device" else ""))
+            + (" (reduced from the full run's defaults to fit one device call; the hybrid levels through SVGF, "
+               "with and without probe GI, left out: give them with `rayvr converge --configs`)"
+               if figures == "device" else ""))
 
 
 def _round(value, digits: int = 4):

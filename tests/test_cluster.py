@@ -140,7 +140,7 @@ def test_error_study_split_by_configuration_matches_one_process(cluster, gpu, tm
     views = default_views(scene, 2, SIZE)
     ref_settings = rv.tune.ReferenceSettings(4, 1, 3)
     ref = rv.tune.render_reference(scene, views, ref_settings, gpu=gpu)
-    configs = rv.tune.standard_configs(scene, ref_settings, spp=(1,))
+    configs = rv.tune.standard_configs(scene, ref_settings, spp=(1,), denoised_levels=False)
     settings = rv.tune.StudySettings(frames=1, timing_frames=1, warmup=1, metrics=("relmse", "psnr"),
                                      motion=rv.tune.Motion(frames=2, samples=1), progressive_frames=2)
     kw = {"reference": ref, "views": views, "settings": settings}

@@ -153,3 +153,25 @@ def test_denoise_benchmark_times_each_svgf_kernel(gpu):
         args.kernels = bad
         with pytest.raises(OptionError, match="--kernels"):
             denoise.run(args)
+
+
+def test_the_error_study_gets_the_hybrid_levels_through_svgf_with_and_without_probe_gi(gpu):
+    scene = builtin.cornell_box()
+    configs = {c.name: c for c in rv.tune.standard_configs(scene, spp=(1,))}
+    for level in ("all RASTER", "all SHADOWS", "all REFLECTIONS", "SHADOWS + REFLECTIONS (Floor)"):
+        assert f"{level} + SVGF" in configs and f"{level} + probes GI + SVGF" in configs
+        assert f"{level} + OIDN" not in configs          # offline: no frame budget to trade
+    both = configs["all SHADOWS + probes GI + SVGF"]
+    graph = both.build_graph()
+    assert {"SVGF", "Probes", "Shadows"} <= set(graph.passes) and both.output_pin(graph) == "TAA.dst"
+    assert both.settings(scene)["denoiser"] == "svgf" and both.settings(scene)["gi"] == "probes"
+    assert not any(n.endswith("SVGF") and not n.startswith("PATH")
+                   for n in (c.name for c in rv.tune.standard_configs(scene, spp=(1,), denoised_levels=False)))
+    settings = rv.tune.StudySettings(frames=2, timing_frames=1, warmup=0, motion=None, floors=False,
+                                     progressive_frames=0)
+    reference = rv.tune.ReferenceSettings(frames=4, spp=2, max_bounces=2)
+    res = rv.tune.measure(scene, [both, configs["all SHADOWS + probes GI"]], views=1, size=(12, 12),
+                          reference=reference, settings=settings, cache_dir=False, progress=False, gpu=gpu)
+    denoised, raw = res["all SHADOWS + probes GI + SVGF"], res["all SHADOWS + probes GI"]
+    assert denoised.gpu_ms > 0 and np.isfinite(denoised.errors["relmse"]["mean"])
+    assert denoised.errors["flip"]["mean"] != raw.errors["flip"]["mean"]     # another image, not the raw one

@@ -32,6 +32,7 @@ from .reference import ReferenceSettings
 
 DEFAULT_BOUNCES = ReferenceSettings.max_bounces
 DENOISERS = ("svgf", "oidn")
+REALTIME_DENOISERS = ("svgf",)   # those that fit a frame budget (the hybrid levels get these)
 GI_MODES = ("probes",)
 
 
@@ -264,11 +265,12 @@ def available_gi(builder=hybrid_graph) -> list[str]:
 
 
 def standard_configs(scene, reference: ReferenceSettings | None = None, reflect: str = "auto", spp=(1, 4, 16),
-                     taa: bool = True, **options) -> list[Config]:
+                     taa: bool = True, denoised_levels: bool = True, **options) -> list[Config]:
     """Every effect level alone (all RASTER, all SHADOWS, all REFLECTIONS, all PATH_TRACED at each
     `spp`) and mixed (SHADOWS with REFLECTIONS on one material); PATH_TRACED 1 spp + TAA (judged in
     motion); each PATH_TRACED level with every available denoiser, each other level with probe GI
-    where the graphs have it. PATH_TRACED uses the reference's bounces."""
+    where the graphs have it and (`denoised_levels`) with the real-time denoiser, with and without
+    probe GI. PATH_TRACED uses the reference's bounces."""
     bounces = (reference or ReferenceSettings()).max_bounces
     opts = {"path_bounces": bounces, **options}
     mirror = reflective_material(scene, reflect)
@@ -285,6 +287,12 @@ def standard_configs(scene, reference: ReferenceSettings | None = None, reflect:
     for d in available_denoisers():
         configs += [Config(f"{name} + {d.upper()}", Effect.PATH_TRACED, options={**o, "denoise": d})
                     for name, o in traced]
+    if denoised_levels:   # the hybrid's one-sample light through SVGF (OIDN is offline: no frame budget)
+        for d in (d for d in available_denoisers() if d in REALTIME_DENOISERS):
+            for gi in [None, *available_gi()]:
+                extra = {"denoise": d, **({"gi": gi} if gi else {})}
+                configs += [Config(f"{name}{f' + {gi} GI' if gi else ''} + {d.upper()}", effects,
+                                   options={**opts, **extra}) for name, effects in levels]
     return configs
 
 
