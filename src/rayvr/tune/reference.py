@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import OptionError, RayvrError
+from ..errors import OptionError
 from ..fileio import atomic_write
 from . import seeds
 from .display import LUMINANCE
@@ -121,6 +121,12 @@ class Reference:
         need = self.settings.frames * self.noise_relmse / self.settings.tolerance
         return max(2, 2 * math.ceil(need / 2))
 
+    @property
+    def halves_identical(self) -> bool:
+        """Whether A and B are equal to the bit: light without noise at these settings (one point
+        light, direct light only), or a half that was never added (as the H200 once gave it)."""
+        return bool(np.array_equal(self.half_a[..., :3], self.half_b[..., :3]))
+
     def verdict(self) -> str:
         """One line: converged or not, and whether the bounces suffice."""
         s = self.settings
@@ -128,6 +134,9 @@ class Reference:
                  if self.converged else
                  f"NOT converged: halves predict relMSE {self.noise_relmse:.2e} > tolerance {s.tolerance:.0e} "
                  f"(about {self.frames_to_converge()} frames of {s.spp} spp would do)")
+        if self.halves_identical:
+            noise = ("halves identical (noise-free light at these settings, or a half that was not rendered: the "
+                     "convergence check cannot tell)")
         bounce = (f"{s.max_bounces} bounces: one more changes the mean radiance by {100 * self.bounce_change:+.2f}% "
                   f"({'within' if self.bounces_enough else 'OVER'} the {100 * s.bounce_tolerance:g}% tolerance)")
         return f"{noise}; {bounce}"
@@ -138,7 +147,8 @@ class Reference:
                           "half_a_frames": [self.first_frame, self.first_frame + self.settings.frames // 2],
                           "half_b_frames": [self.first_frame + self.settings.frames // 2,
                                             self.first_frame + self.settings.frames]},
-                "convergence": {"verdict": "converged" if self.converged else "not converged",
+                "convergence": {"verdict": "halves identical" if self.halves_identical else
+                                ("converged" if self.converged else "not converged"),
                                 "predicted_relmse": self.noise_relmse, "tolerance": self.settings.tolerance,
                                 "eps": self.eps, "method": "halves A, B: mean((A-B)^2/4 / (M^2+eps))"},
                 "bounces": {"bounces": self.settings.max_bounces, "relative_change_one_more": self.bounce_change,
@@ -214,10 +224,6 @@ def render_reference(scene, view_set, settings: ReferenceSettings = ReferenceSet
     a, at_check = shots[-1].image, next(s.image for s in shots if s.frames == check)
     b = render_mean(scene, reference_graph(settings), PIN, view_set, half, first + half, gpu=gpu,
                     tick=None if tick is None else (lambda n: tick(half + n)))[-1].image
-    if np.array_equal(a, b):
-        # path-traced halves from disjoint seeds are never equal
-        raise RayvrError(f"reference of {scene.name}: its two halves came out identical (the renderer repeated its "
-                         f"random numbers or did not render); not using it, nothing cached")
     image = ((a.astype(np.float64) + b) * 0.5).astype(np.float32)
     a, b = split_halves(a, image)    # B as the cache gives it back (2 image - A, in float32)
     more = render_mean(scene, reference_graph(settings, settings.max_bounces + 1), PIN, view_set,

@@ -171,10 +171,12 @@ def sections(results, images: _Images, plots: dict, budget_ms=None, title: str |
         f"Seeds: frames {seeds['half_a_frames'][0]}..{seeds['half_a_frames'][1] - 1} (half A) and "
         f"{seeds['half_b_frames'][0]}..{seeds['half_b_frames'][1] - 1} (half B); the configurations use frames "
         f"from 0, so no render shares random numbers with the reference.",
-        f"**{'Converged' if ref.converged else 'NOT converged'}**: the halves predict a relMSE of "
-        f"{ref.noise_relmse:.2e} for their mean against the truth (mean((A-B)^2/4 / (M^2+eps)), eps {ref.eps:g}); "
-        f"tolerance {rs.tolerance:.0e}, an RMS error of {100 * rs.tolerance ** 0.5:.1f}% of a pixel's radiance."
-        + ("" if ref.converged else f" About {ref.frames_to_converge()} frames of {rs.spp} spp would converge."),
+        ("**Halves identical**: the two halves are equal to the bit, so the convergence check cannot tell "
+         "noise-free light at these settings from a half that was not rendered." if ref.halves_identical else
+         f"**{'Converged' if ref.converged else 'NOT converged'}**: the halves predict a relMSE of "
+         f"{ref.noise_relmse:.2e} for their mean against the truth (mean((A-B)^2/4 / (M^2+eps)), eps {ref.eps:g}); "
+         f"tolerance {rs.tolerance:.0e}, an RMS error of {100 * rs.tolerance ** 0.5:.1f}% of a pixel's radiance."
+         + ("" if ref.converged else f" About {ref.frames_to_converge()} frames of {rs.spp} spp would converge.")),
         f"**{'Enough' if ref.bounces_enough else 'Too few'} bounces**: one more bounce changes the mean radiance by "
         f"{100 * ref.bounce_change:+.3f}% (tolerance {100 * rs.bounce_tolerance:g}%; rendered over "
         f"{rs.bounce_check_frames} frames with half A's random numbers, so only the extra bounce differs).",
