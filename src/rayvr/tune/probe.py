@@ -130,7 +130,8 @@ def probe_cost_model(scene, view_set, builder, options: dict, judge: ErrorJudge,
         for level in tqdm(probe_levels, desc="effect levels", unit="level", disable=not progress, leave=False):
             for m in scene.materials:
                 m.effect = level
-            times[level] = timed_frames(r, frames, max(1, warmup), warmup_s, judge.quiet)   # >= 1: the level may recompile
+            # warm-up >= 1 frame: the level may recompile
+            times[level] = timed_frames(r, frames, max(1, warmup), warmup_s, judge.quiet)
             errors[level] = judge.mean_map_later(r, pin, trials, f"all {level.name} {pin}")
             if level == Effect.RASTER:
                 words = r.read_output(ids_pin, flip_y=True)[..., 0]
