@@ -108,7 +108,7 @@ def run(args) -> dict:
         runner = LocalRunner(before_wait=(lambda s=following: prefetch_references(s, args.views, size, ref_settings,
                                                                                   motion, args.cache))
                              if following is not None else None)
-        configs = standard_configs(scene, ref_settings, denoised_levels=args.figures != "device")
+        configs = standard_configs(scene, ref_settings, denoised_levels=args.figures != "device" and not quick)
         results, tuned = tuned_study(scene, view_set, ref, settings, configs, budgets, cache_dir=args.cache,
                                      runner=runner,
                                      option_sets=[{}] if quick else None)   # quick: the graph's own options

@@ -180,7 +180,9 @@ class StudyPlan:
             progressive_frames=pick(args.progressive_frames, "--progressive-frames", d.progressive_frames),
             preset=args.preset, ppd=args.ppd, display=self.display, metrics=tuple(metrics))
         self.cache = False if args.no_cache else args.cache
-        self.note = d.note(chosen) if chosen else None
+        self.denoised_levels = d.denoised_levels
+        left_out = not d.denoised_levels and not args.configs
+        self.note = d.note(chosen, left_out) if chosen or left_out else None
         self.report = Path(args.report) if args.report else None
         from ..fileio import check_writable
 
@@ -199,7 +201,8 @@ class StudyPlan:
 
         if self.configs_file:
             return load_configs(self.configs_file)
-        return standard_configs(scene, self.reference, reflect=self.reflect, spp=self.spp)
+        return standard_configs(scene, self.reference, reflect=self.reflect, spp=self.spp,
+                                denoised_levels=self.denoised_levels)
 
     def notes(self) -> list[str]:
         return [self.note] if self.note else []

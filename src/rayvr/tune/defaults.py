@@ -1,7 +1,8 @@
 """Study sizes for the machine at hand: what `rayvr converge` and `rayvr tune` render when not
-told, chosen so that the study of the built-in Cornell box took about a minute. With probe GI and
-SVGF among its 28 configurations it takes about 8 minutes on llvmpipe (2 cores; 1.5 with the
-references and floors cached): the probe rows render most slowly there.
+told, chosen so that the study of the built-in Cornell box took about a minute. With the probe-GI
+rows among its configurations it takes several minutes on llvmpipe (2 cores): they render most
+slowly there. So on llvmpipe the standard list leaves out the hybrid levels through SVGF
+(`denoised_levels`; 8 rows, half of them with probe GI), and the note says so.
 
 On llvmpipe (`gpu.caps.is_software`, ~0.45 M paths of 8 bounces per second on 2 cores) that is 2
 views of 32x32, a 64 x 16 spp reference and 16-frame progressive curves; on a GPU, 2 views of
@@ -27,14 +28,19 @@ class MachineDefaults:
     motion_frames: int
     motion_samples: int
     progressive_frames: int
+    denoised_levels: bool = True    # rayvr.tune.standard_configs' hybrid levels through SVGF
 
-    def note(self, chosen: dict) -> str:
-        """One line saying what was chosen for this machine (`chosen`: option -> value used)."""
+    def note(self, chosen: dict, left_out: bool = False) -> str:
+        """One line saying what was chosen for this machine (`chosen`: option -> value used;
+        `left_out`: the standard list without the hybrid levels through SVGF)."""
         parts = ", ".join(f"{k} {v}" for k, v in chosen.items())
+        if left_out:
+            parts += ("; " if parts else "") + "the hybrid levels through SVGF left out (give them with --configs)"
         return f"defaults for {self.kind} (sized for the Cornell box; give options to change): {parts}"
 
 
-SOFTWARE = MachineDefaults("llvmpipe (software rendering)", (32, 32), 64, 16, 4, 10, 2, 16, 2, 16)
+SOFTWARE = MachineDefaults("llvmpipe (software rendering)", (32, 32), 64, 16, 4, 10, 2, 16, 2, 16,
+                           denoised_levels=False)
 HARDWARE = MachineDefaults("a GPU", (720, 800), 256, 16, 4, 30, 5, 32, 3, 128)
 
 
