@@ -124,7 +124,11 @@ def test_probed_model_splits_time_and_error_by_material(gpu, scene, reference):
     assert set(model.pixels) == set(scene.materials.names())
     assert sum(model.pixels.values()) == SIZE[0] * SIZE[1]               # the box fills the view
     assert model.pixels["BackWall"] > model.pixels["Light"] > 0
-    assert model.ms["BackWall"][Effect.SHADOWS] > model.ms["Light"][Effect.SHADOWS] > 0
+    # the level's change of time shared by pixels (its sign is llvmpipe's: direct lighting of every pixel
+    # can cost more than 144 pixels' shadow rays)
+    shadows = {n: model.ms[n][Effect.SHADOWS] for n in ("BackWall", "Light")}
+    assert shadows["BackWall"] != 0.0
+    assert shadows["BackWall"] / shadows["Light"] == pytest.approx(model.pixels["BackWall"] / model.pixels["Light"])
     assert all(model.ms[n][Effect.RASTER] == 0 for n in model.materials)
     # per-material shares of the all-RASTER error add up to that image's relMSE (the next frame's)
     settings = StudySettings(frames=1, timing_frames=1, warmup=1, motion=None, floors=False, progressive_frames=0,
