@@ -109,6 +109,12 @@ class StudySettings:
             raise OptionError(f"study eps: must be > 0, got {self.eps!r}")
         check_metrics(self.metrics)
 
+    def workers_for(self, view_set) -> int:
+        """Processes that judge the images of `view_set` (metric_workers; None: by view size)."""
+        if self.metric_workers is not None:
+            return self.metric_workers
+        return default_workers(view_set.size[0] * view_set.size[1])
+
     def pixels_per_degree(self) -> float:
         from ..xr.presets import get_preset
 
@@ -257,9 +263,8 @@ class Study:
         return study
 
     def metric_workers(self) -> int:
-        """Processes that judge the images (StudySettings.metric_workers; None: by view size)."""
-        w = self.s.metric_workers
-        return default_workers(self.view_set.size[0] * self.view_set.size[1]) if w is None else w
+        """Processes that judge the images (StudySettings.workers_for)."""
+        return self.s.workers_for(self.view_set)
 
     # -- planning ----------------------------------------------------------------------------
     def _reference_units(self) -> float:

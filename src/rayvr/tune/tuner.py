@@ -130,28 +130,23 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
     hybrid graph, e.g. probe GI and SVGF, and none), one cost model each (tune_effects)."""
     from .configs import Config
     from .measure import measure
-    from .pool import MetricPool, default_workers
+    from .pool import MetricPool
     from .runner import LocalRunner
 
     runner = runner or LocalRunner()
-    judge = ErrorJudge(reference, settings.display.fixed(reference.image), settings.pixels_per_degree(), metric,
-                       settings.eps)
     options = {"path_bounces": reference.settings.max_bounces}
     if option_sets is None:
         option_sets = [{}] + [{k: v for k, v in c.options.items() if k in TUNED_OPTIONS}
                               for c in configs if c.builder is hybrid_graph and c.options.get("denoise") != "oidn"]
     # a local probe's error maps are made by worker processes while it renders (as the study's)
-    workers = 0
-    if isinstance(runner, LocalRunner):
-        pixels = view_set.size[0] * view_set.size[1]
-        workers = default_workers(pixels) if settings.metric_workers is None else settings.metric_workers
+    workers = settings.workers_for(view_set) if isinstance(runner, LocalRunner) else 0
     with MetricPool(workers) as pool:
-        judge.pool = pool if workers else None
+        judge = ErrorJudge(reference, settings.display.fixed(reference.image), settings.pixels_per_degree(), metric,
+                           settings.eps, pool=pool if workers else None)
         models = [(opts, runner.probe(scene, view_set, hybrid_graph, opts, judge, levels=levels,
                                       frames=settings.timing_frames, warmup=settings.warmup,
                                       warmup_s=settings.warmup_s, trials=trials, progress=progress, gpu=gpu)[0])
                   for opts in option_sets_for(hybrid_graph, options, option_sets)]
-        judge.pool = None
     tuned = {float(b): choose_with_options(models, options, b, levels) for b in budgets}
     names = {b: f"tuned for {b:g} ms" for b in tuned}
     rows = list(configs) + [Config(names[b], dict(t.assignment), options={**options, **t.options})
