@@ -36,7 +36,7 @@ QUICK_TIME_SIZES = ("2x64x64", "8x32x43")
 FIGURES = {"size": ("1440x1600", "32x32"), "timing_frames": (50, 4), "warmup": (10, 2), "reference_frames": (256, 32),
            "reference_spp": (16, 8), "motion_frames": (32, 8), "motion_samples": (3, 2), "frames": (4, 2)}
 COLUMNS = ["part", "scene", "config", "views x size", "GPU ms", "SVGF ms", "TAA ms", "SVGF MB", "OIDN wall ms",
-           "FLIP", "PSNR dB", "relMSE", "FLIP in motion", "PSNR in motion"]
+           "OIDN CUDA ms fast / balanced / high", "FLIP", "PSNR dB", "relMSE", "FLIP in motion", "PSNR in motion"]
 
 
 def add_arguments(parser) -> None:
@@ -103,7 +103,7 @@ def time_rows(scene_spec: str, entries, frames: int, warmup: int, kernels=DEFAUL
     scene = load_scene_arg(scene_spec)
     rows = []
     for views, size in entries:
-        oidn = _oidn_ms(size, views)
+        oidn, oidn_cuda = _oidn_ms(size, views), _oidn_cuda_ms(size, views)
         for kernel, iterations in kernels:
             graph = rv.graphs.path_traced(max_bounces=1, denoise="svgf")
             if svgf_props(kernel, iterations):
@@ -117,7 +117,7 @@ def time_rows(scene_spec: str, entries, frames: int, warmup: int, kernels=DEFAUL
                 total = sum(p.mean_ms for p in prof.passes.values())
             rows.append(["time", scene.name, f"1 spp + {svgf_label(kernel, iterations)} + TAA (1 bounce)",
                          f"{views}x{size[0]}x{size[1]}", round(total, 3), round(svgf, 3), round(taa, 3),
-                         float(f"{svgf_bytes / 2 ** 20:.3g}"), oidn, "-", "-", "-", "-", "-"])
+                         float(f"{svgf_bytes / 2 ** 20:.3g}"), oidn, oidn_cuda, "-", "-", "-", "-", "-"])
     return rows
 
 
@@ -138,6 +138,36 @@ def _oidn_ms(size, views: int):
     t0 = time.perf_counter()
     pyoidn.denoise(color, albedo, normal, hdr=True, clean_aux=True)
     return round((time.perf_counter() - t0) * 1e3 * views, 1)
+
+
+def _oidn_cuda_ms(size, views: int, repeats: int = 10) -> str:
+    """OIDN on pyoidn's CUDA device (torch CUDA tensors, RT filter, HDR, albedo and normal, clean
+    aux) for `views` images of `size` at qualities fast / balanced / high: the mean of `repeats`
+    calls after two warm-ups, synchronised, times `views`; or why it could not run."""
+    try:
+        import pyoidn
+        import torch
+    except ImportError as exc:
+        return f"no {exc.name}"
+    if not torch.cuda.is_available():
+        return "no CUDA"
+    w, h = size
+    g = torch.Generator(device="cuda").manual_seed(0)
+    color = torch.rand((h, w, 3), device="cuda", generator=g) * 2.0
+    albedo = torch.full((h, w, 3), 0.6, device="cuda")
+    normal = torch.zeros((h, w, 3), device="cuda")
+    normal[..., 2] = 1.0
+    out = []
+    for quality in ("fast", "balanced", "high"):
+        for _ in range(2):
+            pyoidn.denoise(color, albedo, normal, hdr=True, clean_aux=True, quality=quality)
+        torch.cuda.synchronize()
+        t0 = time.perf_counter()
+        for _ in range(repeats):
+            pyoidn.denoise(color, albedo, normal, hdr=True, clean_aux=True, quality=quality)
+        torch.cuda.synchronize()
+        out.append(f"{(time.perf_counter() - t0) * 1e3 / repeats * views:.2f}")
+    return " / ".join(out)
 
 
 def _svgf_builder(kernel: int, iterations: int | None):
@@ -192,7 +222,7 @@ def error_rows(scene_spec: str, args, f: dict, quick: bool, kernels=DEFAULT_KERN
     for r in results.rows:
         motion_stats = r.motion or {}
         rows.append(["error", scene.name, r.name, f"{len(view_set)}x{size[0]}x{size[1]}", round(r.gpu_ms, 3),
-                     _ms(r.pass_ms.get("SVGF")), _ms(r.pass_ms.get("TAA")), "-", _ms(r.pass_ms.get("Denoise")),
+                     _ms(r.pass_ms.get("SVGF")), _ms(r.pass_ms.get("TAA")), "-", _ms(r.pass_ms.get("Denoise")), "-",
                      stat_cell(r.errors.get("flip")), stat_cell(r.errors.get("psnr")), stat_cell(r.errors.get("relmse")),
                      stat_cell(motion_stats.get("flip")), stat_cell(motion_stats.get("psnr"))])
     notes = [f"{scene.name}: reference {ref.verdict()}"]
@@ -216,7 +246,8 @@ def run(args) -> dict:
         [_entry(e) for e in (QUICK_TIME_SIZES if quick else TIME_SIZES)]
     rows, notes = [], []
     if "time" in parts:
-        rows += time_rows(scenes[-1], entries, f["timing_frames"], f["warmup"], kernels)
+        for spec in scenes:
+            rows += time_rows(spec, entries, f["timing_frames"], f["warmup"], kernels)
     if "error" in parts:
         for spec in scenes:
             more, more_notes = error_rows(spec, args, f, quick, kernels)
@@ -224,7 +255,8 @@ def run(args) -> dict:
             notes += more_notes
     notes += ["time: SVGF ms and TAA ms are the passes' mean GPU time per frame (all views in one dispatch); "
               "SVGF MB: its resources in the compile report (history, moments, surfaces, the filter's scratch, "
-              "its output); OIDN wall ms: pyoidn's CPU device, outside the GPU timers",
+              "its output); OIDN wall ms: pyoidn's CPU device, outside the GPU timers; OIDN CUDA ms: pyoidn's CUDA "
+              "device on torch CUDA tensors (where the machine has them), wall time of synchronised calls",
               "error: mean ± std over judged frames x views; FLIP at the preset's pixels per degree; in motion: "
               "the 'turn' trajectory, judged frames along it, each against its own reference",
               "targets (H200): SVGF <= 1.5 ms at 2x1440x1600; 1 spp + SVGF below raw 16 spp's error at < 1/10 of "

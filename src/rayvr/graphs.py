@@ -89,7 +89,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
            auto_exposure: bool = False, light_samples: int = 1,
            multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid",
            gbuffer: str = "auto", denoise: str | None = None, gi: str | None = None,
-           probes: dict | None = None) -> RenderGraph:
+           probes: dict | None = None, reflection_max_roughness: float | None = None) -> RenderGraph:
     """The hybrid raster + ray-traced graph: multiview G-buffer, direct light for every pixel,
     ray-traced shadows and reflections only for the pixels whose material's effect asks for them,
     path tracing (rayvr.passes.PathTracer in G-buffer mode) for PATH_TRACED materials, composite
@@ -101,11 +101,15 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     `gi="probes"` adds indirect light to RASTER, SHADOWS and REFLECTIONS materials from a volume of
     irradiance probes ray traced once per frame for every view (rayvr.passes.ProbeGI, pass
     "Probes", with `probes` as its properties); PATH_TRACED materials trace their own.
+    `reflection_max_roughness`: REFLECTIONS surfaces rougher than this (and not transmissive) are
+    shaded as SHADOWS, their specular light from the probes (the G-buffer's property of that name,
+    rayvr.passes.gbuffer.reflection_cutoff); None: 0.6 with probe GI, 1 (every one traced) without.
     Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR), with a denoiser then its HDR
     output (`TAA.dst` or `Denoise.dst`; `hdr_output(graph)` names a graph's)."""
     from . import passes as P
     from .errors import OptionError
     from .passes.gbuffer import channels
+    from .passes.gbuffer import reflection_cutoff
     from .passes.probe_gi import inputs as probe_inputs
 
     if gi not in (None, "none", *GI_MODES):
@@ -116,7 +120,10 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     denoise = denoiser(denoise)
     svgf = denoise == "svgf"
     g = RenderGraph(name)
-    g.add_pass(P.GBufferAuto(mode=gbuffer, multiview=multiview), "GBuffer")
+    if reflection_max_roughness is None:
+        reflection_max_roughness = reflection_cutoff.HYBRID_GI_MAX_ROUGHNESS if gi == "probes" else 1.0
+    g.add_pass(P.GBufferAuto(mode=gbuffer, multiview=multiview, reflection_max_roughness=reflection_max_roughness),
+               "GBuffer")
     g.add_pass(P.DirectLighting(light_samples=light_samples, raster_only=True),
                "Direct")
     g.add_pass(P.EffectCompaction(path_list=True), "Compaction")

@@ -24,6 +24,17 @@ uint gbuf_pack_effect(uint effect, uint material) { return (material << 8u) | (e
 #define GBUF_RNG_SALT 5u
 
 #ifdef GBUF_WRITER
+// The effect a surface of material m is shaded with: its material's, but with REFLECTION_MAX_ROUGHNESS
+// (rayvr/passes/gbuffer/reflection_cutoff.py) a REFLECTIONS surface rougher than that and not
+// transmissive is shaded as SHADOWS (its specular light from the probes, not from one noisy ray).
+uint gbuf_effect_for(MaterialParams m) {
+#ifdef REFLECTION_MAX_ROUGHNESS
+    if (m.effect == EFFECT_REFLECTIONS && m.roughness > REFLECTION_MAX_ROUGHNESS && !(m.transmission > 0.0))
+        return EFFECT_SHADOWS;
+#endif
+    return m.effect;
+}
+
 // The texel of the surface at render-space `pos` seen from view v: normals already facing the
 // viewer, `front_face` whether the viewer sees the side the winding makes the front, material m
 // (index `material`). The back of a single-sided emitter emits nothing (as a ray hit's in the
@@ -42,7 +53,7 @@ GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, bool front_face, Mat
     t.metalRough = vec2(m.metallic, r);
     vec3 emitted = front_face || m.double_sided ? m.emissive : vec3(0.0);
     t.emissive = vec4(to_half_range(emitted), 0.0);   // the emissive target is rgba16f
-    t.effect = gbuf_pack_effect(m.effect, material);
+    t.effect = gbuf_pack_effect(gbuf_effect_for(m), material);
     vec4 now_clip = views[v].view_proj * vec4(pos, 1.0);
     vec4 before_clip = views[v].prev_view_proj * vec4(pos, 1.0);
     vec2 size = views[v].clip.zw;

@@ -8,6 +8,7 @@ from __future__ import annotations
 from ...errors import OptionError
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, RenderPass
+from . import reflection_cutoff
 from .raster import GBufferRaster, check_multiview, gbuffer_reflection
 from .rt import GBufferRT
 
@@ -31,13 +32,15 @@ class GBufferAuto(RenderPass):
     """The G-buffer through GBufferRaster or GBufferRT (see the module docstring). After compile,
     `chosen` is 'raster' or 'rt' and `why` says why; defines() shows both in the compile report."""
 
-    PROPERTIES = {"mode": "auto", "multiview": "auto", "cull_back_faces": False}
+    PROPERTIES = {"mode": "auto", "multiview": "auto", "cull_back_faces": False, reflection_cutoff.PROPERTY: 1.0}
     USES_SCENE = True
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
         if key == "mode" and value not in MODES:
             raise OptionError(f"pass {self.name}: property 'mode' is {value!r}; use auto, raster or rt")
+        if key == reflection_cutoff.PROPERTY:
+            return reflection_cutoff.validate(self.name, value)
         return check_multiview(self.name, value) if key == "multiview" else value
 
     def reflect(self, cd):
@@ -48,9 +51,10 @@ class GBufferAuto(RenderPass):
         self.chosen, self.why = choose_gbuffer(self.mode, ctx.caps, self.cull_back_faces)
         self.release()
         if self.chosen == "rt":
-            self.impl = GBufferRT()
+            self.impl = GBufferRT(reflection_max_roughness=self.reflection_max_roughness)
         else:
-            self.impl = GBufferRaster(multiview=self.multiview, cull_back_faces=self.cull_back_faces)
+            self.impl = GBufferRaster(multiview=self.multiview, cull_back_faces=self.cull_back_faces,
+                                      reflection_max_roughness=self.reflection_max_roughness)
         self.impl.name = self.name
         self.impl.compile(ctx, cd)
 

@@ -9,7 +9,7 @@ from ...errors import GpuError, OptionError, ShaderError
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
 from ..effects import effect_defines, scene_defines
-from . import channels
+from . import channels, reflection_cutoff
 from .layered_target import LayeredTarget, max_multiview_views
 
 MULTIVIEW_MODES = ("auto", "on", "off")
@@ -36,11 +36,13 @@ def gbuffer_reflection(access: Access = Access.IMAGE) -> Reflection:
 class GBufferRaster(RenderPass):
     """Rasterises the scene for all views in one draw call (see the module docstring)."""
 
-    PROPERTIES = {"multiview": "auto", "cull_back_faces": False}
+    PROPERTIES = {"multiview": "auto", "cull_back_faces": False, reflection_cutoff.PROPERTY: 1.0}
     USES_SCENE = True
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
+        if key == reflection_cutoff.PROPERTY:
+            return reflection_cutoff.validate(self.name, value)
         return check_multiview(self.name, value) if key == "multiview" else value
 
     def reflect(self, cd):
@@ -83,7 +85,8 @@ class GBufferRaster(RenderPass):
 
     def _build_program(self, ctx) -> None:
         self._defines = {**scene_defines(ctx), **effect_defines(), "VIEW_COUNT": self._views,
-                         "RAYVR_MULTIVIEW": int(self._multiview)}
+                         "RAYVR_MULTIVIEW": int(self._multiview),
+                         **reflection_cutoff.defines(self.reflection_max_roughness)}
         self._prog = self.raster_program(ctx.gl, "gbuffer.vert", "gbuffer.frag", self._defines)
 
     def _fall_back_to_layered(self, ctx, reason: str) -> None:

@@ -14,7 +14,7 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import RenderPass
 from ..dispatch import groups_2d, ray_group, ray_group_defines
 from ..effects import effect_defines, scene_defines
-from . import channels
+from . import channels, reflection_cutoff
 from .raster import gbuffer_reflection
 
 
@@ -23,17 +23,23 @@ class GBufferRT(RenderPass):
     """Traces one primary ray per pixel and view (pixel centre + the view's jitter) and writes the
     G-buffer targets (see the module docstring)."""
 
+    PROPERTIES = {reflection_cutoff.PROPERTY: 1.0}
     USES_SCENE = True
     # Views a workgroup spans in a camera grid (passes.dispatch.VIEW_GROUP): primary rays gain from
     # 2 and lose from more (benchmarks/RESULTS.md, "views a ray pass's workgroup spans").
     VIEW_GROUP = 2
+
+    def validate_property(self, key, value):
+        value = super().validate_property(key, value)
+        return reflection_cutoff.validate(self.name, value) if key == reflection_cutoff.PROPERTY else value
 
     def reflect(self, cd):
         return gbuffer_reflection()
 
     def compile(self, ctx, cd):
         self._group = ray_group(cd.views, view_group=self.VIEW_GROUP)
-        self._defines = {**scene_defines(ctx), **effect_defines(), **ray_group_defines(self._group)}
+        self._defines = {**scene_defines(ctx), **effect_defines(), **ray_group_defines(self._group),
+                         **reflection_cutoff.defines(self.reflection_max_roughness)}
         self._prog = self.compute_program(ctx.gl, "gbuffer_rt.comp", self._defines)
         self._res = program_resources(self._prog)
         self._groups = groups_2d(cd.size, cd.views, self._group)

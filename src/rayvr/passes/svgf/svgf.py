@@ -15,7 +15,8 @@ Four stages, one compute shader each, run as dispatches of this one pass:
     a-trous     `iterations` passes of the edge-stopping wavelet filter, `kernel` 3x3 (the
                 default, 9 taps) or 5x5 (the paper's B3 spline, 25 taps), taps 1, 2, 4, ...
                 pixels apart; depth, normal and variance-scaled luminance weights
-    modulate    filtered illumination x albedo + emission
+    modulate    filtered illumination x albedo + emission: in the last a-trous iteration (its
+                program built with SVGF_FINAL), or with 0 iterations a dispatch of its own
 The a-trous stage is bound by texture fetches, so what it reads per tap is small: the filter
 key (`key0/1`, rg32ui: linear depth, 0 where nothing was drawn, and octahedral normal) and one
 texel holding both lobes' illumination and variance (`filter0/1`, rgba32ui float16 pairs; rgba16f
@@ -50,7 +51,6 @@ from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
-STAGES = ("reproject", "variance", "atrous", "modulate")
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
 KERNELS = (3, 5)     # a-trous kernel widths: 3x3 (1/2, 1/4 per axis), 5x5 (B3 spline 3/8, 1/4, 1/16)
 
@@ -156,10 +156,12 @@ class SVGF(RenderPass):
         self._specular = self.SPECULAR in cd.input_formats
         self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular)}
         self._gl = ctx.gl
+        # the modulate stage's own program only when 0 iterations ask for it (_modulate_program)
         self._res = {stage: program_resources(self.compute_program(ctx.gl, f"svgf_{stage}.comp", self._defines))
-                     for stage in STAGES if stage != "atrous"}
+                     for stage in ("reproject", "variance")}
         self._atrous = {}
         self._atrous_program()
+        self._atrous_program(final=True)
         self._groups = groups_2d(cd.size, cd.views)
         self._frames = 0
         self._scene_version = None
@@ -167,14 +169,15 @@ class SVGF(RenderPass):
         self.resets = 0
         self.reset()
 
-    def _atrous_program(self):
-        """The a-trous stage's program for the current `kernel` (built in compile(); a kernel set
-        after it is built on its first frame)."""
-        kernel = int(self.kernel)
-        if kernel not in self._atrous:
-            self._atrous[kernel] = program_resources(self.compute_program(
-                self._gl, "svgf_atrous.comp", {**self._defines, "SVGF_KERNEL": kernel}))
-        return self._atrous[kernel]
+    def _atrous_program(self, final: bool = False):
+        """The a-trous stage's program for the current `kernel`, the last iteration's (which also
+        remodulates) with `final` (both built in compile(); a kernel set after it is built on its
+        first frame)."""
+        key = (int(self.kernel), bool(final))
+        if key not in self._atrous:
+            self._atrous[key] = program_resources(self.compute_program(
+                self._gl, "svgf_atrous.comp", {**self._defines, "SVGF_KERNEL": key[0], "SVGF_FINAL": int(final)}))
+        return self._atrous[key]
 
     def defines(self) -> dict:
         if not hasattr(self, "_defines"):
@@ -198,6 +201,20 @@ class SVGF(RenderPass):
         res.image("history_diffuse", data[self.HISTORY_DIFFUSE])
         if self._specular:
             res.image("history_specular", data[self.HISTORY_SPECULAR])
+
+    def _modulate_program(self):
+        """The modulate stage's own program (0 iterations: otherwise the last remodulates)."""
+        if "modulate" not in self._res:
+            self._res["modulate"] = program_resources(self.compute_program(self._gl, "svgf_modulate.comp",
+                                                                           self._defines))
+        return self._res["modulate"]
+
+    def _bind_modulate(self, res, data) -> None:
+        """Bind what remodulation reads and writes: the G-buffer, the input (the background) and
+        the output colour."""
+        channels.bind_inputs(res, data, GBUFFER)
+        res.texture("svgf_diffuse_in", data[self.DIFFUSE])
+        res.image("dst", data[self.COLOR])
 
     def _set_common(self, res) -> None:
         res.set("svgf_phi_depth", float(self.phi_depth))
@@ -248,25 +265,29 @@ class SVGF(RenderPass):
         ctx.barrier(*between)
 
         src = 0
-        res = self._atrous_program()
-        self._set_common(res)
-        res.texture("key_cur", data[self.KEY[cur]])
-        res.texture("gradient_cur", data[self.GRADIENT])
-        self._histories(res, data)
         for i in range(iterations):
+            final = i == iterations - 1
+            res = self._atrous_program(final)
+            self._set_common(res)
+            res.texture("key_cur", data[self.KEY[cur]])
+            res.texture("gradient_cur", data[self.GRADIENT])
+            self._histories(res, data)
             res.texture("src_illum", scratch[src])
-            res.image("dst_illum", scratch[1 - src])
+            if final:
+                self._bind_modulate(res, data)
+            else:
+                res.image("dst_illum", scratch[1 - src])
             res.set("svgf_step", 1 << i)
             res.set("svgf_write_history", i == tap)
             res.prog.run(*self._groups)
-            ctx.barrier(*between)
+            if not final:
+                ctx.barrier(*between)
             src = 1 - src
 
-        res = self._res["modulate"]
-        channels.bind_inputs(res, data, GBUFFER)
-        res.texture("svgf_diffuse_in", data[self.DIFFUSE])
-        res.texture("src_illum", scratch[src])
-        res.image("dst", data[self.COLOR])
-        res.prog.run(*self._groups)
+        if iterations == 0:
+            res = self._modulate_program()
+            self._bind_modulate(res, data)
+            res.texture("src_illum", scratch[src])
+            res.prog.run(*self._groups)
         self._frames += 1
         self._history_valid = True

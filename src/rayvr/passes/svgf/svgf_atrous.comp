@@ -5,13 +5,26 @@
 // wrote), normal and luminance (against the 3x3 Gaussian of the variance); the variance is
 // filtered with the squared weights. With `svgf_write_history` the result is next frame's history.
 // Taps come in mirrored pairs (offsets o and -o), which share the depth weight's denominator.
+// With SVGF_FINAL (the last iteration) the filtered illumination is not stored: it is remodulated
+// into the output colour `dst` here (svgf_color; the background as it came where nothing was
+// drawn), which spares a pass that would read it back (the modulate stage serves 0 iterations).
 #define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
+#ifndef SVGF_FINAL
+#define SVGF_FINAL 0
+#endif
 uniform SVGF_ILLUM_SAMPLER src_illum;
+#if SVGF_FINAL
+uniform sampler2DArray svgf_diffuse_in;
+layout(rgba16f) writeonly uniform image2DArray dst;
+#define OUT_SIZE imageSize(dst)
+#else
 layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE dst_illum;
+#define OUT_SIZE imageSize(dst_illum)
+#endif
 layout(rgba16f) writeonly uniform image2DArray history_diffuse;
 #if SVGF_SPECULAR
 layout(rgba16f) writeonly uniform image2DArray history_specular;
@@ -90,13 +103,17 @@ void add_tap(ivec3 q, ivec2 size, float depth_scale, float log_k) {
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
-    ivec3 size = imageSize(dst_illum);
+    ivec3 size = OUT_SIZE;
     if (any(greaterThanEqual(p, size))) return;
     uvec2 key = texelFetch(key_cur, p, 0).xy;
     c_depth = svgf_key_depth(key);
     SvgfIllum centre = texelFetch(src_illum, p, 0);
     if (!(c_depth > 0.0)) {   // nothing to filter: the texel as it came
+#if SVGF_FINAL
+        imageStore(dst, p, vec4(to_half_range(texelFetch(svgf_diffuse_in, p, 0).rgb), 1.0));
+#else
         imageStore(dst_illum, p, centre);
+#endif
         if (svgf_write_history) {
             imageStore(history_diffuse, p, vec4(svgf_illum_diffuse(centre).rgb, 0.0));
 #if SVGF_SPECULAR
@@ -132,7 +149,11 @@ void main() {
         d = vec4(sum_d / sum_w.x, sum_v.x / (sum_w.x * sum_w.x));
         s = vec4(sum_s / sum_w.y, sum_v.y / (sum_w.y * sum_w.y));
     }
+#if SVGF_FINAL
+    imageStore(dst, p, vec4(to_half_range(svgf_color(p, d.rgb, s.rgb)), 1.0));
+#else
     imageStore(dst_illum, p, svgf_illum_pack(d, s));
+#endif
     if (svgf_write_history) imageStore(history_diffuse, p, vec4(d.rgb, 0.0));
 #if SVGF_SPECULAR
     if (svgf_write_history) imageStore(history_specular, p, vec4(s.rgb, 0.0));

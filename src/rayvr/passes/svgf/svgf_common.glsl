@@ -104,6 +104,19 @@ vec3 svgf_demodulate(vec3 radiance, vec3 albedo) {
 
 vec3 svgf_remodulate(vec3 illumination, vec3 albedo) { return illumination * max(albedo, vec3(SVGF_ALBEDO_EPS)); }
 
+// The output colour at p (a pixel with geometry) from its filtered illumination: each lobe times
+// its albedo, plus the G-buffer's emission.
+vec3 svgf_color(ivec3 p, vec3 diffuse, vec3 specular) {
+    GSurface g = gbuf_load(p);
+    vec3 albedo_d, albedo_s;
+    svgf_albedo(g, uint(p.z), albedo_d, albedo_s);
+    vec3 c = svgf_remodulate(diffuse, albedo_d) + g.emissive;
+#if SVGF_SPECULAR
+    c += svgf_remodulate(specular, albedo_s);
+#endif
+    return c;
+}
+
 // One axis of the depth gradient: the smaller of the one-sided differences towards neighbours
 // that have geometry (depth > 0), so the gradient of a pixel on an edge is its own surface's.
 float svgf_depth_slope(float z, float before, float after) {

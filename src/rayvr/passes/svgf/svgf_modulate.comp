@@ -1,5 +1,6 @@
 // SVGF stage 4, remodulation: the filtered illumination of each lobe times its albedo, plus the
-// G-buffer's emission; where nothing was drawn, the input (the background) as it came.
+// G-buffer's emission; where nothing was drawn, the input (the background) as it came. Only with
+// no a-trous iteration: otherwise the last one remodulates (svgf_atrous.comp, SVGF_FINAL).
 #include "svgf_common.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
@@ -15,13 +16,7 @@ void main() {
         imageStore(dst, p, vec4(to_half_range(texelFetch(svgf_diffuse_in, p, 0).rgb), 1.0));
         return;
     }
-    GSurface g = gbuf_load(p);
-    vec3 albedo_d, albedo_s;
-    svgf_albedo(g, uint(p.z), albedo_d, albedo_s);
     SvgfIllum illum = texelFetch(src_illum, p, 0);
-    vec3 c = svgf_remodulate(svgf_illum_diffuse(illum).rgb, albedo_d) + g.emissive;
-#if SVGF_SPECULAR
-    c += svgf_remodulate(svgf_illum_specular(illum).rgb, albedo_s);
-#endif
+    vec3 c = svgf_color(p, svgf_illum_diffuse(illum).rgb, svgf_illum_specular(illum).rgb);
     imageStore(dst, p, vec4(to_half_range(c), 1.0));
 }
