@@ -172,7 +172,11 @@ def frame_rows(scene, args, quick: bool, notes: list) -> list:
             single = default_views(scene, 1, (round(w * s), round(h * s)))
             with rv.Renderer(scene, _graph(True), views=single) as r:
                 wall = wall_ms_per_frame(r, frames, 2)
-                one = (r.profile().total_ms if r.gpu.caps.timer_queries else None) or wall
+                prof = r.profile()
+                one = (prof.total_ms if r.gpu.caps.timer_queries else None) or wall
+                if r.gpu.caps.timer_queries:
+                    notes.append(f"frame {scene.name} 1x{single.size[0]}x{single.size[1]} + GI, GPU ms per pass: "
+                                 + ", ".join(f"{k} {s.mean_ms:.3f}" for k, s in prof.passes.items()))
             ratio = times[True] / one
             rows.append(["frame", scene.name, "SHADOWS + REFLECTIONS + GI, one view of the same pixels",
                          f"1x{single.size[0]}x{single.size[1]}", round(one, 3), f"views_ratio {ratio:.3g}",
