@@ -447,3 +447,40 @@ def test_untraced_glossy_light_comes_from_the_probes(gpu, roughness):
             r.render()
         reference = _material_mean(np.asarray(r.read_output("Accumulate.dst"), np.float64), words, index)
     assert 0.7 < hybrid / reference < 1.3, (hybrid, reference)
+
+
+def test_rough_reflections_go_to_the_probes_and_smooth_or_transmissive_ones_stay_traced(gpu):
+    """With probe GI the G-buffer marks REFLECTIONS pixels rougher than 0.6 and not transmissive
+    as SHADOWS (their specular light then comes from the probes' glossy fallback); smooth and
+    transmissive ones stay REFLECTIONS, and so does everything without GI or with
+    reflection_max_roughness=1. Read from the effect word itself (effect | material << 8)."""
+    s = Scene("reflective_room")
+    s.add_material(lambert("White", (0.6,) * 3, effect=rv.Effect.SHADOWS))
+    s.add_material(Material("Rough", metallic=0.0, roughness=0.9, effect=rv.Effect.REFLECTIONS))
+    s.add_material(Material("Smooth", metallic=1.0, roughness=0.2, effect=rv.Effect.REFLECTIONS))
+    s.add_material(Material("RoughGlass", metallic=0.0, roughness=0.9, transmission=1.0,
+                            effect=rv.Effect.REFLECTIONS))
+    pos, idx = room((-0.5, -0.5, -0.5), (0.5, 0.5, 0.5))
+    walls = {0: "Smooth", 1: "RoughGlass", 4: "Rough"}   # x-, x+, z- (the back wall)
+    for k in range(6):
+        s.add_object(f"Wall{k}", pos[4 * k:4 * k + 4], idx[2 * k:2 * k + 2] - 4 * k, walls.get(k, "White"))
+    s.lights.append(Light("point", position=(0.1, 0.3, 0.1), intensity=1.0, name="Point"))
+    view = View(look_at((0, 0, 0.45), (0, 0, -0.5)), Fov.symmetric(100.0, 1.0), 24, 24, 0.01, 10.0)
+    names = s.materials.names()
+    probes = {"counts": [2, 2, 2], "rays_per_probe": 32, "warmup": 1}
+
+    def effects(gi, **kw):
+        g = rv.graphs.hybrid(gi=gi, probes=probes if gi else None, **kw)
+        g.mark_output("GBuffer.effect")
+        with rv.Renderer(s, g, views=ViewSet([view]), gpu=gpu) as r:
+            r.render()
+            word = np.asarray(r.read_output("GBuffer.effect")).astype(np.int64).reshape(-1)
+        return {names[m]: set((word[word >> 8 == m] & 0xFF).tolist()) for m in range(len(names))}
+
+    traced = {"White": {int(rv.Effect.SHADOWS)}, **{n: {int(rv.Effect.REFLECTIONS)}
+                                                     for n in ("Rough", "Smooth", "RoughGlass")}}
+    assert effects("probes") == {**traced, "Rough": {int(rv.Effect.SHADOWS)}}
+    assert effects(None) == traced
+    assert effects("probes", reflection_max_roughness=1.0) == traced
+    with pytest.raises(OptionError, match="GBuffer.*reflection_max_roughness"):
+        rv.graphs.hybrid(gi="probes", reflection_max_roughness=1.5)
