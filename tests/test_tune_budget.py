@@ -131,3 +131,38 @@ def test_choose_among_option_sets_takes_the_least_error_that_fits():
     assert not a.fits and not b.fits and choose_among([a, b]) is a
     with pytest.raises(OptionError, match="no choices"):
         choose_among([])
+
+
+def test_back_off_replaces_a_choice_that_measures_over_the_budget():
+    """The GPU runs 30% slower than the model says: the first choice (A and B SHADOWS, predicted
+    5.0 of a 6.0 ms budget) measures 6.5; at 6.0 x 6.0 / 6.5 ms the model still offers both, so the
+    ask shrinks by 10% more and the next choice keeps one upgrade: 4.55 ms. Within the budget at
+    once, the first choice stands; with nothing cheaper, the overrun stays noted."""
+    from rayvr.tune.budget import back_off
+
+    m = model({"A": {R: 0, S: 1.5}, "B": {R: 0, S: 1.5}}, {"A": {R: 1.0, S: 0.1}, "B": {R: 1.0, S: 0.2}})
+    measured = []
+
+    def measure(choice):
+        ms = 1.3 * choice.model.predict_ms(choice.assignment)
+        measured.append(dict(choice.assignment))
+        choice.record_measurement(ms, choice.model.predict_error(choice.assignment), "fake")
+        return ms
+
+    first = choose_effects(m, 6.0)
+    assert first.assignment == {"A": S, "B": S} and first.predicted_ms == pytest.approx(5.0)
+    out = back_off(first, lambda ask: choose_effects(m, ask), measure, 6.0)
+    assert measured == [{"A": S, "B": S}, {"A": S, "B": R}]
+    assert out.assignment == {"A": S, "B": R} and out.measured_ms == pytest.approx(4.55)
+    assert out.budget_ms == 6.0 and not any("over the budget" in n for n in out.notes)
+    assert "backed off from a choice predicted 5 ms that measured 6.5" in out.notes[-1]
+
+    measured.clear()
+    roomy = choose_effects(m, 10.0)
+    assert back_off(roomy, lambda ask: choose_effects(m, ask), measure, 10.0) is roomy and len(measured) == 1
+
+    # nothing cheaper than all RASTER: one measurement more at most, and the overrun stays noted
+    slow = model({"A": {R: 0, S: 1.5}}, {"A": {R: 1.0, S: 0.1}}, base=5.0)
+    measured.clear()
+    out = back_off(choose_effects(slow, 5.2), lambda ask: choose_effects(slow, ask), measure, 5.2)
+    assert out.assignment == {"A": R} and len(measured) == 1 and "over the budget" in out.notes[-1]

@@ -156,6 +156,44 @@ class TuneResult:
                 "model": self.model.as_dict()}
 
 
+# Choices a measured overrun may replace (back_off): each asks the model for the budget scaled by
+# what the last one over-promised.
+BACKOFF_TRIES = 2
+
+
+def back_off(first: TuneResult, choose, measure, budget_ms: float, tries: int = BACKOFF_TRIES) -> TuneResult:
+    """`first` (chosen for `budget_ms`) measured, and while the measured frame runs over the budget
+    a new choice for a smaller ask, at most `tries` times: the ask shrinks by budget / measured
+    (how far the cost model under-predicted), and again by 10% while the model returns the same
+    choice. `choose(ask_ms)` -> TuneResult; `measure(result)` -> its measured ms (recording it).
+    Returns the first choice measured within the budget, else the last; its `budget_ms` is the
+    budget asked for and a note names the choices it replaced."""
+    result, ask = first, budget_ms
+    result.budget_ms = budget_ms
+    ms = measure(result)
+    replaced = []
+    for _ in range(tries):
+        if ms <= budget_ms:
+            break
+        ask *= budget_ms / ms
+        nxt = choose(ask)
+        while (nxt.assignment, nxt.options) == (result.assignment, result.options) and ask > 0.05 * budget_ms:
+            ask *= 0.9
+            nxt = choose(ask)
+        if (nxt.assignment, nxt.options) == (result.assignment, result.options):
+            break   # nothing cheaper to offer
+        replaced.append((result.predicted_ms, ms))
+        nxt.budget_ms = budget_ms
+        result = nxt
+        ms = measure(result)
+    if replaced:
+        result.notes = [n for n in result.notes if "over the budget" not in n or ms > budget_ms]
+        result.notes.append("backed off from " + ", ".join(f"a choice predicted {p:.3g} ms that measured {m:.3g}"
+                                                          for p, m in replaced)
+                            + f"; this one was chosen for {ask:.3g} ms")
+    return result
+
+
 def choose_among(results) -> TuneResult:
     """Of choices made on several CostModels (one per graph option set), the one that fits with the
     least predicted error (ties: the faster); when none fits, the fastest. A note names the others."""

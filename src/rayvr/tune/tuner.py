@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from ..errors import OptionError
 from ..materials.effect import Effect
-from .budget import FRAME_BUDGET_MS, TuneResult, choose_among, choose_effects
+from .budget import FRAME_BUDGET_MS, TuneResult, back_off, choose_among, choose_effects
 from .configs import accepts, hybrid_graph, set_effects
 from .display import Display
 from .metrics import DEFAULT_EPS
@@ -71,7 +71,9 @@ def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=Non
     """Measure a CostModel on the GPU (`rayvr.tune.probe.probe_cost_model`: one render per effect
     level, timed after `warmup_s` seconds of warm-up, default 0.5 s on GPUs with timer queries),
     choose effects with `choose_effects`, then (with `verify`) render the choice and record its
-    measured ms and error. With `apply` the scene's materials get the chosen effects.
+    measured ms and error; a choice that measures over the budget is replaced by one chosen for a
+    smaller ask (`rayvr.tune.budget.back_off`). With `apply` the scene's materials get the chosen
+    effects.
 
     `renderer_or_scene`: a Scene (with `size`, `views`: default 2 views of 1440x1600) or an
     rv.Renderer (its scene, views and graph; `graph` then defaults to a copy of its graph; with a
@@ -89,10 +91,17 @@ def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=Non
     models = [(opts, probe_cost_model(scene, view_set, builder, opts, judge, levels, frames, warmup, warmup_s,
                                       trials, progress, gpu)[0])
               for opts in option_sets_for(builder, options, option_sets)]
-    result = choose_with_options(models, options, budget_ms, levels, fixed)
+    def choose(ask_ms):
+        return choose_with_options(models, options, ask_ms, levels, fixed)
+
+    def verify_choice(choice):
+        choice.record_measurement(*render_assignment(scene, view_set, builder, {**options, **choice.options},
+                                                     choice.assignment, judge, frames, warmup, warmup_s, trials, gpu))
+        return choice.measured_ms
+
+    result = choose(budget_ms)
     if verify:
-        result.record_measurement(*render_assignment(scene, view_set, builder, {**options, **result.options},
-                                                     result.assignment, judge, frames, warmup, warmup_s, trials, gpu))
+        result = back_off(result, choose, verify_choice, budget_ms)
     if apply:
         set_effects(scene, result.assignment)
     return result
@@ -122,9 +131,11 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
                 notes=(), budget_option: str = "budget_ms", runner=None, option_sets=None):
     """The error study with the tuner on top: probe a cost model against `reference` (judged as
     the study judges), choose effects for each of `budgets`, and measure `configs` plus one
-    "tuned for B ms" row per budget alike. Returns (Results, {budget: TuneResult}); each
-    TuneResult records its row's measured ms and error (a note names `budget_option` when the
-    row runs over), and Results.tuned is the first. `runner`: where the probe and the study run
+    "tuned for B ms" row per budget alike. A tuned row that measures over its budget is chosen
+    again for a smaller ask and measured alone (`rayvr.tune.budget.back_off`, at most twice).
+    Returns (Results, {budget: TuneResult}); each TuneResult records its row's measured ms and
+    error (a note names `budget_option` when the row still runs over), and Results.tuned is the
+    first. `runner`: where the probe and the study run
     (default here; rayvr.cluster.StudyRunner: the probe on one worker, the rows over all).
     `option_sets`: the graph options tuned beside the effects (default: those of `configs` on the
     hybrid graph, e.g. probe GI and SVGF, and none), one cost model each (tune_effects)."""
@@ -153,9 +164,23 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
                             for b, t in tuned.items()]
     results = measure(scene, rows, views=view_set, reference=reference, settings=settings, cache_dir=cache_dir,
                       progress=progress, gpu=gpu, notes=notes, runner=runner)
-    for b, t in tuned.items():
-        row = results[names[b]]
+
+    def measured_row(b, choice):
+        """The study's row for `choice` (measured with the rest, or now alone after an overrun)."""
+        name = names[b]
+        if choice is not first[b]:
+            again = measure(scene, [Config(name, dict(choice.assignment), options={**options, **choice.options})],
+                            views=view_set, reference=reference, settings=settings, cache_dir=cache_dir,
+                            progress=progress, gpu=gpu, runner=runner)
+            results.rows[[r.name for r in results.rows].index(name)] = again[name]
+        row = results[name]
         row.tuned = True
-        t.record_measurement(row.gpu_ms, row.mean(metric), results.method, budget_option)
+        choice.record_measurement(row.gpu_ms, row.mean(metric), results.method, budget_option)
+        return row.gpu_ms
+
+    first = dict(tuned)
+    for b in tuned:
+        tuned[b] = back_off(first[b], lambda ask: choose_with_options(models, options, ask, levels),
+                            lambda choice, b=b: measured_row(b, choice), b)
     results.tuned = next(iter(tuned.values()))
     return results, tuned
