@@ -261,3 +261,21 @@ def test_a_level_on_every_material_is_predicted_as_the_probe_timed_it(gpu, scene
     assert model.predict_ms(every) == pytest.approx(3.2)      # not 1.6 + 2.0: Direct's 0.4 less counts
     assert model.predict_ms({n: Effect.RASTER for n in model.materials}) == pytest.approx(1.6)
     assert model.ms["BackWall"][Effect.SHADOWS] == pytest.approx(1.6 * model.pixels["BackWall"] / SIZE[0] / SIZE[1])
+
+
+def test_probe_gi_frames_are_planned_with_their_probe_rays():
+    """The progress plan (and so the ETA) counts probe GI's rays per frame, a fixed cost shared by
+    the frame's pixels: at 2x32x32 the default 8^3 x 128 rays outweigh the SHADOWS pass 30 times,
+    at 2x1440x1600 they add under 2%."""
+    from rayvr.scene.builtin import cornell_box
+    from rayvr.tune.measure import EFFECT_COST, PROBE_RAY_COST, frame_cost
+
+    scene = cornell_box()
+    plain = Config("all SHADOWS", Effect.SHADOWS)
+    gi = Config("all SHADOWS + probes GI", Effect.SHADOWS, options={"gi": "probes"})
+    small = Config("small volume", Effect.SHADOWS, options={"gi": "probes", "probes": {"counts": [2, 2, 2]}})
+    assert frame_cost(plain, scene, 2048) == frame_cost(gi, scene) == EFFECT_COST[Effect.SHADOWS]
+    assert frame_cost(gi, scene, 2048) == pytest.approx(0.5 + PROBE_RAY_COST * 512 * 128 / 2048)
+    assert frame_cost(gi, scene, 2048) > 30 * frame_cost(plain, scene, 2048)
+    assert frame_cost(gi, scene, 2 * 1440 * 1600) < 1.02 * frame_cost(plain, scene, 2 * 1440 * 1600)
+    assert frame_cost(small, scene, 2048) == pytest.approx(0.5 + PROBE_RAY_COST * 8 * 128 / 2048)

@@ -73,8 +73,11 @@ def add_study_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--motion-frames", type=integer("--motion-frames", 1, MAX_FRAMES),
                    help="frames along the trajectory (default 16 llvmpipe, 32 GPU)")
     p.add_argument("--motion-samples", type=integer("--motion-samples", 1, seeds.SLOTS - 1),
-                   help="trajectory frames judged, each with its own reference (default 2 llvmpipe, 3 GPU)")
+                   help="trajectory frames judged, each with its own reference (default 1 llvmpipe, 3 GPU)")
     p.add_argument("--no-floors", action="store_true", help="skip the bias floors (converged configurations)")
+    p.add_argument("--floor-fraction", type=number("--floor-fraction", 0, 1, low_open=True), default=None,
+                   help="a bias floor renders this fraction of the reference's paths per pixel (default: 0.25 on a "
+                        "GPU, 0.0625 on llvmpipe)")
     p.add_argument("--progressive-frames", type=integer("--progressive-frames", 0, MAX_FRAMES),
                    help="frames of the progressive curves (0: none)")
     p.add_argument("--cache", help="reference cache folder (default ~/.cache/rayvr/references)")
@@ -177,6 +180,7 @@ class StudyPlan:
             timing_frames=pick(args.timing_frames, "--timing-frames", d.timing_frames),
             warmup=pick(args.warmup, "--warmup", d.warmup), warmup_s=args.warmup_s, motion=motion,
             floors=not args.no_floors,
+            floor_fraction=pick(args.floor_fraction, "--floor-fraction", d.floor_fraction),
             progressive_frames=pick(args.progressive_frames, "--progressive-frames", d.progressive_frames),
             preset=args.preset, ppd=args.ppd, display=self.display, metrics=tuple(metrics))
         self.cache = False if args.no_cache else args.cache

@@ -5,8 +5,11 @@ slowly there. So on llvmpipe the standard list leaves out the hybrid levels thro
 (`denoised_levels`; 8 rows, half of them with probe GI), and the note says so.
 
 On llvmpipe (`gpu.caps.is_software`, ~0.45 M paths of 8 bounces per second on 2 cores) that is 2
-views of 32x32, a 64 x 16 spp reference and 16-frame progressive curves; on a GPU, 2 views of
-720x800 (a quarter of the Valve Index's pixels) and a 256 x 16 spp reference. Bigger scenes take
+views of 32x32, a 64 x 16 spp reference, one judged frame along the trajectory (each needs its
+own reference), bias floors at 1/16 of the reference's paths (a probe-GI floor of 256 frames took
+37 s there: the probe update, whatever the image's size) and 16-frame progressive curves; on a GPU,
+2 views of 720x800 (a quarter of the Valve Index's pixels), a 256 x 16 spp reference and floors at
+1/4 of its paths. Bigger scenes take
 longer; every figure can be given instead, and the report says which were chosen and why.
 """
 from __future__ import annotations
@@ -28,6 +31,7 @@ class MachineDefaults:
     motion_frames: int
     motion_samples: int
     progressive_frames: int
+    floor_fraction: float = 0.25    # of the reference's paths per pixel, for each bias floor
     denoised_levels: bool = True    # rayvr.tune.standard_configs' hybrid levels through SVGF
 
     def note(self, chosen: dict, left_out: bool = False) -> str:
@@ -39,8 +43,8 @@ class MachineDefaults:
         return f"defaults for {self.kind} (sized for the Cornell box; give options to change): {parts}"
 
 
-SOFTWARE = MachineDefaults("llvmpipe (software rendering)", (32, 32), 64, 16, 4, 10, 2, 16, 2, 16,
-                           denoised_levels=False)
+SOFTWARE = MachineDefaults("llvmpipe (software rendering)", (32, 32), 64, 16, 4, 10, 2, 16, 1, 16,
+                           floor_fraction=0.0625, denoised_levels=False)
 HARDWARE = MachineDefaults("a GPU", (720, 800), 256, 16, 4, 30, 5, 32, 3, 128)
 
 
