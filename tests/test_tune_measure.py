@@ -1,6 +1,7 @@
 """rayvr.tune on the GPU: measure() rows (settings, spread, motion, floors), the displayed image
 against the graph's own tone mapper, the probed cost model and tune_effects; the Cornell box at
 12x12, one view, a few frames each. Every test builds its own scene (they change effects)."""
+import dataclasses
 import math
 
 import numpy as np
@@ -279,3 +280,57 @@ def test_probe_gi_frames_are_planned_with_their_probe_rays():
     assert frame_cost(gi, scene, 2048) > 30 * frame_cost(plain, scene, 2048)
     assert frame_cost(gi, scene, 2 * 1440 * 1600) < 1.02 * frame_cost(plain, scene, 2 * 1440 * 1600)
     assert frame_cost(small, scene, 2048) == pytest.approx(0.5 + PROBE_RAY_COST * 8 * 128 / 2048)
+
+
+def test_a_tuned_row_over_its_budget_is_chosen_again_and_measured_alone(gpu, scene, reference, monkeypatch):
+    """tuned_study with a cost model that promises 1/1.3 of what the (fake) study measures: the
+    row tuned for 6 ms (both walls SHADOWS, predicted 5.0, measured 6.5) is chosen again for a
+    smaller ask, that choice is measured on its own and replaces the row, and the TuneResult
+    records its measurement and what it replaced."""
+    import importlib
+
+    from rayvr.tune.budget import CostModel
+    from rayvr.tune.runner import LocalRunner
+    from rayvr.tune.tuner import tuned_study
+
+    R, S = Effect.RASTER, Effect.SHADOWS
+    model = CostModel(2.0, {"A": {R: 0, S: 1.5}, "B": {R: 0, S: 1.5}}, {"A": {R: 1.0, S: 0.1}, "B": {R: 1.0, S: 0.2}})
+
+    class Probe(LocalRunner):
+        def probe(self, *args, **kwargs):
+            return model, "Composite.color"
+
+    class Row:
+        def __init__(self, name, effects):
+            self.name, self.effects, self.tuned = name, dict(effects), False
+            self.gpu_ms = 1.3 * model.predict_ms(self.effects)
+
+        def mean(self, metric):
+            return model.predict_error(self.effects)
+
+    class Results:
+        method = "fake"
+
+        def __init__(self, rows):
+            self.rows, self.tuned = rows, None
+
+        def __getitem__(self, name):
+            return next(r for r in self.rows if r.name == name)
+
+    measured = []
+
+    def fake_measure(scene_, configs, **kwargs):
+        measured.append([c.name for c in configs])
+        return Results([Row(c.name, c.effects) for c in configs])
+
+    monkeypatch.setattr(importlib.import_module("rayvr.tune.measure"), "measure", fake_measure)
+    settings = dataclasses.replace(TINY, metric_workers=0)
+    results, tuned = tuned_study(scene, default_views(scene, 1, SIZE), reference, settings, [], budgets=(6.0, 10.0),
+                                 progress=False, runner=Probe(), option_sets=[{}])
+    assert measured == [["tuned for 6 ms", "tuned for 10 ms"], ["tuned for 6 ms"]]
+    six, ten = tuned[6.0], tuned[10.0]
+    assert six.assignment == {"A": S, "B": R} and results["tuned for 6 ms"].effects == six.assignment
+    assert six.measured_ms == pytest.approx(4.55) and six.budget_ms == 6.0
+    assert "backed off from a choice predicted 5 ms that measured 6.5" in six.notes[-1]
+    assert ten.assignment == {"A": S, "B": S} and ten.measured_ms == pytest.approx(6.5)   # within its budget
+    assert all(r.tuned for r in results.rows) and results.tuned is six
