@@ -8,7 +8,7 @@ from rayvr.cli.main import main
 
 TINY = ["--size", "12x12", "--views", "1", "--frames", "1", "--timing-frames", "1", "--warmup", "1",
         "--reference-frames", "4", "--reference-spp", "1", "--bounces", "2", "--motion-frames", "2",
-        "--motion-samples", "1", "--progressive-frames", "2", "--spp", "1", "--quiet"]
+        "--motion-samples", "1", "--progressive-frames", "2", "--spp", "1", "--floor-fraction", "0.25", "--quiet"]
 
 
 def test_converge_prints_the_verdict_and_table_and_writes_the_report(gpu, tmp_path, capsys):
