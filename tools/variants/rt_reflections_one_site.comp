@@ -1,0 +1,168 @@
+// tools/variants (an experiment for tools/pt-variants `reflections_one_site`, not the tree's code):
+// rt_reflections.comp with each bounce's reflection ray and its hit's shadow ray traced by ONE
+// rq_step call site in one loop (a small state machine), instead of trace_closest and
+// shade_direct_mis's trace_transmittance inlining two traversals. LIGHT_SAMPLES 1 only; the same
+// rays and random numbers as the tree's kernel (sums in another order).
+//
+// Mirror, glossy and refracted light for the pixels whose effect is REFLECTIONS or above (those on
+// the reflection list, dispatched indirectly, or with PIXELS_2D the whole image in tiles): sample
+// the BSDF's specular lobes (GGX VNDF reflection, and for transmissive materials refraction or a
+// thin wall's pass-through; exact deltas at roughness 0), trace, shade the hit with emission and
+// shadowed direct light, continue up to MAX_BOUNCES through reflective hits (absorbing inside
+// volumes). Light a rough lobe's ray finds (emitters, the environment) and the light sample of
+// the vertex it left share it by the power heuristic (shading.glsl shade_direct_mis). Output: that radiance weighted by the specular lobes, which the composite adds to the
+// direct light (the diffuse part is the direct-light passes'). Each hit adds the probes' indirect
+// diffuse light, and a path stopped by MAX_BOUNCES on a reflective surface their glossy fallback:
+// with PROBE_RECORDS (the graph's way) this kernel only records what the lookups need
+// (glsl/probe_records.glsl: one record per view and bounce, an empty one past the path's end) and
+// rt_reflections_probes.comp, dispatched after it over the same pixels, looks them up and adds
+// them (the lookup's registers here cost the traversal its occupancy: 6.15 ms against 1.73 ms
+// without probes, tauray on the H200); with PROBE_GI instead they are looked up in this kernel
+// (only tests compile that, as the reference).
+#define GBUF_READER 1
+#include "views.glsl"
+#include "gbuffer.glsl"
+#include "pixel_list.glsl"
+#include "shading.glsl"
+#include "probe_records.glsl"   // and probe_gi.glsl
+#include "nonfinite.glsl"
+
+#if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
+layout(local_size_x = RAY_GROUP_SIZE) in;
+#else           // the pixels on the list
+layout(local_size_x = PIXEL_LIST_GROUP) in;
+#endif
+layout(rgba16f) writeonly uniform image2DArray dst;
+#ifndef PROBE_RECORDS
+#define PROBE_RECORDS 0
+#endif
+#if PROBE_RECORDS
+layout(rgba32ui) writeonly uniform uimage2DArray probe_hits;
+layout(rgba32ui) writeonly uniform uimage2DArray probe_factors;
+
+void store_probe_record(ivec3 p, int bounce, ProbeRecord r) {
+    ivec3 q = ivec3(p.xy, probe_record_layer(p.z, bounce, imageSize(dst).z));
+    imageStore(probe_hits, q, probe_record_hit(r));
+    imageStore(probe_factors, q, probe_record_factors(r));
+}
+#endif
+
+// One light sample at s as shade_direct_mis draws and weighs it (`specular_traced`: MIS with this
+// pass's own specular rays): its unshadowed f cos Le / pdf in `contribution` and the shadow ray
+// that decides it; false where it adds nothing.
+bool light_sample_unshadowed(PathVertex s, inout Rng rng, bool specular_traced, out vec3 contribution,
+                             out vec3 l, out float dist) {
+    contribution = vec3(0.0);
+    l = vec3(0.0, 0.0, 1.0);
+    dist = 0.0;
+#if SCENE_HAS_LIGHTS
+    LightSample ls = sample_light(s.pos, rng_next3(rng));
+    if (!ls.valid || dot(ls.direction, s.ng) <= 0.0) return false;
+    vec3 f;
+    if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0)
+        f = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction)
+          + power_heuristic(ls.pdf, bsdf_pdf_specular(s.bsdf, s.n, s.v, ls.direction))
+          * bsdf_eval_reflection(s.bsdf, s.n, s.v, ls.direction);
+    else
+        f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
+    if (f.x + f.y + f.z <= 0.0) return false;
+    contribution = f * ls.weight;
+    l = ls.direction;
+    dist = ls.distance * (1.0 - 1e-4);
+    return true;
+#else
+    return false;
+#endif
+}
+
+void main() {
+    ivec3 p;
+    if (!ray_pass_pixel(EFFECT_REFLECTIONS, imageSize(dst), p)) return;
+    Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
+    rq_blend_begin(rng);   // alphaMode BLEND: this pixel's decisions
+    PathVertex s = path_vertex_at_gbuffer(gbuf_load(p), uint(p.z));
+    vec3 throughput = vec3(1.0);
+    vec3 radiance = vec3(0.0);
+    vec3 medium = vec3(0.0);
+#if PROBE_RECORDS
+    int recorded = 0;
+#endif
+    int bounce = 0;
+    bool shadow = false;      // the ray in flight: false the bounce's reflection ray, true its hit's shadow ray
+    bool continues = false;   // the hit carries the path further
+    vec3 contribution = vec3(0.0);
+    BsdfSample bs;
+    bool whole = false;
+    bool start = true;        // a bounce begins: sample the specular lobes and start its reflection ray
+    for (;;) {
+        if (start) {
+            start = false;
+            if (!bsdf_sample_specular(s.bsdf, s.n, s.v, rng_next3(rng), bs)) break;
+            float side = dot(bs.l, s.ng);
+            if (bs.transmitted ? side >= 0.0 : side <= 0.0) break;
+            throughput *= bs.weight;
+            if (!(max3(throughput) > 0.0)) break;
+            if (bs.transmitted && !s.bsdf.thin) medium = s.bsdf.inside ? vec3(0.0) : s.attenuation;
+            whole = bs.delta || bs.transmitted;
+            rq_begin(offset_ray_origin(s.pos, bs.transmitted ? -s.ng : s.ng), bs.l, 1e30, false);
+        }
+        if (!rq_done && rq_step()) continue;   // the one traversal site
+        bool bounce_done = true;
+        if (!shadow) {
+            if (!rq_found) {
+                float w = whole ? 1.0 : power_heuristic(bs.pdf, environment_light_pdf(bs.l));
+                radiance += throughput * environment_radiance(bs.l) * w;
+                break;
+            }
+            Hit hit = rq_hit;
+            if (max3(medium) > 0.0) throughput *= exp(-medium * hit.t);
+            float spread = cone_spread_after_bounce(s.cone_spread, bs.pdf, bs.delta);
+            SurfacePoint sp;
+            MaterialParams mp;
+            vec3 from = s.pos;
+            s = path_vertex_at_hit(hit, bs.l, s.cone_width + hit.t * spread, spread, sp, mp);
+            vec3 emitted = vec3(0.0);
+#if SCENE_HAS_EMISSIVE_TRIANGLES
+            if (max3(mp.emissive) > 0.0 && (sp.front_face || mp.double_sided))
+                emitted = mp.emissive * (whole ? 1.0 : power_heuristic(bs.pdf, emissive_light_pdf(sp, hit.instance, from)));
+#endif
+            continues = mp.effect >= EFFECT_REFLECTIONS;
+#if PROBE_RECORDS
+            store_probe_record(p, bounce, probe_record_at(s, throughput, continues && bounce == MAX_BOUNCES - 1));
+            recorded = bounce + 1;
+#endif
+            radiance += throughput * (emitted + probe_gi_diffuse(s));
+            vec3 l;
+            float d;
+            if (light_sample_unshadowed(s, rng, continues && bounce + 1 < MAX_BOUNCES, contribution, l, d)) {
+#if SCENE_HAS_ALPHA_BLEND   // trace_transmittance's expected visibility through BLEND surfaces
+                rq_fractional = true;
+                rq_transmittance = 1.0;
+#endif
+                rq_begin(offset_ray_origin(s.pos, s.ng), l, d, true);
+                shadow = true;
+                bounce_done = false;
+            }
+        } else {
+            float visible = rq_found ? 0.0 : 1.0;
+#if SCENE_HAS_ALPHA_BLEND
+            rq_fractional = false;
+            if (!rq_found) visible = rq_transmittance;
+#endif
+            radiance += throughput * contribution * visible;
+            shadow = false;
+        }
+        if (!bounce_done) continue;
+        if (!continues) break;
+        if (bounce == MAX_BOUNCES - 1) {
+            radiance += throughput * probe_gi_glossy(s);
+            break;
+        }
+        ++bounce;
+        start = true;
+    }
+#if PROBE_RECORDS
+    for (int b = recorded; b < MAX_BOUNCES; ++b) store_probe_record(p, b, probe_record_none());
+#endif
+    imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(radiance)), 1.0));   // the target is rgba16f
+}
