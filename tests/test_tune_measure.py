@@ -320,14 +320,15 @@ def test_a_tuned_row_over_its_budget_is_chosen_again_and_measured_alone(gpu, sce
     measured = []
 
     def fake_measure(scene_, configs, **kwargs):
-        measured.append([c.name for c in configs])
+        measured.append(([c.name for c in configs], kwargs.get("curves", True)))
         return Results([Row(c.name, c.effects) for c in configs])
 
     monkeypatch.setattr(importlib.import_module("rayvr.tune.measure"), "measure", fake_measure)
     settings = dataclasses.replace(TINY, metric_workers=0)
     results, tuned = tuned_study(scene, default_views(scene, 1, SIZE), reference, settings, [], budgets=(6.0, 10.0),
                                  progress=False, runner=Probe(), option_sets=[{}])
-    assert measured == [["tuned for 6 ms", "tuned for 10 ms"], ["tuned for 6 ms"]]
+    # the study with its curves, then the backed-off row alone, without them
+    assert measured == [(["tuned for 6 ms", "tuned for 10 ms"], True), (["tuned for 6 ms"], False)]
     six, ten = tuned[6.0], tuned[10.0]
     assert six.assignment == {"A": S, "B": R} and results["tuned for 6 ms"].effects == six.assignment
     assert six.measured_ms == pytest.approx(4.55) and six.budget_ms == 6.0

@@ -108,8 +108,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     output (`TAA.dst` or `Denoise.dst`; `hdr_output(graph)` names a graph's)."""
     from . import passes as P
     from .errors import OptionError
-    from .passes.gbuffer import channels
-    from .passes.gbuffer import reflection_cutoff
+    from .passes.gbuffer import channels, reflection_cutoff
     from .passes.probe_gi import inputs as probe_inputs
 
     if gi not in (None, "none", *GI_MODES):

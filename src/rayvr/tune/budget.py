@@ -168,6 +168,9 @@ def back_off(first: TuneResult, choose, measure, budget_ms: float, tries: int = 
     choice. `choose(ask_ms)` -> TuneResult; `measure(result)` -> its measured ms (recording it).
     Returns the first choice measured within the budget, else the last; its `budget_ms` is the
     budget asked for and a note names the choices it replaced."""
+    def same(a, b):
+        return (a.assignment, a.options) == (b.assignment, b.options)
+
     result, ask = first, budget_ms
     result.budget_ms = budget_ms
     ms = measure(result)
@@ -177,10 +180,10 @@ def back_off(first: TuneResult, choose, measure, budget_ms: float, tries: int = 
             break
         ask *= budget_ms / ms
         nxt = choose(ask)
-        while (nxt.assignment, nxt.options) == (result.assignment, result.options) and ask > 0.05 * budget_ms:
+        while same(nxt, result) and ask > 0.05 * budget_ms:
             ask *= 0.9
             nxt = choose(ask)
-        if (nxt.assignment, nxt.options) == (result.assignment, result.options):
+        if same(nxt, result):
             break   # nothing cheaper to offer
         replaced.append((result.predicted_ms, ms))
         nxt.budget_ms = budget_ms

@@ -158,29 +158,30 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
                                       frames=settings.timing_frames, warmup=settings.warmup,
                                       warmup_s=settings.warmup_s, trials=trials, progress=progress, gpu=gpu)[0])
                   for opts in option_sets_for(hybrid_graph, options, option_sets)]
-    tuned = {float(b): choose_with_options(models, options, b, levels) for b in budgets}
-    names = {b: f"tuned for {b:g} ms" for b in tuned}
-    rows = list(configs) + [Config(names[b], dict(t.assignment), options={**options, **t.options})
-                            for b, t in tuned.items()]
-    results = measure(scene, rows, views=view_set, reference=reference, settings=settings, cache_dir=cache_dir,
-                      progress=progress, gpu=gpu, notes=notes, runner=runner)
+    def choose(ask_ms):
+        return choose_with_options(models, options, ask_ms, levels)
+
+    def row_config(b, choice):
+        return Config(f"tuned for {b:g} ms", dict(choice.assignment), options={**options, **choice.options})
+
+    first = {float(b): choose(b) for b in budgets}
+    results = measure(scene, list(configs) + [row_config(b, t) for b, t in first.items()], views=view_set,
+                      reference=reference, settings=settings, cache_dir=cache_dir, progress=progress, gpu=gpu,
+                      notes=notes, runner=runner)
 
     def measured_row(b, choice):
-        """The study's row for `choice` (measured with the rest, or now alone after an overrun)."""
-        name = names[b]
+        """The study's row for `choice` (measured with the rest, or now alone after an overrun:
+        its row only, the progressive curves are the study's)."""
+        config = row_config(b, choice)
         if choice is not first[b]:
-            again = measure(scene, [Config(name, dict(choice.assignment), options={**options, **choice.options})],
-                            views=view_set, reference=reference, settings=settings, cache_dir=cache_dir,
-                            progress=progress, gpu=gpu, runner=runner)
-            results.rows[[r.name for r in results.rows].index(name)] = again[name]
-        row = results[name]
+            again = measure(scene, [config], views=view_set, reference=reference, settings=settings,
+                            cache_dir=cache_dir, progress=progress, gpu=gpu, curves=False, runner=runner)
+            results.rows[[r.name for r in results.rows].index(config.name)] = again[config.name]
+        row = results[config.name]
         row.tuned = True
         choice.record_measurement(row.gpu_ms, row.mean(metric), results.method, budget_option)
         return row.gpu_ms
 
-    first = dict(tuned)
-    for b in tuned:
-        tuned[b] = back_off(first[b], lambda ask: choose_with_options(models, options, ask, levels),
-                            lambda choice, b=b: measured_row(b, choice), b)
+    tuned = {b: back_off(t, choose, lambda choice, b=b: measured_row(b, choice), b) for b, t in first.items()}
     results.tuned = next(iter(tuned.values()))
     return results, tuned
