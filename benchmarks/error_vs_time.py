@@ -60,6 +60,9 @@ def add_arguments(parser) -> None:
                         help="processes judging the images while the GPU renders (default: os.cpu_count() - 2 from "
                              "256x256 per view, else 0 = one after the other here)")
     parser.add_argument("--cache", help="reference cache folder (default ~/.cache/rayvr/references)")
+    parser.add_argument("--denoised-levels", choices=("auto", "on", "off"), default="auto",
+                        help="the hybrid levels through SVGF, with and without probe GI (auto: in the full "
+                             "figures, not in the device figures nor --quick)")
 
 
 def run(args) -> dict:
@@ -96,7 +99,8 @@ def run(args) -> dict:
                              progressive_frames=f["progressive_frames"], preset=args.preset,
                              floor_fraction=floor_fraction, metric_workers=args.metric_workers,
                              hdrflip_frames=hdrflip_frames)
-    rows, notes = [], [figures_note(args.figures, f, args.frames, floor_fraction, hdrflip_frames)]
+    rows, notes = [], [figures_note(args.figures, f, args.frames, floor_fraction, hdrflip_frames,
+                                    args.denoised_levels == "on")]
     loaded = [load_scene_arg(spec) for spec in scenes]
     if len(loaded) > 1:
         notes.append("each scene's references were rendered while the scene before it was still being judged "
@@ -108,7 +112,8 @@ def run(args) -> dict:
         runner = LocalRunner(before_wait=(lambda s=following: prefetch_references(s, args.views, size, ref_settings,
                                                                                   motion, args.cache))
                              if following is not None else None)
-        configs = standard_configs(scene, ref_settings, denoised_levels=args.figures != "device" and not quick)
+        denoised = {"on": True, "off": False}.get(args.denoised_levels, args.figures != "device" and not quick)
+        configs = standard_configs(scene, ref_settings, denoised_levels=denoised)
         results, tuned = tuned_study(scene, view_set, ref, settings, configs, budgets, cache_dir=args.cache,
                                      runner=runner,
                                      option_sets=[{}] if quick else None)   # quick: the graph's own options
@@ -154,7 +159,8 @@ def prefetch_references(scene, views: int, size, ref_settings, motion, cache_dir
         cached_reference(scene, ViewSet(frames[i]), ref_settings, cache_dir, sample=k + 1)
 
 
-def figures_note(figures: str, f: dict, frames: int, floor_fraction: float, hdrflip_frames=None) -> str:
+def figures_note(figures: str, f: dict, frames: int, floor_fraction: float, hdrflip_frames=None,
+                 denoised: bool = False) -> str:
     """What this run computed, on how many frames (the table's statistics depend on it)."""
     ref = f"reference {f['reference_frames']} x {f['reference_spp']} spp"
     metrics = ("every metric (FLIP, HDR-FLIP, PSNR, SSIM, relMSE)" if hdrflip_frames is None else
@@ -164,8 +170,9 @@ def figures_note(figures: str, f: dict, frames: int, floor_fraction: float, hdrf
             f"{frames} judged frames x every view; in motion "
             f"{f['motion_frames']} frames, judged at {f['motion_samples']}; floors at {floor_fraction:g} of the "
             f"reference's paths; progressive curves to {f['progressive_frames']} frames"
-            + (" (reduced from the full run's defaults to fit one device call; the hybrid levels through SVGF, "
-               "with and without probe GI, left out: give them with `rayvr converge --configs`)"
+            + (" (reduced from the full run's defaults to fit one device call"
+               + ("" if denoised else "; the hybrid levels through SVGF, with and without probe GI, left out: "
+                                      "give them with --denoised-levels on") + ")"
                if figures == "device" else ""))
 
 

@@ -19,7 +19,7 @@
 //
 // A LightSample's `weight` is the incident radiance divided by the sample's pdf (solid angle,
 // selection included) so a shader adds bsdf(wi = direction) * cos * weight, after a shadow ray
-// trace_occluded(origin, direction, distance * (1 - 1e-4)). For punctual lights pdf = 0 (delta).
+// (shadow_ray: from the offset origin to the sampled point). For punctual lights pdf = 0 (delta).
 #pragma once
 #include "scene.glsl"
 #include "color.glsl"
@@ -55,6 +55,22 @@ struct LightSample {
 
 LightSample no_light_sample() {
     return LightSample(vec3(0.0, 1.0, 0.0), 0.0, vec3(0.0), 0.0, false);
+}
+
+// The shadow ray of light sample ls taken at p, from `origin` (p moved off its surface:
+// offset_ray_origin): aimed at the sampled point itself and stopping 1e-4 of the way short of it.
+// Aiming from p instead (ls.direction, ls.distance) moves the ray's end into the emitter by the
+// origin's offset: a lamp 0.4 m above a floor 3 m from the render origin hid itself (the offset,
+// 6e-5 m, outgrew the 4e-5 m margin).
+void shadow_ray(vec3 p, vec3 origin, LightSample ls, out vec3 dir, out float tmax) {
+    dir = ls.direction;
+    tmax = ls.distance * (1.0 - 1e-4);
+    if (ls.distance >= 1e29) return;   // directional light, environment: no end point
+    vec3 to = p + ls.direction * ls.distance - origin;
+    float d = length(to);
+    if (!(d > 0.0)) return;
+    dir = to / d;
+    tmax = d * (1.0 - 1e-4);
 }
 
 #if SCENE_HAS_LIGHTS
@@ -127,9 +143,10 @@ LightSample eval_punctual_light(uint i, vec3 p) {
 // with r in [0, 1); `share`: the probability with which the table drew the punctual group. One
 // pass, no array (a small shader: llvmpipe compiles every pass that lights): light i replaces the
 // pick so far with probability w_i / (w_0 + ... + w_i), r rescaled to stay uniform.
-LightSample sample_punctual_local(vec3 p, uint n, float r, float share) {
+LightSample punctual_local_pick(vec3 p, uint n, float r, out float total, out float w_pick) {
     LightSample pick = no_light_sample();
-    float total = 0.0, w_pick = 0.0;
+    total = 0.0;
+    w_pick = 0.0;
     for (uint i = 0u; i < n; ++i) {
         LightSample c = eval_punctual_light(i, p);
         float w = c.valid ? luminance(c.weight) : 0.0;
@@ -145,20 +162,54 @@ LightSample sample_punctual_local(vec3 p, uint n, float r, float share) {
         }
         r = min(r, 0.99999994);
     }
+    return pick;
+}
+
+LightSample sample_punctual_local(vec3 p, uint n, float r, float share) {
+    float total, w_pick;
+    LightSample pick = punctual_local_pick(p, n, r, total, w_pick);
     if (!(w_pick > 0.0) || !(share > 0.0)) return no_light_sample();
     pick.weight *= total / (w_pick * share);
     return pick;
+}
+
+// The summed unshadowed irradiance (luminance) the n punctual lights give p: what the spatial
+// selection weighs the punctual lights by.
+float punctual_local_total(vec3 p, uint n) {
+    float total = 0.0;
+    for (uint i = 0u; i < n; ++i) {
+        LightSample c = eval_punctual_light(i, p);
+        float w = c.valid ? luminance(c.weight) : 0.0;
+        if (w > 0.0) total += w;
+    }
+    return total;
 }
 #endif
 
 // ---- emissive triangles ---------------------------------------------------------------------------
 #if SCENE_HAS_EMISSIVE_TRIANGLES
+#define EMISSIVE_CLUSTERS_MAX 16   // light_table.EMISSIVE_CLUSTERS_MAX
+struct EmissiveCluster {   // one instance's emissive triangles (light_table.pack_emissive)
+    vec4 sphere;      // object-space centre of the instance's emissive vertices, world radius
+    uvec4 ids;        // instance, first entry, entry count, power (float bits)
+};
 struct EmissiveTriangle {
-    uvec4 ids;        // instance, mesh-local triangle, material
+    uvec4 ids;        // instance, mesh-local triangle, material, alias entry (within its cluster)
+    vec4 select;      // x: alias threshold (within its cluster)
 };
 layout(std430, binding = RAYVR_EMISSIVE_TRIANGLE_SSBO) readonly buffer EmissiveTriangles {
+    uvec4 emissive_info;   // x: clusters (0: the light table alone draws)
+    EmissiveCluster emissive_clusters[EMISSIVE_CLUSTERS_MAX];
     EmissiveTriangle emissive_triangles[];
 };
+
+// The irradiance (luminance) cluster c may give p: power / (pi max(d^2, r^2)), as if all of it
+// left a disc facing p from the cluster's centre (capped inside its bounding sphere).
+float emissive_cluster_estimate(uint c, vec3 p) {
+    EmissiveCluster k = emissive_clusters[c];
+    vec3 to = instance_point_to_render(k.ids.x, k.sphere.xyz) - p;
+    return uintBitsToFloat(k.ids.w) / (RAYVR_PI * max(dot(to, to), k.sphere.w * k.sphere.w));
+}
 
 // Render-space vertices of scene triangle tri placed by instance inst.
 void emissive_vertices(uint inst, uint tri, out vec3 a, out vec3 b, out vec3 c) {
@@ -168,13 +219,15 @@ void emissive_vertices(uint inst, uint tri, out vec3 a, out vec3 b, out vec3 c) 
 }
 
 // Selection probability per unit area of a point on an emissive triangle of material m: its power
-// pi L A (x 2 double-sided) over the total, over its area A, which cancels (light_table.py).
-float emissive_area_pdf(uint m) {
+// pi L A (x 2 double-sided) times `per_power`, the probability per unit power of its group (the
+// table's 1 / total, or a cluster's share / its power), over its area A, which cancels
+// (light_table.py).
+float emissive_area_pdf(uint m, float per_power) {
     float sides = scene_materials[m].flags.z != 0u ? 2.0 : 1.0;
-    return RAYVR_PI * sides * luminance(scene_materials[m].emission_cutoff.rgb) * light_table_info.w;
+    return RAYVR_PI * sides * luminance(scene_materials[m].emission_cutoff.rgb) * per_power;
 }
 
-LightSample sample_emissive(uint k, vec3 p, vec2 u) {
+LightSample sample_emissive(uint k, vec3 p, vec2 u, float per_power) {
     LightSample s = no_light_sample();
     EmissiveTriangle e = emissive_triangles[k];
     uint inst = e.ids.x;
@@ -196,7 +249,7 @@ LightSample sample_emissive(uint k, vec3 p, vec2 u) {
     float cos_l = dot(nl, -s.direction);
     MaterialParams m = material_params(e.ids.z, triangle_uv(tri, bary));
     if (cos_l <= 0.0 && !m.double_sided) return s;   // the back of a single-sided emitter is dark
-    s.pdf = emissive_area_pdf(e.ids.z) * d2 / max(abs(cos_l), 1e-12);
+    s.pdf = emissive_area_pdf(e.ids.z, per_power) * d2 / max(abs(cos_l), 1e-12);
     s.weight = m.emissive / s.pdf;
 #if SCENE_HAS_ALPHA_BLEND
     // a BLEND emitter is there for a ray with probability alpha (scene.glsl): its expected light
@@ -206,11 +259,43 @@ LightSample sample_emissive(uint k, vec3 p, vec2 u) {
     return s;
 }
 
+// Spatial selection (light_table.py) when the buffer has clusters and the punctual lights are few.
+bool lights_spatial() {
+#if SCENE_HAS_PUNCTUAL_LIGHTS
+    if (punctual_light_count() > uint(LOCAL_PUNCTUAL_MAX)) return false;
+#endif
+    return emissive_info.x > 0u;
+}
+
+// The punctual lights' irradiance estimate at p (0 without them), the spatial selection's weight.
+float punctual_estimate(vec3 p) {
+#if SCENE_HAS_PUNCTUAL_LIGHTS
+    return punctual_local_total(p, punctual_light_count());
+#else
+    return 0.0;
+#endif
+}
+
+// Probability per unit power with which the spatial selection draws `instance`'s cluster at p.
+float emissive_spatial_per_power(uint instance, vec3 p) {
+    float w_e = 0.0, w_c = 0.0, power = 1.0;
+    for (uint c = 0u; c < emissive_info.x; ++c) {
+        float w = emissive_cluster_estimate(c, p);
+        w_e += w;
+        if (emissive_clusters[c].ids.x == instance) {
+            w_c = w;
+            power = uintBitsToFloat(emissive_clusters[c].ids.w);
+        }
+    }
+    return (1.0 - light_table_info.z) * w_c / ((punctual_estimate(p) + w_e) * power);
+}
+
 float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p) {
     vec3 to = q.position - p;
     float d2 = dot(to, to);
     float cos_l = abs(dot(q.geometric_normal, to)) * inversesqrt(max(d2, 1e-30));
-    return emissive_area_pdf(q.material) * d2 / max(cos_l, 1e-12);
+    float per_power = lights_spatial() ? emissive_spatial_per_power(instance, p) : light_table_info.w;
+    return emissive_area_pdf(q.material, per_power) * d2 / max(cos_l, 1e-12);
 }
 #endif
 
@@ -304,8 +389,55 @@ float environment_light_pdf(vec3 dir) { return 0.0; }
 #endif
 
 // ---- one sample of all of them ------------------------------------------------------------------
+#if SCENE_HAS_EMISSIVE_TRIANGLES
+// Spatial selection (light_table.py): the environment by its share of the power; below it the
+// punctual lights (drawn among themselves as sample_punctual_local does) against each emissive
+// cluster, by their irradiance estimates at p; within a cluster a triangle by its power (the
+// cluster's alias table). u.x makes the choices (rescaled to stay uniform), u.yz the point.
+LightSample sample_light_spatial(vec3 p, vec3 u) {
+    float x = u.x;
+    float rest = 1.0 - light_table_info.z;   // what the environment leaves
+#if SCENE_HAS_ENVIRONMENT
+    if (x < light_table_info.z) return sample_environment(u.yz);
+    x = min((x - light_table_info.z) / rest, 0.99999994);
+#endif
+    float w_p = 0.0, w_pick = 0.0;
+    LightSample pick = no_light_sample();
+#if SCENE_HAS_PUNCTUAL_LIGHTS
+    pick = punctual_local_pick(p, punctual_light_count(), u.y, w_p, w_pick);
+#endif
+    uint nc = emissive_info.x;
+    float w_e = 0.0;
+    for (uint c = 0u; c < nc; ++c) w_e += emissive_cluster_estimate(c, p);
+    float sum = w_p + w_e;
+    if (x * sum < w_p) {
+        if (!(w_pick > 0.0)) return no_light_sample();
+        pick.weight *= sum / (w_pick * rest);   // 1 / (rest * w_pick / sum)
+        return pick;
+    }
+    // the cluster: the first whose running sum passes x's share of the clusters' estimates
+    float target = min(x * sum - w_p, w_e), below = 0.0, w_c = 0.0;
+    uint c = 0u;
+    for (; c < nc; ++c) {
+        w_c = emissive_cluster_estimate(c, p);
+        if (target < below + w_c || c + 1u == nc) break;
+        below += w_c;
+    }
+    if (!(w_c > 0.0)) return no_light_sample();
+    EmissiveCluster k = emissive_clusters[c];
+    float y = clamp((target - below) / w_c, 0.0, 0.99999994) * float(k.ids.z);
+    uint i = min(uint(y), k.ids.z - 1u);
+    uint j = k.ids.y + i;
+    if (y - float(i) >= emissive_triangles[j].select.x) j = emissive_triangles[j].ids.w;
+    return sample_emissive(j, p, u.yz, rest * w_c / (sum * uintBitsToFloat(k.ids.w)));
+}
+#endif
+
 LightSample sample_light(vec3 p, vec3 u) {
 #if SCENE_HAS_LIGHTS
+#if SCENE_HAS_EMISSIVE_TRIANGLES
+    if (lights_spatial()) return sample_light_spatial(p, u);
+#endif
     uint n = light_count();
     if (n == 0u) return no_light_sample();
     float x = u.x * float(n);
@@ -326,7 +458,7 @@ LightSample sample_light(vec3 p, vec3 u) {
     }
 #endif
 #if SCENE_HAS_EMISSIVE_TRIANGLES
-    if (e.ids.x == LIGHT_KIND_EMISSIVE) return sample_emissive(e.ids.y, p, u.yz);
+    if (e.ids.x == LIGHT_KIND_EMISSIVE) return sample_emissive(e.ids.y, p, u.yz, light_table_info.w);
 #endif
 #if SCENE_HAS_ENVIRONMENT
     if (e.ids.x == LIGHT_KIND_ENVIRONMENT) return sample_environment(u.yz);

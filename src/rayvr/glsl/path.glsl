@@ -94,8 +94,7 @@ PtRays pt_vertex(inout PtPath path, PathVertex s, int bounce, inout Rng rng, con
             r.nee = path.beta * f * ls.weight * w;
             if (split && bounce == 0)
                 r.nee_diffuse = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction) * ls.weight * w;
-            r.nee_dir = ls.direction;
-            r.nee_dist = ls.distance * (1.0 - 1e-4);
+            shadow_ray(s.pos, offset_ray_origin(s.pos, s.ng), ls, r.nee_dir, r.nee_dist);   // traced from there
         }
     }
 #endif

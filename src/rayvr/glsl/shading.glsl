@@ -40,7 +40,10 @@ vec3 shade_direct_mis(PathVertex s, inout Rng rng, bool specular_traced) {
 #if SHADE_SHADOWS
         // the shadow ray's expected visibility through BLEND surfaces, not a coin toss per
         // surface: a light behind a half-transparent leaf is half visible in every pixel
-        float visible = trace_transmittance(origin, ls.direction, ls.distance * (1.0 - 1e-4));
+        vec3 dir;
+        float tmax;
+        shadow_ray(s.pos, origin, ls, dir, tmax);
+        float visible = trace_transmittance(origin, dir, tmax);
         if (visible <= 0.0) continue;
         f *= visible;
 #endif

@@ -79,6 +79,8 @@ def pack_materials(materials, texture_layers: dict[int, int] | None = None) -> n
 class GpuScene:
     """GPU buffers, BVH and textures of one `Scene`. Build once; `update(origin)` per frame."""
 
+    SPATIAL_LIGHTS = True   # light_table.pack_emissive: draw emissive clusters by their irradiance estimate
+
     def __init__(self, gpu, scene: Scene, bvh_method: str = "auto", progress: bool | None = None,
                  bvh_layout: str = "bvh4"):
         if bvh_layout not in BVH_LAYOUTS:
@@ -275,24 +277,31 @@ class GpuScene:
         mats = list(self.scene.materials)
         lum = np.array([light_table.luminance(m.emission) for m in mats], np.float64)
         sides = np.array([2.0 if m.double_sided else 1.0 for m in mats])
-        ids, power = [], []
+        ids, power, clusters, first = [], [], [], 0
         for i, inst in enumerate(self.scene.instances):
             mesh = self.scene.meshes[inst.mesh]
             m = mesh.material_ids
             sel = np.flatnonzero(lum[m] > 0)
             if not len(sel):
                 continue
-            tri = mesh.triangles()[sel].astype(np.float64) @ inst.transform[:3, :3].T
+            local = mesh.triangles()[sel].astype(np.float64)
+            tri = local @ inst.transform[:3, :3].T
             area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
             p = np.pi * area * lum[m[sel]] * sides[m[sel]]
             keep = p > 0
+            if not keep.any():
+                continue
             ids.append(np.stack([np.full(int(keep.sum()), i), sel[keep], m[sel][keep],
                                  np.zeros(int(keep.sum()))], axis=1).astype(np.uint32))
             power.append(p[keep])
+            clusters.append(light_table.emissive_cluster(i, local[keep], inst.transform[:3, :3], first, p[keep]))
+            first += int(keep.sum())
         power = np.concatenate(power) if power else np.zeros(0)
         if len(power):
-            self._buffer("emissive_triangles", np.concatenate(ids))
+            self._buffer("emissive_triangles", light_table.pack_emissive(
+                np.concatenate(ids), power, clusters, spatial=self.SPATIAL_LIGHTS))
         self.emissive_count = len(power)
+        self.emissive_clusters = len(clusters)
         return power
 
     def _build_lights(self) -> None:

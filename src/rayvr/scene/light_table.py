@@ -14,6 +14,15 @@ The GPU side (glsl/lights.glsl) picks entry k with probability power_k / total, 
 direction within it. An emissive triangle's selection probability over its area is
 L / (pi total) x (pi, or 2 pi double-sided) — its area cancels — so the pdf of a point on a
 light never needs the area recomputed (in float32, from render-space vertices).
+
+Spatial selection (`pack_emissive`): each instance with emissive triangles is an emissive
+*cluster* (a bounding sphere, its power and an alias table over its own triangles). In a scene
+of at most LOCAL_PUNCTUAL_MAX punctual lights and EMISSIVE_CLUSTERS_MAX clusters the GPU draws,
+below the environment's share, between the punctual lights and each cluster by an estimate of
+the irradiance each gives the shading point: I / d^2 (cone and range included) for a punctual
+light, power / (pi max(d^2, r^2)) for a cluster of radius r at distance d. A wall beside a small
+lamp then spends a fair share of its samples on the lamp instead of the global power's few per
+cent (tauray/test.glb: 4%, each a firefly 24 times the mean).
 """
 from __future__ import annotations
 
@@ -24,6 +33,7 @@ import numpy as np
 
 POINT, SPOT, DIRECTIONAL = 0, 1, 2
 KIND_PUNCTUAL, KIND_EMISSIVE, KIND_ENVIRONMENT = 0, 1, 2
+EMISSIVE_CLUSTERS_MAX = 16   # as glsl/lights.glsl: more emissive instances fall back to the table
 
 
 def luminance(rgb) -> np.ndarray:
@@ -140,3 +150,54 @@ def build_light_table(punctual: np.ndarray, emissive: np.ndarray, environment: f
         return LightTable(kinds, indices, power, np.ones(0), np.zeros(0, np.int64), 0.0)
     threshold, alias = alias_table(power)
     return LightTable(kinds, indices, power / total, threshold, alias, total)
+
+
+@dataclasses.dataclass
+class EmissiveCluster:
+    """The emissive triangles of one instance: entries [first, first + count) of the emissive
+    list, the bounding sphere of their object-space vertices (centre; radius scaled to world by
+    the instance's largest axis scale) and their summed power."""
+
+    instance: int
+    centre: np.ndarray
+    radius: float
+    first: int
+    count: int
+    power: float
+
+
+def emissive_cluster(instance: int, triangles: np.ndarray, linear: np.ndarray, first: int,
+                     powers: np.ndarray) -> EmissiveCluster:
+    """The cluster of `instance`'s emissive triangles ((k, 3, 3) object space), its 3x3 `linear`
+    part of the instance transform, their powers, starting at emissive entry `first`."""
+    v = np.asarray(triangles, np.float64).reshape(-1, 3)
+    centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
+    scale = float(np.linalg.norm(np.asarray(linear, np.float64), axis=0).max())
+    radius = float(np.linalg.norm(v - centre, axis=1).max()) * scale
+    return EmissiveCluster(int(instance), centre, radius, int(first), len(powers), float(np.sum(powers)))
+
+
+def pack_emissive(ids: np.ndarray, powers: np.ndarray, clusters: list[EmissiveCluster],
+                  spatial: bool = True) -> np.ndarray:
+    """The EmissiveTriangles block of glsl/lights.glsl: uvec4 header (cluster count: 0 when there
+    are more than EMISSIVE_CLUSTERS_MAX or not `spatial`, then the table alone draws), EMISSIVE_CLUSTERS_MAX cluster
+    rows (vec4 object-space centre + world radius, uvec4 instance, first, count, power bits), then
+    per triangle uvec4 (instance, mesh-local triangle, material, alias entry within its cluster)
+    and vec4 (alias threshold, -, -, -); float32 rows with uint fields as bits."""
+    n = len(powers)
+    out = np.zeros((1 + 2 * EMISSIVE_CLUSTERS_MAX + 2 * n, 4), np.float32)
+    bits = out.view(np.uint32)
+    rows = 1 + 2 * EMISSIVE_CLUSTERS_MAX + 2 * np.arange(n)
+    bits[rows] = ids
+    for c in clusters:
+        threshold, alias = alias_table(powers[c.first:c.first + c.count])
+        bits[rows[c.first:c.first + c.count], 3] = alias + c.first
+        out[rows[c.first:c.first + c.count] + 1, 0] = threshold
+    if spatial and len(clusters) <= EMISSIVE_CLUSTERS_MAX:
+        bits[0, 0] = len(clusters)
+        for k, c in enumerate(clusters):
+            out[1 + 2 * k, 0:3] = c.centre
+            out[1 + 2 * k, 3] = c.radius
+            bits[2 + 2 * k, 0:3] = c.instance, c.first, c.count
+            out[2 + 2 * k, 3] = c.power
+    return out
