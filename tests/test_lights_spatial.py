@@ -26,18 +26,25 @@ def test_each_emissive_instance_is_a_cluster_with_its_own_alias_table():
     powers = rng.exponential(size=7)
     ids = np.arange(28, dtype=np.uint32).reshape(7, 4)
     tri = rng.normal(size=(3, 3, 3))
-    clusters = [lt.emissive_cluster(4, tri, 2.0 * np.eye(3), 0, powers[:3]),
-                lt.emissive_cluster(9, tri[:1], np.eye(3), 3, powers[3:])]
+    clusters = [lt.emissive_cluster(4, tri, 0, powers[:3]), lt.emissive_cluster(9, tri[:1], 3, powers[3:])]
     assert clusters[0].power == pytest.approx(powers[:3].sum())
     v = tri.reshape(-1, 3)
-    assert np.linalg.norm(v - clusters[0].centre, axis=1).max() * 2.0 == pytest.approx(clusters[0].radius)
-    rows = lt.pack_emissive(ids, powers, clusters)
+    assert np.linalg.norm(v - clusters[0].centre, axis=1).max() == pytest.approx(clusters[0].radius)
+    transforms = np.tile(np.eye(4), (10, 1, 1))
+    transforms[4, :3, :3] = np.diag([2.0, 1.0, 0.5])   # instance 4: scaled and moved
+    transforms[4, :3, 3] = [10.0, 0.0, -3.0]
+    anchor = np.array([9.0, 1.0, 0.0])
+    head = lt.pack_clusters(clusters, transforms, anchor)
+    rows = lt.pack_emissive(ids, powers, clusters, head)
     bits = rows.view(np.uint32)
     assert bits[0, 0] == 2
+    np.testing.assert_allclose(rows[1, :3], np.diag([2.0, 1.0, 0.5]) @ clusters[0].centre + [1.0, -1.0, -3.0],
+                               rtol=1e-6)   # anchor space: world minus the anchor
+    assert rows[1, 3] == pytest.approx(2.0 * clusters[0].radius)   # the largest axis scale
     np.testing.assert_array_equal(bits[2, :3], [4, 0, 3])
     np.testing.assert_array_equal(bits[4, :3], [9, 3, 4])
     assert rows[4, 3] == pytest.approx(powers[3:].sum(), rel=1e-6)
-    first = 1 + 2 * lt.EMISSIVE_CLUSTERS_MAX
+    first = lt.CLUSTER_ROWS
     tri_rows = bits[first::2]
     np.testing.assert_array_equal(tri_rows[:, :3], ids[:, :3])
     for c in clusters:   # each triangle's alias stays in its cluster and draws it by its power share
@@ -46,9 +53,27 @@ def test_each_emissive_instance_is_a_cluster_with_its_own_alias_table():
         assert alias.min() >= 0 and alias.max() < c.count
         p = lt.alias_probabilities(rows[first + 1::2][sl, 0].astype(np.float64), alias)
         np.testing.assert_allclose(p, powers[sl] / powers[sl].sum(), rtol=1e-6)
-    assert lt.pack_emissive(ids, powers, clusters, spatial=False).view(np.uint32)[0, 0] == 0
-    many = [lt.emissive_cluster(k, tri[:1], np.eye(3), k, powers[k:k + 1]) for k in range(7)] * 3
-    assert lt.pack_emissive(np.tile(ids, (3, 1)), np.tile(powers, 3), many).view(np.uint32)[0, 0] == 0
+    assert lt.pack_clusters(clusters, transforms, anchor, spatial=False).view(np.uint32)[0, 0] == 0
+    many = [lt.emissive_cluster(k % 10, tri[:1], k, powers[:1]) for k in range(lt.EMISSIVE_CLUSTERS_MAX + 1)]
+    assert lt.pack_clusters(many, transforms, anchor).view(np.uint32)[0, 0] == 0   # too many: by power
+
+
+def test_a_moving_lamp_takes_its_cluster_along(gpu):
+    """The clusters' spheres follow their instances (and the render origin): after the lamp moves
+    the buffer holds its new centre, as the renderer's frame update writes it."""
+    scene = lamp_scene(lambert("White", (0.8,) * 3), 4.0)
+    with rv.Renderer(scene, rv.graphs.hybrid(), views=down_view()) as r:
+        r.render()
+        gs = r.gpu_scene
+        lamp = next(i for i, inst in enumerate(scene.instances) if inst.name == "Lamp")
+        t = scene.instances[lamp].transform.copy()
+        t[:3, 3] += [0.5, 0.2, 0.0]
+        scene.instances[lamp].transform = t
+        r.render()
+        head = np.frombuffer(gs.buffers["emissive_triangles"].read(), np.float32)[:lt.CLUSTER_ROWS * 4].reshape(-1, 4)
+        centre = LAMP.mean(axis=0) + [0.5, 0.2, 0.0]
+        np.testing.assert_allclose(head[1, :3], centre - gs.frame.anchor, atol=1e-5)
+        assert gs.emissive_clusters == 1
 
 
 def lamp_scene(material: Material, point_intensity: float) -> Scene:

@@ -189,8 +189,8 @@ float punctual_local_total(vec3 p, uint n) {
 // ---- emissive triangles ---------------------------------------------------------------------------
 #if SCENE_HAS_EMISSIVE_TRIANGLES
 #define EMISSIVE_CLUSTERS_MAX 16   // light_table.EMISSIVE_CLUSTERS_MAX
-struct EmissiveCluster {   // one instance's emissive triangles (light_table.pack_emissive)
-    vec4 sphere;      // object-space centre of the instance's emissive vertices, world radius
+struct EmissiveCluster {   // one instance's emissive triangles (light_table.pack_clusters)
+    vec4 sphere;      // anchor-space centre of the instance's emissive vertices, world radius
     uvec4 ids;        // instance, first entry, entry count, power (float bits)
 };
 struct EmissiveTriangle {
@@ -206,9 +206,9 @@ layout(std430, binding = RAYVR_EMISSIVE_TRIANGLE_SSBO) readonly buffer EmissiveT
 // The irradiance (luminance) cluster c may give p: power / (pi max(d^2, r^2)), as if all of it
 // left a disc facing p from the cluster's centre (capped inside its bounding sphere).
 float emissive_cluster_estimate(uint c, vec3 p) {
-    EmissiveCluster k = emissive_clusters[c];
-    vec3 to = instance_point_to_render(k.ids.x, k.sphere.xyz) - p;
-    return uintBitsToFloat(k.ids.w) / (RAYVR_PI * max(dot(to, to), k.sphere.w * k.sphere.w));
+    vec4 sphere = emissive_clusters[c].sphere;
+    vec3 to = sphere.xyz + render_shift() - p;
+    return uintBitsToFloat(emissive_clusters[c].ids.w) / (RAYVR_PI * max(dot(to, to), sphere.w * sphere.w));
 }
 
 // Render-space vertices of scene triangle tri placed by instance inst.
@@ -391,9 +391,10 @@ float environment_light_pdf(vec3 dir) { return 0.0; }
 // ---- one sample of all of them ------------------------------------------------------------------
 #if SCENE_HAS_EMISSIVE_TRIANGLES
 // Spatial selection (light_table.py): the environment by its share of the power; below it the
-// punctual lights (drawn among themselves as sample_punctual_local does) against each emissive
-// cluster, by their irradiance estimates at p; within a cluster a triangle by its power (the
-// cluster's alias table). u.x makes the choices (rescaled to stay uniform), u.yz the point.
+// punctual lights (drawn among themselves as sample_punctual_local does) and each emissive
+// cluster, by their irradiance estimates at p, in one pass over the candidates (each replaces the
+// pick so far with probability w / running sum, x rescaled to stay uniform); within a cluster a
+// triangle by its power (the cluster's alias table). u.x makes the choices, u.yz the point.
 LightSample sample_light_spatial(vec3 p, vec3 u) {
     float x = u.x;
     float rest = 1.0 - light_table_info.z;   // what the environment leaves
@@ -401,35 +402,38 @@ LightSample sample_light_spatial(vec3 p, vec3 u) {
     if (x < light_table_info.z) return sample_environment(u.yz);
     x = min((x - light_table_info.z) / rest, 0.99999994);
 #endif
-    float w_p = 0.0, w_pick = 0.0;
+    float sum = 0.0, w_pick = 0.0;
     LightSample pick = no_light_sample();
 #if SCENE_HAS_PUNCTUAL_LIGHTS
-    pick = punctual_local_pick(p, punctual_light_count(), u.y, w_p, w_pick);
+    pick = punctual_local_pick(p, punctual_light_count(), u.y, sum, w_pick);
 #endif
-    uint nc = emissive_info.x;
-    float w_e = 0.0;
-    for (uint c = 0u; c < nc; ++c) w_e += emissive_cluster_estimate(c, p);
-    float sum = w_p + w_e;
-    if (x * sum < w_p) {
+    float w_chosen = sum;   // the punctual lights' estimate while they are the pick
+    uint chosen = 0xFFFFFFFFu;
+    for (uint c = 0u; c < emissive_info.x; ++c) {
+        float w = emissive_cluster_estimate(c, p);
+        if (!(w > 0.0)) continue;
+        sum += w;
+        float q = w / sum;
+        if (x < q) {
+            chosen = c;
+            w_chosen = w;
+            x = x / q;
+        } else {
+            x = (x - q) / (1.0 - q);
+        }
+        x = min(x, 0.99999994);
+    }
+    if (chosen == 0xFFFFFFFFu) {
         if (!(w_pick > 0.0)) return no_light_sample();
         pick.weight *= sum / (w_pick * rest);   // 1 / (rest * w_pick / sum)
         return pick;
     }
-    // the cluster: the first whose running sum passes x's share of the clusters' estimates
-    float target = min(x * sum - w_p, w_e), below = 0.0, w_c = 0.0;
-    uint c = 0u;
-    for (; c < nc; ++c) {
-        w_c = emissive_cluster_estimate(c, p);
-        if (target < below + w_c || c + 1u == nc) break;
-        below += w_c;
-    }
-    if (!(w_c > 0.0)) return no_light_sample();
-    EmissiveCluster k = emissive_clusters[c];
-    float y = clamp((target - below) / w_c, 0.0, 0.99999994) * float(k.ids.z);
-    uint i = min(uint(y), k.ids.z - 1u);
-    uint j = k.ids.y + i;
+    uvec4 k = emissive_clusters[chosen].ids;
+    float y = x * float(k.z);
+    uint i = min(uint(y), k.z - 1u);
+    uint j = k.y + i;
     if (y - float(i) >= emissive_triangles[j].select.x) j = emissive_triangles[j].ids.w;
-    return sample_emissive(j, p, u.yz, rest * w_c / (sum * uintBitsToFloat(k.ids.w)));
+    return sample_emissive(j, p, u.yz, rest * w_chosen / (sum * uintBitsToFloat(k.w)));
 }
 #endif
 

@@ -104,6 +104,7 @@ class SceneFrame:
         gs.upload("instances", np.concatenate([header, rows.reshape(-1)]))
         self._shift = header[4:7].copy()
         self._build_tlas(live, w.min(axis=1), w.max(axis=1))
+        gs.write_emissive_clusters(mats, self.anchor)
         self.rebuilds += 1
 
     def _build_tlas(self, live: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:

@@ -272,6 +272,7 @@ class GpuScene:
         """The emissive triangles of every instance (world-space areas in float64) and their powers;
         degenerate (zero-area) triangles are left out. Uploads their ids; returns the powers."""
         self.emissive_count = 0
+        self._clusters = []
         if "SCENE_HAS_EMISSIVE_TRIANGLES" not in self.features:
             return np.zeros(0)
         mats = list(self.scene.materials)
@@ -294,15 +295,30 @@ class GpuScene:
             ids.append(np.stack([np.full(int(keep.sum()), i), sel[keep], m[sel][keep],
                                  np.zeros(int(keep.sum()))], axis=1).astype(np.uint32))
             power.append(p[keep])
-            clusters.append(light_table.emissive_cluster(i, local[keep], inst.transform[:3, :3], first, p[keep]))
+            clusters.append(light_table.emissive_cluster(i, local[keep], first, p[keep]))
             first += int(keep.sum())
         power = np.concatenate(power) if power else np.zeros(0)
+        self._clusters = clusters
         if len(power):
+            frame = getattr(self, "frame", None)   # none yet while the constructor builds
             self._buffer("emissive_triangles", light_table.pack_emissive(
-                np.concatenate(ids), power, clusters, spatial=self.SPATIAL_LIGHTS))
+                np.concatenate(ids), power, clusters, self._cluster_rows(self.scene.instances.transforms,
+                                                                         np.zeros(3) if frame is None else frame.anchor)))
         self.emissive_count = len(power)
-        self.emissive_clusters = len(clusters)
         return power
+
+    def _cluster_rows(self, transforms, anchor) -> np.ndarray:
+        return light_table.pack_clusters(self._clusters, transforms, anchor, spatial=self.SPATIAL_LIGHTS)
+
+    def write_emissive_clusters(self, transforms, anchor) -> None:
+        """Rewrite the emissive clusters' anchor-space spheres (instances moved, or the anchor)."""
+        if self.emissive_count:
+            self.buffers["emissive_triangles"].write(self._cluster_rows(transforms, anchor).tobytes())
+
+    @property
+    def emissive_clusters(self) -> int:
+        """Emissive clusters the spatial light selection draws among (0: selection by power)."""
+        return len(self._clusters) if self.SPATIAL_LIGHTS and len(self._clusters) <= light_table.EMISSIVE_CLUSTERS_MAX else 0
 
     def _build_lights(self) -> None:
         """The light table over every light (light_table.py), the emissive triangles and the

@@ -155,49 +155,61 @@ def build_light_table(punctual: np.ndarray, emissive: np.ndarray, environment: f
 @dataclasses.dataclass
 class EmissiveCluster:
     """The emissive triangles of one instance: entries [first, first + count) of the emissive
-    list, the bounding sphere of their object-space vertices (centre; radius scaled to world by
-    the instance's largest axis scale) and their summed power."""
+    list, the bounding sphere of their object-space vertices and their summed power."""
 
     instance: int
-    centre: np.ndarray
-    radius: float
+    centre: np.ndarray    # object space
+    radius: float         # object space
     first: int
     count: int
     power: float
 
 
-def emissive_cluster(instance: int, triangles: np.ndarray, linear: np.ndarray, first: int,
-                     powers: np.ndarray) -> EmissiveCluster:
-    """The cluster of `instance`'s emissive triangles ((k, 3, 3) object space), its 3x3 `linear`
-    part of the instance transform, their powers, starting at emissive entry `first`."""
+def emissive_cluster(instance: int, triangles: np.ndarray, first: int, powers: np.ndarray) -> EmissiveCluster:
+    """The cluster of `instance`'s emissive triangles ((k, 3, 3) object space) and their powers,
+    starting at emissive entry `first`."""
     v = np.asarray(triangles, np.float64).reshape(-1, 3)
     centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
-    scale = float(np.linalg.norm(np.asarray(linear, np.float64), axis=0).max())
-    radius = float(np.linalg.norm(v - centre, axis=1).max()) * scale
+    radius = float(np.linalg.norm(v - centre, axis=1).max())
     return EmissiveCluster(int(instance), centre, radius, int(first), len(powers), float(np.sum(powers)))
 
 
-def pack_emissive(ids: np.ndarray, powers: np.ndarray, clusters: list[EmissiveCluster],
-                  spatial: bool = True) -> np.ndarray:
-    """The EmissiveTriangles block of glsl/lights.glsl: uvec4 header (cluster count: 0 when there
-    are more than EMISSIVE_CLUSTERS_MAX or not `spatial`, then the table alone draws), EMISSIVE_CLUSTERS_MAX cluster
-    rows (vec4 object-space centre + world radius, uvec4 instance, first, count, power bits), then
-    per triangle uvec4 (instance, mesh-local triangle, material, alias entry within its cluster)
-    and vec4 (alias threshold, -, -, -); float32 rows with uint fields as bits."""
-    n = len(powers)
-    out = np.zeros((1 + 2 * EMISSIVE_CLUSTERS_MAX + 2 * n, 4), np.float32)
+CLUSTER_ROWS = 1 + 2 * EMISSIVE_CLUSTERS_MAX   # the header and the cluster rows of pack_emissive
+
+
+def pack_clusters(clusters: list[EmissiveCluster], transforms: np.ndarray, anchor, spatial: bool = True) -> np.ndarray:
+    """The head of the EmissiveTriangles block (glsl/lights.glsl), CLUSTER_ROWS vec4 rows: uvec4
+    (cluster count: 0 when there are more than EMISSIVE_CLUSTERS_MAX or not `spatial`, then the
+    table alone draws), then per cluster vec4 (anchor-space centre: the instance's transform minus
+    `anchor`; world radius: scaled by the transform's largest axis scale) and uvec4 (instance,
+    first entry, entry count, power bits). Rewritten whenever instances move or the anchor does."""
+    out = np.zeros((CLUSTER_ROWS, 4), np.float32)
+    if not (spatial and 0 < len(clusters) <= EMISSIVE_CLUSTERS_MAX):
+        return out
     bits = out.view(np.uint32)
-    rows = 1 + 2 * EMISSIVE_CLUSTERS_MAX + 2 * np.arange(n)
+    bits[0, 0] = len(clusters)
+    anchor = np.asarray(anchor, np.float64)
+    for k, c in enumerate(clusters):
+        t = np.asarray(transforms[c.instance], np.float64)
+        out[1 + 2 * k, 0:3] = t[:3, :3] @ c.centre + t[:3, 3] - anchor
+        out[1 + 2 * k, 3] = c.radius * float(np.linalg.norm(t[:3, :3], axis=0).max())
+        bits[2 + 2 * k, 0:3] = c.instance, c.first, c.count
+        out[2 + 2 * k, 3] = c.power
+    return out
+
+
+def pack_emissive(ids: np.ndarray, powers: np.ndarray, clusters: list[EmissiveCluster], head: np.ndarray) -> np.ndarray:
+    """The EmissiveTriangles block: `head` (pack_clusters), then per triangle uvec4 (instance,
+    mesh-local triangle, material, alias entry within its cluster) and vec4 (alias threshold,
+    -, -, -); float32 rows with uint fields as bits."""
+    n = len(powers)
+    out = np.zeros((CLUSTER_ROWS + 2 * n, 4), np.float32)
+    out[:CLUSTER_ROWS] = head
+    bits = out.view(np.uint32)
+    rows = CLUSTER_ROWS + 2 * np.arange(n)
     bits[rows] = ids
     for c in clusters:
         threshold, alias = alias_table(powers[c.first:c.first + c.count])
         bits[rows[c.first:c.first + c.count], 3] = alias + c.first
         out[rows[c.first:c.first + c.count] + 1, 0] = threshold
-    if spatial and len(clusters) <= EMISSIVE_CLUSTERS_MAX:
-        bits[0, 0] = len(clusters)
-        for k, c in enumerate(clusters):
-            out[1 + 2 * k, 0:3] = c.centre
-            out[1 + 2 * k, 3] = c.radius
-            bits[2 + 2 * k, 0:3] = c.instance, c.first, c.count
-            out[2 + 2 * k, 3] = c.power
     return out
