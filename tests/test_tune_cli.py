@@ -21,14 +21,18 @@ def test_converge_prints_the_verdict_and_table_and_writes_the_report(gpu, tmp_pa
                 "| PATH_TRACED 1 spp + TAA |"):
         assert row in out
     note = [line for line in out.splitlines() if line.startswith("defaults for")]
-    # every size was given; llvmpipe's standard list leaves the hybrid levels through SVGF out, and says so
-    assert len(note) == 1 and note[0].split(": ", 1)[1].startswith("the hybrid levels through SVGF left out")
+    # every size was given; llvmpipe's standard list has a coarser probe grid and leaves the hybrid
+    # levels through SVGF out, and says so
+    assert len(note) == 1 and note[0].split(": ", 1)[1].startswith(
+        "probe GI rows' probes 4x4x4; the hybrid levels through SVGF left out")
     assert "| all SHADOWS + SVGF |" not in out and "| PATH_TRACED 1 spp + SVGF |" in out
     assert {"report.md", "report.html", "results.json", "pareto.png", "convergence.png", "images"} == \
         {p.name for p in report.iterdir()}
     doc = json.loads((report / "results.json").read_text())
     assert doc["reference"]["convergence"]["verdict"] == "not converged"
     assert all(r["settings"]["bounces"] == 2 for r in doc["rows"])   # PATH_TRACED follows the reference
+    gi = [r["settings"]["options"] for r in doc["rows"] if r["settings"]["gi"] == "probes"]
+    assert gi and all(o["probes"] == {"counts": [4, 4, 4]} for o in gi)   # the note's probe grid
     assert len(list((tmp_path / "cache").glob("*.npz"))) == 2 + len(doc["rows"])   # 2 references, the floors
 
 

@@ -185,6 +185,9 @@ class StudyPlan:
             preset=args.preset, ppd=args.ppd, display=self.display, metrics=tuple(metrics))
         self.cache = False if args.no_cache else args.cache
         self.denoised_levels = d.denoised_levels
+        self.probes = {"counts": list(d.probe_counts)} if d.probe_counts and not args.configs else None
+        if self.probes:
+            chosen["probe GI rows' probes"] = "x".join(str(c) for c in d.probe_counts)
         left_out = not d.denoised_levels and not args.configs
         self.note = d.note(chosen, left_out) if chosen or left_out else None
         self.report = Path(args.report) if args.report else None
@@ -206,7 +209,7 @@ class StudyPlan:
         if self.configs_file:
             return load_configs(self.configs_file)
         return standard_configs(scene, self.reference, reflect=self.reflect, spp=self.spp,
-                                denoised_levels=self.denoised_levels)
+                                denoised_levels=self.denoised_levels, probes=self.probes)
 
     def notes(self) -> list[str]:
         return [self.note] if self.note else []

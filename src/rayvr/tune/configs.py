@@ -265,12 +265,14 @@ def available_gi(builder=hybrid_graph) -> list[str]:
 
 
 def standard_configs(scene, reference: ReferenceSettings | None = None, reflect: str = "auto", spp=(1, 4, 16),
-                     taa: bool = True, denoised_levels: bool = True, **options) -> list[Config]:
+                     taa: bool = True, denoised_levels: bool = True, probes: dict | None = None,
+                     **options) -> list[Config]:
     """Every effect level alone (all RASTER, all SHADOWS, all REFLECTIONS, all PATH_TRACED at each
     `spp`) and mixed (SHADOWS with REFLECTIONS on one material); PATH_TRACED 1 spp + TAA (judged in
     motion); each PATH_TRACED level with every available denoiser, each other level with probe GI
     where the graphs have it and (`denoised_levels`) with the real-time denoiser, with and without
-    probe GI. PATH_TRACED uses the reference's bounces."""
+    probe GI. PATH_TRACED uses the reference's bounces. `probes`: the probe GI rows' ProbeGI
+    properties (e.g. {"counts": [4, 4, 4]}; default the pass's)."""
     bounces = (reference or ReferenceSettings()).max_bounces
     opts = {"path_bounces": bounces, **options}
     mirror = reflective_material(scene, reflect)
@@ -278,7 +280,8 @@ def standard_configs(scene, reference: ReferenceSettings | None = None, reflect:
               (f"SHADOWS + REFLECTIONS ({mirror})", {"*": Effect.SHADOWS, mirror: Effect.REFLECTIONS})]
     configs = [Config(name, effects, options=dict(opts)) for name, effects in levels]
     for mode in available_gi():
-        configs += [Config(f"{name} + {mode} GI", effects, options={**opts, "gi": mode}) for name, effects in levels]
+        configs += [Config(f"{name} + {mode} GI", effects, options={**opts, **_gi(mode, probes)})
+                    for name, effects in levels]
     traced = [(f"PATH_TRACED {n} spp", {**opts, "spp": int(n)}) for n in spp]
     configs += [Config(name, Effect.PATH_TRACED, options=o) for name, o in traced]
     if taa:
@@ -290,10 +293,15 @@ def standard_configs(scene, reference: ReferenceSettings | None = None, reflect:
     if denoised_levels:   # the hybrid's one-sample light through SVGF (OIDN is offline: no frame budget)
         for d in (d for d in available_denoisers() if d in REALTIME_DENOISERS):
             for gi in [None, *available_gi()]:
-                extra = {"denoise": d, **({"gi": gi} if gi else {})}
+                extra = {"denoise": d, **(_gi(gi, probes) if gi else {})}
                 configs += [Config(f"{name}{f' + {gi} GI' if gi else ''} + {d.upper()}", effects,
                                    options={**opts, **extra}) for name, effects in levels]
     return configs
+
+
+def _gi(mode: str, probes: dict | None) -> dict:
+    """The graph options of GI `mode` with the probe properties `probes`."""
+    return {"gi": mode, **({"probes": dict(probes)} if probes else {})}
 
 
 CONFIG_FIELDS = ("name", "effects", "graph", "options", "accumulate", "output")

@@ -33,6 +33,7 @@ class MachineDefaults:
     progressive_frames: int
     floor_fraction: float = 0.25    # of the reference's paths per pixel, for each bias floor
     denoised_levels: bool = True    # rayvr.tune.standard_configs' hybrid levels through SVGF
+    probe_counts: tuple | None = None   # the probe GI rows' probes per axis (None: the pass's 8^3)
 
     def note(self, chosen: dict, left_out: bool = False) -> str:
         """One line saying what was chosen for this machine (`chosen`: option -> value used;
@@ -44,7 +45,7 @@ class MachineDefaults:
 
 
 SOFTWARE = MachineDefaults("llvmpipe (software rendering)", (32, 32), 64, 16, 4, 10, 2, 16, 1, 16,
-                           floor_fraction=0.0625, denoised_levels=False)
+                           floor_fraction=0.0625, denoised_levels=False, probe_counts=(4, 4, 4))
 HARDWARE = MachineDefaults("a GPU", (720, 800), 256, 16, 4, 30, 5, 32, 3, 128)
 
 
