@@ -181,6 +181,7 @@ def test_environment_files_that_are_not_panoramas_are_refused_naming_the_file(tm
     (["--graph", "path_traced", "--spp", "0"], "--spp"),
     (["--graph", "path_traced", "--bounces", "-1"], "--bounces"),
     (["--environment-strength", "-2"], "--environment-strength"),
+    (["--light-selection", "nearest"], "--light-selection"),
 ])
 def test_render_refuses_bad_lighting_options_in_one_line(gpu, tmp_path, capsys, argv, field):
     from PIL import Image

@@ -11,12 +11,13 @@ import pytest
 import rayvr as rv
 from rayvr.scene import light_table as lt
 from rayvr.scene.builtin import lambert, quad_mesh
+from rayvr.errors import OptionError
 from rayvr.scene.gpu_scene import GpuScene
 from rayvr.scene.model import Light, Material, Scene
 from rayvr.xr.cameras import look_at
 from rayvr.xr.views import Fov, View, ViewSet
+from test_lights_environment import down_view, plane_points
 
-SIZE = 24
 LAMP = np.array([[-0.9, 0.4, -0.3], [-0.3, 0.4, -0.3], [-0.3, 0.4, 0.3], [-0.9, 0.4, 0.3]])   # facing down
 LAMP_L = 5.0
 
@@ -76,8 +77,9 @@ def test_a_moving_lamp_takes_its_cluster_along(gpu):
         assert gs.emissive_clusters == 1
 
 
-def lamp_scene(material: Material, point_intensity: float) -> Scene:
+def lamp_scene(material: Material, point_intensity: float, spatial: bool = True) -> Scene:
     s = Scene("lamp")
+    s.light_selection = "spatial" if spatial else "power"
     s.add_material(material)
     s.add_material(lambert("Lamp", (0.0, 0.0, 0.0), emissive=(LAMP_L,) * 3))
     s.add_object("Plane", *quad_mesh([[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2]], facing=(0, 1, 0)),
@@ -85,20 +87,6 @@ def lamp_scene(material: Material, point_intensity: float) -> Scene:
     s.add_object("Lamp", *quad_mesh(LAMP, facing=(0, -1, 0)), "Lamp")
     s.lights = [Light("point", position=(1.2, 1.5, 0.0), intensity=point_intensity)]
     return s
-
-
-def down_view() -> ViewSet:
-    return ViewSet([View(look_at((0.0, 3.0, 0.0), (0.0, 0.0, 0.0), up=(0.0, 0.0, -1.0)),
-                         Fov.symmetric(40.0, 1.0), SIZE, SIZE, 0.01, 10.0)])
-
-
-def plane_points(views) -> np.ndarray:
-    pts = np.zeros((SIZE, SIZE, 3))
-    for j in range(SIZE):
-        for i in range(SIZE):
-            o, d = views[0].primary_ray((i + 0.5, j + 0.5))
-            pts[j, i] = o + d * (-o[1] / d[1])
-    return pts
 
 
 def polygon_irradiance(x: np.ndarray, n: np.ndarray, poly: np.ndarray, radiance: float) -> np.ndarray:
@@ -132,10 +120,6 @@ def frames_of(scene, graph, views, pin, frames) -> np.ndarray:
     return np.array(out)
 
 
-@pytest.fixture
-def selection(monkeypatch):
-    """set(spatial): light selection for the next GpuScene, spatial or by power alone."""
-    return lambda spatial: monkeypatch.setattr(GpuScene, "SPATIAL_LIGHTS", spatial)
 
 
 def lamp_plane_radiance(pts: np.ndarray) -> np.ndarray:
@@ -148,7 +132,7 @@ def lamp_plane_radiance(pts: np.ndarray) -> np.ndarray:
     return 0.8 / math.pi * (e_point + polygon_irradiance(pts, up, LAMP, LAMP_L))
 
 
-def test_a_small_lamp_beside_a_bright_point_light_is_drawn_where_it_lights(gpu, selection):
+def test_a_small_lamp_beside_a_bright_point_light_is_drawn_where_it_lights(gpu):
     """A white Lambert plane under a point light of 60 times the lamp's power and a 0.6 m lamp
     0.4 m above it: the mean of 64 one-sample frames is the closed form (point light + Lambert's
     polygon formula) everywhere, and under the lamp, where it gives most of the light, the frames'
@@ -162,8 +146,7 @@ def test_a_small_lamp_beside_a_bright_point_light_is_drawn_where_it_lights(gpu, 
     assert under.sum() >= 9 and seen.mean() > 0.9
     var = {}
     for spatial in (True, False):
-        selection(spatial)
-        scene = lamp_scene(lambert("White", (0.8,) * 3), 4.0)
+        scene = lamp_scene(lambert("White", (0.8,) * 3), 4.0, spatial)
         scene.materials["White"].effect = rv.Effect.SHADOWS
         f = frames_of(scene, rv.graphs.hybrid(), views, "Composite.color", 64)[..., 0]
         var[spatial] = f[:, under].var(0).mean()
@@ -175,14 +158,15 @@ def test_a_small_lamp_beside_a_bright_point_light_is_drawn_where_it_lights(gpu, 
     assert var[True] < 0.2 * var[False], var
 
 
-def test_the_path_tracer_lights_the_plane_from_the_near_lamp_as_the_closed_form_says(gpu):
-    """The same plane path traced (light samples and BSDF rays that hit the lamp, by MIS): the
-    converged mean is the closed form."""
+@pytest.mark.parametrize("spatial", [True, False])
+def test_the_path_tracer_lights_the_plane_from_the_near_lamp_as_the_closed_form_says(gpu, spatial):
+    """The same plane path traced (light samples and BSDF rays that hit the lamp, by MIS), either
+    light selection: the converged mean is the closed form."""
     views = down_view()
     pts = plane_points(views)
     want = lamp_plane_radiance(pts)
     seen = ~through_lamp(pts, np.array([0.0, 3.0, 0.0]))
-    scene = lamp_scene(lambert("White", (0.8,) * 3), 4.0)
+    scene = lamp_scene(lambert("White", (0.8,) * 3), 4.0, spatial)
     scene.materials["White"].effect = rv.Effect.PATH_TRACED
     g = rv.graphs.path_traced(samples_per_pixel=16, max_bounces=2)
     g.update_pass("PathTracer", {"pixel_jitter": False})   # the closed form is at pixel centres
@@ -194,7 +178,7 @@ def test_the_path_tracer_lights_the_plane_from_the_near_lamp_as_the_closed_form_
     assert abs(got.sum() / want[seen].sum() - 1.0) < 0.01
 
 
-def test_path_traced_mis_on_a_glossy_plane_agrees_with_selection_by_power(gpu, selection):
+def test_path_traced_mis_on_a_glossy_plane_agrees_with_selection_by_power(gpu):
     """A glossy plane (roughness 0.25) seen at an angle under a lamp and a point light: BSDF rays
     that hit the lamp are weighted by the lamp's light-sampling pdf at their origin, which the
     spatial selection makes depend on the point. Any mismatch between the pdf it draws with and
@@ -203,8 +187,8 @@ def test_path_traced_mis_on_a_glossy_plane_agrees_with_selection_by_power(gpu, s
     views = ViewSet([View(look_at((0.0, 1.5, 2.5), (-0.3, 0.0, 0.0)), Fov.symmetric(50.0, 1.0), 16, 16, 0.01, 10.0)])
     means = {}
     for spatial in (True, False):
-        selection(spatial)
-        scene = lamp_scene(Material("Gloss", base_color=(0.8, 0.8, 0.8, 1.0), metallic=0.0, roughness=0.25), 2.0)
+        scene = lamp_scene(Material("Gloss", base_color=(0.8, 0.8, 0.8, 1.0), metallic=0.0, roughness=0.25), 2.0,
+                           spatial)
         scene.materials["Gloss"].effect = rv.Effect.PATH_TRACED
         g = rv.graphs.path_traced(samples_per_pixel=16, max_bounces=3)
         g.mark_output("PathTracer.color")
@@ -216,3 +200,10 @@ def test_path_traced_mis_on_a_glossy_plane_agrees_with_selection_by_power(gpu, s
     assert ok.mean() > 0.5
     assert np.sqrt((z ** 2).mean()) < 1.6, np.sqrt((z ** 2).mean())
     assert abs(m1.sum() / m0.sum() - 1.0) < 0.01
+
+
+def test_a_light_selection_that_does_not_exist_is_refused_naming_the_field(gpu):
+    scene = lamp_scene(lambert("White", (0.8,) * 3), 4.0)
+    scene.light_selection = "nearest"
+    with pytest.raises(OptionError, match=r"scene 'lamp'.light_selection: 'nearest'; use one of power, spatial"):
+        GpuScene(gpu, scene)

@@ -122,13 +122,22 @@ def add_lighting_arguments(p) -> None:
                         "EXR/HDR panorama (2:1); a scene with no light at all gets a neutral 1,1,1")
     p.add_argument("--environment-strength", type=number("--environment-strength", 0, 1e9), default=1.0,
                    help="multiplier of --environment (default 1)")
+    p.add_argument("--light-selection", default="power", metavar="power|spatial",
+                   help="how a point draws its light sample: power (default; one table over every light) or "
+                        "spatial (lamps by their irradiance estimate at the point: far fewer fireflies beside "
+                        "small lamps, a little more noise elsewhere)")
 
 
 def apply_lighting(scene, args) -> None:
-    """Give `scene` the --environment of `args` (if any), and say on one line of stderr when the
+    """Give `scene` the --light-selection and --environment of `args` (if any), and say on one line of stderr when the
     scene has no light at all and renders with the neutral default environment."""
     from ..scene import DEFAULT_ENVIRONMENT, load_environment
+    from ..scene.gpu_scene import GpuScene
 
+    selection = getattr(args, "light_selection", "power")
+    if selection not in GpuScene.LIGHT_SELECTIONS:
+        raise OptionError(f"--light-selection {selection}: use one of {', '.join(GpuScene.LIGHT_SELECTIONS)}")
+    scene.light_selection = selection
     spec = getattr(args, "environment", None)
     if spec is not None:
         scene.environment = load_environment(spec, "--environment", getattr(args, "environment_strength", 1.0))

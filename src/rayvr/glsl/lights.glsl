@@ -57,6 +57,17 @@ LightSample no_light_sample() {
     return LightSample(vec3(0.0, 1.0, 0.0), 0.0, vec3(0.0), 0.0, false);
 }
 
+// One step of a single-pass weighted choice (a reservoir of one): a candidate of weight w > 0
+// joins `total` and replaces the pick so far with probability w / total (true), r in [0, 1)
+// rescaled to stay uniform for the steps after it.
+bool reservoir_take(float w, inout float total, inout float r) {
+    total += w;
+    float q = w / total;
+    bool take = r < q;
+    r = min(take ? r / q : (r - q) / (1.0 - q), 0.99999994);
+    return take;
+}
+
 // The shadow ray of light sample ls taken at p, from `origin` (p moved off its surface:
 // offset_ray_origin): aimed at the sampled point itself and stopping 1e-4 of the way short of it.
 // Aiming from p instead (ls.direction, ls.distance) moves the ray's end into the emitter by the
@@ -151,16 +162,10 @@ LightSample punctual_local_pick(vec3 p, uint n, float r, out float total, out fl
         LightSample c = eval_punctual_light(i, p);
         float w = c.valid ? luminance(c.weight) : 0.0;
         if (!(w > 0.0)) continue;
-        total += w;
-        float q = w / total;
-        if (r < q) {
+        if (reservoir_take(w, total, r)) {
             pick = c;
             w_pick = w;
-            r = r / q;
-        } else {
-            r = (r - q) / (1.0 - q);
         }
-        r = min(r, 0.99999994);
     }
     return pick;
 }
@@ -259,8 +264,16 @@ LightSample sample_emissive(uint k, vec3 p, vec2 u, float per_power) {
     return s;
 }
 
-// Spatial selection (light_table.py) when the buffer has clusters and the punctual lights are few.
+#ifndef LIGHTS_SPATIAL
+#define LIGHTS_SPATIAL 0   // GpuScene.defines(): Scene.light_selection "spatial"
+#endif
+
+// Spatial selection (light_table.py) when the scene asks for it, the buffer has clusters and the
+// punctual lights are few.
 bool lights_spatial() {
+#if !LIGHTS_SPATIAL
+    return false;
+#endif
 #if SCENE_HAS_PUNCTUAL_LIGHTS
     if (punctual_light_count() > uint(LOCAL_PUNCTUAL_MAX)) return false;
 #endif
@@ -412,16 +425,10 @@ LightSample sample_light_spatial(vec3 p, vec3 u) {
     for (uint c = 0u; c < emissive_info.x; ++c) {
         float w = emissive_cluster_estimate(c, p);
         if (!(w > 0.0)) continue;
-        sum += w;
-        float q = w / sum;
-        if (x < q) {
+        if (reservoir_take(w, sum, x)) {
             chosen = c;
             w_chosen = w;
-            x = x / q;
-        } else {
-            x = (x - q) / (1.0 - q);
         }
-        x = min(x, 0.99999994);
     }
     if (chosen == 0xFFFFFFFFu) {
         if (!(w_pick > 0.0)) return no_light_sample();

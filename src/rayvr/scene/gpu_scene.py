@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from ..errors import GpuError, SceneError
+from ..errors import GpuError, OptionError, SceneError
 from ..gpu.bindings import BINDINGS
 from ..materials import bsdf_tables
 from ..materials.material import TEXTURE_SLOTS, Material
@@ -79,7 +79,7 @@ def pack_materials(materials, texture_layers: dict[int, int] | None = None) -> n
 class GpuScene:
     """GPU buffers, BVH and textures of one `Scene`. Build once; `update(origin)` per frame."""
 
-    SPATIAL_LIGHTS = True   # light_table.pack_emissive: draw emissive clusters by their irradiance estimate
+    LIGHT_SELECTIONS = ("power", "spatial")
 
     def __init__(self, gpu, scene: Scene, bvh_method: str = "auto", progress: bool | None = None,
                  bvh_layout: str = "bvh4"):
@@ -89,6 +89,10 @@ class GpuScene:
         self.gpu = gpu
         self.gl = gpu.gl if hasattr(gpu, "gl") else gpu
         self.scene = scene
+        self.light_selection = getattr(scene, "light_selection", "power")
+        if self.light_selection not in self.LIGHT_SELECTIONS:
+            raise OptionError(f"scene '{scene.name}'.light_selection: {self.light_selection!r}; use one of "
+                              f"{', '.join(self.LIGHT_SELECTIONS)}")
         self.features = scene.features
         self.timings: dict[str, float] = {}
         self.buffers: dict[str, object] = {}
@@ -307,8 +311,13 @@ class GpuScene:
         self.emissive_count = len(power)
         return power
 
+    @property
+    def spatial_lights(self) -> bool:
+        """Whether the scene asks for spatial light selection (Scene.light_selection)."""
+        return self.light_selection == "spatial"
+
     def _cluster_rows(self, transforms, anchor) -> np.ndarray:
-        return light_table.pack_clusters(self._clusters, transforms, anchor, spatial=self.SPATIAL_LIGHTS)
+        return light_table.pack_clusters(self._clusters, transforms, anchor, spatial=self.spatial_lights)
 
     def write_emissive_clusters(self, transforms, anchor) -> None:
         """Rewrite the emissive clusters' anchor-space spheres (instances moved, or the anchor)."""
@@ -318,7 +327,7 @@ class GpuScene:
     @property
     def emissive_clusters(self) -> int:
         """Emissive clusters the spatial light selection draws among (0: selection by power)."""
-        return len(self._clusters) if self.SPATIAL_LIGHTS and len(self._clusters) <= light_table.EMISSIVE_CLUSTERS_MAX else 0
+        return len(self._clusters) if self.spatial_lights and len(self._clusters) <= light_table.EMISSIVE_CLUSTERS_MAX else 0
 
     def _build_lights(self) -> None:
         """The light table over every light (light_table.py), the emissive triangles and the
@@ -425,13 +434,15 @@ class GpuScene:
     def defines(self) -> dict[str, int | str]:
         """The #defines every shader that includes the scene library is built with: the feature
         flags (0 or 1), SCENE_SCALE, the scene's extent in metres (ray offsets scale with it), and
-        RQ_BVH_WIDTH and RQ_BVH_QUANTIZED, the node layout of the uploaded BVHs."""
+        RQ_BVH_WIDTH and RQ_BVH_QUANTIZED, the node layout of the uploaded BVHs, and LIGHTS_SPATIAL
+        (Scene.light_selection "spatial" in a scene with emissive triangles; else compiled out)."""
         have = set(self.features)
         if not self.emissive_count:   # every emissive triangle degenerate: no code samples an empty table
             have.discard("SCENE_HAS_EMISSIVE_TRIANGLES")
         if self.environment is None:
             have -= {"SCENE_HAS_ENVIRONMENT", "SCENE_HAS_ENVIRONMENT_MAP"}
         return {**{f: int(f in have) for f in FEATURES}, "SCENE_SCALE": repr(self.scale),
+                "LIGHTS_SPATIAL": int(self.spatial_lights and "SCENE_HAS_EMISSIVE_TRIANGLES" in have),
                 **_LAYOUT_DEFINES[self.bvh_layout]}
 
     @property

@@ -341,6 +341,11 @@ class Scene:
         self.textures: list[Texture] = []
         self.lights = LightList()
         self.environment: Environment | None = None
+        # how a shading point draws its light sample: "power" (one alias table over every light)
+        # or "spatial" (lamps drawn by their irradiance estimate at the point: scene/light_table.py;
+        # far fewer fireflies beside small lamps, a little more noise elsewhere; read when a
+        # renderer builds its GpuScene)
+        self.light_selection = "power"
         self.cameras: list[Camera] = []
         self.warnings: list[str] = []          # what a loader skipped (e.g. line primitives)
 
