@@ -193,6 +193,10 @@ float punctual_local_total(vec3 p, uint n) {
 
 // ---- emissive triangles ---------------------------------------------------------------------------
 #if SCENE_HAS_EMISSIVE_TRIANGLES
+#ifndef LIGHTS_SPATIAL
+#define LIGHTS_SPATIAL 0   // GpuScene.defines(): Scene.light_selection "spatial" (the clusters below)
+#endif
+#if LIGHTS_SPATIAL
 #define EMISSIVE_CLUSTERS_MAX 16   // light_table.EMISSIVE_CLUSTERS_MAX
 struct EmissiveCluster {   // one instance's emissive triangles (light_table.pack_clusters)
     vec4 sphere;      // anchor-space centre of the instance's emissive vertices, world radius
@@ -215,6 +219,14 @@ float emissive_cluster_estimate(uint c, vec3 p) {
     vec3 to = sphere.xyz + render_shift() - p;
     return uintBitsToFloat(emissive_clusters[c].ids.w) / (RAYVR_PI * max(dot(to, to), sphere.w * sphere.w));
 }
+#else
+struct EmissiveTriangle {
+    uvec4 ids;        // instance, mesh-local triangle, material
+};
+layout(std430, binding = RAYVR_EMISSIVE_TRIANGLE_SSBO) readonly buffer EmissiveTriangles {
+    EmissiveTriangle emissive_triangles[];
+};
+#endif
 
 // Render-space vertices of scene triangle tri placed by instance inst.
 void emissive_vertices(uint inst, uint tri, out vec3 a, out vec3 b, out vec3 c) {
@@ -264,16 +276,9 @@ LightSample sample_emissive(uint k, vec3 p, vec2 u, float per_power) {
     return s;
 }
 
-#ifndef LIGHTS_SPATIAL
-#define LIGHTS_SPATIAL 0   // GpuScene.defines(): Scene.light_selection "spatial"
-#endif
-
-// Spatial selection (light_table.py) when the scene asks for it, the buffer has clusters and the
-// punctual lights are few.
+#if LIGHTS_SPATIAL
+// Spatial selection (light_table.py) when the buffer has clusters and the punctual lights are few.
 bool lights_spatial() {
-#if !LIGHTS_SPATIAL
-    return false;
-#endif
 #if SCENE_HAS_PUNCTUAL_LIGHTS
     if (punctual_light_count() > uint(LOCAL_PUNCTUAL_MAX)) return false;
 #endif
@@ -302,12 +307,16 @@ float emissive_spatial_per_power(uint instance, vec3 p) {
     }
     return (1.0 - light_table_info.z) * w_c / ((punctual_estimate(p) + w_e) * power);
 }
+#endif
 
 float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p) {
     vec3 to = q.position - p;
     float d2 = dot(to, to);
     float cos_l = abs(dot(q.geometric_normal, to)) * inversesqrt(max(d2, 1e-30));
-    float per_power = lights_spatial() ? emissive_spatial_per_power(instance, p) : light_table_info.w;
+    float per_power = light_table_info.w;
+#if LIGHTS_SPATIAL
+    if (lights_spatial()) per_power = emissive_spatial_per_power(instance, p);
+#endif
     return emissive_area_pdf(q.material, per_power) * d2 / max(cos_l, 1e-12);
 }
 #endif
@@ -402,7 +411,7 @@ float environment_light_pdf(vec3 dir) { return 0.0; }
 #endif
 
 // ---- one sample of all of them ------------------------------------------------------------------
-#if SCENE_HAS_EMISSIVE_TRIANGLES
+#if SCENE_HAS_EMISSIVE_TRIANGLES && LIGHTS_SPATIAL
 // Spatial selection (light_table.py): the environment by its share of the power; below it the
 // punctual lights (drawn among themselves as sample_punctual_local does) and each emissive
 // cluster, by their irradiance estimates at p, in one pass over the candidates (each replaces the
@@ -446,7 +455,7 @@ LightSample sample_light_spatial(vec3 p, vec3 u) {
 
 LightSample sample_light(vec3 p, vec3 u) {
 #if SCENE_HAS_LIGHTS
-#if SCENE_HAS_EMISSIVE_TRIANGLES
+#if SCENE_HAS_EMISSIVE_TRIANGLES && LIGHTS_SPATIAL
     if (lights_spatial()) return sample_light_spatial(p, u);
 #endif
     uint n = light_count();

@@ -305,9 +305,9 @@ class GpuScene:
         self._clusters = clusters
         if len(power):
             frame = getattr(self, "frame", None)   # none yet while the constructor builds
-            self._buffer("emissive_triangles", light_table.pack_emissive(
-                np.concatenate(ids), power, clusters, self._cluster_rows(self.scene.instances.transforms,
-                                                                         np.zeros(3) if frame is None else frame.anchor)))
+            head = self._cluster_rows(self.scene.instances.transforms,
+                                      np.zeros(3) if frame is None else frame.anchor) if self.spatial_lights else None
+            self._buffer("emissive_triangles", light_table.pack_emissive(np.concatenate(ids), power, clusters, head))
         self.emissive_count = len(power)
         return power
 
@@ -321,7 +321,7 @@ class GpuScene:
 
     def write_emissive_clusters(self, transforms, anchor) -> None:
         """Rewrite the emissive clusters' anchor-space spheres (instances moved, or the anchor)."""
-        if self.emissive_count:
+        if self.emissive_count and self.spatial_lights:
             self.buffers["emissive_triangles"].write(self._cluster_rows(transforms, anchor).tobytes())
 
     @property

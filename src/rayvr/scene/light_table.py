@@ -198,10 +198,14 @@ def pack_clusters(clusters: list[EmissiveCluster], transforms: np.ndarray, ancho
     return out
 
 
-def pack_emissive(ids: np.ndarray, powers: np.ndarray, clusters: list[EmissiveCluster], head: np.ndarray) -> np.ndarray:
-    """The EmissiveTriangles block: `head` (pack_clusters), then per triangle uvec4 (instance,
-    mesh-local triangle, material, alias entry within its cluster) and vec4 (alias threshold,
-    -, -, -); float32 rows with uint fields as bits."""
+def pack_emissive(ids: np.ndarray, powers: np.ndarray, clusters: list[EmissiveCluster],
+                  head: np.ndarray | None) -> np.ndarray:
+    """The EmissiveTriangles block. Selection by power (`head` None): per triangle uvec4 (instance,
+    mesh-local triangle, material, -). Spatial: `head` (pack_clusters), then per triangle uvec4
+    (instance, mesh-local triangle, material, alias entry within its cluster) and vec4 (alias
+    threshold, -, -, -); float32 rows with uint fields as bits."""
+    if head is None:
+        return np.ascontiguousarray(ids, np.uint32)
     n = len(powers)
     out = np.zeros((CLUSTER_ROWS + 2 * n, 4), np.float32)
     out[:CLUSTER_ROWS] = head
