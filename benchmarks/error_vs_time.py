@@ -99,8 +99,8 @@ def run(args) -> dict:
                              progressive_frames=f["progressive_frames"], preset=args.preset,
                              floor_fraction=floor_fraction, metric_workers=args.metric_workers,
                              hdrflip_frames=hdrflip_frames)
-    rows, notes = [], [figures_note(args.figures, f, args.frames, floor_fraction, hdrflip_frames,
-                                    args.denoised_levels == "on")]
+    denoised = {"on": True, "off": False}.get(args.denoised_levels, args.figures != "device" and not quick)
+    rows, notes = [], [figures_note(args.figures, f, args.frames, floor_fraction, hdrflip_frames, denoised)]
     loaded = [load_scene_arg(spec) for spec in scenes]
     if len(loaded) > 1:
         notes.append("each scene's references were rendered while the scene before it was still being judged "
@@ -112,7 +112,6 @@ def run(args) -> dict:
         runner = LocalRunner(before_wait=(lambda s=following: prefetch_references(s, args.views, size, ref_settings,
                                                                                   motion, args.cache))
                              if following is not None else None)
-        denoised = {"on": True, "off": False}.get(args.denoised_levels, args.figures != "device" and not quick)
         configs = standard_configs(scene, ref_settings, denoised_levels=denoised)
         results, tuned = tuned_study(scene, view_set, ref, settings, configs, budgets, cache_dir=args.cache,
                                      runner=runner,

@@ -327,7 +327,7 @@ class GpuScene:
     @property
     def emissive_clusters(self) -> int:
         """Emissive clusters the spatial light selection draws among (0: selection by power)."""
-        return len(self._clusters) if self.spatial_lights and len(self._clusters) <= light_table.EMISSIVE_CLUSTERS_MAX else 0
+        return light_table.drawn_clusters(self._clusters, self.spatial_lights)
 
     def _build_lights(self) -> None:
         """The light table over every light (light_table.py), the emissive triangles and the

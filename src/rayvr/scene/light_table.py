@@ -15,8 +15,9 @@ direction within it. An emissive triangle's selection probability over its area 
 L / (pi total) x (pi, or 2 pi double-sided) — its area cancels — so the pdf of a point on a
 light never needs the area recomputed (in float32, from render-space vertices).
 
-Spatial selection (`pack_emissive`): each instance with emissive triangles is an emissive
-*cluster* (a bounding sphere, its power and an alias table over its own triangles). In a scene
+Spatial selection (Scene.light_selection "spatial"; `pack_clusters`, `pack_emissive`): each instance
+with emissive triangles is an emissive *cluster* (a bounding sphere, its power and an alias table
+over its own triangles). In a scene
 of at most LOCAL_PUNCTUAL_MAX punctual lights and EMISSIVE_CLUSTERS_MAX clusters the GPU draws,
 below the environment's share, between the punctual lights and each cluster by an estimate of
 the irradiance each gives the shading point: I / d^2 (cone and range included) for a punctual
@@ -177,6 +178,12 @@ def emissive_cluster(instance: int, triangles: np.ndarray, first: int, powers: n
 CLUSTER_ROWS = 1 + 2 * EMISSIVE_CLUSTERS_MAX   # the header and the cluster rows of pack_emissive
 
 
+def drawn_clusters(clusters: list[EmissiveCluster], spatial: bool) -> int:
+    """How many clusters the spatial selection draws among: all of them, or 0 (selection by power)
+    when it is off or there are more than EMISSIVE_CLUSTERS_MAX."""
+    return len(clusters) if spatial and len(clusters) <= EMISSIVE_CLUSTERS_MAX else 0
+
+
 def pack_clusters(clusters: list[EmissiveCluster], transforms: np.ndarray, anchor, spatial: bool = True) -> np.ndarray:
     """The head of the EmissiveTriangles block (glsl/lights.glsl), CLUSTER_ROWS vec4 rows: uvec4
     (cluster count: 0 when there are more than EMISSIVE_CLUSTERS_MAX or not `spatial`, then the
@@ -184,7 +191,7 @@ def pack_clusters(clusters: list[EmissiveCluster], transforms: np.ndarray, ancho
     `anchor`; world radius: scaled by the transform's largest axis scale) and uvec4 (instance,
     first entry, entry count, power bits). Rewritten whenever instances move or the anchor does."""
     out = np.zeros((CLUSTER_ROWS, 4), np.float32)
-    if not (spatial and 0 < len(clusters) <= EMISSIVE_CLUSTERS_MAX):
+    if not drawn_clusters(clusters, spatial):
         return out
     bits = out.view(np.uint32)
     bits[0, 0] = len(clusters)
