@@ -20,6 +20,25 @@
 // share the specular lobes' light by the power heuristic, weight 1 together, so a near-mirror
 // reflects an environment or a large emitter (which light sampling almost never finds in its
 // narrow lobe) and a small emitter stays light-sampled. Punctual lights (pdf 0) stay here whole.
+#if SCENE_HAS_LIGHTS
+// One light sample at s from random numbers u, unshadowed: f(v, l) cos * Le / pdf, zero when the
+// light is below s's geometric horizon or the BSDF reflects none of it; `ls` is the sample (its
+// direction and distance make the shadow ray: shadow_ray in lights.glsl).
+vec3 light_sample_unshadowed(PathVertex s, vec3 u, bool specular_traced, out LightSample ls) {
+    ls = sample_light(s.pos, u);
+    if (!ls.valid || dot(ls.direction, s.ng) <= 0.0) return vec3(0.0);
+    vec3 f;
+    if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0)
+        f = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction)
+          + power_heuristic(ls.pdf, bsdf_pdf_specular(s.bsdf, s.n, s.v, ls.direction))
+          * bsdf_eval_reflection(s.bsdf, s.n, s.v, ls.direction);
+    else
+        f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
+    if (f.x + f.y + f.z <= 0.0) return vec3(0.0);
+    return f * ls.weight;   // weight = radiance / pdf (lights.glsl)
+}
+#endif
+
 vec3 shade_direct_mis(PathVertex s, inout Rng rng, bool specular_traced) {
     vec3 sum = vec3(0.0);
 #if SCENE_HAS_LIGHTS   // punctual, emissive or the environment (lights.glsl)
@@ -27,16 +46,9 @@ vec3 shade_direct_mis(PathVertex s, inout Rng rng, bool specular_traced) {
     vec3 origin = offset_ray_origin(s.pos, s.ng);
 #endif
     for (int k = 0; k < LIGHT_SAMPLES; ++k) {
-        LightSample ls = sample_light(s.pos, rng_next3(rng));
-        if (!ls.valid || dot(ls.direction, s.ng) <= 0.0) continue;
-        vec3 f;
-        if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0)
-            f = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction)
-              + power_heuristic(ls.pdf, bsdf_pdf_specular(s.bsdf, s.n, s.v, ls.direction))
-              * bsdf_eval_reflection(s.bsdf, s.n, s.v, ls.direction);
-        else
-            f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
-        if (f.x + f.y + f.z <= 0.0) continue;
+        LightSample ls;
+        vec3 c = light_sample_unshadowed(s, rng_next3(rng), specular_traced, ls);
+        if (c.x + c.y + c.z <= 0.0) continue;
 #if SHADE_SHADOWS
         // the shadow ray's expected visibility through BLEND surfaces, not a coin toss per
         // surface: a light behind a half-transparent leaf is half visible in every pixel
@@ -45,9 +57,9 @@ vec3 shade_direct_mis(PathVertex s, inout Rng rng, bool specular_traced) {
         shadow_ray(s.pos, origin, ls, dir, tmax);
         float visible = trace_transmittance(origin, dir, tmax);
         if (visible <= 0.0) continue;
-        f *= visible;
+        c *= visible;
 #endif
-        sum += f * ls.weight;   // weight = radiance / pdf (lights.glsl)
+        sum += c;
     }
     sum *= 1.0 / float(LIGHT_SAMPLES);
 #endif

@@ -35,7 +35,8 @@ from . import layout as L
 
 RNG_SALT = 11
 MAX_GROUPS_X = 65535
-RAY_RECORD_BYTES = 48   # one ProbeRay (probe_rays.glsl): radiance, hit, ids
+LIGHT_KINDS = ("PUNCTUAL_LIGHTS", "EMISSIVE_TRIANGLES", "ENVIRONMENT")   # glsl/lights.glsl SCENE_HAS_LIGHTS
+RAY_RECORD_BYTES = 64   # one ProbeRay (probe_rays.glsl): hit, ids, radiance, direct
 # pin -> (output format, history format, texels per probe side). The readers sample the irradiance
 # as float16 (half the texture traffic of the lookups every pixel makes); the update blends in
 # float32 history, where float16's rounding would stall the hysteresis 1% short of its target.
@@ -131,9 +132,14 @@ class ProbeGI(RenderPass):
         self._atlas = self.atlas()
         self._defines = {**scene_defines(ctx), "PROBE_RAYS": int(self.rays_per_probe), "SHADE_SHADOWS": 1,
                          "LIGHT_SAMPLES": 1, "RNG_SALT": RNG_SALT}
-        # two dispatches per update: rays and direct light, then the bounce lookup and the blend (the
-        # lookup's registers in the traversal kernel cost it occupancy: probe_trace.comp)
-        self._trace = program_resources(self.compute_program(ctx.gl, "probe_trace.comp", self._defines))
+        # four dispatches per update (probe_rays.glsl): the closest hits; their shading and light samples;
+        # the shadow rays (none without lights); the blend. Each traversal runs in a kernel with no
+        # shading beside it, whose registers would cost it occupancy (probe_trace.comp).
+        stages = ["probe_trace.comp", "probe_shade.comp"]
+        if any(self._defines.get(f"SCENE_HAS_{kind}") for kind in LIGHT_KINDS):
+            stages.append("probe_shadow.comp")
+        self._stages = {name: program_resources(self.compute_program(ctx.gl, name, self._defines))
+                        for name in stages}
         self._res = program_resources(self.compute_program(ctx.gl, "probe_update.comp", self._defines))
         n = self._atlas.probes
         self._groups = (min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), 1)
@@ -159,7 +165,9 @@ class ProbeGI(RenderPass):
         d = dict(getattr(self, "_defines", {}))
         if hasattr(self, "_atlas"):
             d.update({"probes": f"{self._atlas.probes} in {len(self._volumes)} volume(s)",
-                      "rays_per_frame": self.rays_per_frame(), "probe_memory": human_bytes(self._memory)})
+                      "rays_per_frame": self.rays_per_frame(), "probe_memory": human_bytes(self._memory),
+                      "stages": "+".join(name.removeprefix("probe_").removesuffix(".comp")
+                                         for name in (*self._stages, "probe_update.comp"))})
         return d
 
     def hysteresis_at(self, update: int) -> float:
@@ -176,10 +184,11 @@ class ProbeGI(RenderPass):
         volumes = data[self.VOLUMES]
         volumes.write(L.pack_volumes(self._volumes, self._atlas, origin, float(self.normal_bias),
                                      float(self.view_bias), bool(self.visibility)))
-        for res in (self._trace, self._res):
+        for res in (*self._stages.values(), self._res):
             res.buffer("ProbeVolumes", volumes)
             res.buffer("ProbeRays", data[self.RAYS])
-        self._trace.set("probe_frame", int(ctx.frame_index) & 0xFFFFFFFF)
+        for stage in self._stages.values():
+            stage.set("probe_frame", int(ctx.frame_index) & 0xFFFFFFFF)
         res = self._res
         steps = 1 + (int(self.warmup) if self._updates == 0 else 0)
         for step in range(steps):
@@ -187,20 +196,27 @@ class ProbeGI(RenderPass):
                 ctx.barrier(Access.SAMPLED, Access.IMAGE, Access.STORAGE)
             self._update(ctx, data, step)
         for name in MAPS:
-            res.clear_sampler(f"probe_{name}_tex")
+            for prog in (self._stages["probe_shade.comp"], res):
+                prog.clear_sampler(f"probe_{name}_tex")
 
     def _update(self, ctx, data, step: int) -> None:
         rotation = tuple(L.random_rotation([ctx.frame_index, step]).T.ravel())
-        trace = self._trace
-        trace.set("probe_rotation", rotation)
-        trace.set("probe_step", step)
-        trace.prog.run(*self._groups)
-        ctx.barrier(Access.STORAGE)
-        res = self._res
         read, write = self._updates % 2, (self._updates + 1) % 2
+        history = int(self._updates > 0)
+        for name, stage in self._stages.items():
+            stage.set("probe_rotation", rotation)
+            stage.set("probe_step", step)
+            if name == "probe_shade.comp":   # the bounce: the previous update's probes
+                stage.set("probe_history", history)
+                for map_name in MAPS:
+                    stage.texture(f"probe_{map_name}_tex", data[self.history_pin(map_name, read)],
+                                  sampler=self._sampler)
+            stage.prog.run(*self._groups)
+            ctx.barrier(Access.STORAGE)
+        res = self._res
         res.set("probe_rotation", rotation)
         res.set("probe_hysteresis", self.hysteresis_at(self._updates))
-        res.set("probe_history", int(self._updates > 0))
+        res.set("probe_history", history)
         for name in MAPS:
             res.texture(f"probe_{name}_tex", data[self.history_pin(name, read)], sampler=self._sampler)
             res.image(f"{name}_out", data[name])

@@ -1,6 +1,8 @@
-// What the two stages of a probe update (probe_trace.comp, probe_update.comp) share: the probe
-// rays' directions and origins, and the ProbeRay records stage 1 writes for stage 2 (binding by
-// name: the pass binds the block "ProbeRays" to its internal `rays` buffer, probes x rays records).
+// What the four stages of a probe update (probe_trace.comp, probe_shade.comp, probe_shadow.comp,
+// probe_update.comp) share: the probe rays' directions and origins, and the ProbeRay record each
+// stage hands on to the next (binding by name: the pass binds the block "ProbeRays" to its
+// internal `rays` buffer, probes x rays records). Each stage is a workgroup per probe and an
+// invocation per ray.
 #pragma once
 #include "probe_gi.glsl"
 
@@ -13,9 +15,10 @@ const float PROBE_RAY_SPREAD = sqrt(4.0 * RAYVR_PI / float(PROBE_RAYS));   // a 
 #define PROBE_RAY_BACKFACE 2u
 
 struct ProbeRay {
-    vec4 radiance;   // rgb: direct light (or the environment for a miss); a: distance for the depth moments
-    vec4 hit;        // x: t, yz: barycentrics, w: kind (uint bits: PROBE_RAY_*)
-    uvec4 ids;       // x: instance, y: primitive
+    vec4 hit;        // trace: t, barycentrics, kind (uint bits: PROBE_RAY_*); shade: the shadow ray's origin, tmax
+    uvec4 ids;       // trace: instance, primitive; shade: the shadow ray's direction (float bits), kind
+    vec4 radiance;   // shade: rgb what needs no ray (a miss's environment, the bounce); a: distance for the depth moments
+    vec4 direct;     // shade: rgb the light sample's unshadowed contribution (0: no shadow ray); shadow: a, its visibility
 };
 layout(std430) buffer ProbeRays { ProbeRay probe_rays[]; };
 

@@ -1,8 +1,8 @@
-// Stage 2 of a probe update (rayvr.passes.ProbeGI): a workgroup per probe, an invocation per ray.
-// Each takes its ray's record from stage 1 (probe_trace.comp: the hit and its direct light) and
-// adds the light the surface reflects from the previous update's probes (so bounces add up over
-// frames). Then each texel of the probe's irradiance (cosine-weighted) and depth-moment (cosine^50
-// weighted, Majercik et al. 2019) maps is blended with its previous value by the hysteresis.
+// Stage 4 of a probe update (rayvr.passes.ProbeGI; records in probe_rays.glsl): a workgroup per
+// probe, an invocation per ray. Each takes its ray's light from stages 2 and 3 (what needed no ray
+// plus the direct light its shadow ray let through) and its distance; then each texel of the
+// probe's irradiance (cosine-weighted) and depth-moment (cosine^50 weighted, Majercik et al. 2019)
+// maps is blended with its previous value by the hysteresis.
 // Border texels repeat their octahedral opposite's interior texel, computed the same way, so
 // no second pass copies them. Results go to the pass's outputs and to the history the next
 // update reads (probe_*_tex are the previous update's history).
@@ -57,22 +57,11 @@ void main() {
 
     vec4 radiance = vec4(0.0, 0.0, 0.0, max_depth);
     if (live) {
-        ProbeRay rec = probe_rays[probe * uint(PROBE_RAYS) + ray];
-        radiance = rec.radiance;
-        uint kind = floatBitsToUint(rec.hit.w);
-        if (kind == PROBE_RAY_BACKFACE) {
-            atomicAdd(backfaces, 1u);
-        } else if (kind == PROBE_RAY_SURFACE && probe_history != 0) {
-            Hit hit;
-            hit.t = rec.hit.x;
-            hit.barycentrics = rec.hit.yz;
-            hit.instance = rec.ids.x;
-            hit.primitive = rec.ids.y;
-            SurfacePoint sp;
-            MaterialParams mp;
-            PathVertex s = path_vertex_at_hit(hit, dir, hit.t * PROBE_RAY_SPREAD, PROBE_RAY_SPREAD, sp, mp);
-            radiance.rgb += nonfinite_scrub(probe_gi_diffuse(s));
-        }
+        uint i = probe * uint(PROBE_RAYS) + ray;
+        vec4 direct = probe_rays[i].direct;   // a: the shadow ray's visibility
+        radiance = probe_rays[i].radiance;
+        radiance.rgb = nonfinite_scrub(radiance.rgb + direct.rgb * direct.a);
+        if (probe_rays[i].ids.w == PROBE_RAY_BACKFACE) atomicAdd(backfaces, 1u);
     }
     ray_radiance[ray] = radiance;
     ray_direction[ray] = dir;
