@@ -56,7 +56,7 @@ def test_the_bounce_check_sees_missing_light(gpu, scene, long_reference):
     assert "OVER" in few.verdict() and few.as_dict()["bounces"]["verdict"] == "too few"
 
 
-def test_reference_cache_is_keyed_by_everything_that_changes_it(gpu, scene, tmp_path):
+def test_reference_cache_is_keyed_by_everything_that_changes_it(gpu, scene, tmp_path, monkeypatch):
     views = default_views(scene, 1, SIZE)
     tiny = ReferenceSettings(frames=2, spp=1, max_bounces=2)
     first = R.cached_reference(scene, views, tiny, tmp_path, gpu)
@@ -81,6 +81,15 @@ def test_reference_cache_is_keyed_by_everything_that_changes_it(gpu, scene, tmp_
     other = rv.scenes.cornell_box()
     other.materials["Floor"].effect = Effect.PATH_TRACED                                  # effects do not count
     assert base == key(other, views, tiny, 0)
+    R.code_digest.cache_clear()
+    try:   # other shaders (a new rayvr, an edited checkout): rendered again
+        with monkeypatch.context() as m:
+            m.setattr(R, "SHADER_SUFFIXES", (".glsl",))
+            R.code_digest.cache_clear()
+            assert base != key(scene, views, tiny, 0)
+    finally:
+        R.code_digest.cache_clear()
+    assert base == key(scene, views, tiny, 0)
     path.write_bytes(b"damaged")                                                          # re-rendered, replaced
     fresh = R.cached_reference(scene, views, tiny, tmp_path, gpu)
     np.testing.assert_array_equal(fresh.image, first.image)                               # deterministic seeds

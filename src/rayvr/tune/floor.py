@@ -27,7 +27,7 @@ import numpy as np
 
 from . import seeds
 from .configs import effects_restored
-from .reference import CACHE_VERSION, default_cache_dir, load_halves, scene_digest, store_halves, views_digest
+from .reference import code_digest, default_cache_dir, load_halves, scene_digest, store_halves, views_digest
 
 
 @dataclasses.dataclass
@@ -66,7 +66,7 @@ def even_frames(frames: int) -> int:
 
 
 def floor_key(scene, view_set, config, frames: int) -> str:
-    text = json.dumps([CACHE_VERSION, "floor", scene_digest(scene), views_digest(view_set), config.key(scene), frames])
+    text = json.dumps([code_digest(), "floor", scene_digest(scene), views_digest(view_set), config.key(scene), frames])
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 

@@ -14,13 +14,15 @@ each. Its image is their mean. Two checks say whether it can be trusted:
   A's random numbers (so the two differ only by the extra bounce's light) change the mean
   radiance by less than `bounce_tolerance` (default 1%).
 
-The cache is an .npz per (scene content, views, size, settings, seed range, code version) in
+The cache is an .npz per (scene content, views, size, settings, seed range, rayvr's version and
+shaders) in
 `cache_dir` (default $XDG_CACHE_HOME/rayvr/references, else ~/.cache/rayvr/references), written
 under a temporary name and renamed, so an interrupted render never leaves a half-written one.
 """
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import math
@@ -34,7 +36,8 @@ from ..fileio import atomic_write
 from . import seeds
 from .display import LUMINANCE
 
-CACHE_VERSION = 2          # bump when a change to the renderer changes what a reference shows
+CACHE_VERSION = 3          # bump when a change outside the shaders changes what a reference shows
+SHADER_SUFFIXES = (".glsl", ".comp", ".vert", ".frag")
 NAME = "path-traced reference"
 PIN = "Accumulate.dst"     # the reference graph's running mean
 
@@ -198,11 +201,24 @@ def reference_graph(settings: ReferenceSettings, bounces: int | None = None):
     return path_traced_graph(spp=settings.spp, max_bounces=bounces or settings.max_bounces)
 
 
+@functools.cache
+def code_digest() -> str:
+    """A hash of rayvr's version and every shader it ships: a cached reference or floor rendered
+    by other GPU code is not reused (CACHE_VERSION covers changes outside the shaders)."""
+    from .. import __version__
+
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256(f"{__version__} {CACHE_VERSION}".encode())
+    for path in sorted(p for p in root.rglob("*") if p.suffix in SHADER_SUFFIXES):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
+    return h.hexdigest()
+
+
 def reference_key(scene, view_set, settings: ReferenceSettings, first_frame: int) -> str:
     """The cache key: everything that changes the reference (scene content, views, size,
-    settings, the path tracer's properties, the seed range, the code version)."""
+    settings, the path tracer's properties, the seed range, the code: code_digest)."""
     tracer = reference_graph(settings).get_pass("PathTracer").get_properties()
-    text = json.dumps([CACHE_VERSION, scene_digest(scene), views_digest(view_set), dataclasses.asdict(settings),
+    text = json.dumps([code_digest(), scene_digest(scene), views_digest(view_set), dataclasses.asdict(settings),
                        first_frame, tracer], sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
