@@ -35,7 +35,7 @@ from . import layout as L
 
 RNG_SALT = 11
 MAX_GROUPS_X = 65535
-LIGHT_KINDS = ("PUNCTUAL_LIGHTS", "EMISSIVE_TRIANGLES", "ENVIRONMENT")   # glsl/lights.glsl SCENE_HAS_LIGHTS
+STAGES = ("probe_trace.comp", "probe_shade.comp", "probe_shadow.comp")   # before the blend (probe_update.comp)
 RAY_RECORD_BYTES = 64   # one ProbeRay (probe_rays.glsl): hit, ids, radiance, direct
 # pin -> (output format, history format, texels per probe side). The readers sample the irradiance
 # as float16 (half the texture traffic of the lookups every pixel makes); the update blends in
@@ -133,13 +133,10 @@ class ProbeGI(RenderPass):
         self._defines = {**scene_defines(ctx), "PROBE_RAYS": int(self.rays_per_probe), "SHADE_SHADOWS": 1,
                          "LIGHT_SAMPLES": 1, "RNG_SALT": RNG_SALT}
         # four dispatches per update (probe_rays.glsl): the closest hits; their shading and light samples;
-        # the shadow rays (none without lights); the blend. Each traversal runs in a kernel with no
-        # shading beside it, whose registers would cost it occupancy (probe_trace.comp).
-        stages = ["probe_trace.comp", "probe_shade.comp"]
-        if any(self._defines.get(f"SCENE_HAS_{kind}") for kind in LIGHT_KINDS):
-            stages.append("probe_shadow.comp")
+        # the shadow rays; the blend. Each traversal runs in a kernel with no shading beside it, whose
+        # registers would cost it occupancy (probe_trace.comp).
         self._stages = {name: program_resources(self.compute_program(ctx.gl, name, self._defines))
-                        for name in stages}
+                        for name in STAGES}
         self._res = program_resources(self.compute_program(ctx.gl, "probe_update.comp", self._defines))
         n = self._atlas.probes
         self._groups = (min(n, MAX_GROUPS_X), -(-n // MAX_GROUPS_X), 1)
@@ -165,9 +162,7 @@ class ProbeGI(RenderPass):
         d = dict(getattr(self, "_defines", {}))
         if hasattr(self, "_atlas"):
             d.update({"probes": f"{self._atlas.probes} in {len(self._volumes)} volume(s)",
-                      "rays_per_frame": self.rays_per_frame(), "probe_memory": human_bytes(self._memory),
-                      "stages": "+".join(name.removeprefix("probe_").removesuffix(".comp")
-                                         for name in (*self._stages, "probe_update.comp"))})
+                      "rays_per_frame": self.rays_per_frame(), "probe_memory": human_bytes(self._memory)})
         return d
 
     def hysteresis_at(self, update: int) -> float:

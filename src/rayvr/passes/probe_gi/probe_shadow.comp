@@ -1,7 +1,7 @@
 // Stage 3 of a probe update (rayvr.passes.ProbeGI; records in probe_rays.glsl): each invocation
 // traces the shadow ray stage 2 recorded for its probe ray, if any, and records its visibility
 // (the expected one through BLEND surfaces, as RTShadows'). A kernel of its own: a traversal
-// runs fastest with no shading beside it (probe_trace.comp). Left out of scenes without lights.
+// runs fastest with no shading beside it (probe_trace.comp).
 #define PROBE_GI 1
 #include "probe_rays.glsl"
 #include "ray_query.glsl"
