@@ -119,8 +119,8 @@ class ProbeGI(RenderPass):
             for k in (0, 1):
                 r.add_internal(self.history_pin(name, k), f"probe {name}, kept between updates (used in turn)") \
                     .format(history_fmt).texture_size(w, h).views(1)
-        r.add_internal(self.RAYS, "each probe ray's hit and direct light, from the trace stage to the update "
-                                  "stage").buffer(self.rays_per_frame() * RAY_RECORD_BYTES)
+        r.add_internal(self.RAYS, "each probe ray's hit, shadow ray and light, handed from stage to stage "
+                                  "of the update").buffer(self.rays_per_frame() * RAY_RECORD_BYTES)
         n = len(self.volumes) or 1
         r.add_output(self.VOLUMES, "the probe volumes (ProbeVolumes block, render space)").buffer(L.volume_bytes(n))
         return r
