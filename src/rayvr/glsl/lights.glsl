@@ -150,17 +150,17 @@ LightSample eval_punctual_light(uint i, vec3 p) {
 #define LOCAL_PUNCTUAL_MAX 8
 #endif
 
-// One of the n (2..LOCAL_PUNCTUAL_MAX) punctual lights, drawn by its unshadowed irradiance at p
-// with r in [0, 1); `share`: the probability with which the table drew the punctual group. One
-// pass, no array (a small shader: llvmpipe compiles every pass that lights): light i replaces the
-// pick so far with probability w_i / (w_0 + ... + w_i), r rescaled to stay uniform.
+// The weight the local choices give punctual light sample c: its unshadowed irradiance (luminance).
+float punctual_local_weight(LightSample c) { return c.valid ? luminance(c.weight) : 0.0; }
+
+// sample_punctual_local's choice: the pick, its weight and the n lights' summed weight.
 LightSample punctual_local_pick(vec3 p, uint n, float r, out float total, out float w_pick) {
     LightSample pick = no_light_sample();
     total = 0.0;
     w_pick = 0.0;
     for (uint i = 0u; i < n; ++i) {
         LightSample c = eval_punctual_light(i, p);
-        float w = c.valid ? luminance(c.weight) : 0.0;
+        float w = punctual_local_weight(c);
         if (!(w > 0.0)) continue;
         if (reservoir_take(w, total, r)) {
             pick = c;
@@ -170,6 +170,10 @@ LightSample punctual_local_pick(vec3 p, uint n, float r, out float total, out fl
     return pick;
 }
 
+// One of the n (2..LOCAL_PUNCTUAL_MAX) punctual lights, drawn by its unshadowed irradiance at p
+// with r in [0, 1); `share`: the probability with which the table drew the punctual group. One
+// pass, no array (a small shader: llvmpipe compiles every pass that lights): light i replaces the
+// pick so far with probability w_i / (w_0 + ... + w_i), r rescaled to stay uniform.
 LightSample sample_punctual_local(vec3 p, uint n, float r, float share) {
     float total, w_pick;
     LightSample pick = punctual_local_pick(p, n, r, total, w_pick);
@@ -183,8 +187,7 @@ LightSample sample_punctual_local(vec3 p, uint n, float r, float share) {
 float punctual_local_total(vec3 p, uint n) {
     float total = 0.0;
     for (uint i = 0u; i < n; ++i) {
-        LightSample c = eval_punctual_light(i, p);
-        float w = c.valid ? luminance(c.weight) : 0.0;
+        float w = punctual_local_weight(eval_punctual_light(i, p));
         if (w > 0.0) total += w;
     }
     return total;

@@ -13,13 +13,6 @@
 #define LIGHT_SAMPLES 1
 #endif
 
-// Mean over LIGHT_SAMPLES light samples of f(v, l) cos * Le / pdf at vertex s, with visibility
-// when SHADE_SHADOWS. `specular_traced`: a ray pass also samples s's specular lobes
-// (bsdf_sample_specular) and adds the lights its rays find (RTReflections, at the pixels whose
-// effect is REFLECTIONS or above and at its reflective hits short of its bounce limit); the two
-// share the specular lobes' light by the power heuristic, weight 1 together, so a near-mirror
-// reflects an environment or a large emitter (which light sampling almost never finds in its
-// narrow lobe) and a small emitter stays light-sampled. Punctual lights (pdf 0) stay here whole.
 #if SCENE_HAS_LIGHTS
 // One light sample at s from random numbers u, unshadowed: f(v, l) cos * Le / pdf, zero when the
 // light is below s's geometric horizon or the BSDF reflects none of it; `ls` is the sample (its
@@ -39,6 +32,13 @@ vec3 light_sample_unshadowed(PathVertex s, vec3 u, bool specular_traced, out Lig
 }
 #endif
 
+// Mean over LIGHT_SAMPLES light samples of f(v, l) cos * Le / pdf at vertex s, with visibility
+// when SHADE_SHADOWS. `specular_traced`: a ray pass also samples s's specular lobes
+// (bsdf_sample_specular) and adds the lights its rays find (RTReflections, at the pixels whose
+// effect is REFLECTIONS or above and at its reflective hits short of its bounce limit); the two
+// share the specular lobes' light by the power heuristic, weight 1 together, so a near-mirror
+// reflects an environment or a large emitter (which light sampling almost never finds in its
+// narrow lobe) and a small emitter stays light-sampled. Punctual lights (pdf 0) stay here whole.
 vec3 shade_direct_mis(PathVertex s, inout Rng rng, bool specular_traced) {
     vec3 sum = vec3(0.0);
 #if SCENE_HAS_LIGHTS   // punctual, emissive or the environment (lights.glsl)

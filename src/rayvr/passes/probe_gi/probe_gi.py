@@ -174,47 +174,43 @@ class ProbeGI(RenderPass):
         k = update - settle
         return min(float(self.hysteresis), k / (k + 1.0))
 
+    def _programs(self) -> tuple:
+        """The update's programs in dispatch order: the stages, then the blend."""
+        return (*self._stages.values(), self._res)
+
     def execute(self, ctx, data):
         origin = ctx.scene.origin if ctx.scene is not None else None
         volumes = data[self.VOLUMES]
         volumes.write(L.pack_volumes(self._volumes, self._atlas, origin, float(self.normal_bias),
                                      float(self.view_bias), bool(self.visibility)))
-        for res in (*self._stages.values(), self._res):
-            res.buffer("ProbeVolumes", volumes)
-            res.buffer("ProbeRays", data[self.RAYS])
-        for stage in self._stages.values():
-            stage.set("probe_frame", int(ctx.frame_index) & 0xFFFFFFFF)
-        res = self._res
+        for prog in self._programs():   # each binds and sets only what its shader declares
+            prog.buffer("ProbeVolumes", volumes)
+            prog.buffer("ProbeRays", data[self.RAYS])
+            prog.set("probe_frame", int(ctx.frame_index) & 0xFFFFFFFF)
         steps = 1 + (int(self.warmup) if self._updates == 0 else 0)
         for step in range(steps):
             if step:
                 ctx.barrier(Access.SAMPLED, Access.IMAGE, Access.STORAGE)
             self._update(ctx, data, step)
-        for name in MAPS:
-            for prog in (self._stages["probe_shade.comp"], res):
+        for prog in self._programs():
+            for name in MAPS:
                 prog.clear_sampler(f"probe_{name}_tex")
 
     def _update(self, ctx, data, step: int) -> None:
         rotation = tuple(L.random_rotation([ctx.frame_index, step]).T.ravel())
         read, write = self._updates % 2, (self._updates + 1) % 2
-        history = int(self._updates > 0)
-        for name, stage in self._stages.items():
-            stage.set("probe_rotation", rotation)
-            stage.set("probe_step", step)
-            if name == "probe_shade.comp":   # the bounce: the previous update's probes
-                stage.set("probe_history", history)
-                for map_name in MAPS:
-                    stage.texture(f"probe_{map_name}_tex", data[self.history_pin(map_name, read)],
-                                  sampler=self._sampler)
-            stage.prog.run(*self._groups)
-            ctx.barrier(Access.STORAGE)
         res = self._res
-        res.set("probe_rotation", rotation)
         res.set("probe_hysteresis", self.hysteresis_at(self._updates))
-        res.set("probe_history", history)
         for name in MAPS:
-            res.texture(f"probe_{name}_tex", data[self.history_pin(name, read)], sampler=self._sampler)
             res.image(f"{name}_out", data[name])
             res.image(f"{name}_next", data[self.history_pin(name, write)])
-        res.prog.run(*self._groups)
+        for k, prog in enumerate(self._programs()):
+            if k:
+                ctx.barrier(Access.STORAGE)
+            prog.set("probe_rotation", rotation)
+            prog.set("probe_step", step)
+            prog.set("probe_history", int(self._updates > 0))
+            for name in MAPS:   # the previous update's probes: the shading's bounce, the blend's history
+                prog.texture(f"probe_{name}_tex", data[self.history_pin(name, read)], sampler=self._sampler)
+            prog.prog.run(*self._groups)
         self._updates += 1
