@@ -25,8 +25,9 @@ class GBufferRT(RenderPass):
 
     PROPERTIES = {reflection_cutoff.PROPERTY: 1.0}
     USES_SCENE = True
-    # Views a workgroup spans in a camera grid (passes.dispatch.VIEW_GROUP): primary rays gain from
-    # 2 and lose from more (benchmarks/RESULTS.md, "views a ray pass's workgroup spans").
+    # A workgroup of one warp: a 4x8 tile, in a camera grid 2x8 pixels of 2 views (benchmarks/RESULTS.md,
+    # "views a ray pass's workgroup spans": 64 invocations cost 64 views of 512x683 6.12 ms against 3.18).
+    TILE = (4, 8)
     VIEW_GROUP = 2
 
     def validate_property(self, key, value):
@@ -37,7 +38,7 @@ class GBufferRT(RenderPass):
         return gbuffer_reflection()
 
     def compile(self, ctx, cd):
-        self._group = ray_group(cd.views, view_group=self.VIEW_GROUP)
+        self._group = ray_group(cd.views, self.TILE, self.VIEW_GROUP)
         self._defines = {**scene_defines(ctx), **effect_defines(), **ray_group_defines(self._group),
                          **reflection_cutoff.defines(self.reflection_max_roughness)}
         self._prog = self.compute_program(ctx.gl, "gbuffer_rt.comp", self._defines)

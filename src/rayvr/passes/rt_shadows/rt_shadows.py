@@ -11,7 +11,8 @@ from ..gbuffer.lighting_pass import GBufferLightingPass
 class RTShadows(GBufferLightingPass):
     """Emission + ray-traced shadowed direct light for the pixels whose effect is SHADOWS or above.
     Area lights get soft shadows from `light_samples` samples per pixel. Over the whole image in
-    8x8 tiles spanning 8 views of a camera grid (benchmarks/RESULTS.md has the measurements)."""
+    one-warp workgroups (8x4 pixels; 2x2 pixels of 8 views in a camera grid): 8x8 tiles cost a
+    third more (benchmarks/RESULTS.md has the measurements)."""
 
     SHADER = "rt_shadows.comp"
     OUTPUT = "shadowed"
@@ -20,7 +21,6 @@ class RTShadows(GBufferLightingPass):
     LOWEST_EFFECT = Effect.SHADOWS
     SALT = 2
     PROPERTIES = {"light_samples": 1}
-    TILE = (8, 8)
     VIEW_GROUP = 8
 
     def skip_reason(self, cd):
