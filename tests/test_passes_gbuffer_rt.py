@@ -114,6 +114,8 @@ def test_ray_group_spans_views_only_in_camera_grids():
     assert ray_group(64, view_group=2) == (8, 4, 2)
     assert ray_group(64, (8, 4)) == (4, 2, 4)
     assert ray_group(64, view_group=1) == (8, 8, 1)
+    assert ray_group(6, (8, 4), 16) == (4, 2, 4)      # fewer views than asked for: the largest power of two
+    assert ray_group(3, (8, 4), 16) == (8, 4, 1)
 
 
 def test_alpha_masked_quad_is_seen_through_like_the_raster(gpu):

@@ -226,6 +226,30 @@ def test_one_probe_set_serves_every_view(gpu):
     assert np.abs(got - want).mean() / want.mean() < 0.01
 
 
+def test_composite_over_view_groups_equals_one_view_a_workgroup(gpu, monkeypatch):
+    """With probes HybridComposite runs in workgroups spanning 4 views of a camera grid; 6 views of
+    20x13 pixels (the second group holds two views past the last, and no side is a multiple of the
+    tile) composite exactly as workgroups of one view do, each view its own image."""
+    from rayvr.passes.composite.hybrid_composite import HybridComposite
+    from rayvr.renderer import default_views
+
+    scene = closed_box()
+    images = {}
+    default = HybridComposite.PROBE_VIEW_GROUP
+    assert default > 1
+    for group in (default, 1):
+        monkeypatch.setattr(HybridComposite, "PROBE_VIEW_GROUP", group)
+        g = probe_graph(counts=[3, 3, 3], rays_per_probe=32, warmup=1)
+        with rv.Renderer(scene, g, views=default_views(scene, 6, (20, 13), grid=(3, 2)), gpu=gpu) as r:
+            r.render()
+            assert r.compiled.passes["Composite"].defines()["RAY_GROUP_Z"] == group
+            images[group] = r.read_output("Composite.color")[..., :3].copy()
+    grouped, alone = images[default], images[1]
+    assert np.isfinite(grouped).all() and grouped.mean() > 0.01
+    np.testing.assert_array_equal(grouped, alone)
+    assert all(not np.array_equal(grouped[i], grouped[i + 1]) for i in range(5)), "a view repeated its neighbour"
+
+
 def mirror_box(front_mirror=False):
     """The closed box with its back wall (z = -0.5) a perfect mirror (REFLECTIONS; Fresnel 1), and
     with `front_mirror` the front wall (z = +0.5) too."""

@@ -22,12 +22,12 @@ def groups_2d(size: tuple[int, int], views: int, group: tuple[int, ...] = COMPUT
 
 def ray_group(views: int, tile: tuple[int, int] = COMPUTE_GROUP, view_group: int | None = None) -> tuple[int, int, int]:
     """The (x, y, views) shape of a ray pass's workgroup of tile[0] * tile[1] invocations: the tile
-    shrunk (larger side first) to make room for `view_group` views (default VIEW_GROUP) when a frame
-    has at least MIN_GROUPED_VIEWS."""
+    shrunk (larger side first) to make room for `view_group` views (default VIEW_GROUP; fewer, a
+    power of two, where the frame has fewer) when a frame has at least MIN_GROUPED_VIEWS."""
     x, y = tile
     z = 1
     want = VIEW_GROUP if view_group is None else view_group
-    while z < want and views >= max(want, MIN_GROUPED_VIEWS) and x * y > 1:
+    while z < want and 2 * z <= views and views >= MIN_GROUPED_VIEWS and x * y > 1:
         z *= 2
         if x > y:
             x //= 2

@@ -16,8 +16,11 @@
 #define GBUF_READER 1
 #include "gbuffer.glsl"
 #include "probe_gi.glsl"
+#include "ray_group.glsl"
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+// HybridComposite's workgroups: with PROBE_GI one warp (8x4 pixels; in a camera grid 4x2 pixels of 4 views,
+// whose lookups share probes), else 8x8 pixels of one view
+layout(local_size_x = RAY_GROUP_SIZE) in;
 
 uniform sampler2DArray direct_tex;
 #if HAS_SHADOWS
@@ -40,8 +43,8 @@ layout(rgba16f) writeonly uniform image2DArray dst_specular;
 #endif
 
 void main() {
-    ivec3 p = ivec3(gl_GlobalInvocationID);
-    if (any(greaterThanEqual(p, imageSize(dst)))) return;
+    ivec3 p = ray_group_pixel();
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;   // past the image or the last view
     uint effect = gbuf_effect_at(p);
     vec3 c = texelFetch(direct_tex, p, 0).rgb;
     vec3 reflected = vec3(0.0);

@@ -4,7 +4,7 @@ from __future__ import annotations
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
-from ..dispatch import groups_2d
+from ..dispatch import COMPUTE_GROUP, groups_2d, ray_group, ray_group_defines
 from ..effects import effect_defines
 from ..gbuffer import channels
 from ..probe_gi import inputs as probe_inputs
@@ -29,6 +29,11 @@ class HybridComposite(RenderPass):
     `pathSpecular`)."""
 
     EFFECT, DIRECT, SHADOWED, REFLECTION, PATH_TRACED = "effect", "direct", "shadowed", "reflection", "pathTraced"
+    # With the probe lookups, one-warp workgroups spanning 4 views of a camera grid (passes.dispatch.
+    # ray_group): 8x8 tiles of one view cost them a fifth more; without, 8x8 tiles of one view, which
+    # take half the time of 8x4 ones (benchmarks/RESULTS.md, session 11).
+    PROBE_TILE = (8, 4)
+    PROBE_VIEW_GROUP = 4
     EMISSIVE, PATH_DIFFUSE, PATH_SPECULAR = "emissive", "pathDiffuse", "pathSpecular"
     COLOR, DIFFUSE, SPECULAR = "color", "diffuse", "specular"
     PROPERTIES = {"lobes": False}
@@ -68,10 +73,11 @@ class HybridComposite(RenderPass):
             defines["PROBE_GI"] = 1
             self._probe_sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR),
                                                           repeat_x=False, repeat_y=False))
-        self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes))}
+        self._group = ray_group(cd.views, self.PROBE_TILE, self.PROBE_VIEW_GROUP) if self._probes else (*COMPUTE_GROUP, 1)
+        self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group)}
         self._prog = self.compute_program(ctx.gl, "composite.comp", {**effect_defines(), **self._defines})
         self._res = program_resources(self._prog)
-        self._groups = groups_2d(cd.size, cd.views)
+        self._groups = groups_2d(cd.size, cd.views, self._group)
 
     def defines(self) -> dict:
         return dict(getattr(self, "_defines", {}))

@@ -11,7 +11,7 @@ from ..gbuffer.lighting_pass import GBufferLightingPass
 class RTShadows(GBufferLightingPass):
     """Emission + ray-traced shadowed direct light for the pixels whose effect is SHADOWS or above.
     Area lights get soft shadows from `light_samples` samples per pixel. Over the whole image in
-    one-warp workgroups (8x4 pixels; 2x2 pixels of 8 views in a camera grid): 8x8 tiles cost a
+    one-warp workgroups (8x4 pixels; in a camera grid 2x1 pixels of 16 views): 8x8 tiles cost a
     third more (benchmarks/RESULTS.md has the measurements)."""
 
     SHADER = "rt_shadows.comp"
@@ -21,7 +21,7 @@ class RTShadows(GBufferLightingPass):
     LOWEST_EFFECT = Effect.SHADOWS
     SALT = 2
     PROPERTIES = {"light_samples": 1}
-    VIEW_GROUP = 8
+    VIEW_GROUP = 16
 
     def skip_reason(self, cd):
         return unused_effect_reason(cd, Effect.SHADOWS)
