@@ -29,13 +29,13 @@ class HybridComposite(RenderPass):
     `pathSpecular`)."""
 
     EFFECT, DIRECT, SHADOWED, REFLECTION, PATH_TRACED = "effect", "direct", "shadowed", "reflection", "pathTraced"
+    EMISSIVE, PATH_DIFFUSE, PATH_SPECULAR = "emissive", "pathDiffuse", "pathSpecular"
+    COLOR, DIFFUSE, SPECULAR = "color", "diffuse", "specular"
     # With the probe lookups, one-warp workgroups spanning 4 views of a camera grid (passes.dispatch.
     # ray_group): 8x8 tiles of one view cost them a fifth more; without, 8x8 tiles of one view, which
     # take half the time of 8x4 ones (benchmarks/RESULTS.md, session 11).
     PROBE_TILE = (8, 4)
     PROBE_VIEW_GROUP = 4
-    EMISSIVE, PATH_DIFFUSE, PATH_SPECULAR = "emissive", "pathDiffuse", "pathSpecular"
-    COLOR, DIFFUSE, SPECULAR = "color", "diffuse", "specular"
     PROPERTIES = {"lobes": False}
 
     def reflect(self, cd):
@@ -73,7 +73,8 @@ class HybridComposite(RenderPass):
             defines["PROBE_GI"] = 1
             self._probe_sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR),
                                                           repeat_x=False, repeat_y=False))
-        self._group = ray_group(cd.views, self.PROBE_TILE, self.PROBE_VIEW_GROUP) if self._probes else (*COMPUTE_GROUP, 1)
+        self._group = (ray_group(cd.views, self.PROBE_TILE, self.PROBE_VIEW_GROUP) if self._probes
+                       else (*COMPUTE_GROUP, 1))
         self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group)}
         self._prog = self.compute_program(ctx.gl, "composite.comp", {**effect_defines(), **self._defines})
         self._res = program_resources(self._prog)

@@ -25,7 +25,7 @@ class GBufferRT(RenderPass):
 
     PROPERTIES = {reflection_cutoff.PROPERTY: 1.0}
     USES_SCENE = True
-    # A workgroup of one warp: a 4x8 tile, in a camera grid 2x8 pixels of 2 views (benchmarks/RESULTS.md,
+    # A workgroup of one warp: a 4x8 tile, in a camera grid 4x4 pixels of 2 views (benchmarks/RESULTS.md,
     # "views a ray pass's workgroup spans": 64 invocations cost 64 views of 512x683 6.12 ms against 3.18).
     TILE = (4, 8)
     VIEW_GROUP = 2
