@@ -5,6 +5,7 @@ import json
 import pytest
 
 from rayvr.cli.main import main
+from rayvr.tune.defaults import machine_defaults
 
 TINY = ["--size", "12x12", "--views", "1", "--frames", "1", "--timing-frames", "1", "--warmup", "1",
         "--reference-frames", "4", "--reference-spp", "1", "--bounces", "2", "--motion-frames", "2",
@@ -21,18 +22,29 @@ def test_converge_prints_the_verdict_and_table_and_writes_the_report(gpu, tmp_pa
                 "| PATH_TRACED 1 spp + TAA |"):
         assert row in out
     note = [line for line in out.splitlines() if line.startswith("defaults for")]
-    # every size was given; llvmpipe's standard list has a coarser probe grid and leaves the hybrid
-    # levels through SVGF out, and says so
-    assert len(note) == 1 and note[0].split(": ", 1)[1].startswith(
-        "probe GI rows' probes 4x4x4; the hybrid levels through SVGF left out")
-    assert "| all SHADOWS + SVGF |" not in out and "| PATH_TRACED 1 spp + SVGF |" in out
+    d = machine_defaults(gpu)   # the defaults of the machine the test runs on
+    # every size was given; what the machine's defaults still choose (llvmpipe: a coarser probe
+    # grid, the hybrid levels through SVGF left out) is said in one line, or nothing is
+    said = ([f"probe GI rows' probes {'x'.join(map(str, d.probe_counts))}"] if d.probe_counts else []) + \
+        (["the hybrid levels through SVGF left out"] if not d.denoised_levels else [])
+    if said:
+        assert len(note) == 1 and note[0].split(": ", 1)[1].startswith("; ".join(said))
+    else:
+        assert note == []
+    assert ("| all SHADOWS + SVGF |" in out) == d.denoised_levels and "| PATH_TRACED 1 spp + SVGF |" in out
+    assert "against a reference that has NOT converged" in out     # the table's title says so
     assert {"report.md", "report.html", "results.json", "pareto.png", "convergence.png", "images"} == \
         {p.name for p in report.iterdir()}
     doc = json.loads((report / "results.json").read_text())
     assert doc["reference"]["convergence"]["verdict"] == "not converged"
     assert all(r["settings"]["bounces"] == 2 for r in doc["rows"])   # PATH_TRACED follows the reference
     gi = [r["settings"]["options"] for r in doc["rows"] if r["settings"]["gi"] == "probes"]
-    assert gi and all(o["probes"] == {"counts": [4, 4, 4]} for o in gi)   # the note's probe grid
+    assert gi and all(o.get("probes") == ({"counts": list(d.probe_counts)} if d.probe_counts else None)
+                      for o in gi)   # the note's probe grid
+    assert doc["reference"]["stop"] == "fixed" and doc["reference"]["frames"] == 4   # --reference-frames alone
+    assert all({"relmse_trim", "fireflies"} <= set(r) for r in doc["rows"])
+    report_md = (report / "report.md").read_text()
+    assert report_md.index("**Reference**: NOT converged") < report_md.index("## Reference")   # at the top
     assert len(list((tmp_path / "cache").glob("*.npz"))) == 2 + len(doc["rows"])   # 2 references, the floors
 
 

@@ -60,7 +60,9 @@ def test_measure_states_settings_spread_motion_and_floor(gpu, scene, reference):
     assert pt1.settings["denoiser"] == "none" and pt1.settings["effects"]["Floor"] == "PATH_TRACED"
     assert pt1.errors["relmse"]["std"] > 0                                         # independent frames differ
     assert pt4.mean("relmse") < 0.6 * pt1.mean("relmse")                           # 4 frames averaged: less noise
-    assert raster.floor["bias_relmse"] > 10 * pt1.floor["bias_relmse"]             # no indirect light: bias
+    # both floors keep the pixel-centre G-buffer's aliasing against the pixel-filtered reference
+    # (at 12x12 most of PATH_TRACED's floor); RASTER also leaves out the indirect light
+    assert raster.floor["bias_relmse"] > 3 * pt1.floor["bias_relmse"]
     # the first judged image's own metrics are one of the samples the row summarises
     per_view, _ = M.evaluate(pt1.image, reference.image, Display().fixed(reference.image), res.study["ppd"])
     assert pt1.errors["flip"]["mean"] == pytest.approx(per_view["flip"][0], rel=0.5)
@@ -338,3 +340,28 @@ def test_a_tuned_row_over_its_budget_is_chosen_again_and_measured_alone(gpu, sce
     assert "backed off from a choice predicted 5 ms that measured 6.5" in six.notes[-1]
     assert ten.assignment == {"A": S, "B": S} and ten.measured_ms == pytest.approx(6.5)   # within its budget
     assert all(r.tuned for r in results.rows) and results.tuned is six
+
+
+def test_a_study_run_again_takes_its_finished_rows_from_the_cache(gpu, scene, tmp_path, monkeypatch):
+    """Rows are cached as they finish: a second run of the same study renders none of them (a
+    Renderer would fail here), and gives the same rows; another configuration is measured."""
+    ref = ReferenceSettings(frames=4, spp=2, max_bounces=2)
+    settings = StudySettings(frames=1, timing_frames=1, warmup=1, motion=None, floor_fraction=0.5,
+                             progressive_frames=0)
+    configs = [Config("all RASTER", Effect.RASTER, options={"path_bounces": 2}),
+               Config("all SHADOWS", Effect.SHADOWS, options={"path_bounces": 2})]
+    kw = dict(views=1, size=SIZE, reference=ref, settings=settings, cache_dir=tmp_path, progress=False, gpu=gpu,
+              curves=False)
+    first = measure(scene, configs, **kw)
+    assert len(list(tmp_path.glob("row-*.pkl"))) == 2
+
+    def no_render(*args, **kwargs):
+        raise AssertionError("a cached row was rendered again")
+    with monkeypatch.context() as m:
+        m.setattr(rv.renderer.Renderer, "__init__", no_render)
+        again = measure(scene, configs, **kw)
+    for a, b in zip(first.rows, again.rows):
+        assert a.name == b.name and a.gpu_ms == b.gpu_ms and a.errors == b.errors and a.floor == b.floor
+        np.testing.assert_array_equal(a.image, b.image)
+    other = measure(scene, [Config("all REFLECTIONS", Effect.REFLECTIONS, options={"path_bounces": 2})], **kw)
+    assert other.rows[0].name == "all REFLECTIONS" and len(list(tmp_path.glob("row-*.pkl"))) == 3

@@ -161,3 +161,23 @@ def test_fixed_exposure_comes_from_the_reference_once():
         Display("aces")(ref)
     with pytest.raises(OptionError, match="operator"):
         Display("filmic")
+
+
+def test_trimmed_relmse_and_fireflies_see_past_a_few_outliers():
+    """One pixel in 2,000 at 100x the reference: relMSE is ruled by it, the trimmed relMSE (the
+    largest 0.1% left out) is the rest's exact error, and the firefly count finds that pixel."""
+    ref = np.full((1, 40, 50, 3), 0.5)
+    test = ref * 1.1                                      # every pixel 10% high: relMSE 0.0025/0.26
+    test[0, 7, 9] = 50.0
+    per_view, _ = M.evaluate(test, ref, Display().fixed(ref), which=("relmse", "relmse_trim", "fireflies"))
+    exact = 0.05 ** 2 / (0.25 + 1e-2)
+    assert per_view["relmse"][0] > 3.0                    # (49.5^2 / 0.26) / 2000 ~ 4.7
+    assert per_view["relmse_trim"][0] == pytest.approx(exact, rel=1e-9)
+    assert per_view["fireflies"][0] == 1
+    # a black reference pixel: radiance above ~9 sqrt(eps) counts, noise below it does not
+    dark = np.zeros((1, 8, 8, 3))
+    noisy = np.full_like(dark, 0.5)
+    noisy[0, 0, 0] = 2.0
+    assert M.evaluate(noisy, dark, Display().fixed(np.ones_like(dark)), which=("fireflies",))[0]["fireflies"][0] == 1
+    assert M.trimmed_mean(np.arange(10.0)) == pytest.approx(4.5)        # under 1000 values: nothing trimmed
+    assert M.trimmed_mean(np.r_[np.zeros(999), 1e9]) == 0.0

@@ -15,6 +15,7 @@ from rayvr.tune import metrics as M
 from rayvr.tune import reference as R
 from rayvr.tune import seeds
 from rayvr.tune.configs import path_traced_graph
+from rayvr.tune.progressive import render_mean
 
 SIZE = (12, 12)
 LONG = ReferenceSettings(frames=64, spp=32)          # 2048 spp
@@ -116,7 +117,10 @@ def test_test_and_reference_frames_have_independent_noise(gpu, scene, long_refer
     random numbers: their noise around the converged image is uncorrelated; the same first
     frame reproduces it exactly (what shared seeds did before: correlation 0.97)."""
     views = default_views(scene, 1, SIZE)
-    truth = long_reference.image[..., :3].astype(np.float64)
+    # at pixel centres (the reference is pixel-filtered: a jittered 1-spp frame's error at the
+    # light's edges is the light's whole radiance, and a few such pixels would rule the coefficient)
+    truth = render_mean(scene, path_traced_graph(spp=32, pixel_jitter=False), "Accumulate.dst", views, 64,
+                        seeds.FLOOR, gpu=gpu)[-1].image[..., :3].astype(np.float64)
     test = _one_frame(scene, views, seeds.TEST, gpu) - truth
     ref_first = _one_frame(scene, views, seeds.reference_first_frame(), gpu) - truth
     same = _one_frame(scene, views, seeds.TEST, gpu) - truth
@@ -149,8 +153,10 @@ def test_first_frame_starts_the_frame_index_jitter_and_accumulation(gpu, scene):
 
 def test_bias_floor_is_noise_with_the_references_settings_and_not_with_fewer_bounces(gpu, scene, long_reference):
     views = default_views(scene, 1, SIZE)
-    same = Config("same as the reference", Effect.PATH_TRACED, graph="path_traced", options={"spp": 4})
-    fewer = Config("2 bounces", Effect.PATH_TRACED, graph="path_traced", options={"spp": 4, "max_bounces": 2})
+    same = Config("same as the reference", Effect.PATH_TRACED, graph="path_traced",
+                  options={"spp": 4, "pixel_jitter": True})    # the reference's pixel filter too
+    fewer = Config("2 bounces", Effect.PATH_TRACED, graph="path_traced",
+                   options={"spp": 4, "max_bounces": 2, "pixel_jitter": True})
     floor = bias_floor(scene, same, views, 256, cache_dir=False, gpu=gpu).against(long_reference)
     assert floor["within_noise"] and floor["relmse"] < 2 * floor["noise_relmse"]
     low = bias_floor(scene, fewer, views, 256, cache_dir=False, gpu=gpu)
@@ -198,3 +204,65 @@ def test_a_reference_whose_halves_are_identical_says_so(gpu, scene, monkeypatch)
     flat = R.render_reference(scene, views, tiny, gpu=gpu)
     assert flat.halves_identical and flat.verdict().startswith("halves identical")
     assert flat.as_dict()["convergence"]["verdict"] == "halves identical"
+
+
+def test_reference_renders_on_until_converged_and_a_later_run_resumes_it(gpu, scene, tmp_path):
+    """Extensions append the next frames of the seed range (first half to A, second to B) until
+    the halves meet the tolerance; the cache keeps every extension, and a larger cap resumes."""
+    views = default_views(scene, 1, SIZE)
+    start = ReferenceSettings(frames=4, spp=4, max_bounces=2, tolerance=2e-3)             # a fixed count
+    first = R.cached_reference(scene, views, start, tmp_path, gpu)
+    assert first.frames == 4 and first.stop == "fixed" and not first.converged
+    assert "NOT converged" in first.verdict() and "a fixed count" in first.verdict()
+    grow = ReferenceSettings(frames=4, spp=4, max_bounces=2, tolerance=2e-3, max_frames=512)
+    ref = R.cached_reference(scene, views, grow, tmp_path, gpu)
+    assert ref.converged and ref.stop == "converged" and 4 < ref.frames <= 512
+    assert ref.noise_relmse <= 2e-3 < first.noise_relmse
+    a, b = ref.halves_frames()
+    ranges = sorted(a + b)
+    assert ranges[0][0] == seeds.reference_first_frame() and all(
+        x[1] == y[0] for x, y in zip(ranges, ranges[1:]))                    # every frame once, none shared
+    assert sum(y - x for x, y in ranges) == ref.frames
+    # the halves are means over their own frames: half A equals a render of exactly those frames
+    a_frames = [(x, y - x) for x, y in a]
+    mean = sum(render_mean(scene, R.reference_graph(grow), R.PIN, views, n, x, gpu=gpu)[-1].image.astype(np.float64)
+               * n for x, n in a_frames) / sum(n for _, n in a_frames)
+    np.testing.assert_allclose(ref.half_a, mean, rtol=1e-4, atol=1e-6)
+    again = R.cached_reference(scene, views, grow, tmp_path, gpu)          # resumed: nothing to render
+    assert again.seconds == 0.0 and again.frames == ref.frames and again.stop == "converged"
+    np.testing.assert_array_equal(again.image, ref.image)
+    assert len(list(tmp_path.glob("*.npz"))) == 1                            # one file, extended in place
+
+
+def test_reference_stops_at_its_time_cap(gpu, scene):
+    views = default_views(scene, 1, SIZE)
+    capped = ReferenceSettings(frames=4, spp=1, max_bounces=2, tolerance=1e-9, max_frames=1 << 16, max_seconds=0.0)
+    ref = R.cached_reference(scene, views, capped, False, gpu)
+    assert ref.frames == 4 and ref.stop == "time cap" and "0 s time cap" in ref.verdict()
+    doc = ref.as_dict()
+    assert doc["stop"] == "time cap" and doc["settings"]["max_seconds"] == 0.0 and "box" in doc["pixel_filter"]
+    with pytest.raises(OptionError, match="max_frames"):
+        ReferenceSettings(frames=8, max_frames=6)
+    with pytest.raises(OptionError, match="max_frames"):
+        ReferenceSettings(frames=8, max_frames=9)
+    with pytest.raises(OptionError, match="max_seconds"):
+        ReferenceSettings(max_seconds=-1)
+
+
+def test_the_reference_is_pixel_filtered_and_taa_converges_to_it(gpu, scene):
+    """Judged against the box-filtered reference, the path tracer through pixel centres keeps
+    its aliasing as bias; with jittered paths, or with TAA over a jittered G-buffer's frames, the
+    floor falls to within a small multiple of that (TAA: <= 2x the centres' floor; jittered:
+    within noise)."""
+    views = default_views(scene, 1, (24, 24))
+    ref = render_reference(scene, views, ReferenceSettings(frames=32, spp=16, max_bounces=3), gpu=gpu)
+    centres = Config("centres", Effect.PATH_TRACED, graph="path_traced", options={"spp": 4, "max_bounces": 3})
+    jittered = Config("jittered", Effect.PATH_TRACED, graph="path_traced",
+                      options={"spp": 4, "max_bounces": 3, "pixel_jitter": True})
+    taa = Config("taa", Effect.PATH_TRACED, graph="hybrid_taa", options={"spp": 1, "path_bounces": 3})
+    floor = {c.name: bias_floor(scene, c, views, 64 if c is taa else 32, cache_dir=False, gpu=gpu).against(ref)
+             for c in (centres, jittered, taa)}
+    assert not floor["centres"]["within_noise"]                             # aliasing is error now
+    assert floor["jittered"]["within_noise"]
+    assert floor["taa"]["relmse"] <= 2 * floor["centres"]["relmse"]
+    assert floor["jittered"]["relmse"] < 0.5 * floor["centres"]["relmse"]

@@ -51,7 +51,8 @@ def add_study_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--exposure", default="auto",
                    help=f"exposure in stops (-{MAX_EXPOSURE:g} to {MAX_EXPOSURE:g}), or 'auto' (from the reference, "
                         f"once)")
-    p.add_argument("--metrics", default="flip,hdrflip,psnr,ssim,relmse", help="metrics, comma-separated")
+    p.add_argument("--metrics", default="flip,hdrflip,psnr,ssim,relmse,relmse_trim,fireflies",
+                   help="metrics, comma-separated (default all: flip,hdrflip,psnr,ssim,relmse,relmse_trim,fireflies)")
     p.add_argument("--frames", type=frames, help=f"judged frames per configuration, 1 to {MAX_FRAMES} (default 4)")
     p.add_argument("--timing-frames", type=integer("--timing-frames", 1, MAX_FRAMES),
                    help="timed frames per configuration (default 10 llvmpipe, 30 GPU)")
@@ -60,7 +61,14 @@ def add_study_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--warmup-s", type=number("--warmup-s", 0, 3600, unit=" s"),
                    help="seconds of untimed frames first (default 0.5 on a GPU, 0 llvmpipe)")
     p.add_argument("--reference-frames", type=integer("--reference-frames", 2, seeds.RANGE),
-                   help="frames of the reference, even (default 64 llvmpipe, 256 GPU)")
+                   help="frames of the reference's first round, even (default 64 llvmpipe, 256 GPU); given alone, "
+                        "the reference renders exactly these")
+    p.add_argument("--reference-max-frames", type=integer("--reference-max-frames", 2, seeds.RANGE),
+                   help="render the reference on until converged, up to this many frames, even (default 1024 "
+                        "llvmpipe, 16384 GPU)")
+    p.add_argument("--reference-seconds", type=number("--reference-seconds", 0, 86400, unit=" s"),
+                   help="stop rendering the reference on after this many seconds, summed over the runs that "
+                        "resume it from the cache (default 60 llvmpipe, 300 GPU)")
     p.add_argument("--reference-spp", type=integer("--reference-spp", 1, MAX_SPP),
                    help=f"paths per pixel per reference frame, 1 to {MAX_SPP} (default 16)")
     p.add_argument("--bounces", type=integer("--bounces", 1, MAX_BOUNCES), default=8,
@@ -150,9 +158,11 @@ class StudyPlan:
             f"{d.size[0]}x{d.size[1]}", "the default --size", views=args.views)
         if not args.size:
             chosen["--size"] = f"{d.size[0]}x{d.size[1]}"
-        if args.reference_frames is not None and args.reference_frames % 2:
-            raise OptionError(f"--reference-frames {args.reference_frames}: the reference is two equal halves; "
-                              f"give an even number")
+        for option in ("reference_frames", "reference_max_frames"):
+            value = getattr(args, option)
+            if value is not None and value % 2:
+                raise OptionError(f"--{option.replace('_', '-')} {value}: the reference is two equal halves; "
+                                  f"give an even number")
         get_preset(args.preset)
         metrics = parse_list(args.metrics, "--metrics", str.lower)
         for m in metrics:
@@ -161,9 +171,20 @@ class StudyPlan:
         self.spp = parse_list(args.spp, "--spp", parse_spp)
         self.views = args.views
         self.display = Display(args.tonemap.lower(), parse_exposure(args.exposure))
-        self.reference = ReferenceSettings(pick(args.reference_frames, "--reference-frames", d.reference_frames),
-                                           pick(args.reference_spp, "--reference-spp", d.reference_spp),
-                                           args.bounces, args.tolerance, args.bounce_tolerance)
+        frames = pick(args.reference_frames, "--reference-frames", d.reference_frames)
+        fixed = (args.reference_frames is not None and args.reference_max_frames is None
+                 and args.reference_seconds is None)       # a count given alone is rendered as it is
+        max_frames = None if fixed else pick(args.reference_max_frames, "--reference-max-frames",
+                                             max(d.reference_max_frames, frames))
+        if max_frames is not None and max_frames < frames:
+            raise OptionError(f"--reference-max-frames {max_frames}: fewer than the first round's {frames} frames "
+                              f"(--reference-frames); give at least {frames}")
+        self.reference = ReferenceSettings(frames, pick(args.reference_spp, "--reference-spp", d.reference_spp),
+                                           args.bounces, args.tolerance, args.bounce_tolerance,
+                                           max_frames=max_frames,
+                                           max_seconds=None if fixed else pick(args.reference_seconds,
+                                                                               "--reference-seconds",
+                                                                               d.reference_seconds))
         motion = None
         if args.trajectory != TRAJECTORY_NONE:
             frames = pick(args.motion_frames, "--motion-frames", d.motion_frames)
@@ -244,4 +265,5 @@ def print_summary(results) -> None:
     print(f"reference: {results.reference.verdict()}")
     for frame, ref in results.motion_references:
         print(f"reference of trajectory frame {frame}: {ref.verdict()}")
+    print(results.table_title())
     print(results.table())

@@ -35,17 +35,13 @@ from .shares import Share, split_evenly
 @dataclasses.dataclass
 class SplitReference(Reference):
     """A rayvr.tune.Reference rendered on a cluster, with what the split tells besides:
-    `stderr` the standard error of each pixel's mean from the shares' means (batch means; None
-    with one share or from the cache), `shares` the pieces its frames were cut into (0 from the
+    `stderr` the standard error of each pixel's mean from the first round's shares' means (batch
+    means; None with one share or from the cache), `shares` the pieces its frames were cut into (0 from the
     cache), `workers` the worker of each piece, in order."""
 
     stderr: np.ndarray | None = None
     shares: int = 0
     workers: list = dataclasses.field(default_factory=list)
-
-    @property
-    def samples_per_pixel(self) -> int:
-        return self.settings.samples_per_pixel
 
     @classmethod
     def of(cls, ref: Reference) -> "SplitReference":
@@ -133,6 +129,21 @@ def _render_split(c, scene, payload, view_set, settings: ReferenceSettings, firs
                           stderr=fold.stderr(), shares=fold.shares, workers=fold.workers)
 
 
+def _render_frames(c, scene, payload, view_set, settings: ReferenceSettings, first: int, frames: int, shares,
+                   progress: bool) -> np.ndarray:
+    """The mean of the reference graph's frames [first, first + frames) over the cluster `c`
+    (an extension of a reference that has not converged yet)."""
+    graph, _ = _graph_for(reference_graph(settings), [PIN])
+    pieces = shares or SHARES_PER_WORKER * c.size
+    jobs = [Share(i, "samples", {"graph": graph, "views": view_set, "pin": PIN, "frames": b - a,
+                                 "first_frame": first + a}, work=b - a, meta={"part": "b"})
+            for i, (a, b) in enumerate(_cut([0, frames], pieces))]
+    fold = _Fold()
+    c.run(jobs, c.scene_ref(payload), on_result=fold.add, desc=f"reference {scene.name}", unit="frame",
+          progress=progress)
+    return fold.mean("b").astype(np.float32)
+
+
 def converge_reference(scene, views=2, size=(256, 256), settings: ReferenceSettings | None = None,
                        frames: int | None = None, spp: int | None = None, max_bounces: int | None = None,
                        seed: int = 0, cache_dir=False, eps: float = DEFAULT_EPS, cluster=None, workers=None,
@@ -161,7 +172,11 @@ def converge_reference(scene, views=2, size=(256, 256), settings: ReferenceSetti
         def render(first_frame: int) -> SplitReference:
             return _render_split(c, scene, payload, view_set, settings, first_frame, eps, shares, progress)
 
-        ref = cached_reference(scene, view_set, settings, cache_dir, sample=int(seed), eps=eps, render=render)
+        def render_frames(first_frame: int, frames: int, tick) -> np.ndarray:
+            return _render_frames(c, scene, payload, view_set, settings, first_frame, frames, shares, progress)
+
+        ref = cached_reference(scene, view_set, settings, cache_dir, sample=int(seed), eps=eps, render=render,
+                               render_frames=render_frames)
     return SplitReference.of(ref)
 
 
@@ -175,7 +190,7 @@ class StudyRunner:
         self.cluster, self.payload, self.progress = cluster, payload, progress
 
     def reference(self, scene, view_set, settings, cache_dir=None, sample: int = 0, eps: float = DEFAULT_EPS,
-                  gpu=None, tick=None) -> SplitReference:
+                  gpu=None, tick=None, progress=None) -> SplitReference:
         return converge_reference(scene, view_set, settings=settings, seed=sample, cache_dir=cache_dir, eps=eps,
                                   cluster=self.cluster, payload=self.payload, progress=self.progress)
 

@@ -26,6 +26,7 @@ with rayvr.cluster's StudyRunner on Ray workers (each row then names the worker 
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import time
@@ -36,14 +37,16 @@ from ..errors import OptionError
 from ..materials.effect import Effect
 from . import seeds
 from .configs import Config, effects_restored, path_traced_graph
+from .defaults import machine_defaults
 from .display import Display
 from .floor import bias_floor, even_frames, floor_path, load_floor, store_floor
 from .metrics import DEFAULT_EPS, METRICS, check_metrics
 from .motion import Motion, along, trajectory_views
 from .pool import MetricPool, default_workers
 from .progress import StudyProgress
-from .reference import Reference, ReferenceSettings, is_cached
+from .reference import Reference, ReferenceProgress, ReferenceSettings, is_cached
 from .results import Results, Row, summarize
+from .row_cache import image_digest, load_row, row_key, row_path, store_row
 from .runner import LocalRunner
 from .timing import default_warmup_s, make_views, timed_frames
 
@@ -52,7 +55,8 @@ PROGRESSIVE_FIRST_FRAME = seeds.TEST + seeds.RANGE // 4
 # Relative CPU cost per pixel of each metric, measured on the Cornell box (benchmarks/RESULTS.md,
 # "Where the error study's time goes"; FLIP's includes the tone mapping, 2.5 us per pixel on one
 # core; HDR-FLIP runs LDR-FLIP at each of the reference's exposures).
-METRIC_COST = {"flip": 1.0, "hdrflip": 7.5, "ssim": 0.25, "psnr": 0.01, "relmse": 0.03}
+METRIC_COST = {"flip": 1.0, "hdrflip": 7.5, "ssim": 0.25, "psnr": 0.01, "relmse": 0.03, "relmse_trim": 0.01,
+               "fireflies": 0.01}
 # Relative GPU cost per pixel and frame of an effect level, in paths of the reference's length.
 EFFECT_COST = {Effect.RASTER: 0.3, Effect.SHADOWS: 0.5, Effect.REFLECTIONS: 0.8}
 
@@ -180,7 +184,8 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
 
     `views`: a ViewSet, or a view count from the scene's camera at `size` per view.
     `reference`: ReferenceSettings to render (or load from `cache_dir`; False: no cache) the
-    reference with, or a Reference already made for these views. `curves`: the progressive
+    reference with (None: the machine's defaults, rendered until converged: rayvr.tune.defaults),
+    or a Reference already made for these views. `curves`: the progressive
     curves. `notes`: lines for the report (e.g. why these sizes were chosen). `runner`: where
     the steps run (default rayvr.tune.runner.LocalRunner: here, on `gpu`)."""
     from ..gpu import get_context
@@ -193,7 +198,7 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
     ppd = settings.pixels_per_degree()
     warmup_s = default_warmup_s(gpu) if settings.warmup_s is None else float(settings.warmup_s)
     given = reference if isinstance(reference, Reference) else None
-    ref_settings = given.settings if given else (reference or ReferenceSettings())
+    ref_settings = given.settings if given else (reference or machine_defaults(gpu).reference_settings())
     if given is not None and given.image.shape[:3] != (len(view_set), view_set.size[1], view_set.size[0]):
         raise OptionError(f"measure: the reference has {given.image.shape[0]} view(s) of {given.image.shape[2]}x"
                           f"{given.image.shape[1]}, the study renders {len(view_set)} of "
@@ -229,6 +234,21 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
     return Results(ref, rows, made, info, motion_refs)
 
 
+class _ReferenceSteps(ReferenceProgress):
+    """A reference's extensions as steps of the study's progress bar (`units` per frame)."""
+
+    def __init__(self, progress, units: float, label: str):
+        self.progress, self.units, self.label = progress, units, label
+
+    @contextlib.contextmanager
+    def step(self, frames: int, label: str):
+        with self.progress.step("render", self.units * frames, f"{self.label}: {label}") as tick:
+            yield lambda done: tick(done / max(frames, 1))
+
+    def forecast(self, frames: int) -> None:
+        self.progress.plan("render", self.units * frames)
+
+
 def _descriptions() -> dict:
     from .metrics import DESCRIPTIONS
 
@@ -260,6 +280,7 @@ class Study:
         self.pool = MetricPool(0, progress)     # measure() gives it workers
         self.keep_floors = False        # keep floors rendered without a cache in new_floors
         self.new_floors: dict = {}      # configuration name -> Floor
+        self._digests: dict = {}        # id(reference image) -> its image_digest
 
     def spec(self) -> dict:
         """What a worker needs to run this study's rows and curves (after the display is fixed;
@@ -297,19 +318,8 @@ class Study:
                 if not is_cached(self.scene, _views(self.motion_frames[i]), self.ref_settings, self.cache_dir, k + 1):
                     p.plan("render", self._reference_units())
         for c in configs:
-            cost = frame_cost(c, self.scene, self.pixels) * self.pixels
-            p.plan("setup", 1)
-            timed = self.history_frames if self.warmup_s else 0   # the history, then the timing apart
-            p.plan("render", cost * (self.history_frames + timed + s.frames * c.accumulate))
-            p.plan("metric", sum(self._units(self._hdrflip(k)) for k in range(s.frames)))
-            if s.motion:
-                p.plan("setup", 1)
-                p.plan("render", cost * s.motion.frames)
-                p.plan("metric", self._units(s.hdrflip_frames is None) * s.motion.samples)
-            if s.floors:
-                if not self._floor_cached(c):
-                    p.plan("render", cost * floor_frames(c, self.ref_settings, s.floor_fraction))
-                p.plan("metric", self._units(s.hdrflip_frames is None))
+            for kind, units in self._row_units(c).items():
+                p.plan(kind, units)
         if curves and s.progressive_frames:
             from .progressive import snapshot_counts
 
@@ -317,6 +327,37 @@ class Study:
                 p.plan("setup", 1)
                 p.plan("render", self._curve_cost() * (s.warmup + s.timing_frames + s.progressive_frames))
                 p.plan("metric", self._units(s.hdrflip_frames is None) * len(snapshot_counts(s.progressive_frames)))
+
+    def _row_units(self, c) -> dict:
+        """The progress units (by kind) that measuring configuration `c` plans."""
+        s = self.s
+        cost = frame_cost(c, self.scene, self.pixels) * self.pixels
+        timed = self.history_frames if self.warmup_s else 0   # the history, then the timing apart
+        units = {"setup": 1.0, "render": cost * (self.history_frames + timed + s.frames * c.accumulate),
+                 "metric": sum(self._units(self._hdrflip(k)) for k in range(s.frames))}
+        if s.motion:
+            units["setup"] += 1
+            units["render"] += cost * s.motion.frames
+            units["metric"] += self._units(s.hdrflip_frames is None) * s.motion.samples
+        if s.floors:
+            if not self._floor_cached(c):
+                units["render"] += cost * floor_frames(c, self.ref_settings, s.floor_fraction)
+            units["metric"] += self._units(s.hdrflip_frames is None)
+        return units
+
+    def _row_path(self, config, ref: Reference, motion_refs: dict):
+        """Where `config`'s finished row is cached (rayvr.tune.row_cache), or None without a cache."""
+        if self.cache_dir is False:
+            return None
+        digests = [self._digest(ref)] + [f"{i}:{self._digest(r)}" for i, r in sorted(motion_refs.items())]
+        return row_path(self.scene, row_key(self.scene, self.view_set, config, self.s.as_dict(), digests),
+                        self.cache_dir)
+
+    def _digest(self, ref: Reference) -> str:
+        key = id(ref.image)
+        if key not in self._digests:
+            self._digests[key] = image_digest(ref.image)
+        return self._digests[key]
 
     @property
     def history_frames(self) -> int:
@@ -352,13 +393,11 @@ class Study:
 
     # -- steps -------------------------------------------------------------------------------
     def reference(self, sample: int, view_set, label: str) -> Reference:
+        """The reference of `view_set` (trajectory sample `sample`; 0: the static view), its first
+        round and extensions as steps of the progress bar."""
         r = self.ref_settings
-        if is_cached(self.scene, view_set, r, self.cache_dir, sample):
-            return self.runner.reference(self.scene, view_set, r, self.cache_dir, sample, self.s.eps, self.gpu)
-        total = r.frames + r.bounce_check_frames
-        with self.progress.step("render", self._reference_units(), label) as tick:
-            return self.runner.reference(self.scene, view_set, r, self.cache_dir, sample, self.s.eps, self.gpu,
-                                         tick=lambda n: tick(n / total))
+        return self.runner.reference(self.scene, view_set, r, self.cache_dir, sample, self.s.eps, self.gpu,
+                                     progress=_ReferenceSteps(self.progress, self.pixels * r.spp, label))
 
     def judge(self, image, reference_image, name: str, maps: bool = False):
         """(per-view metrics, maps, negative values) of `image`: negative radiance is judged as
@@ -397,6 +436,17 @@ class Study:
         from ..renderer import Renderer
 
         s, p = self.s, self.progress
+        path = self._row_path(config, ref, motion_refs)
+        stored = load_row(path) if path is not None else None
+        if stored is not None:      # measured by an earlier run of the same study
+            for kind, units in self._row_units(config).items():
+                p.plan(kind, -units)
+            stored.name = config.name
+
+            def cached() -> Row:
+                return stored
+            cached.ready = lambda: True
+            return cached
         cost = frame_cost(config, self.scene, self.pixels) * self.pixels
         config.apply(self.scene)
         graph = config.build_graph()
@@ -455,8 +505,12 @@ class Study:
                 row.motion, row.motion_image = motion()
             if floor:
                 row.floor, row.floor_image = floor()
+            if path is not None:
+                store_row(path, row)
             return row
 
+        pending = judged + (motion.pending if motion else []) + (floor.pending if floor else [])
+        finish.ready = lambda: all(q.done() for q in pending)
         return finish
 
     def motion_row(self, config: Config, motion_refs: dict, cost: float):
@@ -491,6 +545,7 @@ class Study:
             samples = {m: v for m, v in samples.items() if v}
             return {**s.motion.as_dict(), **summarize(samples), "negative_values": negatives}, last
 
+        finish.pending = judged
         return finish
 
     def floor_row(self, config: Config, ref: Reference, cost: float, floor=None):
@@ -515,6 +570,7 @@ class Study:
             out.update({m: float(np.mean(v)) for m, v in per_view.items()})
             return out, floor.image
 
+        finish.pending = [pending]
         return finish
 
     # -- progressive curves ------------------------------------------------------------------

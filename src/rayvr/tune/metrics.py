@@ -7,11 +7,13 @@ an image is an error that names the image and the first bad pixel, never a silen
 
     flip(test, ref)           mean FLIP (NVIDIA's flip-evaluator), HDR-FLIP for float, LDR-FLIP for integer
     rel_mse(test, ref)        mean over pixels and channels of (t - r)^2 / (r^2 + eps)
+    trimmed_mean(map)         a per-pixel map's mean without its largest 0.1% (relMSE that outliers do not rule)
+    firefly_map(test, ref)    pixels whose luminance exceeds FIREFLY_RATIO x the reference's
     psnr(test, ref, peak)     10 log10(peak^2 / MSE) in dB; inf for identical images
     ssim(test, ref)           scikit-image's structural similarity of display-encoded images
 
 `evaluate` is the error study's set: FLIP, PSNR and SSIM of the displayed images (see
-rayvr.tune.display), HDR-FLIP and relMSE of the linear radiance.
+rayvr.tune.display), HDR-FLIP, relMSE, trimmed relMSE and the firefly count of the linear radiance.
 
 The `*_map` functions return the per-pixel error (views, h, w) whose mean is the metric: the
 budget tuner sums them over each material's pixels.
@@ -25,6 +27,7 @@ import numpy as np
 
 from .. import images
 from ..errors import OptionError, RayvrError
+from .display import LUMINANCE
 
 DYNAMIC_RANGES = ("auto", "ldr", "hdr")
 THREADED_VIEW_PIXELS = 256 * 256   # smaller views: starting threads costs more than it saves
@@ -90,6 +93,30 @@ def rel_mse_map(test, reference, eps: float = 1e-2, names=("test", "reference"))
 def rel_mse(test, reference, eps: float = 1e-2, names=("test", "reference")) -> float:
     """Relative mean squared error: the mean over pixels and RGB channels of (t - r)^2 / (r^2 + eps)."""
     return float(rel_mse_map(test, reference, eps, names).mean())
+
+
+TRIM_FRACTION = 1e-3   # the share of largest per-pixel errors a trimmed mean leaves out
+FIREFLY_RATIO = 10.0   # a firefly: luminance above this multiple of the reference's
+
+
+def trimmed_mean(error_map, fraction: float = TRIM_FRACTION) -> float:
+    """The mean of `error_map` without its largest `fraction` of values (the denoising
+    literature's outlier-robust relMSE: a few firefly pixels cannot rule it)."""
+    flat = np.asarray(error_map, dtype=np.float64).ravel()
+    drop = int(flat.size * fraction)
+    if drop == 0:
+        return float(flat.mean())
+    keep = flat.size - drop
+    return float(np.partition(flat, keep - 1)[:keep].mean())
+
+
+def firefly_map(test, reference, eps: float = 1e-2, names=("test", "reference")) -> np.ndarray:
+    """Per pixel (views, h, w), 1 where the test's luminance exceeds FIREFLY_RATIO times the
+    reference's: lum(t) - lum(r) > (FIREFLY_RATIO - 1) sqrt(lum(r)^2 + eps), with relMSE's
+    `eps`, so that a black reference pixel needs radiance above about (RATIO - 1) sqrt(eps)."""
+    t, r = pair(test, reference, names)
+    lt, lr = t @ LUMINANCE, r @ LUMINANCE
+    return (lt - lr > (FIREFLY_RATIO - 1.0) * np.sqrt(lr * lr + eps)).astype(np.float64)
 
 
 def default_peak(a: np.ndarray) -> float:
@@ -200,13 +227,20 @@ def srgb_encode(linear) -> np.ndarray:
 
 
 # -- the study's metrics ----------------------------------------------------------------------
-METRICS = {"flip": "FLIP", "hdrflip": "HDR-FLIP", "psnr": "PSNR dB", "ssim": "SSIM", "relmse": "relMSE"}
+METRICS = {"flip": "FLIP", "hdrflip": "HDR-FLIP", "psnr": "PSNR dB", "ssim": "SSIM", "relmse": "relMSE",
+           "relmse_trim": "relMSE trim 0.1%", "fireflies": "fireflies"}
 DESCRIPTIONS = {"flip": "LDR-FLIP of the displayed images at the headset's pixels per degree",
                 "hdrflip": "HDR-FLIP of the linear radiance at the same pixels per degree",
                 "psnr": "PSNR of the displayed images (peak 1)",
                 "ssim": "SSIM of the displayed images (scikit-image, data_range 1)",
-                "relmse": "relative MSE of the linear radiance, (t - r)^2 / (r^2 + eps), eps stated"}
-LOWER_IS_BETTER = {"flip": True, "hdrflip": True, "psnr": False, "ssim": False, "relmse": True}
+                "relmse": "relative MSE of the linear radiance, (t - r)^2 / (r^2 + eps), eps stated",
+                "relmse_trim": f"relMSE without the largest {100 * TRIM_FRACTION:g}% of per-pixel errors (robust "
+                               f"to fireflies)",
+                "fireflies": f"pixels per view whose luminance exceeds {FIREFLY_RATIO:g}x the reference's "
+                             f"(lum(t) - lum(r) > {FIREFLY_RATIO - 1:g} sqrt(lum(r)^2 + eps))"}
+LOWER_IS_BETTER = {"flip": True, "hdrflip": True, "psnr": False, "ssim": False, "relmse": True,
+                   "relmse_trim": True, "fireflies": True}
+RELMSE_METRICS = ("relmse", "relmse_trim")   # the means of the per-pixel relMSE map
 MAP_METRICS = ("flip", "relmse")   # per-pixel maps whose mean is the metric (the tuner sums them)
 DEFAULT_EPS = 1e-2
 
@@ -241,11 +275,15 @@ def evaluate(test, reference, display, ppd: float | None = None, eps: float = DE
     per_map = {}
     if "flip" in need:
         per_map["flip"] = flip_map(*shown, "ldr", ppd, names)
-    if "relmse" in need:
+    if need & set(RELMSE_METRICS):
         per_map["relmse"] = rel_mse_map(t, r, eps, names)
     out = {}
     for m in which:
-        if m in per_map:
+        if m == "relmse_trim":
+            out[m] = np.array([trimmed_mean(view) for view in per_map["relmse"]])
+        elif m == "fireflies":
+            out[m] = firefly_map(t, r, eps, names).reshape(len(t), -1).sum(axis=1)
+        elif m in per_map:
             out[m] = per_map[m].reshape(len(t), -1).mean(axis=1).astype(np.float64)
         elif m == "hdrflip":
             out[m] = flip_map(t, r, "hdr", ppd, names).reshape(len(t), -1).mean(axis=1).astype(np.float64)

@@ -1,9 +1,12 @@
 """The scene's ground truth for the error study: a converged, checked, cached path-traced render.
 
-The reference path traces every pixel from the camera (PathTracer "full" mode + Accumulate,
-paths starting at pixel centres as the raster G-buffer samples them) for `frames` frames of `spp`
-paths each, from its own seed range (rayvr.tune.seeds), as two halves A and B of frames/2 frames
-each. Its image is their mean. Two checks say whether it can be trusted:
+The reference path traces every pixel from the camera (PathTracer "full" mode + Accumulate) with
+each path starting at a random point of its pixel: a box filter over the pixel's footprint, the
+value a displayed pixel integrates, stratified over the frames by the Sobol sampler. Configurations
+that do not anti-alias (the G-buffer samples pixel centres) show their aliasing as error against
+it. It renders `frames` frames of `spp` paths from its own seed range (rayvr.tune.seeds) as two
+halves A and B of frames/2 frames each; its image is their mean. Two checks say whether it can be
+trusted:
 
 - **converged**: the halves are independent estimates, so (A - B)^2 / 4 estimates per pixel the
   squared error of the mean. Its relMSE-weighted mean, mean((A - B)^2 / 4 / (M^2 + eps)), is the
@@ -14,13 +17,24 @@ each. Its image is their mean. Two checks say whether it can be trusted:
   A's random numbers (so the two differ only by the extra bounce's light) change the mean
   radiance by less than `bounce_tolerance` (default 1%).
 
-The cache is an .npz per (scene content, views, size, settings, seed range, rayvr's version and
-shaders) in
-`cache_dir` (default $XDG_CACHE_HOME/rayvr/references, else ~/.cache/rayvr/references), written
-under a temporary name and renamed, so an interrupted render never leaves a half-written one.
+**Rendered until converged** (`max_frames` > `frames`): while the halves predict more than the
+tolerance, the reference renders on in extensions (`converge`): each appends the next frames of
+its seed range, the first half of them to A and the second to B, sized by the halves' forecast
+(at least `frames`, at most doubling what is there), until it converges, reaches `max_frames`,
+or its rendering time, summed over every run that extended it, would pass `max_seconds`. The
+reference is never clamped. Why it stopped is its `stop` ("converged", "frames cap", "time cap",
+"fixed": `max_frames` not set).
+
+The cache is an .npz per (scene content, views, size, spp, bounces, round size `frames`, seed
+range, rayvr's version and shaders) in `cache_dir` (default $XDG_CACHE_HOME/rayvr/references,
+else ~/.cache/rayvr/references), written under a temporary name and renamed after the first
+round and after every extension, so an interrupted render never leaves a half-written one and a
+later run resumes from the last extension. The caps and tolerances are not in the key: a run with
+a larger cap extends the cached reference.
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import hashlib
@@ -36,9 +50,11 @@ from ..fileio import atomic_write
 from . import seeds
 from .display import LUMINANCE
 
-CACHE_VERSION = 3          # bump when a change outside the shaders changes what a reference shows
+CACHE_VERSION = 4          # bump when a change outside the shaders changes what a reference shows
 SHADER_SUFFIXES = (".glsl", ".comp", ".vert", ".frag")
 NAME = "path-traced reference"
+PIXEL_FILTER = "box (a uniform random point of the pixel per path, stratified over the frames)"
+STOPS = ("converged", "halves identical", "frames cap", "time cap", "fixed")
 PIN = "Accumulate.dst"     # the reference graph's running mean
 
 
@@ -52,6 +68,8 @@ class ReferenceSettings:
     tolerance: float = 5e-4
     bounce_tolerance: float = 0.01
     check_frames: int | None = None      # bounce check frames; default frames // 4
+    max_frames: int | None = None        # render on until converged or this many frames (None: `frames` only)
+    max_seconds: float | None = None     # rendering time cap of an extending reference, over all its runs
 
     def __post_init__(self):
         for key in ("frames", "spp", "max_bounces"):
@@ -69,6 +87,21 @@ class ReferenceSettings:
             raise OptionError(f"reference check_frames: must be 1..{self.frames // 2} (half A's frames), "
                               f"got {self.check_frames}")
         seeds.check_length(self.frames, "reference frames")
+        if self.max_frames is not None:
+            m = self.max_frames
+            if isinstance(m, bool) or int(m) != m or m < self.frames or m % 2:
+                raise OptionError(f"reference max_frames: must be an even integer >= frames ({self.frames}), "
+                                  f"got {m!r}")
+            seeds.check_length(m, "reference max_frames")
+        if self.max_seconds is not None:
+            t = self.max_seconds
+            if isinstance(t, bool) or not (isinstance(t, (int, float)) and t >= 0 and math.isfinite(t)):
+                raise OptionError(f"reference max_seconds: must be a number of seconds >= 0, got {t!r}")
+
+    @property
+    def extends(self) -> bool:
+        """Whether the reference renders on until converged (max_frames above frames)."""
+        return self.max_frames is not None and self.max_frames > self.frames
 
     @property
     def samples_per_pixel(self) -> int:
@@ -82,7 +115,13 @@ class ReferenceSettings:
     def as_dict(self) -> dict:
         return {"frames": self.frames, "spp_per_frame": self.spp, "samples_per_pixel": self.samples_per_pixel,
                 "bounces": self.max_bounces, "tolerance_relmse": self.tolerance,
-                "bounce_tolerance": self.bounce_tolerance, "bounce_check_frames": self.bounce_check_frames}
+                "bounce_tolerance": self.bounce_tolerance, "bounce_check_frames": self.bounce_check_frames,
+                "max_frames": self.max_frames, "max_seconds": self.max_seconds, "pixel_filter": PIXEL_FILTER}
+
+    def cache_fields(self) -> dict:
+        """What changes the rendered frames (not the caps and tolerances that decide how many)."""
+        return {"frames": self.frames, "spp": self.spp, "max_bounces": self.max_bounces,
+                "check_frames": self.bounce_check_frames}
 
 
 @dataclasses.dataclass
@@ -99,6 +138,20 @@ class Reference:
     source: str                 # "rendered" or the cache file
     eps: float = 1e-2
     name: str = NAME
+    frames: int = 0             # frames rendered, both halves (0: settings.frames)
+    rounds: list = dataclasses.field(default_factory=list)   # [offset from first_frame, frames] per render
+    total_seconds: float = 0.0  # rendering seconds over every run that made or extended it (0: `seconds`)
+    stop: str = "fixed"         # why it stopped rendering: one of STOPS
+
+    def __post_init__(self):
+        self.frames = self.frames or self.settings.frames
+        self.rounds = [list(r) for r in self.rounds] or [[0, self.settings.frames]]
+        self.total_seconds = self.total_seconds or self.seconds
+
+    @property
+    def samples_per_pixel(self) -> int:
+        """Paths per pixel of the whole reference (both halves, every extension)."""
+        return self.frames * self.settings.spp
 
     @property
     def noise_relmse(self) -> float:
@@ -121,7 +174,7 @@ class Reference:
     def frames_to_converge(self) -> int:
         """Frames (of `settings.spp` paths) that would bring the predicted relMSE to the
         tolerance (noise falls as 1 / frames), rounded up to an even count."""
-        need = self.settings.frames * self.noise_relmse / self.settings.tolerance
+        need = self.frames * self.noise_relmse / self.settings.tolerance
         return max(2, 2 * math.ceil(need / 2))
 
     @property
@@ -130,13 +183,27 @@ class Reference:
         light, direct light only), or a half that was never added (as the H200 once gave it)."""
         return bool(np.array_equal(self.half_a[..., :3], self.half_b[..., :3]))
 
-    def verdict(self) -> str:
-        """One line: converged or not, and whether the bounces suffice."""
+    def stopped(self) -> str:
+        """Why the reference stopped rendering, with its frames and time: one phrase."""
         s = self.settings
-        noise = (f"converged: halves predict relMSE {self.noise_relmse:.2e} <= tolerance {s.tolerance:.0e}"
+        done = f"{self.frames} frames x {s.spp} spp in {self.total_seconds:.0f} s"
+        if self.stop == "time cap":
+            return f"{done}, stopped at the {s.max_seconds:g} s time cap"
+        if self.stop == "frames cap":
+            return f"{done}, stopped at the {s.max_frames}-frame cap"
+        if self.stop == "fixed":
+            return f"{done} (a fixed count; give max_frames to render on until converged)"
+        return done
+
+    def verdict(self) -> str:
+        """One line: converged or not (how many frames, and why it stopped), and whether the
+        bounces suffice."""
+        s = self.settings
+        noise = (f"converged: halves predict relMSE {self.noise_relmse:.2e} <= tolerance {s.tolerance:.0e} "
+                 f"({self.stopped()})"
                  if self.converged else
                  f"NOT converged: halves predict relMSE {self.noise_relmse:.2e} > tolerance {s.tolerance:.0e} "
-                 f"(about {self.frames_to_converge()} frames of {s.spp} spp would do)")
+                 f"({self.stopped()}; about {self.frames_to_converge()} frames of {s.spp} spp would do)")
         if self.halves_identical:
             noise = ("halves identical (noise-free light at these settings, or a half that was not rendered: the "
                      "convergence check cannot tell)")
@@ -144,12 +211,22 @@ class Reference:
                   f"({'within' if self.bounces_enough else 'OVER'} the {100 * s.bounce_tolerance:g}% tolerance)")
         return f"{noise}; {bounce}"
 
+    def halves_frames(self) -> tuple[list, list]:
+        """Half A's and half B's frame ranges, [start, stop) each, one per rendering round."""
+        a, b = [], []
+        for offset, frames in self.rounds:
+            start = self.first_frame + offset
+            a.append([start, start + frames // 2])
+            b.append([start + frames // 2, start + frames])
+        return a, b
+
     def as_dict(self) -> dict:
+        a, b = self.halves_frames()
         return {"name": self.name, "settings": self.settings.as_dict(),
-                "seeds": {"first_frame": self.first_frame,
-                          "half_a_frames": [self.first_frame, self.first_frame + self.settings.frames // 2],
-                          "half_b_frames": [self.first_frame + self.settings.frames // 2,
-                                            self.first_frame + self.settings.frames]},
+                "frames": self.frames, "samples_per_pixel": self.samples_per_pixel, "pixel_filter": PIXEL_FILTER,
+                "stop": self.stop, "stopped": self.stopped(), "total_seconds": self.total_seconds,
+                "seeds": {"first_frame": self.first_frame, "half_a_frames": a[0], "half_b_frames": b[0],
+                          "half_a_rounds": a, "half_b_rounds": b},
                 "convergence": {"verdict": "halves identical" if self.halves_identical else
                                 ("converged" if self.converged else "not converged"),
                                 "predicted_relmse": self.noise_relmse, "tolerance": self.settings.tolerance,
@@ -195,10 +272,11 @@ def views_digest(view_set) -> str:
 
 
 def reference_graph(settings: ReferenceSettings, bounces: int | None = None):
-    """The reference's render graph: `settings.spp` paths per pixel per frame, accumulated."""
+    """The reference's render graph: `settings.spp` paths per pixel per frame, each from a random
+    point of its pixel (PIXEL_FILTER), accumulated."""
     from .configs import path_traced_graph
 
-    return path_traced_graph(spp=settings.spp, max_bounces=bounces or settings.max_bounces)
+    return path_traced_graph(spp=settings.spp, max_bounces=bounces or settings.max_bounces, pixel_jitter=True)
 
 
 @functools.cache
@@ -215,18 +293,33 @@ def code_digest() -> str:
 
 
 def reference_key(scene, view_set, settings: ReferenceSettings, first_frame: int) -> str:
-    """The cache key: everything that changes the reference (scene content, views, size,
-    settings, the path tracer's properties, the seed range, the code: code_digest)."""
+    """The cache key: everything that changes the reference's frames (scene content, views, size,
+    ReferenceSettings.cache_fields, the path tracer's properties, the seed range, the code:
+    code_digest). Not the caps: a larger one extends the cached reference."""
     tracer = reference_graph(settings).get_pass("PathTracer").get_properties()
-    text = json.dumps([code_digest(), scene_digest(scene), views_digest(view_set), dataclasses.asdict(settings),
+    text = json.dumps([code_digest(), scene_digest(scene), views_digest(view_set), settings.cache_fields(),
                        first_frame, tracer], sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
+class ReferenceProgress:
+    """Where a reference reports its rendering (the study's progress bar; by default nowhere).
+    `step(frames, label)` wraps the rendering of `frames` frames and yields `tick(frames_done)`;
+    `forecast(frames)` adds (or, negative, removes) frames expected to be rendered later."""
+
+    @contextlib.contextmanager
+    def step(self, frames: int, label: str):
+        yield lambda done: None
+
+    def forecast(self, frames: int) -> None:
+        pass
+
+
 def render_reference(scene, view_set, settings: ReferenceSettings = ReferenceSettings(), first_frame: int | None = None,
                      gpu=None, tick=None, eps: float = 1e-2) -> Reference:
-    """Render the reference and its checks (see the module docstring). `tick(frames)` is told
-    how many frames have been rendered (of settings.frames + the bounce check's)."""
+    """Render the reference's first `settings.frames` frames and its checks (see the module
+    docstring). `tick(frames)` is told how many frames have been rendered (of settings.frames +
+    the bounce check's)."""
     import time
 
     from .progressive import render_mean, split_halves
@@ -256,30 +349,128 @@ def relative_change(image: np.ndarray, base: np.ndarray) -> float:
     return 0.0 if lum == 0.0 and more == 0.0 else (more - lum) / max(lum, 1e-30)
 
 
+def next_extension(ref: Reference) -> tuple[int, str | None]:
+    """(frames to add, None) for the reference's next extension, or (0, why it stops): converged,
+    the frames cap, or a time cap the next frames would pass (at the seconds per frame so far)."""
+    s = ref.settings
+    if ref.halves_identical:
+        return 0, "halves identical"
+    if ref.converged:
+        return 0, "converged"
+    if not s.extends:
+        return 0, "fixed"
+    room = s.max_frames - ref.frames
+    if room < 2:
+        return 0, "frames cap"
+    # at least one round, at most doubling: the forecast from few frames is itself noisy
+    more = min(max(ref.frames_to_converge() - ref.frames, s.frames), ref.frames, room)
+    if s.max_seconds is not None:
+        per_frame = ref.total_seconds / (ref.frames + s.bounce_check_frames) if ref.total_seconds > 0 else 0.0
+        affordable = (s.max_seconds - ref.total_seconds) / per_frame if per_frame > 0 else more
+        more = min(more, int(affordable))
+    more -= more % 2
+    if more < 2:
+        return 0, "time cap" if s.max_seconds is not None else "frames cap"
+    return more, None
+
+
+def converge(ref: Reference, render_frames, store=None, progress: ReferenceProgress | None = None) -> Reference:
+    """Extend `ref` until it converges or a cap stops it (module docstring): each extension's
+    frames come from `render_frames(first_frame, frames, tick) -> mean image` (its first half
+    to A, its second to B); `store(ref)` after each (the cache). Returns `ref`, extended."""
+    import time
+
+    from .progressive import split_halves
+
+    progress = progress or ReferenceProgress()
+    forecast = 0
+    while True:
+        more, why = next_extension(ref)
+        if why is not None:
+            ref.stop = why
+            break
+        if not forecast:   # the frames the halves predict, for the ETA (consumed by the steps)
+            forecast = min(ref.frames_to_converge(), ref.settings.max_frames) - ref.frames
+            progress.forecast(forecast)
+        half, n = more // 2, ref.frames // 2
+        start = ref.first_frame + ref.frames
+        t0 = time.perf_counter()
+        with progress.step(more, f"reference: frames {ref.frames}..{ref.frames + more}") as tick:
+            a = render_frames(start, half, tick)
+            b = render_frames(start + half, half, lambda k: tick(half + k))
+        took = time.perf_counter() - t0
+        forecast -= more
+        if forecast <= 0:
+            progress.forecast(-forecast)
+            forecast = 0
+        mean_a = (ref.half_a.astype(np.float64) * n + a.astype(np.float64) * half) / (n + half)
+        mean_b = (ref.half_b.astype(np.float64) * n + b.astype(np.float64) * half) / (n + half)
+        ref.image = ((mean_a + mean_b) * 0.5).astype(np.float32)
+        ref.half_a, ref.half_b = split_halves(mean_a, ref.image)
+        ref.rounds.append([ref.frames, more])
+        ref.frames += more
+        ref.seconds += took
+        ref.total_seconds += took
+        if store is not None:
+            store(ref)
+    if forecast > 0:
+        progress.forecast(-forecast)
+    return ref
+
+
 def cached_reference(scene, view_set, settings: ReferenceSettings = ReferenceSettings(), cache_dir=None, gpu=None,
-                     tick=None, sample: int = 0, eps: float = 1e-2, render=None) -> Reference:
+                     tick=None, sample: int = 0, eps: float = 1e-2, render=None, render_frames=None,
+                     progress: ReferenceProgress | None = None) -> Reference:
     """The reference of `scene` seen by `view_set`: from the cache when there, else rendered
-    and stored (`cache_dir=False` disables the cache). `sample` picks the seed range (0 for the
-    static view, k for trajectory sample k). `render(first_frame) -> Reference` renders a
-    missing one (default: `render_reference` on `gpu`; rayvr.cluster splits it over workers)."""
+    and stored (`cache_dir=False` disables the cache); then rendered on until converged or
+    capped (`converge`; settings.max_frames), stored after each extension. `sample` picks the
+    seed range (0 for the static view, k for trajectory sample k). `render(first_frame) ->
+    Reference` renders the first round, `render_frames(first_frame, frames, tick) -> mean image`
+    an extension's half (defaults: on `gpu`; rayvr.cluster splits them over workers)."""
     first = seeds.reference_first_frame(sample)
-    if render is None:
-        def render(first_frame: int) -> Reference:
-            return render_reference(scene, view_set, settings, first_frame, gpu, tick, eps)
+    progress = progress or ReferenceProgress()
+    first_round = settings.frames + settings.bounce_check_frames
+
+    def render_first(first_frame: int, step_tick) -> Reference:
+        if render is not None:
+            return render(first_frame)
+
+        def both(n: int) -> None:
+            step_tick(n)
+            if tick is not None:
+                tick(n)
+        return render_reference(scene, view_set, settings, first_frame, gpu, both, eps)
+
+    def rendered() -> Reference:
+        with progress.step(first_round, f"frames 0..{settings.frames} and the bounce check") as step_tick:
+            return render_first(first, step_tick)
+    if render_frames is None:
+        def render_frames(first_frame: int, frames: int, tick) -> np.ndarray:
+            from .progressive import render_mean
+
+            return render_mean(scene, reference_graph(settings), PIN, view_set, frames, first_frame, gpu=gpu,
+                               tick=tick)[-1].image
     if cache_dir is False:
-        return render(first)
+        return converge(rendered(), render_frames, None, progress)
     path = cache_path(scene, view_set, settings, first, cache_dir)
+
+    def store(ref: Reference) -> None:
+        store_halves(path, ref.image, ref.half_a, {
+            "scene": scene.name, "views": len(view_set), "size": list(view_set.size), "first_frame": first,
+            "bounce_change": ref.bounce_change, "seconds": ref.total_seconds, "frames": ref.frames,
+            "rounds": ref.rounds, "settings": settings.cache_fields()})
+        ref.source = str(path)
+
     cached = load_halves(path)
     if cached is not None:
         image, a, b, meta = cached
-        return Reference(image, a, b, settings, first, float(meta["bounce_change"]), 0.0, str(path), eps)
-    ref = render(first)
-    store_halves(path, ref.image, ref.half_a, {"scene": scene.name, "views": len(view_set),
-                                               "size": list(view_set.size), "first_frame": first,
-                                               "bounce_change": ref.bounce_change, "seconds": ref.seconds,
-                                               **dataclasses.asdict(settings)})
-    ref.source = str(path)
-    return ref
+        ref = Reference(image, a, b, settings, first, float(meta["bounce_change"]), 0.0, str(path), eps,
+                        frames=int(meta.get("frames", settings.frames)), rounds=meta.get("rounds", []),
+                        total_seconds=float(meta.get("seconds", 0.0)))
+    else:
+        ref = rendered()
+        store(ref)
+    return converge(ref, render_frames, store, progress)
 
 
 def load_halves(path: Path):

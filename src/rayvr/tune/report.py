@@ -24,6 +24,7 @@ import numpy as np
 from ..fileio import atomic_folder, atomic_write, png_bytes, write_text
 from .display import Display, to_uint8
 from .metrics import DESCRIPTIONS, LOWER_IS_BETTER, METRICS
+from .reference import PIXEL_FILTER
 from .results import fmt, markdown_table
 
 
@@ -159,18 +160,25 @@ def sections(results, images: _Images, plots: dict, budget_ms=None, title: str |
     intro = [("p", f"{s['views']} view(s) of {s['size'][0]}x{s['size'][1]} on {s['device']}; GPU time by "
                    f"{s['timing']} (warm-up {s['warmup_s']:g} s before timing). The study took "
                    f"{s['seconds']:.0f} s.")]
+    intro.append(("p", f"**Reference**: {ref.verdict()}."))
+    for frame, r in results.motion_references:
+        intro.append(("p", f"**Reference of trajectory frame {frame}**: {r.verdict()}."))
     if s.get("notes"):
         intro.append(("list", list(s["notes"])))
     out.append((title or f"Error against GPU time: {s['scene']}", intro))
     rs = ref.settings
     seeds = ref.as_dict()["seeds"]
+    cap = (f"rendered {rs.frames} frames at a time until converged, at most {rs.max_frames} frames"
+           + (f" or {rs.max_seconds:g} s of rendering" if rs.max_seconds is not None else "")
+           if rs.extends else "a fixed frame count")
     ref_blocks = [("list", [
-        f"{ref.name}: every pixel path traced from the camera at pixel centres, {rs.frames} frames x {rs.spp} "
-        f"spp = {rs.samples_per_pixel} paths per pixel, up to {rs.max_bounces} bounces (each scattering vertex "
-        f"samples a light), Russian roulette from bounce 3.",
-        f"Seeds: frames {seeds['half_a_frames'][0]}..{seeds['half_a_frames'][1] - 1} (half A) and "
-        f"{seeds['half_b_frames'][0]}..{seeds['half_b_frames'][1] - 1} (half B); the configurations use frames "
-        f"from 0, so no render shares random numbers with the reference.",
+        f"{ref.name}: every pixel path traced from the camera, each path from a random point of its pixel "
+        f"(pixel filter: {PIXEL_FILTER}), {ref.frames} frames x {rs.spp} spp = {ref.samples_per_pixel} paths per "
+        f"pixel ({cap}; {ref.stopped()}), up to {rs.max_bounces} bounces (each scattering vertex samples a "
+        f"light), Russian roulette from bounce 3.",
+        "Seeds: frames " + ", ".join(f"{a}..{b - 1}" for a, b in seeds["half_a_rounds"]) + " (half A) and "
+        + ", ".join(f"{a}..{b - 1}" for a, b in seeds["half_b_rounds"]) + " (half B); the configurations use "
+        "frames from 0, so no render shares random numbers with the reference.",
         ("**Halves identical**: the two halves are equal to the bit, so the convergence check cannot tell "
          "noise-free light at these settings from a half that was not rendered." if ref.halves_identical else
          f"**{'Converged' if ref.converged else 'NOT converged'}**: the halves predict a relMSE of "
@@ -208,17 +216,17 @@ def sections(results, images: _Images, plots: dict, budget_ms=None, title: str |
         how.append(f"In motion: the views carried along the '{motion['trajectory']}' trajectory at "
                    f"{motion['refresh_hz']:g} Hz for {motion['frames']} frames; frames {motion['sampled_frames']} "
                    f"judged, each against its own reference (same settings, own seeds).")
-    if any(r.settings.get("graph") == "hybrid_taa" for r in results.rows):
-        how.append("The reference samples pixel centres, as the G-buffer does; a jittered, anti-aliased "
-                   "configuration (TAA) differs from it at edges, most at the light's, and that counts in its error "
-                   "and its floor.")
+    how.append("The reference is pixel-filtered (a box over each pixel, what a displayed pixel integrates); the "
+               "G-buffers sample pixel centres, so a configuration that does not anti-alias shows its aliasing at "
+               "edges, most at the light's, in its error and its floor, and one that resolves sub-pixel jitter "
+               "(TAA, SVGF) converges to the filtered image.")
     if st.get("floors"):
         how.append(f"Bias floor: each configuration rendered converged ({100 * st['floor_fraction']:g}% of the "
                    f"reference's paths per pixel, its own seeds) against the reference: its relMSE, and the part "
                    f"of it that noise does not explain (relMSE - predicted noise of both; 'within noise' when "
                    f"relMSE <= twice the noise). What is left is light the configuration leaves out.")
     out.append(("How the error is measured", [("list", how)]))
-    res = [("table", *results.table_data())]
+    res = [("p", f"**{results.table_title()}**"), ("table", *results.table_data())]
     res.append(("p", "Settings of each configuration:"))
     res.append(("table", *results.settings_data()))
     res.append(("images", [(plots["pareto"], "displayed-image FLIP against GPU ms")]))

@@ -191,6 +191,18 @@ class Results:
                 for c in self.curves for p in c.points]
         return cols, rows
 
+    def table_title(self) -> str:
+        """The table's title: the scene and whether the reference it is judged against converged."""
+        ref = self.reference
+        scene = self.study.get("scene", "?")
+        if ref is None:
+            return f"Error against GPU time: {scene}"
+        if ref.halves_identical or ref.converged:
+            return f"Error against GPU time: {scene}, against a converged reference ({ref.samples_per_pixel} spp)"
+        return (f"Error against GPU time: {scene}, against a reference that has NOT converged (halves predict relMSE "
+                f"{ref.noise_relmse:.2e} > {ref.settings.tolerance:.0e}): errors near its own noise do not tell "
+                f"configurations apart")
+
     def table(self) -> str:
         """The results table as markdown."""
         return markdown_table(*self.table_data())

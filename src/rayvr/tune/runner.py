@@ -23,11 +23,13 @@ class LocalRunner:
         self.before_wait = before_wait
 
     def reference(self, scene, view_set, settings, cache_dir=None, sample: int = 0, eps: float = DEFAULT_EPS,
-                  gpu=None, tick=None):
-        """rayvr.tune.reference.cached_reference: from the cache, else rendered and stored."""
+                  gpu=None, tick=None, progress=None):
+        """rayvr.tune.reference.cached_reference: from the cache, else rendered and stored; then
+        rendered on until converged or capped (`progress`: a ReferenceProgress for the extensions)."""
         from .reference import cached_reference
 
-        return cached_reference(scene, view_set, settings, cache_dir, gpu, tick, sample=sample, eps=eps)
+        return cached_reference(scene, view_set, settings, cache_dir, gpu, tick, sample=sample, eps=eps,
+                                progress=progress)
 
     def probe(self, scene, view_set, builder, options: dict, judge, **kwargs):
         """rayvr.tune.probe.probe_cost_model: (CostModel, HDR pin)."""
@@ -38,12 +40,17 @@ class LocalRunner:
     def rows(self, study, configs, reference, motion_references: dict) -> list:
         """One Row per configuration, in order (rayvr.tune.measure.Study.row): each configuration
         renders while the metric pool judges the ones before (rayvr.tune.pool)."""
-        finish = [study.row_later(c, reference, motion_references) for c in configs]
+        finish, rows = [], {}
+        for c in configs:
+            finish.append(study.row_later(c, reference, motion_references))
+            for k, f in enumerate(finish):   # rows judged by now are finished (and cached) at once
+                if k not in rows and f.ready():
+                    rows[k] = f()
         if self.before_wait is not None:
             before_wait, self.before_wait = self.before_wait, None
             with study.progress.step("wait", 0.0, "other GPU work while the images are judged"):
                 before_wait()
-        return [f() for f in finish]
+        return [rows[k] if k in rows else f() for k, f in enumerate(finish)]
 
     def curves(self, study, reference) -> list:
         """The progressive curves (rayvr.tune.measure.Study.curve), in order, rendered while the
