@@ -274,9 +274,11 @@ def views_digest(view_set) -> str:
 def reference_graph(settings: ReferenceSettings, bounces: int | None = None):
     """The reference's render graph: `settings.spp` paths per pixel per frame, each from a random
     point of its pixel (PIXEL_FILTER), accumulated."""
-    from .configs import path_traced_graph
+    from ..graphs import path_traced
 
-    return path_traced_graph(spp=settings.spp, max_bounces=bounces or settings.max_bounces, pixel_jitter=True)
+    g = path_traced(samples_per_pixel=settings.spp, max_bounces=bounces or settings.max_bounces)
+    g.update_pass("PathTracer", {"pixel_jitter": True})
+    return g
 
 
 @functools.cache
