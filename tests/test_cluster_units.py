@@ -13,7 +13,7 @@ from rayvr.cluster.progress import ProgressCounter
 from rayvr.cluster.shares import split_by_weights, split_evenly, view_range
 from rayvr.cluster.study import _cut
 from rayvr.errors import ClusterError
-from rayvr.renderer import default_views
+from rayvr.xr.cameras import default_views
 from rayvr.tune import seeds
 from test_scene_gltf import base_doc, write
 

@@ -5,8 +5,9 @@ import pytest
 
 import rayvr as rv
 from rayvr.errors import OptionError
-from rayvr.renderer import Renderer, default_views
+from rayvr.renderer import Renderer
 from rayvr.scene import builtin
+from rayvr.xr.cameras import default_views
 
 
 def test_frames_drive_the_headset_and_effects_switch_at_run_time(gpu):

@@ -209,7 +209,7 @@ def run(args) -> int:
     """`rayvr render`: validate the options and outputs, render with the hybrid graph (here, or
     over the workers of a cluster with --workers), write every image at once."""
     from ..passes.tonemap import OPERATORS
-    from ..renderer import default_views
+    from ..xr.cameras import default_views
 
     size = parse_size(args.size, views=args.views)
     if args.tonemap.lower() not in OPERATORS:

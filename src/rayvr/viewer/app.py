@@ -82,7 +82,7 @@ class Viewer:
             self.rig = self.rig.with_preset(preset, self.preset_scale)
         lo, hi = np.asarray(self.scene.bounds(), dtype=np.float64)
         self.extent = max(float(np.linalg.norm(hi - lo)), 1e-3)
-        from ..renderer import camera_pose
+        from ..xr.cameras import camera_pose
 
         self.camera = CameraRig(camera_pose(self.scene)[0], 0.5 * (lo + hi), speed=0.5 * self.extent)
         self.input = InputState()
