@@ -169,7 +169,7 @@ def test_render_with_workers_sums_the_shares_non_finite_counts(gpu, monkeypatch,
     import argparse
     import contextlib
 
-    from rayvr.cluster import cli as cluster_cli
+    from rayvr.cli import cluster as cluster_cli
     from rayvr.cluster import jobs
 
     scene = rv.scenes.quad()

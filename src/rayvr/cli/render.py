@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cluster import cli as cluster_cli
 from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
+from . import cluster as cluster_cli
 from .options import (MAX_VIEWS, add_lighting_arguments, apply_lighting, integer, load_scene_arg, number,
                       parse_size, say_nonfinite, views_count)
 

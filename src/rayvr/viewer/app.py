@@ -53,10 +53,10 @@ def resolve_graph(spec):
 
 def resolve_scene(spec):
     """A Scene, or one from a built-in name or glTF path (None: the Cornell box)."""
-    from ..cli.options import load_scene_arg
+    from ..scene.spec import load_scene_spec
 
     if spec is None or isinstance(spec, (str, Path)):
-        return load_scene_arg(None if spec is None else str(spec))
+        return load_scene_spec(None if spec is None else str(spec))
     return spec
 
 
