@@ -87,7 +87,7 @@ LAYERS = (
     ("rendergraph", "scene"),
     ("xr",),
     ("passes",),
-    ("graphs",),
+    ("graphs", "graph_options"),
     ("renderer",),
     ("check", "tune"),
     ("cluster", "viewer"),

@@ -31,24 +31,22 @@ from .view_rig import ViewRig
 BUDGET_MS = FRAME_BUDGET_MS   # 90 Hz
 HISTORY = 240             # frames of timing kept for the plots
 MAX_WINDOW = (1600, 900)  # the default window's largest size
-GRAPHS = ("hybrid", "path_traced")
 
 
 def resolve_graph(spec):
-    """A RenderGraph from a graph, None (hybrid), 'hybrid', 'path_traced', or a .json/.py file."""
-    from .. import graphs
+    """A RenderGraph from a graph, None (hybrid), a ready-made graph's name ('hybrid',
+    'path_traced': rayvr.graphs.COMMAND_LINE_GRAPHS), or a .json/.py file."""
+    from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
     from ..rendergraph.graph import RenderGraph
 
-    if spec is None or spec == "hybrid":
-        return graphs.hybrid()
     if isinstance(spec, RenderGraph):
         return spec
-    if spec == "path_traced":
-        return graphs.path_traced()
+    if spec is None or spec in COMMAND_LINE_GRAPHS:
+        return BUILDERS[spec or "hybrid"].build()
     path = Path(str(spec))
     if path.suffix.lower() in (".json", ".py"):
         return RenderGraph.load(path)
-    raise OptionError(f"--graph {spec}: use {' or '.join(GRAPHS)}, or a saved graph (.json, .py)")
+    raise OptionError(f"--graph {spec}: use {' or '.join(COMMAND_LINE_GRAPHS)}, or a saved graph (.json, .py)")
 
 
 def resolve_scene(spec):
