@@ -78,3 +78,33 @@ def test_builders_by_name_for_the_viewer_and_the_study():
     assert resolve_graph("path_traced").name == "PathTraced" and resolve_graph(None).name == "Hybrid"
     with pytest.raises(OptionError, match=r"--graph nope: use hybrid or path_traced, or a saved graph"):
         resolve_graph("nope")
+
+
+def test_the_viewer_rebuilds_a_graph_opened_by_name_with_an_option(gpu):
+    pytest.importorskip("imgui_bundle", reason="the viewer extra is not installed: pip install 'rayvr[viewer]'")
+    from rayvr.viewer.app import Viewer
+    from rayvr.viewer.offscreen import OffscreenSurface
+
+    scene = rv.scenes.cornell_box()
+    with Viewer(scene, "hybrid", views=1, size=(16, 16), surface=OffscreenSurface((32, 32), gpu)) as v:
+        v.step()
+        assert v.graph_builder == "hybrid" and "SVGF" not in v.renderer.graph.passes
+        from rayvr.viewer.panels import graph as graph_section   # its options' combos draw
+
+        v.ui.frame(v.surface.window_size, v.surface.framebuffer_size, 0.1, lambda: graph_section.draw(v, v.panels.state))
+        v.set_graph_option("denoise", "svgf")
+        v.set_graph_option("gi", "probes")
+        v.step()
+        assert v.graph_options == {"denoise": "svgf", "gi": "probes"}
+        assert {"SVGF", "Probes"} <= set(v.renderer.graph.passes) and v.renderer.graph is v.graph
+        v.set_graph_option("denoise", NONE)
+        v.step()
+        assert v.graph_options == {"gi": "probes"} and "SVGF" not in v.renderer.graph.passes
+        with pytest.raises(OptionError, match=r"graph option taa: hybrid takes gi, denoise"):
+            v.set_graph_option("taa", True)
+    given = rv.graphs.path_traced()
+    with Viewer(scene, given, views=1, size=(16, 16), surface=OffscreenSurface((32, 32), gpu)) as v:
+        assert v.graph_builder is None
+        with pytest.raises(OptionError, match=r"was given or loaded"):
+            v.set_graph_option("denoise", "svgf")
+        assert v.graph is given
