@@ -24,27 +24,38 @@ def module_name(path: Path) -> str:
     return ".".join(parts)
 
 
+def imported(node, package: str, modules) -> set[str]:
+    """What an import statement in `package` names: `from pkg import sub` counts as importing
+    the submodule when `sub` is one (and else the package)."""
+    if isinstance(node, ast.Import):
+        return {a.name for a in node.names}
+    if node.level:
+        base = package.split(".")
+        base = base[:len(base) - (node.level - 1)]
+        target = ".".join(base + ([node.module] if node.module else []))
+    else:
+        target = node.module or ""
+    subs = {f"{target}.{a.name}" for a in node.names if f"{target}.{a.name}" in modules}
+    return subs if len(subs) == len(node.names) else {target, *subs}
+
+
+def deepest_module(target: str, modules) -> str | None:
+    """'from pkg import sub' names a submodule or a symbol: the deepest existing module."""
+    while target not in modules and "." in target:
+        target = target.rpartition(".")[0]
+    return target if target in modules else None
+
+
+def package_of(path: Path, name: str) -> str:
+    return name if path.name == "__init__.py" else name.rpartition(".")[0]
+
+
 def module_level_imports(path: Path, name: str, modules) -> set[str]:
-    """The rayvr modules `path` imports at module level (not inside functions or classes):
-    `from pkg import sub` counts as importing the submodule when `sub` is one."""
+    """The rayvr modules `path` imports at module level (not inside functions or classes)."""
     tree = ast.parse(path.read_text())
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    out = set()
-    for node in tree.body:
-        if isinstance(node, ast.Import):
-            out |= {a.name for a in node.names if a.name.startswith("rayvr")}
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[:len(base) - (node.level - 1)]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
-            if not target.startswith("rayvr"):
-                continue
-            subs = [f"{target}.{a.name}" for a in node.names if f"{target}.{a.name}" in modules]
-            out |= set(subs) if len(subs) == len(node.names) else {target, *subs}
-    return out
+    package = package_of(path, name)
+    return {t for node in tree.body if isinstance(node, (ast.Import, ast.ImportFrom))
+            for t in imported(node, package, modules) if t.startswith("rayvr")}
 
 
 def test_no_module_level_import_cycle():
@@ -52,10 +63,8 @@ def test_no_module_level_import_cycle():
     g = nx.DiGraph()
     for name, path in modules.items():
         for target in module_level_imports(path, name, modules):
-            # 'from pkg import sub' names a submodule or a symbol: count the deepest existing module
-            while target not in modules and "." in target:
-                target = target.rpartition(".")[0]
-            if target in modules and target != name:
+            target = deepest_module(target, modules)
+            if target and target != name:
                 g.add_edge(name, target)
     cycles = list(nx.simple_cycles(g))
     assert not cycles, cycles[:5]
@@ -105,34 +114,19 @@ def room(module: str) -> str:
     return parts[1] if len(parts) > 1 else ""
 
 
-def deepest_module(target: str, modules) -> str | None:
-    while target not in modules and "." in target:
-        target = target.rpartition(".")[0]
-    return target if target in modules else None
-
-
 def all_imports(path: Path, name: str, modules) -> set[str]:
     """The rayvr modules `path` imports anywhere (module level, functions, classes), and those it
     names in code by a string such as "rayvr.passes" or "rayvr.passes.gbuffer.channels:glsl_source"
     (docstrings aside)."""
     tree = ast.parse(path.read_text())
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    package = package_of(path, name)
     docstrings = {id(n.body[0].value) for n in ast.walk(tree)
                   if isinstance(n, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
                   and n.body and isinstance(n.body[0], ast.Expr) and isinstance(n.body[0].value, ast.Constant)}
     targets, named = set(), set()
     for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            targets |= {a.name for a in node.names}
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[:len(base) - (node.level - 1)]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
-            subs = {f"{target}.{a.name}" for a in node.names if f"{target}.{a.name}" in modules}
-            targets |= subs if len(subs) == len(node.names) else {target, *subs}
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            targets |= imported(node, package, modules)
         elif isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings:
             if MODULE_PATH.fullmatch(node.value):
                 named.add(deepest_module(node.value.partition(":")[0], modules))
