@@ -70,7 +70,7 @@ def run(args) -> dict:
     import rayvr as rv
     import rayvr.cluster as rc
     from rayvr.cli.options import load_scene_arg, parse_size
-    from rayvr.renderer import default_views
+    from rayvr.xr.cameras import default_views
 
     quick = args.quick
     measures = list(MEASUREMENTS) if quick and args.measure == "overhead" else \

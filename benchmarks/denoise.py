@@ -96,7 +96,7 @@ def svgf_label(kernel: int | None, iterations: int | None) -> str:
 def time_rows(scene_spec: str, entries, frames: int, warmup: int, kernels=DEFAULT_KERNELS) -> list[list]:
     import rayvr as rv
     from rayvr.cli.options import load_scene_arg
-    from rayvr.renderer import default_views
+    from rayvr.xr.cameras import default_views
 
     from ._timing import wall_ms_per_frame
 

@@ -59,7 +59,8 @@ def _time(renderer, frames: int, warmup: int) -> tuple[dict, str]:
 def run(args) -> dict:
     import rayvr as rv
     from rayvr.cli.options import load_scene_arg, parse_size
-    from rayvr.renderer import Renderer, default_views
+    from rayvr.renderer import Renderer
+    from rayvr.xr.cameras import default_views
 
     quick = args.quick
     scene = load_scene_arg("cornell_box" if quick and args.scene == DEFAULT_SCENE else args.scene)

@@ -31,7 +31,7 @@ def add_arguments(parser) -> None:
 def _renderer(scene, spp: int, views: int, size, max_bounces: int):
     import rayvr as rv
     from rayvr.graphs import path_traced
-    from rayvr.renderer import default_views
+    from rayvr.xr.cameras import default_views
 
     graph = path_traced(samples_per_pixel=spp, max_bounces=max_bounces)
     return rv.Renderer(scene, graph, views=default_views(scene, views=views, size=size))

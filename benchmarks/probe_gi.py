@@ -138,7 +138,7 @@ def update_rows(scene, args, quick: bool) -> list:
 
 
 def frame_rows(scene, args, quick: bool, notes: list) -> list:
-    from rayvr.renderer import default_views
+    from rayvr.xr.cameras import default_views
 
     from ._timing import wall_ms_per_frame
 

@@ -57,8 +57,8 @@ def _flip_or_none(test, ref):
 
 def run(args) -> dict:
     from rayvr.cli.converge import parse_list
-    from rayvr.renderer import default_views
     from rayvr.tune.seeds import reference_first_frame
+    from rayvr.xr.cameras import default_views
 
     quick = args.quick
     size = (16, 16) if quick and args.size == "32x32" else parse_size(args.size)

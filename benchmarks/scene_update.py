@@ -43,8 +43,8 @@ def instanced_scene(count: int, lights: int):
 
 
 def run(args) -> dict:
-    from rayvr.renderer import default_views
     from rayvr.scene import GpuScene
+    from rayvr.xr.cameras import default_views
     from rayvr.xr.views import Pose, View, ViewSet
 
     frames = 20 if args.quick else args.frames

@@ -50,7 +50,7 @@ def _grid(n: int) -> tuple[int, int]:
 
 def run(args) -> dict:
     from rayvr.materials.effect import Effect
-    from rayvr.renderer import default_views
+    from rayvr.xr.cameras import default_views
 
     w, h = (64, 85) if args.quick and args.size == "512x683" else parse_size(args.size)
     counts = [int(v) for v in args.views.split(",")]

@@ -10,7 +10,7 @@ import argparse
 import json
 
 import rayvr as rv
-from rayvr.renderer import camera_pose
+from rayvr.xr.cameras import camera_pose
 
 
 def main() -> None:

@@ -14,7 +14,7 @@ import argparse
 import sys
 
 import rayvr as rv
-from rayvr.renderer import camera_pose
+from rayvr.xr.cameras import camera_pose
 
 
 def main() -> int:

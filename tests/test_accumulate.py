@@ -65,9 +65,9 @@ def test_sample_index_zero_restarts(gpu):
 
 
 def test_view_change_resets(gpu):
-    from rayvr.renderer import default_views
     from rayvr.scene import builtin
     from rayvr.scene.model import Camera
+    from rayvr.xr.cameras import default_views
 
     scene = builtin.quad()
     a = default_views(scene, 1, (W, H))

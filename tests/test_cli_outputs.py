@@ -13,7 +13,7 @@ import rayvr as rv
 import rayvr.renderer
 from rayvr.cli.main import main
 from rayvr.fileio import atomic_group, check_writable, write_text
-from rayvr.xr.cameras import grid_for_views
+from rayvr.xr.cameras import default_views, grid_for_views
 
 TINY = ["--size", "8x8"]
 
@@ -287,7 +287,7 @@ def test_grid_for_views_is_the_most_square_factorisation():
 
 
 def test_views_without_grid_render_a_grid_of_that_many(gpu, tmp_path, capsys):
-    views = rv.renderer.default_views(rv.scenes.cornell_box(), 48, (4, 4))
+    views = default_views(rv.scenes.cornell_box(), 48, (4, 4))
     xs = sorted({round(float(v.pose.position[0]), 9) for v in views})
     ys = sorted({round(float(v.pose.position[1]), 9) for v in views})
     assert (len(views), len(xs), len(ys)) == (48, 8, 6)

@@ -10,7 +10,7 @@ from PIL import Image
 import rayvr as rv
 import rayvr.cluster as rc
 from rayvr.cli.main import main
-from rayvr.renderer import default_views
+from rayvr.xr.cameras import default_views
 
 ray = pytest.importorskip("ray", reason="the cluster tests need Ray: pip install -e '.[test,cluster]'")
 

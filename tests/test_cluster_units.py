@@ -13,7 +13,7 @@ from rayvr.cluster.progress import ProgressCounter
 from rayvr.cluster.shares import split_by_weights, split_evenly, view_range
 from rayvr.cluster.study import _cut
 from rayvr.errors import ClusterError
-from rayvr.renderer import default_views
+from rayvr.xr.cameras import default_views
 from rayvr.tune import seeds
 from test_scene_gltf import base_doc, write
 
@@ -169,7 +169,7 @@ def test_render_with_workers_sums_the_shares_non_finite_counts(gpu, monkeypatch,
     import argparse
     import contextlib
 
-    from rayvr.cluster import cli as cluster_cli
+    from rayvr.cli import cluster as cluster_cli
     from rayvr.cluster import jobs
 
     scene = rv.scenes.quad()

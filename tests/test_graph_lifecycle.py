@@ -5,8 +5,8 @@ import pytest
 
 import rayvr as rv
 from rayvr.gpu.objects import live_gl_objects
-from rayvr.renderer import default_views
 from rayvr.scene import GpuScene, builtin
+from rayvr.xr.cameras import default_views
 
 
 def hybrid_everything():

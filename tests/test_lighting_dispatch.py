@@ -5,9 +5,10 @@ import numpy as np
 import pytest
 
 import rayvr as rv
-from rayvr.renderer import Renderer, default_views
+from rayvr.renderer import Renderer
 from rayvr.scene import builtin
 from rayvr.scene.model import Light
+from rayvr.xr.cameras import default_views
 
 OUTPUTS = ("Shadows.shadowed", "Reflections.reflection", "Composite.color")
 

@@ -5,9 +5,10 @@ import pytest
 
 import rayvr as rv
 from rayvr.materials.material import Material
-from rayvr.renderer import Renderer, default_views
+from rayvr.renderer import Renderer
 from rayvr.scene import builtin
 from rayvr.scene.model import Camera, Scene
+from rayvr.xr.cameras import default_views
 
 PINS = ("posW", "normW", "faceNormalW", "baseColor", "metalRough", "emissive", "effect", "motion")
 

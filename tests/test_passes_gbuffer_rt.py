@@ -11,7 +11,8 @@ from rayvr.materials.material import Material
 from rayvr.passes.dispatch import ray_group
 from rayvr.passes.gbuffer.auto import choose_gbuffer
 from rayvr.passes.gbuffer import GBufferRT
-from rayvr.renderer import Renderer, default_views
+from rayvr.renderer import Renderer
+from rayvr.xr.cameras import default_views
 from rayvr.scene import builtin
 from rayvr.scene.model import Camera
 

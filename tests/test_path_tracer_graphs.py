@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from rayvr.graphs import hybrid_taa, path_traced
-from rayvr.renderer import Renderer, default_views
+from rayvr.renderer import Renderer
 from rayvr.scene import builtin
 from rayvr.scene.model import Camera
+from rayvr.xr.cameras import default_views
 from rayvr.xr.views import Pose, ViewSet
 
 

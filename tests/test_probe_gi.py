@@ -231,7 +231,7 @@ def test_composite_over_view_groups_equals_one_view_a_workgroup(gpu, monkeypatch
     20x13 pixels (the second group holds two views past the last, and no side is a multiple of the
     tile) composite exactly as workgroups of one view do, each view its own image."""
     from rayvr.passes.composite.hybrid_composite import HybridComposite
-    from rayvr.renderer import default_views
+    from rayvr.xr.cameras import default_views
 
     scene = closed_box()
     images = {}

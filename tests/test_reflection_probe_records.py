@@ -8,8 +8,9 @@ import pytest
 
 import rayvr as rv
 from rayvr.passes.rt_reflections.rt_reflections import RECORD_BYTES
-from rayvr.renderer import Renderer, default_views
+from rayvr.renderer import Renderer
 from rayvr.scene import builtin
+from rayvr.xr.cameras import default_views
 
 PROBES = {"counts": [3, 3, 3], "rays_per_probe": 32, "warmup": 2}
 RECORDS = ("Reflections.probeHits", "Reflections.probeFactors")

@@ -5,8 +5,9 @@ import pytest
 
 import rayvr as rv
 from rayvr.errors import OptionError
-from rayvr.renderer import Renderer, default_views
+from rayvr.renderer import Renderer
 from rayvr.scene import builtin
+from rayvr.xr.cameras import default_views
 
 
 def test_frames_drive_the_headset_and_effects_switch_at_run_time(gpu):
@@ -62,7 +63,7 @@ def test_report_names_pruned_passes_and_the_scene(gpu):
 def test_render_rejects_views_of_another_size(gpu):
     scene = builtin.quad()
     with Renderer(scene, rv.graphs.hybrid(), views=1, size=(16, 16)) as r:
-        other = rv.renderer.default_views(scene, 1, (8, 8))
+        other = default_views(scene, 1, (8, 8))
         with pytest.raises(OptionError, match="compiled for 1 of \\(16, 16\\)"):
             r.render(other)
 

@@ -4,9 +4,9 @@ scene built at that origin, and re-anchors once the shift grows past its bound."
 import numpy as np
 
 import rayvr as rv
-from rayvr.renderer import default_views
 from rayvr.scene import GpuScene, builtin
 from rayvr.scene.gpu_frame import RECENTRE_FRACTION
+from rayvr.xr.cameras import default_views
 from rayvr.xr.views import Pose, View, ViewSet
 
 

@@ -117,7 +117,7 @@ def test_point_at_infinity_lands_on_the_same_pixel(gpu, tmp_path):
 def test_mono_and_view_zero_of_stereo_agree(gpu):
     scene = builtin.cornell_box()
     scene.materials["Floor"].effect = rv.Effect.REFLECTIONS
-    from rayvr.renderer import camera_pose
+    from rayvr.xr.cameras import camera_pose
 
     head, yfov = camera_pose(scene)
     views = stereo_views(head, IPD, FOV, FOV, SIZE)

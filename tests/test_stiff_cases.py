@@ -22,7 +22,7 @@ from rayvr.materials.material import Material
 from rayvr.renderer import Renderer
 from rayvr.scene.builtin import box, cornell_box, lambert, merge, quad_mesh
 from rayvr.scene.model import Environment, Light, Mesh, Scene
-from rayvr.xr.cameras import look_at, stereo_views
+from rayvr.xr.cameras import default_views, look_at, stereo_views
 from rayvr.xr.views import Fov, View, ViewSet
 
 SIZE = 24
@@ -414,11 +414,11 @@ def test_a_scene_without_light_or_without_albedo_is_exactly_black(gpu, index):
     """Nothing emits, or nothing reflects: exactly 0 everywhere, in every pass, no NaN from the
     0 / 0 of an empty light table or a black BSDF's lobe probabilities."""
     what, s = black_scenes()[index]
-    images = {"path tracer": render(s, path_traced(spp=2, bounces=4), rv.renderer.default_views(s, 2, (16, 16)),
+    images = {"path tracer": render(s, path_traced(spp=2, bounces=4), default_views(s, 2, (16, 16)),
                                     PT, frames=2)}
     for effect in EFFECTS:
         images[effect.name] = render(set_effect(s, effect), hybrid(max_bounces=2, gi=None),
-                                     rv.renderer.default_views(s, 2, (16, 16)), HYBRID, frames=2)
+                                     default_views(s, 2, (16, 16)), HYBRID, frames=2)
     for name, img in images.items():
         assert (sane(img, f"{what}, {name}") == 0).all(), f"{what}, {name}: max {img.max()}"
 
@@ -524,7 +524,7 @@ def test_the_image_scales_linearly_with_the_emitters_strength(gpu):
     the light samples' pdfs and the MIS weights do not depend on the scale, so with the same random
     numbers the path tracer's rgba32f image is the unit image times the strength, to float32
     rounding; the hybrid's float16 composite saturates at 65504 for the blinding one, never Inf."""
-    views = rv.renderer.default_views(cornell_box(), 2, (16, 16))
+    views = default_views(cornell_box(), 2, (16, 16))
     images = {}
     for strength in (17.0, 1e-8, 1e9):
         s = cornell_box()
@@ -580,7 +580,7 @@ def test_extreme_near_and_far_planes_render_the_moderate_image(gpu, gbuffer):
     for near, far in ((0.05, 100.0), (1e-4, 1e6)):
         s = set_effect(cornell_box(), rv.Effect.REFLECTIONS)
         s.cameras[0].znear, s.cameras[0].zfar = near, far
-        views = rv.renderer.default_views(s, 2, (SIZE, SIZE))
+        views = default_views(s, 2, (SIZE, SIZE))
         images.append(sane(render(s, hybrid(gbuffer=gbuffer), views, HYBRID), f"near {near}, far {far}"))
     ref, got = images
     same = np.all(np.abs(got - ref) <= HALF_RTOL * np.maximum(ref, 1e-3), axis=-1)
@@ -703,7 +703,7 @@ def test_degenerate_triangles_change_nothing(gpu):
                     [-0.1, 0.1, 0.0], [0.0, 0.2, 0.0], [0.1, 0.3, 0.0],         # collinear
                     [0.0, 0.0, 0.0], [1e-12, 0.0, 0.0], [0.0, 1e-12, 0.0],      # 1e-12 m
                     [-0.2, 0.3, 0.2], [0.0, 0.3, 0.2], [-0.2, 0.3 + 1e-12, 0.2]], np.float32)   # needle
-    views = rv.renderer.default_views(cornell_box(), 2, (16, 16))
+    views = default_views(cornell_box(), 2, (16, 16))
     images = {}
     for degenerate in (False, True):
         s = set_effect(cornell_box(), rv.Effect.REFLECTIONS)
@@ -730,7 +730,7 @@ def test_a_tenth_of_a_millimetre_and_a_ten_kilometre_cornell_box_render_the_unit
     views = {}
     for k in (1.0, scale):
         s = set_effect(transformed_cornell(k), rv.Effect.REFLECTIONS)
-        v = rv.renderer.default_views(s, 1, (16, 16))   # mono: a stereo pair's IPD would not scale
+        v = default_views(s, 1, (16, 16))   # mono: a stereo pair's IPD would not scale
         views[k] = (sane(render(s, hybrid(gbuffer=gbuffer), v, HYBRID), f"hybrid at {k}"),
                     sane(render(s, path_traced(spp=2, bounces=3), v, PT), f"path tracer at {k}"))
     for got, ref, what in zip(views[scale], views[1.0], ("hybrid", "path tracer")):
@@ -749,7 +749,7 @@ def test_a_stereo_pair_far_from_the_origin_renders_the_image_at_the_origin(gpu, 
     images = {}
     for where in ((0.0, 0.0, 0.0), offset):
         s = set_effect(transformed_cornell(1.0, where), rv.Effect.REFLECTIONS)
-        v = rv.renderer.default_views(s, 2, (16, 16))
+        v = default_views(s, 2, (16, 16))
         images[where] = [sane(render(s, hybrid(gbuffer=g), v, HYBRID), f"{g} at {where}") for g in ("raster", "rt")]
         images[where].append(sane(render(s, path_traced(spp=2, bounces=3), v, PT), f"path tracer at {where}"))
     for got, ref, what in zip(images[offset], images[(0.0, 0.0, 0.0)], ("raster", "rt", "path tracer")):

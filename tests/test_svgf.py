@@ -11,10 +11,11 @@ import pytest
 import rayvr as rv
 from rayvr.errors import OptionError
 from rayvr.passes import SVGF
-from rayvr.renderer import Renderer, default_views
+from rayvr.renderer import Renderer
 from rayvr.scene import builtin
 from rayvr.scene.model import Camera, Light
 from rayvr.xr import quaternion
+from rayvr.xr.cameras import default_views
 from rayvr.xr.views import Pose, ViewSet
 
 SIZE = (32, 32)

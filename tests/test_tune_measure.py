@@ -10,7 +10,7 @@ import pytest
 import rayvr as rv
 from rayvr import Effect
 from rayvr.errors import OptionError
-from rayvr.renderer import default_views
+from rayvr.xr.cameras import default_views
 from rayvr.tune import Config, Display, Motion, ReferenceSettings, StudySettings, measure
 from rayvr.tune import metrics as M
 from rayvr.tune.display import to_uint8

@@ -8,7 +8,7 @@ import pytest
 
 import rayvr as rv
 from rayvr import Effect
-from rayvr.renderer import default_views
+from rayvr.xr.cameras import default_views
 from rayvr.tune import Config, Display, Motion, ReferenceSettings, StudySettings, measure
 from rayvr.tune.metrics import METRICS
 from rayvr.tune.pool import MetricPool

@@ -9,7 +9,7 @@ import pytest
 import rayvr as rv
 from rayvr import Effect
 from rayvr.errors import OptionError
-from rayvr.renderer import default_views
+from rayvr.xr.cameras import default_views
 from rayvr.tune import Config, Display, ReferenceSettings, bias_floor, render_reference
 from rayvr.tune import metrics as M
 from rayvr.tune import reference as R

@@ -19,6 +19,7 @@ from rayvr.viewer.input import InputEvent, InputState
 from rayvr.viewer.script import InputScript, ScriptAction
 from rayvr.viewer.view_rig import ViewRig
 from rayvr.xr.camera_path import CameraPath
+from rayvr.xr.cameras import default_views
 from rayvr.xr.views import Pose
 
 KEYS = {"W", "A", "S", "D", "E", "Q", "H", "LEFT_SHIFT", "F12", "SPACE"}
@@ -104,7 +105,7 @@ def test_rig_switches_modes_without_moving_and_resets():
 def test_rig_from_scene_matches_rayvr_render_views_and_stereo_ipd():
     scene = rv.scenes.cornell_box()
     rig = ViewRig.from_scene(scene, 2, (96, 64), ipd=0.07)
-    base = rv.renderer.default_views(scene, 1, (96, 64))[0]
+    base = default_views(scene, 1, (96, 64))[0]
     assert rig.fov_left == base.fov and (rig.near, rig.far) == (base.near, base.far)
     head = Pose([0.1, 0.2, 0.3], orientation(0.4, 0.1))
     views = rig.view_set(head)
@@ -240,7 +241,7 @@ def test_camera_path_round_trip_is_a_pose_log(tmp_path):
     assert back.times[3] > back.times[2]
     log = rv.xr.PoseLog(tmp_path / "p.json")    # SimulatedHeadset can play it in time
     np.testing.assert_allclose(log.pose_at(0.1).position, [1, 0, 0])
-    base = rv.renderer.default_views(rv.scenes.cornell_box(), 2, (32, 32))
+    base = default_views(rv.scenes.cornell_box(), 2, (32, 32))
     views = back.view_set(1, base)
     np.testing.assert_allclose(np.linalg.norm(views[1].pose.position - views[0].pose.position), 0.07)
     assert views[0].near == 0.1 and views[1].fov == back.fov_right
@@ -266,7 +267,7 @@ def test_render_camera_path_options_fail_in_one_line(tmp_path, capsys):
 
 def test_render_replays_a_camera_path_frame_per_pose(gpu, tmp_path, capsys):
     scene = rv.scenes.cornell_box()
-    base = rv.renderer.default_views(scene, 1, (16, 16))
+    base = default_views(scene, 1, (16, 16))
     path = CameraPath()
     for i in range(3):
         path.append(i / 90, Pose(base[0].pose.position + [0.0, 0.0, -0.1 * i], base[0].pose.orientation))

@@ -253,7 +253,7 @@ def test_stereo_side_by_side_and_screenshot_option(display, tmp_path):
     assert img.shape == (64, 128, 3)
     scene = rv.scenes.cornell_box()
     rig = ViewRig.from_scene(scene, 2, (64, 64))
-    from rayvr.renderer import camera_pose
+    from rayvr.xr.cameras import camera_pose
 
     views = rig.view_set(camera_pose(scene)[0])
     for eye, view in enumerate(views):

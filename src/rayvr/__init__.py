@@ -15,8 +15,12 @@ import importlib
 from .errors import (ClusterError, GpuError, GraphError, OptionError, OutputError, RayvrError, SceneError, SceneWarning,
                      ShaderError, ViewerError, XrError)
 from .materials.effect import Effect
+from .rendergraph.registry import add_pass_source
 
 __version__ = "0.1.0"
+
+# rayvr's own passes register when a graph first names one it has not seen (a JSON graph, create_pass)
+add_pass_source("rayvr.passes")
 
 _LAZY = {
     # name: (module, attribute or None for the module itself)

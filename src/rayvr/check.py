@@ -139,7 +139,8 @@ def run_check(scene, size=(32, 32), views: int = 2, frames: int = 2, gpu=None, p
     were. `progress`: a tqdm bar over the configurations."""
     from tqdm import tqdm
 
-    from .renderer import Renderer, default_views
+    from .renderer import Renderer
+    from .xr.cameras import default_views
 
     view_set = default_views(scene, views, size)
     saved = [m.effect for m in scene.materials]

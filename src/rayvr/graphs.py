@@ -19,14 +19,16 @@
     G-buffer) ─> ToneMap; offline work, the `oidn` extra.
 
 Passes that no material needs are pruned at compile time (see the compile report).
+`BUILDERS` names these builders with the options each takes (rayvr.graph_options: the choices of
+`gi=` and `denoise=`, what each needs, which fit a frame budget).
 """
 from __future__ import annotations
 
 from .errors import OptionError
+from .graph_options import DENOISE, GI, GraphBuilder
 from .rendergraph.graph import RenderGraph
 
 OUTPUT = "ToneMap.dst"        # display-referred rgba8, sRGB encoded
-GI_MODES = ("probes",)        # hybrid(gi=...): indirect light for RASTER, SHADOWS and REFLECTIONS materials
 HDR_OUTPUT = "Composite.color"  # linear radiance (rgba16f), for EXR
 PT_OUTPUT = "ToneMap.dst"          # path_traced(): display-referred rgba8, sRGB encoded
 PT_HDR_OUTPUT = "Accumulate.dst"   # path_traced(): linear radiance, mean over the accumulated frames (rgba32f)
@@ -34,19 +36,16 @@ TAA_HDR_OUTPUT = "TAA.dst"         # hybrid_taa() and denoise="svgf": anti-alias
 DENOISED_OUTPUT = "Denoise.dst"    # denoise="oidn": the denoised linear radiance (rgba32f)
 # A graph's linear-radiance output: the first of these it marks (hdr_output()).
 HDR_OUTPUTS = (DENOISED_OUTPUT, TAA_HDR_OUTPUT, HDR_OUTPUT, PT_HDR_OUTPUT)
-DENOISERS = ("svgf", "oidn")
 
 
 def denoiser(denoise) -> str | None:
-    """`denoise` checked: None (or 'none'), 'svgf' or 'oidn' (which needs pyoidn, the oidn extra)."""
+    """`denoise` checked: None (or 'none') or one of DENOISE's values, what it needs installed
+    ('oidn' needs pyoidn, the oidn extra)."""
     if denoise is None or denoise == "none":
         return None
-    if denoise not in DENOISERS:
-        raise OptionError(f"denoise={denoise!r}: use None ('none'), 'svgf' or 'oidn'")
-    if denoise == "oidn":
-        from .passes.oidn import require_pyoidn
-
-        require_pyoidn()
+    if denoise not in DENOISE.values:
+        raise OptionError(f"denoise={denoise!r}: use None ('none'), {DENOISE.either()}")
+    DENOISE[denoise].require(f"denoise={denoise!r}")
     return denoise
 
 
@@ -111,8 +110,8 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     from .passes.gbuffer import channels, reflection_cutoff
     from .passes.probe_gi import inputs as probe_inputs
 
-    if gi not in (None, "none", *GI_MODES):
-        raise OptionError(f"hybrid(gi={gi!r}): unknown global illumination; use one of {', '.join(GI_MODES)} "
+    if gi not in (None, "none", *GI.values):
+        raise OptionError(f"hybrid(gi={gi!r}): unknown global illumination; use one of {', '.join(GI.values)} "
                           f"or None")
     if probes and gi != "probes":
         raise OptionError("hybrid(probes=...): probe settings need gi='probes'")
@@ -217,3 +216,13 @@ def hybrid_taa(alpha: float = 0.1, sigma: float = 1.0, name: str = "HybridTAA", 
     g.add_edge("TAA.dst", reader)
     g.mark_output(TAA_HDR_OUTPUT)
     return g
+
+
+# The ready-made graphs by name, with the options each takes (rayvr.graph_options).
+BUILDERS = {b.name: b for b in (
+    GraphBuilder("hybrid", hybrid, (GI, DENOISE), "per-material effects; default"),
+    GraphBuilder("hybrid_taa", hybrid_taa, (GI, DENOISE), "hybrid with TAA before tone mapping", command_line=False,
+                 extends=hybrid),
+    GraphBuilder("path_traced", path_traced, (DENOISE,), "every pixel, accumulated: reference renders"),
+)}
+COMMAND_LINE_GRAPHS = tuple(name for name, b in BUILDERS.items() if b.command_line)   # --graph NAME

@@ -12,15 +12,16 @@ dispatches. It recompiles the graph only when the set of effects the materials u
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 
 from .errors import OptionError, RayvrError
+from .xr.cameras import (  # default_views: also rayvr.renderer's, as the README uses it
+    camera_pose,
+    default_views,
+)
 from .xr.jitter import halton_jitter
-from .xr.views import HEADER_BYTES, VIEW_STRUCT_FLOATS, Fov, Pose, View, ViewSet
-
-DEFAULT_IPD = 0.063   # metres; the adult mean (Dodgson 2004)
+from .xr.views import HEADER_BYTES, VIEW_STRUCT_FLOATS, ViewSet
 
 
 @dataclasses.dataclass
@@ -31,64 +32,6 @@ class Frame:
     views: ViewSet
     materials: object
     request: object = None
-
-
-def camera_pose(scene) -> tuple[Pose, float]:
-    """The scene's first camera (pose, vertical fov in radians), or one framing its bounds."""
-    from .xr import quaternion
-
-    cams = getattr(scene, "cameras", None) or []
-    if cams:
-        cam = cams[0]
-        m = np.asarray(cam.transform, dtype=np.float64)
-        rot = m[:3, :3] / np.linalg.norm(m[:3, :3], axis=0)
-        return Pose(m[:3, 3].copy(), quaternion.from_matrix(rot)), float(cam.yfov)
-    from .xr.cameras import look_at
-
-    lo, hi = np.asarray(scene.bounds(), dtype=np.float64)
-    centre = 0.5 * (lo + hi)
-    radius = max(float(np.linalg.norm(hi - lo)) * 0.5, 1e-3)
-    yfov = math.radians(45.0)
-    eye = centre + np.array([0.0, 0.0, radius / math.tan(yfov / 2) * 1.1])
-    return look_at(eye, centre), yfov
-
-
-def scene_frustum(scene, size) -> tuple[Pose, Fov, float, float, float]:
-    """(pose, fov, near, far, focal distance) of the scene's camera at `size` pixels: what
-    `default_views` and light-field quilts build their views from. The focal distance is the
-    scene's centre as seen from the camera (light-field frusta converge there)."""
-    w, h = int(size[0]), int(size[1])
-    if w <= 0 or h <= 0:
-        raise OptionError(f"size: {w}x{h} is not a positive pixel size; use e.g. 256x256")
-    pose, yfov = camera_pose(scene)
-    cam = (getattr(scene, "cameras", None) or [None])[0]
-    near = getattr(cam, "znear", 0.05) or 0.05
-    far = getattr(cam, "zfar", 1000.0) or 1000.0
-    lo, hi = np.asarray(scene.bounds(), dtype=np.float64)
-    focal = max(float(np.linalg.norm(0.5 * (lo + hi) - pose.position)), near * 2)
-    return pose, Fov.symmetric(math.degrees(yfov), w / h), near, far, focal
-
-
-def default_views(scene, views: int = 1, size=(256, 256), ipd: float = DEFAULT_IPD,
-                  grid: tuple[int, int] | None = None) -> ViewSet:
-    """Views from the scene's camera: 1 = mono, 2 = stereo (IPD apart), N = a camera grid
-    (`grid` cols x rows, default the most square one of N views (`grid_for_views`), spacing ipd,
-    frusta converging on the scene's centre)."""
-    from .xr.cameras import camera_grid, grid_for_views, stereo_views
-
-    pose, fov, near, far, focal = scene_frustum(scene, size)
-    w, h = int(size[0]), int(size[1])
-    if views == 1 and grid is None:
-        return ViewSet([View(pose, fov, w, h, near, far)])
-    if views == 2 and grid is None:
-        return stereo_views(pose, ipd, fov, fov, (w, h), near, far)
-    if grid is None:
-        grid = grid_for_views(views)
-    if grid[0] * grid[1] != views:
-        raise OptionError(f"--grid {grid[0]}x{grid[1]} has {grid[0] * grid[1]} views but --views is {views}; "
-                          f"make cols x rows equal the view count")
-    return camera_grid(grid[0], grid[1], ipd, fov, (w, h), center_pose=pose, focal_distance=focal,
-                       near=near, far=far)
 
 
 class Renderer:

@@ -32,7 +32,7 @@ MAX_EXPOSURE = 64.0
 
 def add_study_arguments(p: argparse.ArgumentParser) -> None:
     """The options `rayvr converge` and `rayvr tune` share (numbers checked as they are parsed)."""
-    from ..cluster import cli as cluster_cli
+    from . import cluster as cluster_cli
 
     frames = integer("--frames", 1, MAX_FRAMES)
     p.add_argument("scene", nargs="?", help="glTF file or built-in scene name (default: the Cornell box)")
@@ -237,7 +237,7 @@ class StudyPlan:
 
 
 def run(args) -> int:
-    from ..cluster.cli import study_runner
+    from .cluster import study_runner
     from ..gpu import get_context
     from ..tune import measure, write_report
     from .options import load_scene_arg

@@ -27,16 +27,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cluster import cli as cluster_cli
 from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
+from ..graph_options import DENOISE, GI, NONE
+from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
+from . import cluster as cluster_cli
 from .options import (MAX_VIEWS, add_lighting_arguments, apply_lighting, integer, load_scene_arg, number,
                       parse_size, say_nonfinite, views_count)
 
 LAYOUTS = ("per-view", "side-by-side")
-GRAPHS = ("hybrid", "path_traced")
 PT_SPP_PER_FRAME = 8   # the most paths per pixel one path-traced frame traces
-DENOISE_CHOICES = ("none", "svgf", "oidn")
 OUT_SUFFIXES = (".png", ".jpg", ".jpeg", ".exr")
 MAX_IPD_M = 1.0   # metres: eyes are 0.05-0.08 apart; a light-field grid's spacing stays below a metre
 MAX_PROBES_PER_AXIS = 32   # 32^3 probes keep their atlases (three copies) near 300 MiB
@@ -77,9 +77,8 @@ def register(sub) -> None:
     p.add_argument("--multiview", default="auto", choices=("auto", "on", "off"), help="G-buffer multiview")
     p.add_argument("--gbuffer", default="auto", choices=("auto", "raster", "rt"),
                    help="G-buffer: raster, ray-traced, or auto (ray-traced on GPUs with weak raster units)")
-    p.add_argument("--graph", default="hybrid", choices=GRAPHS,
-                   help="hybrid (per-material effects; default) or path_traced (every pixel, accumulated: "
-                        "reference renders)")
+    p.add_argument("--graph", default="hybrid", choices=COMMAND_LINE_GRAPHS,
+                   help=" or ".join(f"{name} ({BUILDERS[name].help})" for name in COMMAND_LINE_GRAPHS))
     p.add_argument("--spp", type=integer("--spp", 1, 1 << 20),
                    help="path_traced: samples per pixel accumulated in all (default: --frames x 1); hybrid: "
                         "paths per frame for PATH_TRACED materials (default 1)")
@@ -88,12 +87,8 @@ def register(sub) -> None:
                         "light, so B = 1 is direct light only; Mitsuba 3's max_depth is B + 1, Tauray's "
                         "'2 bounces + NEE' is B = 3 (default: 8 path_traced, 4 hybrid)")
     add_lighting_arguments(p)
-    p.add_argument("--denoise", default="none", choices=DENOISE_CHOICES,
-                   help="none; svgf (SVGF + TAA over the frames, real time); oidn (Intel Open Image Denoise on "
-                        "the last frame, offline: needs rayvr[oidn]); default none")
-    p.add_argument("--gi", default="none", choices=("none", "probes"),
-                   help="indirect light for RASTER, SHADOWS and REFLECTIONS materials: none, or 'probes' "
-                        "(irradiance probes ray traced once per frame for all views)")
+    for option in (DENOISE, GI):
+        p.add_argument(f"--{option.name}", default=NONE, choices=option.cli_choices, help=option.cli_help)
     p.add_argument("--probes", metavar="XxYxZ", help="with --gi probes: probes per axis over the scene's bounds "
                                                      "(default 8x8x8)")
     p.add_argument("--probe-rays", type=integer("--probe-rays", 16, 1024), help="with --gi probes: rays per probe "
@@ -209,7 +204,7 @@ def run(args) -> int:
     """`rayvr render`: validate the options and outputs, render with the hybrid graph (here, or
     over the workers of a cluster with --workers), write every image at once."""
     from ..passes.tonemap import OPERATORS
-    from ..renderer import default_views
+    from ..xr.cameras import default_views
 
     size = parse_size(args.size, views=args.views)
     if args.tonemap.lower() not in OPERATORS:
@@ -245,10 +240,10 @@ def run(args) -> int:
     if args.graph == "path_traced" and args.spp is not None and args.frames != 1:
         raise OptionError(f"--spp {args.spp} and --frames {args.frames}: path_traced accumulates --spp samples "
                           f"over as many frames as it needs; give one of them")
-    if args.denoise == "oidn":
-        from ..passes.oidn import require_pyoidn
-
-        require_pyoidn("--denoise oidn")
+    for option in (DENOISE, GI):   # what a choice needs (pyoidn for --denoise oidn), before the scene loads
+        value = getattr(args, option.name)
+        if value != NONE:
+            option[value].require(f"--{option.name} {value}")
     scene = load_scene_arg(args.scene)
     apply_effects(scene, args.effect)
     apply_lighting(scene, args)

@@ -40,11 +40,11 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..cluster.cli import study_runner
     from ..gpu import get_context
     from ..materials.effect import Effect
     from ..tune import make_views, write_report
     from ..tune.tuner import tuned_study
+    from .cluster import study_runner
     from .options import load_scene_arg
 
     levels = parse_list(args.levels, "--levels", lambda s: Effect.parse(s, where="--levels"))

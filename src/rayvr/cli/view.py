@@ -78,12 +78,12 @@ def run(args) -> int:
         script = InputScript.load(args.script, key_names(glfw).values())
     require_display()
 
-    from ..viewer.app import Viewer, resolve_graph, resolve_scene
+    from ..viewer.app import Viewer, builder_name, resolve_graph, resolve_scene
     from ..viewer.assignment import apply_assignment, load_assignment
     from .render import apply_effects
 
     scene = resolve_scene(args.scene)
-    graph = resolve_graph(args.graph)
+    graph = args.graph if builder_name(args.graph) else resolve_graph(args.graph)   # by name: its options in the panel
     apply_effects(scene, args.effect)
     if args.assignment:
         apply_assignment(scene, load_assignment(args.assignment, scene))

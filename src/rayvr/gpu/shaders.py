@@ -2,14 +2,16 @@
 
 Includes are resolved against the including file's folder, then the package's shared GLSL folder
 (`rayvr/glsl`), then the `rayvr` package root, so a pass writes `#include "ray_query.glsl"`.
-A few includes are generated from Python tables (`GENERATED_INCLUDES`: the G-buffer channels), so
-the GLSL that reads a table can never drift from it.
+A few includes are generated from Python tables (the G-buffer channels), so the GLSL that reads
+a table can never drift from it: the table's module registers its include (`register_include`)
+when it is imported.
 Each file gets a GLSL source-string number through `#line`, which the error parser maps back
 to its path. Programs are cached per (sources, defines): a pass built twice compiles once.
 """
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 import moderngl
@@ -46,16 +48,18 @@ class ShaderSource:
         return _ERR_LOC.sub(sub, log)
 
 
-# include name -> "module:function" returning its GLSL text (imported on first use)
-GENERATED_INCLUDES = {"gbuffer_channels.glsl": "rayvr.passes.gbuffer.channels:glsl_source"}
+# include name -> the function returning its GLSL text
+GENERATED_INCLUDES: dict[str, Callable[[], str]] = {}
 GENERATED_DIR = Path("<generated>")
 
 
-def _generated_text(path: Path) -> str:
-    import importlib
+def register_include(name: str, source: Callable[[], str]) -> None:
+    """Make `#include "name"` expand to `source()`, the GLSL generated from a Python table."""
+    GENERATED_INCLUDES[name] = source
 
-    module, _, func = GENERATED_INCLUDES[path.name].partition(":")
-    return getattr(importlib.import_module(module), func)()
+
+def _generated_text(path: Path) -> str:
+    return GENERATED_INCLUDES[path.name]()
 
 
 def _resolve(name: str, including_dir: Path, search: list[Path]) -> Path:

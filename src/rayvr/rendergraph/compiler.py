@@ -27,7 +27,7 @@ import networkx as nx
 
 from ..errors import GraphError, did_you_mean
 from .formats import get_format
-from .graph import Edge, split_pin
+from .graph_data import Edge, split_pin
 from .render_pass import CompileData, Pin, PinDirection, PinKind, Reflection
 
 DEFAULT_FORMAT = "rgba32f"   # an output pin that declares no format

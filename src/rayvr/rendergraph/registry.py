@@ -12,10 +12,9 @@ import importlib
 from ..errors import GraphError, did_you_mean
 
 _REGISTRY: dict[str, type] = {}
-
-# Packages whose import registers passes (rayvr.passes imports its subpackage basic); imported
-# on the first look-up that misses.
-PASS_PACKAGES = ["rayvr.passes"]
+# Modules whose import registers passes, imported on the first look-up that misses (rayvr's own
+# package adds its passes here: see rayvr/__init__.py).
+_SOURCES: list[str] = []
 
 
 def register_pass(cls: type) -> type:
@@ -28,8 +27,15 @@ def register_pass(cls: type) -> type:
     return cls
 
 
+def add_pass_source(module: str) -> None:
+    """Name a module whose import registers passes (a plugin's package); it is imported when a
+    look-up first misses, so a saved graph names its pass types without importing them."""
+    if module not in _SOURCES:
+        _SOURCES.append(module)
+
+
 def _import_pass_packages() -> None:
-    for name in PASS_PACKAGES:
+    for name in _SOURCES:
         importlib.import_module(name)
 
 

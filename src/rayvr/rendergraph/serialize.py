@@ -10,6 +10,7 @@ from pathlib import Path
 
 from ..errors import GraphError, RayvrError
 from ..fileio import write_text
+from .graph_data import GraphData
 from .registry import get_pass_class
 
 JSON_FORMAT = "rayvr.rendergraph"
@@ -44,10 +45,8 @@ def _field(obj: dict, key: str, kind, where: str, default=None):
     return value
 
 
-def graph_from_dict(data: dict, where: str = "graph"):
-    """Build a graph from `graph_to_dict()` output; errors name `where` and the field."""
-    from .graph import RenderGraph
-
+def graph_from_dict(data: dict, graph_type: type[GraphData], where: str = "graph"):
+    """A `graph_type` built from `graph_to_dict()` output; errors name `where` and the field."""
     if not isinstance(data, dict):
         raise GraphError(f"{where}: expected a JSON object with 'name', 'passes', 'edges', 'outputs'")
     if data.get("format", JSON_FORMAT) != JSON_FORMAT:
@@ -55,7 +54,7 @@ def graph_from_dict(data: dict, where: str = "graph"):
     version = data.get("version", JSON_VERSION)
     if version != JSON_VERSION:
         raise GraphError(f"{where}.version: {version!r} is not supported (this rayvr reads {JSON_VERSION})")
-    g = RenderGraph(_field(data, "name", str, where))
+    g = graph_type(_field(data, "name", str, where))
     for i, entry in enumerate(_field(data, "passes", list, where)):
         at = f"{where}.passes[{i}]"
         if not isinstance(entry, dict):
@@ -91,14 +90,12 @@ def graph_from_dict(data: dict, where: str = "graph"):
 
 
 def _pass_expr(cls: type) -> tuple[str, str | None]:
-    """How the script names a pass class: rv.passes.X when exported there, else an import."""
-    try:
-        import rayvr.passes as exported
-
-        if getattr(exported, cls.__name__, None) is cls:
-            return f"rv.passes.{cls.__name__}", None
-    except ImportError:
-        pass
+    """How the script names a pass class: rv.<package>.X when a package of rayvr exports it
+    (rv.passes.X for rayvr's own passes), else an import from its package or module."""
+    parts = cls.__module__.split(".")
+    top = ".".join(parts[:2])   # rayvr.<package>
+    if len(parts) > 2 and parts[0] == "rayvr" and getattr(sys.modules.get(top), cls.__name__, None) is cls:
+        return f"rv.{parts[1]}.{cls.__name__}", None
     package = cls.__module__.rpartition(".")[0]
     module = package if getattr(sys.modules.get(package), cls.__name__, None) is cls else cls.__module__
     return cls.__name__, f"from {module} import {cls.__name__}"
@@ -138,10 +135,8 @@ def save_graph(graph, path) -> Path:
     return path
 
 
-def load_graph(path):
-    """A graph from a .py script (executed) or a .json file (not executed)."""
-    from .graph import RenderGraph
-
+def load_graph(path, graph_type: type[GraphData]):
+    """A `graph_type` from a .json file (not executed), or the one a .py script (executed) makes."""
     path = Path(path)
     if not path.is_file():
         raise GraphError(f"load('{path}'): file not found; give a saved graph (.py or .json)")
@@ -151,7 +146,7 @@ def load_graph(path):
             data = json.loads(path.read_text())
         except json.JSONDecodeError as exc:
             raise GraphError(f"{path}: not valid JSON at line {exc.lineno} column {exc.colno}: {exc.msg}") from None
-        return graph_from_dict(data, where=str(path))
+        return graph_from_dict(data, graph_type, where=str(path))
     if suffix != ".py":
         raise GraphError(f"load('{path}'): unknown suffix '{path.suffix}'; use .py (script) or .json")
     try:
@@ -162,13 +157,13 @@ def load_graph(path):
         lines = [f.lineno for f in traceback.extract_tb(sys.exc_info()[2]) if Path(f.filename) == path]
         at = f":{lines[-1]}" if lines else ""
         raise GraphError(f"{path}{at}: the graph script failed: {type(exc).__name__}: {exc}") from exc
-    graphs = list({id(v): v for v in namespace.values() if isinstance(v, RenderGraph)}.values())
+    graphs = list({id(v): v for v in namespace.values() if isinstance(v, graph_type)}.values())
     if len(graphs) == 1:
         return graphs[0]
     makers = [v for k, v in namespace.items() if k.startswith("render_graph_") and callable(v)]
     if len(makers) == 1:
         graph = makers[0]()
-        if isinstance(graph, RenderGraph):
+        if isinstance(graph, graph_type):
             return graph
     found = ", ".join(g.name for g in graphs) or "none"
     raise GraphError(f"{path}: expected one RenderGraph (or one render_graph_<Name>() function) in the "

@@ -6,8 +6,8 @@ defaults with the configuration's options over them, so every row of a report sa
 The PATH_TRACED levels default to the reference's bounces, so that they converge to it.
 
 A denoiser or probe GI is one more option of the graph builder (`denoise=`, `gi=`); the standard
-set includes those rows only when `rv.graphs.hybrid`/`path_traced` accept the option and build
-with it, so they appear once the reconstruction and probe issues add them.
+set includes a row for each value rayvr.graph_options lists for an option the builder takes
+(rayvr.graphs.BUILDERS), those whose extra is installed.
 
 Configurations from a file (`load_configs`): JSON, a list or {"configs": [...]} of
     {"name": "mirror floor", "effects": {"*": "shadows", "Floor": "reflections"},
@@ -26,14 +26,12 @@ import numpy as np
 
 from ..fileio import read_json
 from ..errors import OptionError, did_you_mean
-from ..graphs import HDR_OUTPUTS  # noqa: F401  (the HDR pins the error is measured on, in order of preference)
+from ..graph_options import DENOISE, GI
+from ..graphs import BUILDERS, HDR_OUTPUTS
 from ..materials.effect import Effect
 from .reference import ReferenceSettings
 
 DEFAULT_BOUNCES = ReferenceSettings.max_bounces
-DENOISERS = ("svgf", "oidn")
-REALTIME_DENOISERS = ("svgf",)   # those that fit a frame budget (the hybrid levels get these)
-GI_MODES = ("probes",)
 
 
 def hybrid_graph(spp: int = 1, max_bounces: int = 1, path_bounces: int = DEFAULT_BOUNCES, light_samples: int = 1,
@@ -72,24 +70,14 @@ def path_traced_graph(spp: int = 1, max_bounces: int = DEFAULT_BOUNCES, pixel_ji
 GRAPHS = {"hybrid": hybrid_graph, "hybrid_taa": hybrid_taa_graph, "path_traced": path_traced_graph}
 
 
-def _underlying(builder):
-    """The rv.graphs function a study builder wraps (its **kw go there)."""
-    from .. import graphs
-
-    return {hybrid_graph: graphs.hybrid, hybrid_taa_graph: graphs.hybrid, path_traced_graph: graphs.path_traced}.get(
-        builder)
-
-
 def builder_defaults(builder) -> dict:
-    """Every keyword the builder takes and its default: its own, then those of the rv.graphs
-    function it wraps."""
-    out = {}
-    for fn in (_underlying(builder), builder):
-        if fn is None:
-            continue
-        for name, p in inspect.signature(fn).parameters.items():
-            if p.default is not inspect.Parameter.empty:
-                out[name] = p.default
+    """Every keyword the builder takes and its default: its own, over those of the ready-made
+    graph it wraps (rayvr.graphs.BUILDERS, by its name in GRAPHS)."""
+    name = next((k for k, v in GRAPHS.items() if v is builder), None)
+    out = BUILDERS[name].defaults() if name else {}
+    for key, p in inspect.signature(builder).parameters.items():
+        if p.default is not inspect.Parameter.empty:
+            out[key] = p.default
     return out
 
 
@@ -245,23 +233,15 @@ def reflective_material(scene, choice: str = "auto") -> str:
     return names[int(area.argmax())]
 
 
-def _builds(builder, **options) -> bool:
-    """Whether `builder(**options)` makes a graph (a denoiser value it does not know: no)."""
-    try:
-        builder(**options)
-        return True
-    except (TypeError, ValueError, OptionError):
-        return False
-
-
 def available_denoisers(builder=hybrid_graph) -> list[str]:
-    """The DENOISERS `builder` accepts as `denoise=` (none before the reconstruction issue)."""
-    return [d for d in DENOISERS if accepts(builder, "denoise") and _builds(builder, denoise=d)]
+    """The denoisers (rayvr.graph_options.DENOISE) whose extra is installed, if `builder` takes
+    `denoise=`."""
+    return list(DENOISE.available_values()) if accepts(builder, "denoise") else []
 
 
 def available_gi(builder=hybrid_graph) -> list[str]:
-    """The GI_MODES `builder` accepts as `gi=` (none before the probe issue)."""
-    return [m for m in GI_MODES if accepts(builder, "gi") and _builds(builder, gi=m)]
+    """The GI modes (rayvr.graph_options.GI) whose extra is installed, if `builder` takes `gi=`."""
+    return list(GI.available_values()) if accepts(builder, "gi") else []
 
 
 def standard_configs(scene, reference: ReferenceSettings | None = None, reflect: str = "auto", spp=(1, 4, 16),
@@ -291,7 +271,7 @@ def standard_configs(scene, reference: ReferenceSettings | None = None, reflect:
         configs += [Config(f"{name} + {d.upper()}", Effect.PATH_TRACED, options={**o, "denoise": d})
                     for name, o in traced]
     if denoised_levels:   # the hybrid's one-sample light through SVGF (OIDN is offline: no frame budget)
-        for d in (d for d in available_denoisers() if d in REALTIME_DENOISERS):
+        for d in (d for d in available_denoisers() if DENOISE[d].realtime):
             for gi in [None, *available_gi()]:
                 extra = {"denoise": d, **(_gi(gi, probes) if gi else {})}
                 configs += [Config(f"{name}{f' + {gi} GI' if gi else ''} + {d.upper()}", effects,

@@ -106,7 +106,7 @@ def default_warmup_s(gpu) -> float:
 
 def make_views(scene, views=2, size=(256, 256)):
     """A ViewSet: `views` as given, or that many views from the scene's camera at `size`."""
-    from ..renderer import default_views
+    from ..xr.cameras import default_views
     from ..xr.views import ViewSet
 
     if isinstance(views, ViewSet):

@@ -7,6 +7,7 @@ material's effect (rayvr.tune.budget.choose_effects, which needs no GPU), check 
 from __future__ import annotations
 
 from ..errors import OptionError
+from ..graph_options import OPTIONS, realtime_option_sets
 from ..materials.effect import Effect
 from .budget import FRAME_BUDGET_MS, TuneResult, back_off, choose_among, choose_effects
 from .configs import accepts, hybrid_graph, set_effects
@@ -21,9 +22,9 @@ from .timing import make_views
 # probe GI lights RASTER, SHADOWS and REFLECTIONS materials indirectly; SVGF denoises the one-sample
 # light of every lit pixel (hybrid) or path (path_traced); both together were the least error per ms of
 # the four on tauray (H200, 2x720x800: FLIP 0.225 in 1.79 ms against 0.318 in 1.29 with probe GI alone).
-OPTION_SETS = ({}, {"gi": "probes"}, {"denoise": "svgf"}, {"gi": "probes", "denoise": "svgf"})
+OPTION_SETS = tuple(realtime_option_sets())   # none, each real-time value alone, all together
 # The keys of a study's configurations that tuned_study tries (OIDN, offline, never: it is no GPU time).
-TUNED_OPTIONS = ("gi", "denoise")
+TUNED_OPTIONS = tuple(o.name for o in OPTIONS)
 
 
 def option_sets_for(builder, options: dict, option_sets=None) -> list[dict]:
@@ -150,7 +151,8 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
     options = {"path_bounces": reference.settings.max_bounces}
     if option_sets is None:
         option_sets = [{}] + [{k: v for k, v in c.options.items() if k in TUNED_OPTIONS}
-                              for c in configs if c.builder is hybrid_graph and c.options.get("denoise") != "oidn"]
+                              for c in configs if c.builder is hybrid_graph
+                              and all(o.is_realtime(c.options.get(o.name)) for o in OPTIONS)]
     # a local probe's error maps are made by worker processes while it renders (as the study's)
     workers = settings.workers_for(view_set) if isinstance(runner, LocalRunner) else 0
     with MetricPool(workers) as pool:

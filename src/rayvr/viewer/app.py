@@ -31,32 +31,39 @@ from .view_rig import ViewRig
 BUDGET_MS = FRAME_BUDGET_MS   # 90 Hz
 HISTORY = 240             # frames of timing kept for the plots
 MAX_WINDOW = (1600, 900)  # the default window's largest size
-GRAPHS = ("hybrid", "path_traced")
 
 
 def resolve_graph(spec):
-    """A RenderGraph from a graph, None (hybrid), 'hybrid', 'path_traced', or a .json/.py file."""
-    from .. import graphs
+    """A RenderGraph from a graph, None (hybrid), a ready-made graph's name ('hybrid',
+    'path_traced': rayvr.graphs.COMMAND_LINE_GRAPHS), or a .json/.py file."""
+    from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
     from ..rendergraph.graph import RenderGraph
 
-    if spec is None or spec == "hybrid":
-        return graphs.hybrid()
     if isinstance(spec, RenderGraph):
         return spec
-    if spec == "path_traced":
-        return graphs.path_traced()
+    if spec is None or spec in COMMAND_LINE_GRAPHS:
+        return BUILDERS[spec or "hybrid"].build()
     path = Path(str(spec))
     if path.suffix.lower() in (".json", ".py"):
         return RenderGraph.load(path)
-    raise OptionError(f"--graph {spec}: use {' or '.join(GRAPHS)}, or a saved graph (.json, .py)")
+    raise OptionError(f"--graph {spec}: use {' or '.join(COMMAND_LINE_GRAPHS)}, or a saved graph (.json, .py)")
+
+
+def builder_name(spec) -> str | None:
+    """The ready-made graph `spec` names (None: 'hybrid'), or None for a given or saved graph."""
+    from ..graphs import COMMAND_LINE_GRAPHS
+
+    if spec is None:
+        return "hybrid"
+    return spec if isinstance(spec, str) and spec in COMMAND_LINE_GRAPHS else None
 
 
 def resolve_scene(spec):
     """A Scene, or one from a built-in name or glTF path (None: the Cornell box)."""
-    from ..cli.options import load_scene_arg
+    from ..scene.spec import load_scene_spec
 
     if spec is None or isinstance(spec, (str, Path)):
-        return load_scene_arg(None if spec is None else str(spec))
+        return load_scene_spec(None if spec is None else str(spec))
     return spec
 
 
@@ -76,13 +83,15 @@ class Viewer:
                  script=None, dt: float | None = None, on_frame=None, ipd: float | None = None):
         self.scene = resolve_scene(scene)
         self.graph = resolve_graph(graph)
+        self.graph_builder = builder_name(graph)   # rayvr.graphs.BUILDERS' name, when opened by one
+        self.graph_options: dict = {}              # its options set in the viewer (rayvr.graph_options)
         self.rig = ViewRig.from_scene(self.scene, views, size, ipd=ipd)
         self.preset_scale = float(preset_scale)   # a preset's panel size times this
         if preset:
             self.rig = self.rig.with_preset(preset, self.preset_scale)
         lo, hi = np.asarray(self.scene.bounds(), dtype=np.float64)
         self.extent = max(float(np.linalg.norm(hi - lo)), 1e-3)
-        from ..renderer import camera_pose
+        from ..xr.cameras import camera_pose
 
         self.camera = CameraRig(camera_pose(self.scene)[0], 0.5 * (lo + hi), speed=0.5 * self.extent)
         self.input = InputState()
@@ -202,6 +211,25 @@ class Viewer:
         """Set one property of a pass (graph.update_pass); the graph recompiles before the next frame."""
         self.graph.update_pass(pass_name, {key: value})
         self._pending_recompile = True
+
+    def set_graph_option(self, option: str, value) -> None:
+        """Build the ready-made graph again with `option` = `value` (rayvr.graph_options; None or
+        'none': off) and the options set before; a new Renderer compiles it before the next frame
+        (pass properties edited since go with the old graph). A graph given or loaded has none."""
+        from ..graph_options import NONE
+        from ..graphs import BUILDERS
+
+        if self.graph_builder is None:
+            raise OptionError(f"graph option {option}: graph '{self.graph.name}' was given or loaded, not built by "
+                              f"name; edit its passes' properties instead")
+        builder = BUILDERS[self.graph_builder]
+        if not builder.takes(option):
+            raise OptionError(f"graph option {option}: {builder.name} takes "
+                              f"{', '.join(o.name for o in builder.options)}")
+        options = {k: v for k, v in {**self.graph_options, option: value}.items() if v not in (None, NONE)}
+        self.graph = builder.build(**options)
+        self.graph_options = options
+        self._pending_rebuild = True
 
     def set_effect(self, material: str, effect) -> None:
         """Change a material's effect (the Renderer recompiles when the set of effects changes)."""

@@ -30,7 +30,7 @@ class ViewRig:
     @classmethod
     def from_scene(cls, scene, views: int, size, ipd: float | None = None) -> "ViewRig":
         """The scene camera's fov and clip planes (as `rayvr render` uses them) at `size` per view."""
-        from ..renderer import DEFAULT_IPD, default_views
+        from ..xr.cameras import DEFAULT_IPD, default_views
 
         if views not in (1, 2):
             raise OptionError(f"--views {views}: the viewer shows 1 (mono) or 2 (stereo) views")

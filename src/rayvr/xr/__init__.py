@@ -3,7 +3,8 @@
 `OpenXRSink` loads on first use, so rayvr imports and renders without pyopenxr installed.
 """
 from .camera_path import CameraPath
-from .cameras import camera_grid, eye_poses, grid_for_views, lightfield_row, look_at, mono_view, stereo_views
+from .cameras import (DEFAULT_IPD, camera_grid, camera_pose, default_views, eye_poses, grid_for_views, lightfield_row,
+                      look_at, mono_view, scene_frustum, stereo_views)
 from .compositor import Compositor
 from .presets import PRESETS, HeadsetPreset, get_preset
 from .quilt import LOOKING_GLASS, QuiltLayout, compose_quilt, read_quilt, write_quilt_png
@@ -15,6 +16,7 @@ from .views import Fov, Pose, View, ViewSet, projection
 
 __all__ = ["Fov", "Pose", "View", "ViewSet", "projection",
            "look_at", "eye_poses", "mono_view", "stereo_views", "camera_grid", "grid_for_views", "lightfield_row",
+           "camera_pose", "scene_frustum", "default_views", "DEFAULT_IPD",
            "Sink", "FrameRequest", "OffscreenViews", "SimulatedHeadset", "Compositor",
            "PRESETS", "HeadsetPreset", "get_preset", "Trajectory", "PoseLog", "make_trajectory", "CameraPath",
            "compose_quilt", "read_quilt", "write_quilt_png", "QuiltLayout", "LOOKING_GLASS",

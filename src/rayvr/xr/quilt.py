@@ -77,8 +77,7 @@ def quilt_views(scene, cols: int, rows: int, size, view_cone_deg: float = 40.0, 
     """The cols * rows views of a quilt from the scene's camera: one horizontal row of sheared
     cameras (`lightfield_row`), view 0 leftmost, spanning `view_cone_deg` as seen from the focal
     plane at `focus` metres (default: the scene's centre, where `default_views` converges)."""
-    from ..renderer import scene_frustum
-    from .cameras import lightfield_row
+    from .cameras import lightfield_row, scene_frustum
 
     pose, fov, near, far, focal = scene_frustum(scene, size)
     return lightfield_row(cols * rows, view_cone_deg, focus or focal, fov, size, center_pose=pose,

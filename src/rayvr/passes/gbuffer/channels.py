@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from ...gpu.shaders import register_include
 from ...rendergraph.formats import get_format
 
 
@@ -132,3 +133,6 @@ def glsl_source() -> str:
     lines += [f"    gbuf_frag_{c.name} = t.{c.name};" for c in CHANNELS]
     lines += ["}", "#endif", ""]
     return "\n".join(lines)
+
+
+register_include("gbuffer_channels.glsl", glsl_source)

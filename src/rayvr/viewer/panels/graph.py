@@ -1,13 +1,25 @@
-"""Graph section: the passes in execution order with their GPU ms, what was pruned and why, and
-memory (allocated with lifetime aliasing, and without), from the compile report."""
+"""Graph section: a ready-made graph's options (their real-time values), the passes in execution
+order with their GPU ms, what was pruned and why, and memory (allocated with lifetime aliasing,
+and without), from the compile report."""
 from __future__ import annotations
 
+from ...graph_options import NONE
+from ...graphs import BUILDERS
 from ...rendergraph.report import human_bytes
+from .guard import guarded
 
 
 def draw(v, state) -> None:
     from imgui_bundle import imgui
 
+    if v.graph_builder is not None:
+        for option in BUILDERS[v.graph_builder].options:
+            values = [NONE, *option.realtime_values()]   # a live view: no offline denoiser
+            current = v.graph_options.get(option.name, NONE)
+            imgui.set_next_item_width(140)
+            changed, index = imgui.combo(option.name, values.index(current) if current in values else 0, values)
+            if changed:
+                guarded(v, v.set_graph_option, option.name, values[index])
     report = v.renderer.report()
     profile = v.profile
     w, h = report.size

@@ -6,13 +6,13 @@ from __future__ import annotations
 import collections
 import contextlib
 
+from .options import integer, say_nonfinite
+
 MAX_WORKERS = 1024
 
 
 def add_arguments(parser) -> None:
     """Add --workers and --address to a subcommand's parser."""
-    from ..cli.options import integer
-
     group = parser.add_argument_group("cluster (needs the cluster extra: pip install 'rayvr[cluster]')")
     group.add_argument("--workers", type=integer("--workers", 1, MAX_WORKERS), metavar="N",
                        help="split the work over N Ray workers, one GPU each (llvmpipe without GPUs)")
@@ -27,10 +27,10 @@ def requested(args) -> bool:
 
 def open_cluster(args):
     """The Cluster the options ask for (ClusterError with the install hint without Ray)."""
-    from .ray_support import require_ray
+    from ..cluster.ray_support import require_ray
 
     require_ray("--workers" if args.workers is not None else "--address")
-    from .pool import Cluster
+    from ..cluster.pool import Cluster
 
     return Cluster(args.workers, args.address)
 
@@ -40,10 +40,10 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
     frames; linear radiance gathered and tone mapped here (auto exposure sees every view).
     Returns (pixels (views, h, w, c) rows top-down, the quilt's pixels when `grid` is given, else
     None) and prints what ran where; rayvr render writes them (all or nothing)."""
+    from ..cluster.gather import tone_map
+    from ..cluster.jobs import render_views
+    from ..cluster.payload import ScenePayload, effects_of
     from ..graphs import hdr_output
-    from .gather import tone_map
-    from .jobs import render_views
-    from .payload import ScenePayload, effects_of
 
     payload = ScenePayload.of(spec, effects_of(scene))
     pin = hdr_output(graph)   # the denoiser's, with --denoise
@@ -59,8 +59,6 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
               f"{share['worker']}")
     if getattr(args, "report", False):
         print("--report: each worker compiles its own graph; run without --workers for the compile report")
-    from ..cli.options import say_nonfinite
-
     nonfinite = collections.Counter()   # every share's passes, summed by pass
     for share in result.shares:
         nonfinite.update(share.get("nonfinite", {}))
@@ -96,8 +94,8 @@ def study_runner(args, spec, scene, progress: bool = True):
 
         yield LocalRunner()
         return
-    from .payload import ScenePayload, effects_of
-    from .study import StudyRunner
+    from ..cluster.payload import ScenePayload, effects_of
+    from ..cluster.study import StudyRunner
 
     payload = ScenePayload.of(spec, effects_of(scene))
     with open_cluster(args) as cluster:
