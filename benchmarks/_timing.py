@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import time
 
-from rayvr.tune.timing import GPU_WARM_UP_S
-from rayvr.tune.timing import warm_up as measure_warm_up
+from rayvr.study.timing import GPU_WARM_UP_S
+from rayvr.study.timing import warm_up as measure_warm_up
 
 
 def wall_ms_per_frame(renderer, frames: int, warmup: int) -> float:
@@ -28,7 +28,7 @@ WARM_UP_S = GPU_WARM_UP_S   # an idle H100 clocks at ~345 MHz and needs a moment
 
 
 def warm_up(renderer, seconds: float = WARM_UP_S) -> None:
-    """rayvr.tune.timing.warm_up for the benchmarks' WARM_UP_S."""
+    """rayvr.study.timing.warm_up for the benchmarks' WARM_UP_S."""
     measure_warm_up(renderer, seconds)
 
 

@@ -172,7 +172,7 @@ def _oidn_cuda_ms(size, views: int, repeats: int = 10) -> str:
 
 def _svgf_builder(kernel: int, iterations: int | None):
     """The study's hybrid graph builder with SVGF's kernel (and iterations) set."""
-    from rayvr.tune.configs import hybrid_graph
+    from rayvr.study.configs import hybrid_graph
 
     def build(**options):
         g = hybrid_graph(**options)
@@ -185,7 +185,7 @@ def _svgf_builder(kernel: int, iterations: int | None):
 
 def error_configs(oidn: bool, kernels=DEFAULT_KERNELS):
     from rayvr import Effect
-    from rayvr.tune import Config
+    from rayvr.study import Config
 
     configs = [Config(f"PATH_TRACED {n} spp", Effect.PATH_TRACED, options={"spp": n}) for n in (1, 4, 16)]
     configs += [Config(f"PATH_TRACED 1 spp + {svgf_label(k, i)}", Effect.PATH_TRACED,
@@ -199,9 +199,9 @@ def error_configs(oidn: bool, kernels=DEFAULT_KERNELS):
 
 def error_rows(scene_spec: str, args, f: dict, quick: bool, kernels=DEFAULT_KERNELS) -> tuple[list[list], list[str]]:
     from rayvr.cli.options import load_scene_arg, parse_size
-    from rayvr.tune import Motion, ReferenceSettings, StudySettings, cached_reference, make_views, measure
-    from rayvr.tune.configs import available_denoisers
-    from rayvr.tune.timing import GPU_WARM_UP_S
+    from rayvr.study import Motion, ReferenceSettings, StudySettings, cached_reference, make_views, measure
+    from rayvr.study.configs import available_denoisers
+    from rayvr.study.timing import GPU_WARM_UP_S
     from rayvr.xr.presets import get_preset
 
     scene = load_scene_arg(scene_spec)

@@ -7,12 +7,12 @@ denoiser or probe GI where the graphs have them) and the tuned assignment for ea
 (11.1 and 5.5 ms), each with its GPU ms, its error as mean ± std over frames and views, in
 motion, and its bias floor. One table row per (scene, configuration); the full report of each
 scene (report.md, report.html, results.json, plots, images) goes to OUT/error_vs_time_<scene>/.
-`--quick`: the Cornell box alone at llvmpipe's study sizes (those of rayvr.tune.defaults: 2 x
+`--quick`: the Cornell box alone at llvmpipe's study sizes (those of rayvr.study.defaults: 2 x
 32x32, a 64 x 16 spp reference), for a smoke run on llvmpipe; options given still win.
 `--figures device`: the full size with the reduced figures of DEVICE, which fit both scenes into
 one 10-minute call on the lent H200 (tools/gpu-bench study); the notes say which figures ran.
 The images are judged by `--metric-workers` processes (default os.cpu_count() - 2 at this size)
-while the GPU renders on (rayvr.tune.pool): the same numbers as judged one after the other.
+while the GPU renders on (rayvr.study.pool): the same numbers as judged one after the other.
 """
 from __future__ import annotations
 
@@ -68,12 +68,12 @@ def add_arguments(parser) -> None:
 def run(args) -> dict:
     from rayvr.cli.converge import parse_list
     from rayvr.cli.options import load_scene_arg, parse_size
-    from rayvr.tune import Motion, ReferenceSettings, StudySettings, cached_reference, make_views, standard_configs
-    from rayvr.tune import write_report
-    from rayvr.tune.report import slug
-    from rayvr.tune.results import effects_text
-    from rayvr.tune.timing import GPU_WARM_UP_S
-    from rayvr.tune.runner import LocalRunner
+    from rayvr.study import Motion, ReferenceSettings, StudySettings, cached_reference, make_views, standard_configs
+    from rayvr.study import write_report
+    from rayvr.study.report import slug
+    from rayvr.study.results import effects_text
+    from rayvr.study.timing import GPU_WARM_UP_S
+    from rayvr.study.runner import LocalRunner
     from rayvr.tune.tuner import tuned_study
     from rayvr.xr.presets import get_preset
 
@@ -147,8 +147,8 @@ def prefetch_references(scene, views: int, size, ref_settings, motion, cache_dir
     """Render `scene`'s references (the static view's and one per judged trajectory frame) into
     the cache, as the study would (same views, seeds and settings), so that they are rendered
     while the GPU would otherwise wait for the previous scene's metrics."""
-    from rayvr.tune import cached_reference, make_views
-    from rayvr.tune.motion import trajectory_views
+    from rayvr.study import cached_reference, make_views
+    from rayvr.study.motion import trajectory_views
     from rayvr.xr.views import ViewSet
 
     view_set = make_views(scene, views, size)

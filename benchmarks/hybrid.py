@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rayvr.tune.timing import timed_frames
+from rayvr.study.timing import timed_frames
 
 from ._timing import warm_up
 

@@ -10,7 +10,7 @@ also gets the relMSE of one frame against an N-frame mean at the highest spp, an
 from __future__ import annotations
 
 from rayvr.cli.options import load_scene_arg, parse_size
-from rayvr.tune.metrics import rel_mse
+from rayvr.study.metrics import rel_mse
 
 from ._timing import wall_ms_per_frame
 

@@ -7,7 +7,7 @@ what they buy.
   the next at the default hysteresis;
 - frame: full hybrid frames, SHADOWS with REFLECTIONS on one material, with and without GI, at
   2 x 1440x1600 and 64 x 512x683, and one view of the 64 views' pixels with GI (views overhead);
-- error: the error study (rayvr.tune.measure, a converged reference) of all SHADOWS and SHADOWS +
+- error: the error study (rayvr.study.measure, a converged reference) of all SHADOWS and SHADOWS +
   REFLECTIONS with and without probe GI, and PATH_TRACED 1 spp.
 
 Scenes: tauray/test.glb (bounced light mostly) and the Cornell box. Targets (H200): update <= 1 ms
@@ -77,7 +77,7 @@ def _graph(gi: bool, **probes):
 
 def _effects(scene, mirror: bool = True) -> None:
     from rayvr.materials.effect import Effect
-    from rayvr.tune.configs import reflective_material
+    from rayvr.study.configs import reflective_material
 
     for m in scene.materials:
         m.effect = Effect.SHADOWS
@@ -187,8 +187,8 @@ def frame_rows(scene, args, quick: bool, notes: list) -> list:
 def error_rows(scene, args, quick: bool, notes: list) -> list:
     import rayvr as rv
     from rayvr.materials.effect import Effect
-    from rayvr.tune import Config, ReferenceSettings, StudySettings
-    from rayvr.tune.configs import reflective_material
+    from rayvr.study import Config, ReferenceSettings, StudySettings
+    from rayvr.study.configs import reflective_material
 
     ref = ReferenceSettings(64 if quick else 256, 16)
     opts = {"path_bounces": ref.max_bounces}
@@ -202,7 +202,7 @@ def error_rows(scene, args, quick: bool, notes: list) -> list:
     settings = StudySettings(frames=2 if quick else 4, timing_frames=3 if quick else 50, warmup=1 if quick else 10,
                              warmup_s=0.0 if quick else None, motion=None, floors=False, progressive_frames=0)
     size = (32, 32) if quick else (1440, 1600)
-    results = rv.tune.measure(scene, configs, views=2, size=size, reference=ref, settings=settings,
+    results = rv.study.measure(scene, configs, views=2, size=size, reference=ref, settings=settings,
                               cache_dir=args.cache, progress=not quick, curves=False)
     by_name = {r.name: r for r in results.rows}
     rows = []

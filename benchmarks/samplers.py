@@ -6,7 +6,7 @@ For each sampler and each spp in --spp, --seeds renders of ONE frame of that man
 pixel (a Sobol sequence's first spp points; each seed its own 2^16-frame range, so its own
 scrambles and streams), each against a converged reference (--reference-frames frames of
 --reference-spp paths, half rendered with each sampler, from the error study's reference frame
-range): relMSE (rayvr.tune.metrics.rel_mse, eps 1e-2) and HDR-FLIP of the linear radiance, mean
+range): relMSE (rayvr.study.metrics.rel_mse, eps 1e-2) and HDR-FLIP of the linear radiance, mean
 and std over the seeds, and the ratio PCG / Sobol of the mean relMSE (> 1: Sobol is better).
 The reference's own relMSE (its two halves against each other, divided by 4: the error of
 their mean) bounds what the table can resolve. The error at equal spp does not depend on the
@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from rayvr.cli.options import load_scene_arg, parse_size
-from rayvr.tune.metrics import flip, rel_mse
+from rayvr.study.metrics import flip, rel_mse
 
 from ._study import stat_cell
 
@@ -57,7 +57,7 @@ def _flip_or_none(test, ref):
 
 def run(args) -> dict:
     from rayvr.cli.converge import parse_list
-    from rayvr.tune.seeds import reference_first_frame
+    from rayvr.study.seeds import reference_first_frame
     from rayvr.xr.cameras import default_views
 
     quick = args.quick

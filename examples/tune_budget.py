@@ -45,7 +45,7 @@ def main() -> None:
         configs = rv.tune.standard_configs(scene, settings) + [
             rv.tune.Config("tuned", dict(tuned.assignment), options={"path_bounces": settings.max_bounces})]
         study = rv.tune.StudySettings(frames=3, timing_frames=args.frames)
-        results = rv.tune.measure(scene, configs, views=2, size=size, reference=settings, settings=study)
+        results = rv.study.measure(scene, configs, views=2, size=size, reference=settings, settings=study)
         print(results.table())
         print(f"wrote {rv.tune.write_report(results, args.report, budget_ms=args.budget_ms)}")
 

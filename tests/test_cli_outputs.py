@@ -244,7 +244,7 @@ def _interrupt(*args, **kwargs):
 @pytest.mark.parametrize("target", ["render", "write", "rename", "tune", "graph", "graph png", "check"])
 def test_ctrl_c_is_one_line_exit_130_and_leaves_nothing(gpu, tmp_path, capsys, monkeypatch, target):
     import rayvr.check
-    import rayvr.tune.probe
+    import rayvr.tune.cost_probe
     from rayvr.rendergraph.graph import RenderGraph
 
     graph = tmp_path / "in" / "g.json"
@@ -258,7 +258,7 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_nothing(gpu, tmp_path, capsys, m
     elif target == "rename":
         _fail_on(monkeypatch, os, "replace", 2, KeyboardInterrupt())
     elif target == "tune":
-        monkeypatch.setattr(rayvr.tune.probe, "probe_cost_model", _interrupt)
+        monkeypatch.setattr(rayvr.tune.cost_probe, "probe_cost_model", _interrupt)
         argv = ["tune", *TINY, "--quiet", "--report", str(out / "report"), "--no-cache"]   # Ctrl-C in the probe
     elif target == "graph":
         monkeypatch.setattr(RenderGraph, "compile", _interrupt)

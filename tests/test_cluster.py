@@ -75,7 +75,7 @@ def test_reference_split_by_samples_is_one_process_paths_and_reruns_identically(
     # the study's halves and checks: the same frames as one process, so the same verdict
     assert np.allclose(ref.half_a, one.half_a, rtol=1e-5, atol=1e-6)
     assert np.allclose(ref.half_b, one.half_b, rtol=1e-4, atol=1e-5)
-    assert ref.first_frame == one.first_frame == rv.tune.seeds.reference_first_frame()
+    assert ref.first_frame == one.first_frame == rv.study.seeds.reference_first_frame()
     assert ref.noise_relmse == pytest.approx(one.noise_relmse, rel=1e-3)
     assert ref.bounce_change == pytest.approx(one.bounce_change, rel=1e-3, abs=1e-6) and ref.bounce_change > 0
     assert ref.verdict() == one.verdict()
@@ -146,7 +146,7 @@ def test_error_study_split_by_configuration_matches_one_process(cluster, gpu, tm
                                      motion=rv.tune.Motion(frames=2, samples=1), progressive_frames=2)
     kw = {"reference": ref, "views": views, "settings": settings}
     split = rc.measure(scene, configs, cluster=cluster, progress=False, cache_dir=tmp_path / "split", **kw)
-    here = rv.tune.measure(scene, configs, progress=False, gpu=gpu, cache_dir=tmp_path / "here", **kw)
+    here = rv.study.measure(scene, configs, progress=False, gpu=gpu, cache_dir=tmp_path / "here", **kw)
     assert [r.name for r in split.rows] == [c.name for c in configs]
 
     def stats(errors):

@@ -14,7 +14,7 @@ from rayvr.cluster.shares import split_by_weights, split_evenly, view_range
 from rayvr.cluster.study import _cut
 from rayvr.errors import ClusterError
 from rayvr.xr.cameras import default_views
-from rayvr.tune import seeds
+from rayvr.study import seeds
 from test_scene_gltf import base_doc, write
 
 
@@ -122,7 +122,7 @@ def test_worker_views_and_samples_in_this_process_equal_a_renderer(gpu):
         whole = r.read_output("Composite.color", flip_y=True)
     assert np.array_equal(got["pixels"]["Composite.color"], whole[1:3])
     assert "Shadows" in got["nonfinite"] and not any(got["nonfinite"].values())   # each share's own counts
-    pt = rv.tune.reference.reference_graph(rv.tune.ReferenceSettings(4, 1, 2))   # the reference's own graph
+    pt = rv.study.reference.reference_graph(rv.tune.ReferenceSettings(4, 1, 2))   # the reference's own graph
     two = default_views(scene, 1, (16, 16))
     start = seeds.reference_first_frame()                     # the study's reference seeds
     first = worker.run("samples", (payload.key, [payload]), None, graph=pt.to_dict(), views=two, first_frame=start,

@@ -84,11 +84,11 @@ def test_denoise_oidn_without_pyoidn_is_one_line_and_exit_2(gpu, tmp_path, capsy
     assert "\n" not in line and "--denoise oidn" in line and "pip install 'rayvr[oidn]'" in line
     with pytest.raises(OptionError, match=r"rayvr\[oidn\]"):
         rv.graphs.path_traced(denoise="oidn")
-    assert rv.tune.configs.available_denoisers() == ["svgf"]   # the study leaves OIDN's rows out
+    assert rv.study.configs.available_denoisers() == ["svgf"]   # the study leaves OIDN's rows out
 
 
 def test_the_error_study_gets_denoiser_rows(gpu):
-    from rayvr.tune.configs import available_denoisers, path_traced_graph
+    from rayvr.study.configs import available_denoisers, path_traced_graph
 
     assert available_denoisers() == ["svgf", "oidn"] and available_denoisers(path_traced_graph) == ["svgf", "oidn"]
     scene = builtin.cornell_box()
@@ -103,7 +103,7 @@ def test_the_error_study_gets_denoiser_rows(gpu):
     settings = rv.tune.StudySettings(frames=2, timing_frames=1, warmup=0, motion=None, floors=False,
                                      progressive_frames=0)
     reference = rv.tune.ReferenceSettings(frames=4, spp=2, max_bounces=2)
-    res = rv.tune.measure(scene, [svgf, oidn], views=1, size=(12, 12), reference=reference, settings=settings,
+    res = rv.study.measure(scene, [svgf, oidn], views=1, size=(12, 12), reference=reference, settings=settings,
                           cache_dir=False, progress=False, gpu=gpu)
     for config in (svgf, oidn):
         row = res[config.name]
@@ -170,7 +170,7 @@ def test_the_error_study_gets_the_hybrid_levels_through_svgf_with_and_without_pr
     settings = rv.tune.StudySettings(frames=2, timing_frames=1, warmup=0, motion=None, floors=False,
                                      progressive_frames=0)
     reference = rv.tune.ReferenceSettings(frames=4, spp=2, max_bounces=2)
-    res = rv.tune.measure(scene, [both, configs["all SHADOWS + probes GI"]], views=1, size=(12, 12),
+    res = rv.study.measure(scene, [both, configs["all SHADOWS + probes GI"]], views=1, size=(12, 12),
                           reference=reference, settings=settings, cache_dir=False, progress=False, gpu=gpu)
     denoised, raw = res["all SHADOWS + probes GI + SVGF"], res["all SHADOWS + probes GI"]
     assert denoised.gpu_ms > 0 and np.isfinite(denoised.errors["relmse"]["mean"])

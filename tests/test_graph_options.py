@@ -38,7 +38,7 @@ def test_the_command_line_reads_the_table():
 
 
 def test_a_new_denoiser_is_one_entry(extra_denoiser):
-    from rayvr.tune.configs import available_denoisers, path_traced_graph
+    from rayvr.study.configs import available_denoisers, path_traced_graph
 
     assert extra_denoiser in render_options()["denoise"].choices
     assert rv.graphs.denoiser(extra_denoiser) == extra_denoiser
@@ -51,7 +51,7 @@ def test_a_new_denoiser_is_one_entry(extra_denoiser):
 
 
 def test_the_tuner_tries_the_real_time_values_and_the_study_those_installed(monkeypatch):
-    from rayvr.tune.configs import available_denoisers, available_gi, hybrid_graph
+    from rayvr.study.configs import available_denoisers, available_gi, hybrid_graph
     from rayvr.tune.tuner import OPTION_SETS, TUNED_OPTIONS, option_sets_for
 
     sets = [{}, {"gi": "probes"}, {"denoise": "svgf"}, {"gi": "probes", "denoise": "svgf"}]
@@ -68,7 +68,7 @@ def test_the_tuner_tries_the_real_time_values_and_the_study_those_installed(monk
 
 
 def test_builders_by_name_for_the_viewer_and_the_study():
-    from rayvr.tune.configs import GRAPHS, accepts, hybrid_taa_graph
+    from rayvr.study.configs import GRAPHS, accepts, hybrid_taa_graph
     from rayvr.viewer.app import resolve_graph
 
     assert list(BUILDERS) == list(GRAPHS) == ["hybrid", "hybrid_taa", "path_traced"]

@@ -98,13 +98,14 @@ LAYERS = (
     ("passes",),
     ("graphs", "graph_options"),
     ("renderer",),
-    ("check", "tune"),
+    ("check", "study"),
+    ("tune",),
     ("cluster", "viewer"),
     ("cli", "__main__"),
 )
 FLOOR = {room: i for i, rooms in enumerate(LAYERS) for room in rooms}
 # Packages whose modules may not import each other in a circle, even inside functions.
-CIRCLE_FREE = ("rendergraph", "tune", "passes", "gpu", "scene", "xr", "cluster", "viewer", "cli", "materials")
+CIRCLE_FREE = ("rendergraph", "study", "tune", "passes", "gpu", "scene", "xr", "cluster", "viewer", "cli", "materials")
 MODULE_PATH = re.compile(r"rayvr(\.[A-Za-z_]\w*)+(:\w+)?")
 
 
@@ -146,9 +147,7 @@ def import_graph() -> tuple[nx.DiGraph, dict]:
     return g, modules
 
 
-@pytest.mark.parametrize("package", [pytest.param(p, marks=pytest.mark.xfail(strict=True, reason="the study's "
-                                                                             "configs <-> reference circle"))
-                                     if p == "tune" else p for p in CIRCLE_FREE])
+@pytest.mark.parametrize("package", CIRCLE_FREE)
 def test_no_import_circle_in_a_package_even_inside_functions(package):
     g, _ = import_graph()
     inside = g.subgraph([m for m in g if room(m) == package])

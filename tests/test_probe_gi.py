@@ -428,7 +428,7 @@ def test_cli_render_with_probes(tmp_path, capsys):
 
 
 def test_error_study_has_probe_rows():
-    from rayvr.tune import configs
+    from rayvr.study import configs
 
     assert configs.available_gi() == ["probes"]
     scene = rv.scenes.cornell_box()
@@ -449,7 +449,7 @@ def test_untraced_glossy_light_comes_from_the_probes(gpu, roughness):
     # the lobe's dominant direction from the probes (at roughness 1 the normal's irradiance, the
     # lookup's shortcut): near what a path tracer finds, where diffuse GI alone (a metal has none)
     # would leave it with its direct highlight only
-    from rayvr.tune.probe import effect_pin
+    from rayvr.tune.cost_probe import effect_pin
 
     scene = rv.scenes.cornell_box()
     tall = scene.materials["TallBox"]

@@ -5,7 +5,7 @@ import json
 import pytest
 
 from rayvr.cli.main import main
-from rayvr.tune.defaults import machine_defaults
+from rayvr.study.defaults import machine_defaults
 
 TINY = ["--size", "12x12", "--views", "1", "--frames", "1", "--timing-frames", "1", "--warmup", "1",
         "--reference-frames", "4", "--reference-spp", "1", "--bounces", "2", "--motion-frames", "2",

@@ -11,10 +11,10 @@ import rayvr as rv
 from rayvr import Effect
 from rayvr.errors import OptionError
 from rayvr.xr.cameras import default_views
-from rayvr.tune import Config, Display, Motion, ReferenceSettings, StudySettings, measure
-from rayvr.tune import metrics as M
-from rayvr.tune.display import to_uint8
-from rayvr.tune.probe import ErrorJudge, probe_cost_model
+from rayvr.study import Config, Display, Motion, ReferenceSettings, StudySettings, measure
+from rayvr.study import metrics as M
+from rayvr.study.display import to_uint8
+from rayvr.tune.cost_probe import ErrorJudge, probe_cost_model
 
 SIZE = (12, 12)
 TINY_REF = ReferenceSettings(frames=16, spp=4, max_bounces=4)
@@ -190,7 +190,7 @@ def test_tune_effects_tries_the_graph_options_and_keeps_what_pays(gpu, scene, re
         rv.tune.tune_effects(scene, budget_ms=1e4, option_sets=["gi"], **kw)
     from rayvr.tune.tuner import option_sets_for
     assert option_sets_for(rv.tune.path_traced_graph, {"spp": 1}) == [{"spp": 1}, {"spp": 1, "denoise": "svgf"}]
-    from rayvr.tune.configs import hybrid_graph   # the hybrid takes both, and both together
+    from rayvr.study.configs import hybrid_graph   # the hybrid takes both, and both together
     assert option_sets_for(hybrid_graph, {}) == [{}, {"gi": "probes"}, {"denoise": "svgf"},
                                                  {"gi": "probes", "denoise": "svgf"}]
 
@@ -229,7 +229,7 @@ class _RampingRenderer:
 def test_warm_up_renders_on_until_the_frame_time_settles(monkeypatch):
     import time
 
-    from rayvr.tune import timing
+    from rayvr.study import timing
 
     monkeypatch.setattr(timing, "SETTLE_WINDOW_S", 0.02)
     monkeypatch.setattr(timing, "MAX_SETTLE_S", 5.0)
@@ -252,8 +252,8 @@ def test_warm_up_renders_on_until_the_frame_time_settles(monkeypatch):
 def test_a_level_on_every_material_is_predicted_as_the_probe_timed_it(gpu, scene, reference, monkeypatch):
     """Direct lighting shrinks where rays light the pixels instead: the base's passes change with
     the level, and the model shares that change by pixels like the ray passes' time."""
-    from rayvr.tune import probe as P
-    from rayvr.tune.timing import Timing
+    from rayvr.tune import cost_probe as P
+    from rayvr.study.timing import Timing
 
     frames = iter([{"GBuffer": 1.0, "Direct": 0.5, "Composite": 0.1},                  # all RASTER
                    {"GBuffer": 1.0, "Direct": 0.1, "Shadows": 2.0, "Composite": 0.1}])   # all SHADOWS
@@ -274,7 +274,7 @@ def test_probe_gi_frames_are_planned_with_their_probe_rays():
     the frame's pixels: at 2x32x32 the default 8^3 x 128 rays outweigh the SHADOWS pass 30 times,
     at 2x1440x1600 they add under 2%."""
     from rayvr.scene.builtin import cornell_box
-    from rayvr.tune.measure import EFFECT_COST, PROBE_RAY_COST, frame_cost
+    from rayvr.study.measure import EFFECT_COST, PROBE_RAY_COST, frame_cost
 
     scene = cornell_box()
     plain = Config("all SHADOWS", Effect.SHADOWS)
@@ -295,7 +295,7 @@ def test_a_tuned_row_over_its_budget_is_chosen_again_and_measured_alone(gpu, sce
     import importlib
 
     from rayvr.tune.budget import CostModel
-    from rayvr.tune.runner import LocalRunner
+    from rayvr.study.runner import LocalRunner
     from rayvr.tune.tuner import tuned_study
 
     R, S = Effect.RASTER, Effect.SHADOWS
@@ -328,7 +328,7 @@ def test_a_tuned_row_over_its_budget_is_chosen_again_and_measured_alone(gpu, sce
         measured.append(([c.name for c in configs], kwargs.get("curves", True)))
         return Results([Row(c.name, c.effects) for c in configs])
 
-    monkeypatch.setattr(importlib.import_module("rayvr.tune.measure"), "measure", fake_measure)
+    monkeypatch.setattr(importlib.import_module("rayvr.study.measure"), "measure", fake_measure)
     settings = dataclasses.replace(TINY, metric_workers=0)
     results, tuned = tuned_study(scene, default_views(scene, 1, SIZE), reference, settings, [], budgets=(6.0, 10.0),
                                  progress=False, runner=Probe(), option_sets=[{}])

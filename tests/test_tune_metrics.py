@@ -1,12 +1,12 @@
-"""rayvr.tune.metrics and rayvr.tune.display against hand-computed values (no GPU)."""
+"""rayvr.study.metrics and rayvr.study.display against hand-computed values (no GPU)."""
 import math
 
 import numpy as np
 import pytest
 
 from rayvr.errors import OptionError, RayvrError
-from rayvr.tune import metrics as M
-from rayvr.tune.display import Display, clamp_negative, tonemap
+from rayvr.study import metrics as M
+from rayvr.study.display import Display, clamp_negative, tonemap
 
 
 def image(value, shape=(2, 8, 8, 4), dtype=np.float32):

@@ -1,4 +1,4 @@
-"""rayvr.tune.pool: the error study's metrics in worker processes give the numbers the serial
+"""rayvr.study.pool: the error study's metrics in worker processes give the numbers the serial
 path gives (the same evaluate, the same inputs), the study's rows too; the progress bar counts
 the workers' seconds over the workers."""
 import os
@@ -9,10 +9,10 @@ import pytest
 import rayvr as rv
 from rayvr import Effect
 from rayvr.xr.cameras import default_views
-from rayvr.tune import Config, Display, Motion, ReferenceSettings, StudySettings, measure
-from rayvr.tune.metrics import METRICS
-from rayvr.tune.pool import MetricPool
-from rayvr.tune.progress import StudyProgress
+from rayvr.study import Config, Display, Motion, ReferenceSettings, StudySettings, measure
+from rayvr.study.metrics import METRICS
+from rayvr.study.pool import MetricPool
+from rayvr.study.progress import StudyProgress
 
 
 def _images(seed, views=2, h=24, w=20):
@@ -68,7 +68,7 @@ def test_progress_counts_concurrent_work_by_worker_seconds_over_workers():
 
 
 def test_untimed_rendering_is_estimated_as_a_gpu_renders_it_beside_the_judging():
-    from rayvr.tune.progress import HARDWARE_RENDER_SCALE
+    from rayvr.study.progress import HARDWARE_RENDER_SCALE
 
     left = {}
     for hardware in (False, True):
@@ -83,7 +83,7 @@ def test_untimed_rendering_is_estimated_as_a_gpu_renders_it_beside_the_judging()
 
 
 def test_metric_workers_yield_to_the_process_that_drives_the_gpu():
-    from rayvr.tune.pool import WORKER_NICENESS
+    from rayvr.study.pool import WORKER_NICENESS
 
     with MetricPool(1) as pool:
         niceness = pool.executor.submit(os.nice, 0).result(timeout=120)
@@ -150,7 +150,7 @@ def test_an_interrupted_study_stops_its_workers_at_once():
 
 
 def test_the_tuners_probe_gives_the_same_error_model_with_the_metric_pool(gpu):
-    from rayvr.tune.probe import ErrorJudge, probe_cost_model
+    from rayvr.tune.cost_probe import ErrorJudge, probe_cost_model
 
     size = (12, 12)
     scene = rv.scenes.cornell_box()

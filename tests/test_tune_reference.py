@@ -10,12 +10,12 @@ import rayvr as rv
 from rayvr import Effect
 from rayvr.errors import OptionError
 from rayvr.xr.cameras import default_views
-from rayvr.tune import Config, Display, ReferenceSettings, bias_floor, render_reference
-from rayvr.tune import metrics as M
-from rayvr.tune import reference as R
-from rayvr.tune import seeds
-from rayvr.tune.configs import path_traced_graph
-from rayvr.tune.progressive import render_mean
+from rayvr.study import Config, Display, ReferenceSettings, bias_floor, render_reference
+from rayvr.study import metrics as M
+from rayvr.study import reference as R
+from rayvr.study import seeds
+from rayvr.study.configs import path_traced_graph
+from rayvr.study.progressive import render_mean
 
 SIZE = (12, 12)
 LONG = ReferenceSettings(frames=64, spp=32)          # 2048 spp
@@ -193,7 +193,7 @@ def test_a_reference_whose_halves_are_identical_says_so(gpu, scene, monkeypatch)
     """Equal halves mean noise-free light or a second half that was never added (as a deep queue
     of frames on the H200 once left it): the verdict says the convergence check cannot tell,
     instead of 'converged: relMSE 0'."""
-    from rayvr.tune import progressive
+    from rayvr.study import progressive
 
     views = default_views(scene, 1, SIZE)
     tiny = ReferenceSettings(frames=2, spp=1, max_bounces=2)

@@ -9,8 +9,8 @@ import pytest
 import rayvr as rv
 from rayvr import Effect
 from rayvr.cli.main import main
-from rayvr.tune import Config, Motion, ReferenceSettings, StudySettings, measure, write_report
-from rayvr.tune import report as report_module
+from rayvr.study import Config, Motion, ReferenceSettings, StudySettings, measure, write_report
+from rayvr.study import report as report_module
 
 SIZE = (12, 12)
 
@@ -94,7 +94,7 @@ def test_ctrl_c_during_the_study_exits_130_and_writes_nothing(tmp_path, monkeypa
     def interrupted(*_, **__):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(rv.tune, "measure", interrupted)
+    monkeypatch.setattr(rv.study, "measure", interrupted)
     rc = main(["converge", "--size", "12x12", "--views", "1", "--report", str(tmp_path / "r"), "--quiet"])
     err = capsys.readouterr().err
     assert rc == 130 and err.count("\n") == 1 and "interrupted" in err

@@ -32,6 +32,7 @@ _LAZY = {
     "materials": ("rayvr.materials", None),
     "graphs": ("rayvr.graphs", None),
     "xr": ("rayvr.xr", None),
+    "study": ("rayvr.study", None),
     "tune": ("rayvr.tune", None),
     "cluster": ("rayvr.cluster", None),   # Ray is imported only when a Cluster starts
     "RenderGraph": ("rayvr.rendergraph.graph", "RenderGraph"),

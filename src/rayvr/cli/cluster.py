@@ -85,12 +85,12 @@ def render(args, spec, scene, graph, views, hdr: bool, grid=None) -> tuple:
 @contextlib.contextmanager
 def study_runner(args, spec, scene, progress: bool = True):
     """Where `rayvr converge` and `rayvr tune` run the error study: here
-    (rayvr.tune.runner.LocalRunner), or with --workers/--address on the cluster
+    (rayvr.study.runner.LocalRunner), or with --workers/--address on the cluster
     (rayvr.cluster.StudyRunner: references split by samples, the probe on one worker, the
     configurations over all, each row naming the worker that timed it). `spec`: the scene as
     given on the command line (a glTF file travels as its bytes)."""
     if not requested(args):
-        from ..tune.runner import LocalRunner
+        from ..study.runner import LocalRunner
 
         yield LocalRunner()
         return

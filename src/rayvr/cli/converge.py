@@ -8,7 +8,7 @@ HDR-FLIP, PSNR, SSIM, relMSE) as mean and spread over several frames, on a still
 head, and its bias floor (the configuration converged); then progressive-convergence curves.
 Prints the table; with --report writes report.md, report.html, results.json, the plots and the
 images into DIR, all at once (an interrupted run writes nothing). Unset sizes and frame counts
-are chosen for the machine (rayvr.tune.defaults) and the output says which. Every option is
+are chosen for the machine (rayvr.study.defaults) and the output says which. Every option is
 checked, and the --report and --cache folders are checked for writing, before any rendering.
 With --workers N (or --address) the study runs on a Ray cluster (rayvr.cluster.study): the
 references split by samples, each configuration on one worker, the same cache.
@@ -20,7 +20,7 @@ import math
 from pathlib import Path
 
 from ..errors import OptionError
-from ..tune import seeds
+from ..study import seeds
 from .options import MAX_VIEWS, integer, number, views_count
 
 TRAJECTORY_NONE = "none"
@@ -139,9 +139,9 @@ class StudyPlan:
     Refuses (OptionError, OutputError) before anything is rendered or written."""
 
     def __init__(self, args, gpu):
-        from ..tune import Display, Motion, ReferenceSettings, StudySettings
-        from ..tune.defaults import machine_defaults
-        from ..tune.metrics import METRICS
+        from ..study import Display, Motion, ReferenceSettings, StudySettings
+        from ..study.defaults import machine_defaults
+        from ..study.metrics import METRICS
         from ..xr.presets import get_preset
         from .options import parse_size
 
@@ -217,7 +217,7 @@ class StudyPlan:
         if self.report is not None:
             check_writable(self.report, "--report", folder=True)
         if self.cache is not False:
-            from ..tune.reference import default_cache_dir
+            from ..study.reference import default_cache_dir
 
             check_writable(self.cache or default_cache_dir(), "--cache", folder=True)
         self.configs_file = args.configs
@@ -225,7 +225,7 @@ class StudyPlan:
         self.progress = not args.quiet
 
     def configs(self, scene) -> list:
-        from ..tune import load_configs, standard_configs
+        from ..study import load_configs, standard_configs
 
         if self.configs_file:
             return load_configs(self.configs_file)
@@ -239,7 +239,7 @@ class StudyPlan:
 def run(args) -> int:
     from .cluster import study_runner
     from ..gpu import get_context
-    from ..tune import measure, write_report
+    from ..study import measure, write_report
     from .options import load_scene_arg
 
     plan = StudyPlan(args, get_context())

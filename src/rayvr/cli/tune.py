@@ -42,7 +42,7 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..gpu import get_context
     from ..materials.effect import Effect
-    from ..tune import make_views, write_report
+    from ..study import make_views, write_report
     from ..tune.tuner import tuned_study
     from .cluster import study_runner
     from .options import load_scene_arg

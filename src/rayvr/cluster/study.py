@@ -1,15 +1,15 @@
 """The error study (rayvr.tune) on a cluster: its reference split by samples, its configurations
 and progressive curves split over the workers.
 
-- `converge_reference`: the study's reference (rayvr.tune.reference: the same graph, seeds and
+- `converge_reference`: the study's reference (rayvr.study.reference: the same graph, seeds and
   checks) split by samples. Its frames are the frames one process renders, from the reference
-  seed range of rayvr.tune.seeds, cut into shares that never straddle a boundary the checks read:
+  seed range of rayvr.study.seeds, cut into shares that never straddle a boundary the checks read:
   half A (its first bounce-check frames, then the rest) and half B. The shares' means merge in
   share order (deterministic float64 sums) into the two independent halves, so the convergence
   verdict is one process's up to float rounding; the bounce check's render with one more bounce
   over half A's first frames is split the same way. It is cached through
-  rayvr.tune.reference.cached_reference: the same files and keys as without a cluster.
-- `StudyRunner`: a rayvr.tune.runner for `rv.tune.measure` and the tuner. References as above;
+  rayvr.study.reference.cached_reference: the same files and keys as without a cluster.
+- `StudyRunner`: a rayvr.study.runner for `rv.study.measure` and the tuner. References as above;
   the cost-model probe on one worker (every effect level on one GPU, as the model needs); each
   configuration's row (timing, judged frames, motion, bias floor) and each progressive curve on
   one worker, named in the row (`timed_on`). The rows use the study's seeds, so they equal one
@@ -24,9 +24,9 @@ import time
 import numpy as np
 
 from ..errors import OptionError
-from ..tune import seeds
-from ..tune.metrics import DEFAULT_EPS
-from ..tune.reference import PIN, Reference, ReferenceSettings, cached_reference, reference_graph, relative_change
+from ..study import seeds
+from ..study.metrics import DEFAULT_EPS
+from ..study.reference import PIN, Reference, ReferenceSettings, cached_reference, reference_graph, relative_change
 from . import pool
 from .jobs import SHARES_PER_WORKER, _graph_for, _scene_and_payload
 from .shares import Share, split_evenly
@@ -34,7 +34,7 @@ from .shares import Share, split_evenly
 
 @dataclasses.dataclass
 class SplitReference(Reference):
-    """A rayvr.tune.Reference rendered on a cluster, with what the split tells besides:
+    """A rayvr.study.Reference rendered on a cluster, with what the split tells besides:
     `stderr` the standard error of each pixel's mean from the first round's shares' means (batch
     means; None with one share or from the cache), `shares` the pieces its frames were cut into (0 from the
     cache), `workers` the worker of each piece, in order."""
@@ -153,11 +153,11 @@ def converge_reference(scene, views=2, size=(256, 256), settings: ReferenceSetti
 
     `settings`: a rv.tune.ReferenceSettings, or give its `frames`, `spp`, `max_bounces` (the
     others at ReferenceSettings' defaults). `seed`: the reference seed range of
-    rayvr.tune.seeds (0: the static view's, the frames rv.tune.render_reference renders; k:
+    rayvr.study.seeds (0: the static view's, the frames rv.tune.render_reference renders; k:
     trajectory sample k's). `cache_dir`: the study's reference cache (None: its default folder;
     False, the default here: render and store nothing). `shares`: pieces of the reference's
     frames (default 4 per worker)."""
-    from ..tune.timing import make_views
+    from ..study.timing import make_views
 
     given = {k: v for k, v in {"frames": frames, "spp": spp, "max_bounces": max_bounces}.items() if v is not None}
     if settings is not None and given:
@@ -165,7 +165,7 @@ def converge_reference(scene, views=2, size=(256, 256), settings: ReferenceSetti
     settings = settings or ReferenceSettings(**given)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < seeds.SLOTS:
         raise OptionError(f"converge_reference: seed must be an integer from 0 to {seeds.SLOTS - 1} (a reference "
-                          f"seed range of rayvr.tune.seeds), got {seed!r}")
+                          f"seed range of rayvr.study.seeds), got {seed!r}")
     scene, payload = _scene_and_payload(scene, payload)
     view_set = make_views(scene, views, size)
     with pool.using(cluster, workers, address) as c:
@@ -181,8 +181,8 @@ def converge_reference(scene, views=2, size=(256, 256), settings: ReferenceSetti
 
 
 class StudyRunner:
-    """Where rv.tune.measure and the tuner run their steps on a Cluster (module docstring); the
-    methods are rayvr.tune.runner.LocalRunner's. `payload`: the scene as the workers load it."""
+    """Where rv.study.measure and the tuner run their steps on a Cluster (module docstring); the
+    methods are rayvr.study.runner.LocalRunner's. `payload`: the scene as the workers load it."""
 
     shows_progress = True        # the cluster's bars (frames of each reference, configurations)
 
@@ -228,9 +228,9 @@ class StudyRunner:
 
 def measure(scene, configs, views=2, size=(64, 64), cluster=None, workers=None, address=None, payload=None,
             progress: bool = True, **kwargs):
-    """rv.tune.measure (its other keywords: reference, settings, cache_dir, curves, notes) on the
+    """rv.study.measure (its other keywords: reference, settings, cache_dir, curves, notes) on the
     cluster: the references split by samples, each configuration and curve on one worker."""
-    from ..tune.measure import measure as study
+    from ..study.measure import measure as study
 
     scene, payload = _scene_and_payload(scene, payload)
     with pool.using(cluster, workers, address) as c:
@@ -240,7 +240,7 @@ def measure(scene, configs, views=2, size=(64, 64), cluster=None, workers=None, 
 
 def probe_cost_model(scene, view_set, builder, options: dict, judge, cluster=None, workers=None, address=None,
                      payload=None, **kwargs):
-    """rv.tune.probe.probe_cost_model on one worker: (CostModel, HDR pin)."""
+    """rv.tune.cost_probe.probe_cost_model on one worker: (CostModel, HDR pin)."""
     scene, payload = _scene_and_payload(scene, payload)
     with pool.using(cluster, workers, address) as c:
         return StudyRunner(c, payload, kwargs.pop("progress", True)).probe(scene, view_set, builder, options, judge,

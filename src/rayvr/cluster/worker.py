@@ -10,7 +10,7 @@ at the start of every share.
 Job methods (called through `run`): `samples` (a frame range of a progressive render),
 `views` (some views of a frame), `frames` (a frame range of a trajectory sequence), and the
 error study's (rayvr.cluster.study): `measure` (one configuration's row), `curve` (one
-progressive curve), `probe` (rayvr.tune.probe.probe_cost_model).
+progressive curve), `probe` (rayvr.tune.cost_probe.probe_cost_model).
 """
 from __future__ import annotations
 
@@ -208,11 +208,11 @@ class RenderWorker:
                 "worker": self.describe()}
 
     def job_measure(self, scene, study: dict, config, reference, motion_references: dict, floor=None) -> dict:
-        """One configuration's row of the error study (rayvr.tune.measure.Study.row, `study` its
+        """One configuration's row of the error study (rayvr.study.measure.Study.row, `study` its
         spec) on this worker's GPU, naming this worker (`timed_on`); a floor rendered here (none
         was given: a worker has no cache) comes back for the driver's cache."""
-        from ..tune.configs import effects_restored
-        from ..tune.measure import Study
+        from ..study.configs import effects_restored
+        from ..study.measure import Study
 
         s = Study.from_spec(scene[1], study, self.gpu)
         with effects_restored(scene[1]):
@@ -222,8 +222,8 @@ class RenderWorker:
         return {"row": row, "method": s.method, "floor": s.new_floors.get(config.name)}
 
     def job_curve(self, scene, study: dict, name: str, options: dict, reference) -> dict:
-        """One progressive curve of the error study (rayvr.tune.measure.Study.curve) on this GPU."""
-        from ..tune.measure import Study
+        """One progressive curve of the error study (rayvr.study.measure.Study.curve) on this GPU."""
+        from ..study.measure import Study
 
         curve = Study.from_spec(scene[1], study, self.gpu).curve(name, options, reference)
         curve.timed_on = self.describe()
@@ -231,8 +231,8 @@ class RenderWorker:
         return {"curve": curve}
 
     def job_probe(self, scene, views, builder, options: dict, judge, **kwargs) -> dict:
-        """rayvr.tune.probe.probe_cost_model (its keywords) on this worker's GPU."""
-        from ..tune.probe import probe_cost_model
+        """rayvr.tune.cost_probe.probe_cost_model (its keywords) on this worker's GPU."""
+        from ..tune.cost_probe import probe_cost_model
 
         model, pin = probe_cost_model(scene[1], views, builder, options, judge, progress=False, gpu=self.gpu,
                                       **kwargs)

@@ -9,7 +9,7 @@ The choice runs on a `CostModel` (no GPU needed, so it is unit-testable):
 `base_ms` is the all-RASTER frame, `overhead_ms[e]` the passes effect level e brings in whatever
 its pixel count (e.g. the compaction pass; shared passes are counted once, hence the max),
 `ms[m][e]` the GPU time of material m's pixels at level e (0 for RASTER) and `error[m][e]` their
-share of the image error. `rayvr.tune.probe.probe_cost_model` measures one on the GPU and
+share of the image error. `rayvr.tune.cost_probe.probe_cost_model` measures one on the GPU and
 `rayvr.tune.tuner.tune_effects` runs both; this module needs no GPU.
 
 `choose_effects` is the greedy of the multiple-choice knapsack: start from every material at its

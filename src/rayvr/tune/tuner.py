@@ -9,13 +9,13 @@ from __future__ import annotations
 from ..errors import OptionError
 from ..graph_options import OPTIONS, realtime_option_sets
 from ..materials.effect import Effect
+from ..study.configs import accepts, hybrid_graph, set_effects
+from ..study.display import Display
+from ..study.metrics import DEFAULT_EPS
+from ..study.reference import Reference, ReferenceSettings, cached_reference
+from ..study.timing import make_views
 from .budget import FRAME_BUDGET_MS, TuneResult, back_off, choose_among, choose_effects
-from .configs import accepts, hybrid_graph, set_effects
-from .display import Display
-from .metrics import DEFAULT_EPS
-from .probe import ErrorJudge, probe_cost_model, render_assignment
-from .reference import Reference, ReferenceSettings, cached_reference
-from .timing import make_views
+from .cost_probe import ErrorJudge, probe_cost_model, render_assignment
 
 
 # The graph options the tuner tries beside each material's effect (those the graph builder takes):
@@ -71,7 +71,7 @@ def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=Non
                  reference=None, cache_dir=None, display: Display = Display(), preset: str = "index",
                  ppd: float | None = None, verify: bool = True, apply: bool = True, progress: bool = True,
                  gpu=None, option_sets=None) -> TuneResult:
-    """Measure a CostModel on the GPU (`rayvr.tune.probe.probe_cost_model`: one render per effect
+    """Measure a CostModel on the GPU (`rayvr.tune.cost_probe.probe_cost_model`: one render per effect
     level, timed after `warmup_s` seconds of warm-up, default 0.5 s on GPUs with timer queries),
     choose effects with `choose_effects`, then (with `verify`) render the choice and record its
     measured ms and error; a choice that measures over the budget is replaced by one chosen for a
@@ -142,10 +142,10 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
     (default here; rayvr.cluster.StudyRunner: the probe on one worker, the rows over all).
     `option_sets`: the graph options tuned beside the effects (default: those of `configs` on the
     hybrid graph, e.g. probe GI and SVGF, and none), one cost model each (tune_effects)."""
-    from .configs import Config
-    from .measure import measure
-    from .pool import MetricPool
-    from .runner import LocalRunner
+    from ..study.configs import Config
+    from ..study.measure import measure
+    from ..study.pool import MetricPool
+    from ..study.runner import LocalRunner
 
     runner = runner or LocalRunner()
     options = {"path_bounces": reference.settings.max_bounces}
@@ -158,7 +158,8 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
     with MetricPool(workers) as pool:
         judge = ErrorJudge(reference, settings.display.fixed(reference.image), settings.pixels_per_degree(), metric,
                            settings.eps, pool=pool if workers else None)
-        models = [(opts, runner.probe(scene, view_set, hybrid_graph, opts, judge, levels=levels,
+        probe = getattr(runner, "probe", probe_cost_model)   # the runner's own (a cluster worker's), else here
+        models = [(opts, probe(scene, view_set, hybrid_graph, opts, judge, levels=levels,
                                       frames=settings.timing_frames, warmup=settings.warmup,
                                       warmup_s=settings.warmup_s, trials=trials, progress=progress, gpu=gpu)[0])
                   for opts in option_sets_for(hybrid_graph, options, option_sets)]

@@ -1,11 +1,12 @@
 """Where the error study's steps run.
 
-`rv.tune.measure` and the tuner (`tuner.tuned_study`) hand four kinds of step to a runner:
-the references (`reference`: cached or rendered), the cost-model probe (`probe`), the
-configurations' rows (`rows`) and the progressive curves (`curves`). `LocalRunner` runs them all
-in this process on one GPU; `rayvr.cluster.StudyRunner` has the same methods and runs them on
-Ray workers (references split by samples, each configuration and curve on one worker), with the
-same seeds and the same cache, so that both give the same study.
+`rv.study.measure` and the tuner (`rayvr.tune.tuner.tuned_study`) hand their steps to a runner:
+the references (`reference`: cached or rendered), the configurations' rows (`rows`) and the
+progressive curves (`curves`). `LocalRunner` runs them in this process on one GPU (the tuner's
+cost-model probe then runs here too); `rayvr.cluster.StudyRunner` has the same methods, and
+`probe` for the tuner, and runs them on Ray workers (references split by samples, each
+configuration and curve on one worker), with the same seeds and the same cache, so that both give
+the same study.
 """
 from __future__ import annotations
 
@@ -24,22 +25,16 @@ class LocalRunner:
 
     def reference(self, scene, view_set, settings, cache_dir=None, sample: int = 0, eps: float = DEFAULT_EPS,
                   gpu=None, tick=None, progress=None):
-        """rayvr.tune.reference.cached_reference: from the cache, else rendered and stored; then
+        """rayvr.study.reference.cached_reference: from the cache, else rendered and stored; then
         rendered on until converged or capped (`progress`: a ReferenceProgress for the extensions)."""
         from .reference import cached_reference
 
         return cached_reference(scene, view_set, settings, cache_dir, gpu, tick, sample=sample, eps=eps,
                                 progress=progress)
 
-    def probe(self, scene, view_set, builder, options: dict, judge, **kwargs):
-        """rayvr.tune.probe.probe_cost_model: (CostModel, HDR pin)."""
-        from . import probe
-
-        return probe.probe_cost_model(scene, view_set, builder, options, judge, **kwargs)
-
     def rows(self, study, configs, reference, motion_references: dict) -> list:
-        """One Row per configuration, in order (rayvr.tune.measure.Study.row): each configuration
-        renders while the metric pool judges the ones before (rayvr.tune.pool)."""
+        """One Row per configuration, in order (rayvr.study.measure.Study.row): each configuration
+        renders while the metric pool judges the ones before (rayvr.study.pool)."""
         finish, rows = [], {}
         for c in configs:
             finish.append(study.row_later(c, reference, motion_references))
@@ -53,7 +48,7 @@ class LocalRunner:
         return [rows[k] if k in rows else f() for k, f in enumerate(finish)]
 
     def curves(self, study, reference) -> list:
-        """The progressive curves (rayvr.tune.measure.Study.curve), in order, rendered while the
+        """The progressive curves (rayvr.study.measure.Study.curve), in order, rendered while the
         metric pool judges."""
         finish = [study.curve_later(name, options, reference) for name, options in study.curve_graphs()]
         return [f() for f in finish]

@@ -36,7 +36,7 @@ class MachineDefaults:
     reference_max_frames: int = 16384   # the reference renders on until converged, up to this many frames
     reference_seconds: float = 480.0    # or until this much rendering time (each reference, over its runs)
     floor_fraction: float = 0.25    # of the reference's first-round paths per pixel, for each bias floor
-    denoised_levels: bool = True    # rayvr.tune.standard_configs' hybrid levels through SVGF
+    denoised_levels: bool = True    # rayvr.study.standard_configs' hybrid levels through SVGF
     probe_counts: tuple | None = None   # the probe GI rows' probes per axis (None: the pass's 8^3)
 
     def reference_settings(self, max_bounces: int = 8):

@@ -1,27 +1,27 @@
 """The error study: every configuration's GPU time and image error against a trusted reference.
 
-    results = rv.tune.measure(scene, rv.tune.standard_configs(scene), views=2, size=(64, 64))
+    results = rv.study.measure(scene, rv.tune.standard_configs(scene), views=2, size=(64, 64))
     print(results.table())
     rv.tune.write_report(results, "out/study")   # report.md, report.html, results.json, images
 
-For each configuration (rayvr.tune.configs.Config):
+For each configuration (rayvr.study.configs.Config):
 - **time**: GPU ms per frame from the graph's profile over `timing_frames` frames after a
-  warm-up (rayvr.tune.timing);
+  warm-up (rayvr.study.timing);
 - **error, static view**: `frames` frames (each after the configuration's own accumulation), the
   first after `warmup + timing_frames` frames of history (a count: the judged frames and their
   seeds never depend on the GPU's speed; with a warm-up timed in seconds the timing follows
   them, else the timed frames are the history), every
-  metric of rayvr.tune.metrics.evaluate per frame and view against the reference; reported as the
+  metric of rayvr.study.metrics.evaluate per frame and view against the reference; reported as the
   mean and standard deviation over those frames and views;
-- **error in motion**: the views carried along a headset trajectory (rayvr.tune.motion), the
+- **error in motion**: the views carried along a headset trajectory (rayvr.study.motion), the
   sampled frames judged against a reference rendered for each of them;
-- **bias floor**: the configuration converged, against the reference (rayvr.tune.floor).
-Then the progressive-convergence curves (rayvr.tune.progressive.progressive_curve).
+- **bias floor**: the configuration converged, against the reference (rayvr.study.floor).
+Then the progressive-convergence curves (rayvr.study.progressive.progressive_curve).
 
-The reference (rayvr.tune.reference) is converged and checked; every render has its own seeds
-(rayvr.tune.seeds). The displayed images go through one fixed tone mapping
-(rayvr.tune.display); FLIP uses the headset preset's pixels per degree. The scene's material
-effects are restored afterwards. A runner (rayvr.tune.runner) says where the steps run: here, or
+The reference (rayvr.study.reference) is converged and checked; every render has its own seeds
+(rayvr.study.seeds). The displayed images go through one fixed tone mapping
+(rayvr.study.display); FLIP uses the headset preset's pixels per degree. The scene's material
+effects are restored afterwards. A runner (rayvr.study.runner) says where the steps run: here, or
 with rayvr.cluster's StudyRunner on Ray workers (each row then names the worker that timed it).
 """
 from __future__ import annotations
@@ -72,7 +72,7 @@ class StudySettings:
     length of the progressive curves (0: none); `preset`/`ppd`: FLIP's pixels per degree (ppd
     None: the preset's); `eps`: relMSE's epsilon; `display`: the tone mapping of the displayed
     images; `metric_workers`: processes judging the images while the GPU renders on
-    (rayvr.tune.pool; 0: here, one after the other; None: pool.default_workers, os.cpu_count() - 2 from 256x256 pixels per
+    (rayvr.study.pool; 0: here, one after the other; None: pool.default_workers, os.cpu_count() - 2 from 256x256 pixels per
     view, else 0); the numbers are the same either way. `hdrflip_frames`: HDR-FLIP (the costliest
     metric: LDR-FLIP at each of the reference's exposures, ~8x its cost on the Cornell box) on the
     first N judged frames of each configuration only, not in motion, on the floors nor on the
@@ -169,7 +169,7 @@ def check_configs(scene, configs) -> list[Config]:
         raise OptionError("measure: no configurations; pass e.g. rv.tune.standard_configs(scene)")
     for c in configs:
         if not isinstance(c, Config):
-            raise OptionError(f"measure: {c!r} is not a rayvr.tune.Config")
+            raise OptionError(f"measure: {c!r} is not a rayvr.study.Config")
         c.assignment(scene)          # an unknown material fails now, not after the reference
     names = [c.name for c in configs]
     if len(set(names)) != len(names):
@@ -184,10 +184,10 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
 
     `views`: a ViewSet, or a view count from the scene's camera at `size` per view.
     `reference`: ReferenceSettings to render (or load from `cache_dir`; False: no cache) the
-    reference with (None: the machine's defaults, rendered until converged: rayvr.tune.defaults),
+    reference with (None: the machine's defaults, rendered until converged: rayvr.study.defaults),
     or a Reference already made for these views. `curves`: the progressive
     curves. `notes`: lines for the report (e.g. why these sizes were chosen). `runner`: where
-    the steps run (default rayvr.tune.runner.LocalRunner: here, on `gpu`)."""
+    the steps run (default rayvr.study.runner.LocalRunner: here, on `gpu`)."""
     from ..gpu import get_context
 
     t0 = time.perf_counter()
@@ -346,7 +346,7 @@ class Study:
         return units
 
     def _row_path(self, config, ref: Reference, motion_refs: dict):
-        """Where `config`'s finished row is cached (rayvr.tune.row_cache), or None without a cache."""
+        """Where `config`'s finished row is cached (rayvr.study.row_cache), or None without a cache."""
         if self.cache_dir is False:
             return None
         digests = [self._digest(ref)] + [f"{i}:{self._digest(r)}" for i, r in sorted(motion_refs.items())]
@@ -405,7 +405,7 @@ class Study:
         return self.judge_later(image, reference_image, name, maps).get()
 
     def judge_later(self, image, reference_image, name: str, maps: bool = False, hdrflip: bool = True):
-        """`judge` handed to the metric pool (rayvr.tune.pool): a Pending whose get() is judge's
+        """`judge` handed to the metric pool (rayvr.study.pool): a Pending whose get() is judge's
         answer; the study renders on meanwhile. `hdrflip` False: without HDR-FLIP (where
         StudySettings.hdrflip_frames leaves it out)."""
         return self.pool.judge(image, reference_image, self.display, self.ppd, self.s.eps, (name, "reference"),
@@ -549,7 +549,7 @@ class Study:
         return finish
 
     def floor_row(self, config: Config, ref: Reference, cost: float, floor=None):
-        """`config`'s bias floor (rayvr.tune.floor), judged in the metric pool: returns the
+        """`config`'s bias floor (rayvr.study.floor), judged in the metric pool: returns the
         function that waits for it and gives (floor dict, floor image)."""
         frames = self._floor_frames(config)
         label = f"{config.name} converged (bias floor)"
@@ -585,7 +585,7 @@ class Study:
             for d in available_denoisers(path_traced_graph)]
 
     def curve(self, name: str, options: dict, ref: Reference):
-        """The progressive curve of `path_traced_graph(**options)` (rayvr.tune.progressive)."""
+        """The progressive curve of `path_traced_graph(**options)` (rayvr.study.progressive)."""
         return self.curve_later(name, options, ref)()
 
     def curve_later(self, name: str, options: dict, ref: Reference):

@@ -63,7 +63,7 @@ def _window_frame_s(renderer) -> float:
 def timed_frames(renderer, frames: int, warmup: int, warmup_s: float = 0.0, quiet=None) -> Timing:
     """Render untimed frames for `warmup_s` seconds (warm_up) and then `warmup` more, then
     `frames` timed frames; the per-pass means of the timed ones. `quiet`: a context manager
-    factory held around all of it (rayvr.tune.pool.MetricPool.quiet: the metric workers paused)."""
+    factory held around all of it (rayvr.study.pool.MetricPool.quiet: the metric workers paused)."""
     if frames < 1 or warmup < 0:
         raise OptionError(f"measure: frames must be >= 1 and warmup >= 0, got frames={frames}, warmup={warmup}")
     with quiet() if quiet is not None else contextlib.nullcontext():

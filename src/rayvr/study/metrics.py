@@ -13,7 +13,7 @@ an image is an error that names the image and the first bad pixel, never a silen
     ssim(test, ref)           scikit-image's structural similarity of display-encoded images
 
 `evaluate` is the error study's set: FLIP, PSNR and SSIM of the displayed images (see
-rayvr.tune.display), HDR-FLIP, relMSE, trimmed relMSE and the firefly count of the linear radiance.
+rayvr.study.display), HDR-FLIP, relMSE, trimmed relMSE and the firefly count of the linear radiance.
 
 The `*_map` functions return the per-pixel error (views, h, w) whose mean is the metric: the
 budget tuner sums them over each material's pixels.
@@ -261,7 +261,7 @@ def evaluate(test, reference, display, ppd: float | None = None, eps: float = DE
     """The study's metrics of linear `test` against linear `reference`, each per view:
     ({metric: (views,) array}, {metric: (views, h, w) map} when `maps`).
 
-    `display` (a fixed rayvr.tune.display.Display) makes the displayed images that FLIP, PSNR
+    `display` (a fixed rayvr.study.display.Display) makes the displayed images that FLIP, PSNR
     and SSIM judge; HDR-FLIP and relMSE take the linear radiance. `ppd`: pixels per degree for
     both FLIPs (None: FLIP's 67). `shown_reference`: display(reference), when the caller keeps
     it for many tests (the same values; the study's metric pool does)."""

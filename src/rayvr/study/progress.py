@@ -10,7 +10,7 @@ spent, total = those plus the remaining steps' units at the learned rates, so tq
 "remaining" is that estimate.
 
 A kind can run concurrently with the rest (`concurrent(kind, workers)`: the error metrics in
-rayvr.tune.pool's worker processes). Its steps are not timed here: each reports the seconds its
+rayvr.study.pool's worker processes). Its steps are not timed here: each reports the seconds its
 worker spent (`finished(kind, units, seconds)`), which teach its rate, and its remaining units
 take rate x units / workers of wall time, overlapped with the other kinds: the remaining time
 is the larger of the two. The time this process waits for it is a step of kind "wait" (counted

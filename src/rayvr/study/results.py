@@ -48,7 +48,7 @@ class Row:
     size: tuple
     errors: dict                  # metric -> {"mean", "std", "per_view"}
     motion: dict | None = None    # {"frames", "sampled_frames", metric -> {...}}
-    floor: dict | None = None     # see rayvr.tune.floor.Floor.against, plus its metrics
+    floor: dict | None = None     # see rayvr.study.floor.Floor.against, plus its metrics
     tuned: bool = False
     negative_values: int = 0      # negative radiance values judged as 0 (as the tone mapper shows them)
     timed_on: str | None = None   # the worker (label, GPU, renderer, host) that measured it on a cluster
@@ -119,7 +119,7 @@ def fmt_stat(stat: dict | None) -> str:
 
 
 class Results:
-    """The reference (rayvr.tune.reference.Reference), the rows, the curves and the study's
+    """The reference (rayvr.study.reference.Reference), the rows, the curves and the study's
     context (scene, views, size, display, ppd, eps, timing method, what was chosen and why)."""
 
     def __init__(self, reference, rows: list[Row], curves: list[Curve], study: dict, motion_references=()):

@@ -2,7 +2,7 @@
 
 At 2 x 1440x1600 one judged image costs ~100 CPU-seconds (88 of them HDR-FLIP, which runs
 LDR-FLIP at each of the reference's exposures; SSIM and the tone mapping are single-threaded),
-against milliseconds of GPU. `MetricPool` hands every judgement (rayvr.tune.metrics.evaluate of
+against milliseconds of GPU. `MetricPool` hands every judgement (rayvr.study.metrics.evaluate of
 one read-back image) to a process pool sized by os.cpu_count() (less two for the process driving
 the GPU and its driver) and gives back a `Pending` whose `get()` waits for it, so that the study renders the
 next frames, configurations and curves while earlier images are judged. Results are those of
@@ -15,7 +15,7 @@ References (the static one and one per trajectory frame) go to the workers once,
 a temporary folder that each worker loads once and keeps (with its displayed image); test images travel with their task. At most
 `2 x workers` judgements are outstanding: a render that would queue more waits for the oldest
 (bounded memory: 55 MB per stereo 1440x1600 RGB float32 image). The study's progress bar
-(rayvr.tune.progress) counts metric work by the workers' own seconds, divided by the workers.
+(rayvr.study.progress) counts metric work by the workers' own seconds, divided by the workers.
 """
 from __future__ import annotations
 
@@ -66,7 +66,7 @@ class MetricPool:
     """Judges images here (`workers=0`) or in `workers` processes; see the module docstring.
 
     `judge = pool.judge(image, reference_image, display, ppd, eps, names, which, maps, units)`
-    returns a Pending; `progress` (a rayvr.tune.progress.StudyProgress) is told of each judgement's
+    returns a Pending; `progress` (a rayvr.study.progress.StudyProgress) is told of each judgement's
     `units` of kind "metric" (planned by the study) as it finishes."""
 
     def __init__(self, workers: int = 0, progress=None):

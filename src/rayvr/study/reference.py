@@ -4,7 +4,7 @@ The reference path traces every pixel from the camera (PathTracer "full" mode + 
 each path starting at a random point of its pixel: a box filter over the pixel's footprint, the
 value a displayed pixel integrates, stratified over the frames by the Sobol sampler. Configurations
 that do not anti-alias (the G-buffer samples pixel centres) show their aliasing as error against
-it. It renders `frames` frames of `spp` paths from its own seed range (rayvr.tune.seeds) as two
+it. It renders `frames` frames of `spp` paths from its own seed range (rayvr.study.seeds) as two
 halves A and B of frames/2 frames each; its image is their mean. Two checks say whether it can be
 trusted:
 

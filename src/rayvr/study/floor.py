@@ -2,7 +2,7 @@
 
 However many frames a configuration averages, its error cannot fall below the light it leaves
 out (fewer bounces, no indirect light, shadows without rays...). The floor renders the
-configuration itself for many frames from its own seed range (rayvr.tune.seeds), each frame's
+configuration itself for many frames from its own seed range (rayvr.study.seeds), each frame's
 output averaged (its Accumulate passes pass single frames through), as two halves like the
 reference. Against the reference:
 

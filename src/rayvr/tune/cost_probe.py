@@ -10,7 +10,7 @@ Every material is set to one level at a time (RASTER first, as the base). From e
   level on every material is predicted as the probe measured it (taken as unchanged, they made
   the model's all-SHADOWS frame 0.9 ms dearer than the study's row). Passes the level adds that
   are not list-driven (compaction, accumulation) are the level's fixed overhead.
-- The per-pixel error map against the trusted reference (rayvr.tune.reference): FLIP of the
+- The per-pixel error map against the trusted reference (rayvr.study.reference): FLIP of the
   displayed images at the headset's pixels per degree, or relMSE of the radiance, averaged over
   `trials` frames (their seeds differ), summed over each material's pixels (G-buffer effect ids
   name the material per pixel) and divided by all pixels, so the shares of a one-level render add
@@ -22,9 +22,9 @@ import numpy as np
 
 from ..errors import OptionError
 from ..materials.effect import Effect
+from ..study.configs import Config, effects_restored
+from ..study.timing import default_warmup_s, timed_frames
 from .budget import CostModel
-from .configs import Config, effects_restored
-from .timing import default_warmup_s, timed_frames
 
 TUNE_METRICS = ("flip", "relmse")
 NO_GEOMETRY = 0xFF
@@ -55,8 +55,8 @@ def check_metric(metric: str) -> str:
 
 
 class ErrorJudge:
-    """Per-pixel error maps against a reference: `metric` of rayvr.tune.metrics.evaluate. With a
-    `pool` (a rayvr.tune.pool.MetricPool) the maps are made in its worker processes while the
+    """Per-pixel error maps against a reference: `metric` of rayvr.study.metrics.evaluate. With a
+    `pool` (a rayvr.study.pool.MetricPool) the maps are made in its worker processes while the
     GPU renders on (the same numbers)."""
 
     def __init__(self, reference, display, ppd: float, metric: str, eps: float, pool=None):
@@ -72,8 +72,8 @@ class ErrorJudge:
         return self.pool.quiet if self.pool is not None else None
 
     def map(self, image, name: str) -> np.ndarray:
-        from .display import clamp_negative
-        from .metrics import evaluate, pair
+        from ..study.display import clamp_negative
+        from ..study.metrics import evaluate, pair
 
         image, _ = clamp_negative(image)   # judged as displayed (0), as the study judges
         if self.metric == "flip" and getattr(self, "_shown", None) is None:    # the displayed reference, made once

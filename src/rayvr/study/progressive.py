@@ -2,7 +2,7 @@
 (references, bias floors) and the progressive-convergence curve.
 
 `render_mean` renders a graph for a number of frames from a given first frame (its seed range,
-rayvr.tune.seeds) and returns the running mean of one output at the frame counts asked for, with
+rayvr.study.seeds) and returns the running mean of one output at the frame counts asked for, with
 the wall seconds spent rendering up to each (the GPU finished; readbacks not counted). The mean
 is an Accumulate pass: the graph's own when the output already is an unlimited Accumulate's,
 else one added after the output ("StudyMean"), the graph's own Accumulate passes then passing
@@ -119,7 +119,7 @@ def progressive_curve(scene, name: str, graph, settings: dict, view_set, frames:
                       step=None, later: bool = False, quiet=None):
     """Error against accumulated time of a progressive render (Lift's figure): the graph's HDR
     output read after 1, 2, 4, ... `frames` frames and judged by `judge(image, reference_image,
-    name)` (-> per-view metrics first, or a rayvr.tune.pool.Pending of them). Wall seconds are
+    name)` (-> per-view metrics first, or a rayvr.study.pool.Pending of them). Wall seconds are
     measured (GPU finished, readback and metrics not counted); GPU seconds are frames x the GPU
     ms per frame timed first (`timing_frames` after the warm-up), after which the accumulation
     and every history (TAA, SVGF) restart. `step(kind, units, label)`: a progress step around the
