@@ -7,7 +7,7 @@ The PATH_TRACED levels default to the reference's bounces, so that they converge
 
 A denoiser or probe GI is one more option of the graph builder (`denoise=`, `gi=`); the standard
 set includes those rows only when `rv.graphs.hybrid`/`path_traced` accept the option and build
-with it, so they appear once the reconstruction and probe issues add them.
+with it (`available_denoisers`, `available_gi`).
 
 Configurations from a file (`load_configs`): JSON, a list or {"configs": [...]} of
     {"name": "mirror floor", "effects": {"*": "shadows", "Floor": "reflections"},
@@ -255,12 +255,12 @@ def _builds(builder, **options) -> bool:
 
 
 def available_denoisers(builder=hybrid_graph) -> list[str]:
-    """The DENOISERS `builder` accepts as `denoise=` (none before the reconstruction issue)."""
+    """The DENOISERS `builder` accepts as `denoise=` and builds with."""
     return [d for d in DENOISERS if accepts(builder, "denoise") and _builds(builder, denoise=d)]
 
 
 def available_gi(builder=hybrid_graph) -> list[str]:
-    """The GI_MODES `builder` accepts as `gi=` (none before the probe issue)."""
+    """The GI_MODES `builder` accepts as `gi=` and builds with."""
     return [m for m in GI_MODES if accepts(builder, "gi") and _builds(builder, gi=m)]
 
 
