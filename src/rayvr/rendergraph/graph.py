@@ -47,7 +47,7 @@ def split_pin(ref: str, what: str = "pin") -> tuple[str, str | None]:
 
 
 class RenderGraph:
-    """A named graph of render passes. See docs/CONTRACTS.md and DESIGN.md for the pass API."""
+    """A named graph of render passes. See docs/CONTRACTS.md and docs/adding-a-pass.md for the pass API."""
 
     def __init__(self, name: str = "RenderGraph"):
         if not str(name).isidentifier():
