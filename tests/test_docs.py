@@ -32,7 +32,8 @@ def python_comments(path: Path) -> list[tuple[int, str]]:
 def glsl_comments(path: Path) -> list[tuple[int, str]]:
     """(line, text) of the // and /* */ comments of a shader."""
     text = path.read_text()
-    return [(text.count("\n", 0, m.start()) + 1, m.group(0)) for m in re.finditer(r"//[^\n]*|/\*.*?\*/", text, re.S)]
+    found = re.finditer(r"//[^\n]*|/\*.*?\*/", text, re.DOTALL)
+    return [(text.count("\n", 0, m.start()) + 1, m.group(0)) for m in found]
 
 
 def test_source_comments_name_no_gpu_issue_or_session():

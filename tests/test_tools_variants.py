@@ -96,10 +96,11 @@ def test_shape_properties_round_trip_the_json_form():
 
 
 def test_runs_name_a_variant_or_a_tree(tool, tmp_path):
-    label, root, props = tool.resolve_run("sh_vg4", {}, tool.VARIANTS)
+    _, root, props = tool.resolve_run("sh_vg4", {}, tool.VARIANTS)
     assert root == tool.ROOT and props == {"Shadows": {"view_group": 4}}
     (tmp_path / "src" / "rayvr").mkdir(parents=True)
     label, root, props = tool.resolve_run("old:base", {"old": str(tmp_path)}, tool.VARIANTS)
+    assert label == "old:base"
     assert root == tmp_path.resolve() and props == {}
     with pytest.raises(SystemExit, match="unknown variant 'sh_vg3'"):
         tool.resolve_run("sh_vg3", {}, tool.VARIANTS)

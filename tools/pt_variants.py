@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""GPU time of graph variants and of source trees side by side (a device-machine tool; see tools/gpu-bench).
+"""GPU time of graph variants and of source trees side by side (a device-machine tool).
 
     python3 tools/pt_variants.py OUT.jsonl [RUN ...] [--measures cornell,tauray,spheres] [--rounds 2]
     python3 tools/pt_variants.py --list                  # the variants and what each sets
@@ -24,7 +24,8 @@ Each RUN is a child process with the tree's src/ first on PYTHONPATH. Measures (
 - gi_views: 64 views against one with probe GI, per pass, and their ratio;
 - rays: the tree's own `benchmarks rays` (primary and diffuse Grays/s) on tauray and the spheres.
 RUNs go in the order given, --rounds times (A B A B ...), so clock drift shows as a difference
-between rounds. `--div N` divides every size by N (a smoke test on llvmpipe).
+between rounds. `--div N` divides every size by N (a smoke test on llvmpipe). On the GPU machine run
+it after the preamble that ../shared/tools/gpu-prep prints, or through `tools/gpu-bench variants`.
 """
 from __future__ import annotations
 
@@ -258,7 +259,7 @@ def child_main(config: dict) -> None:
     for key in config["measures"]:
         try:
             out[key] = child.measure(key)
-        except Exception as e:   # a broken run is a row, not the end of the run
+        except Exception as e:   # noqa: BLE001 (a broken run is a row, not the end of the run)
             out[key] = {"error": f"{type(e).__name__}: {str(e)[:300]}"}
     graphs_built = any(k != "rays" for k in config["measures"])
     missing = sorted(set(child.props) - child.applied)
@@ -336,7 +337,7 @@ def main(argv=None) -> int:
             env = dict(os.environ, PYTHONPATH=f"{root / 'src'}:{os.environ.get('PYTHONPATH', '')}")
             t = time.perf_counter()
             p = subprocess.run([sys.executable, __file__, "--child", json.dumps(config)], env=env,
-                               capture_output=True, text=True, timeout=args.timeout)
+                               capture_output=True, text=True, timeout=args.timeout, check=False)
             lines = [line for line in p.stdout.splitlines() if line.startswith("RESULT ")]
             res = json.loads(lines[-1][7:]) if lines else {"error": p.stderr[-800:]}
             row = {"variant": label, "round": rnd, "commit": commit, "wall_s": round(time.perf_counter() - t, 1), **res}
