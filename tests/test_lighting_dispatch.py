@@ -30,10 +30,9 @@ def scene_with_every_light_kind():
 
 
 def render(gpu, scene, monkeypatch, pixels_2d, max_bounces, tile=(8, 4), views=2):
-    for cls in (rv.passes.RTShadows, rv.passes.RTReflections):
-        monkeypatch.setattr(cls, "PIXELS_2D", pixels_2d)
-        monkeypatch.setattr(cls, "TILE", tile)
     g = rv.graphs.hybrid(light_samples=2, max_bounces=max_bounces)
+    for name in ("Shadows", "Reflections"):
+        g.update_pass(name, {"dispatch_mode": "image" if pixels_2d else "list", "tile": list(tile)})
     for name in (*OUTPUTS[:2], "GBuffer.effect"):
         g.mark_output(name)
     view_set = default_views(scene, views, (40, 36))   # not a multiple of the tiles (nor views of 4)

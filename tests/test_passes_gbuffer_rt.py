@@ -19,23 +19,24 @@ from rayvr.scene.model import Camera
 PINS = ("posW", "normW", "faceNormalW", "baseColor", "metalRough", "emissive", "effect", "motion")
 
 
-def gbuffer_graph(kind: str):
+def gbuffer_graph(kind: str, rt_props: dict | None = None):
     g = rv.RenderGraph("GBufferOnly")
-    g.add_pass(rv.passes.GBufferRT() if kind == "rt" else rv.passes.GBufferRaster(), "GBuffer")
+    g.add_pass(rv.passes.GBufferRT(rt_props) if kind == "rt" else rv.passes.GBufferRaster(), "GBuffer")
     for pin in PINS:
         g.mark_output(f"GBuffer.{pin}")
     return g
 
 
-def render_both(scene, views, size, move=None, setup=None, **renderer_kw):
+def render_both(scene, views, size, move=None, setup=None, rt_props=None, **renderer_kw):
     """Both G-buffers of the same frame(s) of `views` default views: {kind: {pin: array}}.
-    `setup(view_set)` runs before the first frame, `move(view_set)` between two frames (motion)."""
+    `setup(view_set)` runs before the first frame, `move(view_set)` between two frames (motion);
+    `rt_props`: GBufferRT's properties."""
     out = {}
     for kind in ("raster", "rt"):
         view_set = default_views(scene, views, size)
         if setup is not None:
             setup(view_set)
-        with Renderer(scene, gbuffer_graph(kind), views=view_set, **renderer_kw) as r:
+        with Renderer(scene, gbuffer_graph(kind, rt_props), views=view_set, **renderer_kw) as r:
             r.render()
             if move is not None:
                 move(r.view_set)
@@ -99,10 +100,10 @@ def test_rt_equals_raster_in_a_camera_grid_whose_views_straddle_workgroups(gpu, 
     # 6 views in workgroups spanning 4 (passes.dispatch.ray_group; GBufferRT's own default is 2):
     # the second workgroup along z has two views past the last one, and 40x36 pixels are no
     # multiple either.
-    monkeypatch.setattr(GBufferRT, "VIEW_GROUP", 4)
-    assert ray_group(6, view_group=GBufferRT.VIEW_GROUP)[2] == 4
+    props = {"view_group": 4}
+    assert ray_group(6, view_group=GBufferRT(props).view_group)[2] == 4
     scene = builtin.spheres(n=2, subdivisions=2)
-    out = render_both(scene, 6, (40, 36))
+    out = render_both(scene, 6, (40, 36), rt_props=props)
     assert_same_gbuffer(out)
     pos = out["rt"]["posW"]
     assert all(not np.array_equal(pos[i], pos[i + 1]) for i in range(5)), "a view repeated its neighbour"

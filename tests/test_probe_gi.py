@@ -235,11 +235,11 @@ def test_composite_over_view_groups_equals_one_view_a_workgroup(gpu, monkeypatch
 
     scene = closed_box()
     images = {}
-    default = HybridComposite.PROBE_VIEW_GROUP
+    default = HybridComposite.PROPERTIES["probe_view_group"]
     assert default > 1
     for group in (default, 1):
-        monkeypatch.setattr(HybridComposite, "PROBE_VIEW_GROUP", group)
         g = probe_graph(counts=[3, 3, 3], rays_per_probe=32, warmup=1)
+        g.update_pass("Composite", {"probe_view_group": group})
         with rv.Renderer(scene, g, views=default_views(scene, 6, (20, 13), grid=(3, 2)), gpu=gpu) as r:
             r.render()
             assert r.compiled.passes["Composite"].defines()["RAY_GROUP_Z"] == group

@@ -1,6 +1,6 @@
 """RTReflections with probe GI defers the hits' probe lookups to a second dispatch
 (glsl/probe_records.glsl, rt_reflections_probes.comp): the result must equal the lookups done in
-the traversal kernel (RTReflections.DEFER_PROBES = False, the former way, kept as the reference)
+the traversal kernel (RTReflections' defer_probes=False, the former way, kept as the reference)
 within the float16 rounding of the records, at every bounce, with the list and the whole-image
 dispatch; graphs without probes allocate no records."""
 import numpy as np
@@ -33,9 +33,8 @@ def reflective_scene():
 
 
 def render(gpu, scene, monkeypatch, *, gi, defer, max_bounces, pixels_2d, frames=2):
-    monkeypatch.setattr(rv.passes.RTReflections, "PIXELS_2D", pixels_2d)
     g = rv.graphs.hybrid(max_bounces=max_bounces, gi="probes" if gi else None, probes=PROBES if gi else None)
-    g.passes["Reflections"].DEFER_PROBES = defer
+    g.update_pass("Reflections", {"dispatch_mode": "image" if pixels_2d else "list", "defer_probes": defer})
     g.mark_output("Reflections.reflection")
     views = default_views(scene, 2, (32, 28))
     with Renderer(scene, g, views=views, gpu=gpu) as r:

@@ -466,8 +466,8 @@ LightSample sample_light(vec3 p, vec3 u) {
     float x = u.x * float(n);
     uint k = min(uint(x), n - 1u);
     // entry k, or its alias; then one load of the chosen entry (reassigning a LightEntry read from
-    // the buffer gave the H200 a selection probability that was not the drawn light's: 1.3-1.5x
-    // too bright under 100-10,000 point lights of unequal power)
+    // the buffer has given a selection probability that was not the drawn light's: 1.3-1.5x too
+    // bright under 100-10,000 point lights of unequal power)
     uint j = x - float(k) < light_entries[k].select.x ? k : light_entries[k].ids.z;
     LightEntry e = light_entries[j];
     float p_select = e.select.y;

@@ -146,7 +146,7 @@ vec3 probe_gi_glossy_direction(vec3 n, vec3 v, float roughness) {
 // irradiance about the lobe's dominant direction / pi (a surface whose reflections are not traced:
 // RASTER and SHADOWS pixels). Where that direction is within ~10 degrees of the normal (rough
 // surfaces) the normal's irradiance serves both: irradiance is cosine-smoothed, and the second
-// fetch per probe cost a third of the composite's lookup on the H200.
+// fetch per probe costs a third of the composite's lookup.
 vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy) {
     glossy = vec3(0.0);
 #if PROBE_GI

@@ -37,12 +37,11 @@
 // space and the loop continues in its BLAS; popping back to the entry depth moves it back), near
 // child first, the other hit children on a per-invocation stack (BVH4: sorted by entry distance
 // with a 5-comparator network and pushed far to near). One node fetch or one leaf per iteration
-// from one call site keeps a warp's lanes in step: 2.5-4x faster on an H100 than nested
-// TLAS/BLAS loops with the BLAS loop inlined at three call sites. The loop body is a step
-// function over per-invocation globals (rq_begin / rq_step), so a kernel may also interleave
-// steps with its own work; on the H100 this form was also 17-22% faster than the same body in a
-// loop over locals (NVIDIA's compiler schedules it better; a state struct passed inout was 20x
-// slower: it is copied). bvh4q decodes a node's 4 boxes
+// from one call site keeps a warp's lanes in step (several times faster than nested TLAS/BLAS
+// loops with the BLAS loop inlined at three call sites). The loop body is a step function over
+// per-invocation globals (rq_begin / rq_step), so a kernel may also interleave steps with its
+// own work; compilers schedule this form better than the same body in a loop over locals (a
+// state struct passed inout is copied, and was far slower). bvh4q decodes a node's 4 boxes
 // (one fma per plane whose only rounding is the add's: the float box bvh_wide.decode computes,
 // which holds the exact one) and slab-tests them with bvh4's float operations, near and far
 // planes picked by the ray's signs: it enters every box bvh4 enters, and a few more.

@@ -19,7 +19,7 @@ uint pcg_hash(uint v) {
 // (nested uniform scrambling seeded by the pixel, view, pass and group: per-pixel
 // decorrelation); the sample index runs over the frames (progressive). A group's pair is the
 // first two Sobol dimensions, a (0,2)-sequence, computed without a table (a table's lookups at
-// shuffled, per-lane indices serialise in the constant cache: measured 4x slower on an H200);
+// shuffled, per-lane indices serialise in the constant cache: measured 4x slower on a GPU);
 // rng_next3's third coordinate is a van der Corput point under its own shuffle (Burley's
 // padding). RAYVR_SAMPLER 0: the PCG hash (Jarzynski & Olano 2020), for comparisons.
 #ifndef RAYVR_SAMPLER

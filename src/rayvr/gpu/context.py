@@ -44,14 +44,16 @@ class Capabilities:
 
 
 # NVIDIA datacenter compute GPUs: graphics runs on only a few of their TPCs, so fragment work is
-# ~30x slower than compute there (H100: 14 ms raster vs a few ms ray-traced G-buffer). A heuristic
-# on the renderer string: A100/A800, H100/H200/H800/H20, GH200/GB200, B100/B200/B200A.
+# ~30x slower than compute there (the raster G-buffer takes several times the ray-traced one's
+# time). A heuristic on the renderer string: the A, H and B series' 100, 200, 800 and 20 parts,
+# with the G- and GB- superchips, as the pattern below spells them.
 _WEAK_RASTER = re.compile(r"\b(G?[AHB](?:100|200|800|20)[A-Z]?)\b")
 
 
 def is_weak_raster(renderer: str) -> bool:
     """True for NVIDIA datacenter compute GPUs without full graphics (a heuristic on the renderer
-    string, e.g. 'NVIDIA H100 80GB HBM3/PCIe/SSE2'); then a ray-traced G-buffer beats raster."""
+    string: the vendor, then a model the pattern above matches); then a ray-traced G-buffer beats
+    raster."""
     if "nvidia" not in renderer.lower():
         return False
     return _WEAK_RASTER.search(renderer.upper()) is not None

@@ -4,7 +4,7 @@ and the simple ones in `rayvr.passes.basic`.
 
 Every sub-folder that is a package is imported here, so its passes register themselves
 (`@register_pass`) and appear as `rayvr.passes.<ClassName>`: adding a pass is adding a folder
-(see docs/DESIGN.md, "Adding a pass").
+(see docs/adding-a-pass.md).
 """
 from __future__ import annotations
 

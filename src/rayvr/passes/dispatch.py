@@ -1,6 +1,12 @@
 """Workgroup shapes of the passes' compute dispatches: plain 2D tiles over every view, and the
-ray passes' tiles that span several views of a camera grid (glsl/ray_group.glsl)."""
+ray passes' tiles that span several views of a camera grid (glsl/ray_group.glsl).
+
+The ray passes take their tile and view count as properties (`tile`, `view_group`; checked here by
+`check_shape`), so an experiment with another shape is a property set, not
+an edit: the values reach the shaders as the RAY_GROUP_* defines."""
 from __future__ import annotations
+
+from ..errors import OptionError
 
 COMPUTE_GROUP = (8, 8)   # the local size of the passes' 2D compute shaders
 
@@ -34,6 +40,49 @@ def ray_group(views: int, tile: tuple[int, int] = COMPUTE_GROUP, view_group: int
         else:
             y //= 2
     return x, y, z
+
+
+def check_tile(pass_name: str, key: str, value) -> list[int]:
+    """A `tile` property: [x, y] pixels, positive integers, at most 1024 invocations (the GL
+    minimum of GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS). Returned as a list (it round-trips JSON)."""
+    try:
+        x, y = (_whole(v) for v in value)
+        ok = x >= 1 and y >= 1 and x * y <= 1024
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise OptionError(f"pass {pass_name}: property '{key}' must be [x, y], two positive integers with "
+                          f"x * y <= 1024 (a workgroup's pixels), got {value!r}")
+    return [x, y]
+
+
+def _whole(v) -> int:
+    """`v` as an int when it is a whole number (the viewer's vector fields give floats)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or int(v) != v:
+        raise ValueError(v)
+    return int(v)
+
+
+def check_view_group(pass_name: str, key: str, value) -> int:
+    """A `view_group` property: the views a workgroup spans, an integer >= 1 (1: one view)."""
+    try:
+        v = _whole(value)
+    except ValueError:
+        v = 0
+    if v < 1:
+        raise OptionError(f"pass {pass_name}: property '{key}' must be an integer >= 1 (views a workgroup "
+                          f"spans; 1: one view), got {value!r}")
+    return v
+
+
+def check_shape(pass_name: str, key: str, value):
+    """`value` checked when `key` names a workgroup shape property (`tile`, `view_group`, or those
+    names after a prefix: `probe_tile`); any other property's value as it is."""
+    if key == "tile" or key.endswith("_tile"):
+        return check_tile(pass_name, key, value)
+    if key == "view_group" or key.endswith("_view_group"):
+        return check_view_group(pass_name, key, value)
+    return value
 
 
 def ray_group_defines(group: tuple[int, int, int]) -> dict:

@@ -17,7 +17,7 @@ from .graph_data import GraphData
 
 
 class RenderGraph(GraphData):
-    """A named graph of render passes. See docs/CONTRACTS.md and DESIGN.md for the pass API."""
+    """A named graph of render passes. See docs/CONTRACTS.md and docs/adding-a-pass.md for the pass API."""
 
     # -- compile ---------------------------------------------------------------------------
     def plan(self, scene=None, size=(64, 64), views: int = 1, caps=None):

@@ -8,8 +8,8 @@ the TLAS, punctual lights, the render-space shift). `update(origin)` uploads onl
 a head that moves rewrites the 32-byte shift, edits rebuild their part, materials re-upload when
 `scene.materials.version` moved. `bvh_layout` picks the node layout of both BVH levels: "bvh2"
 (bvh.py's 64 B BVH2 nodes), "bvh4" (bvh_wide.py's 112 B BVH4 nodes, collapsed from the same BVH2
-builds; the default: fastest on the H100) or "bvh4q" (the same BVH4 with 8-bit quantised child
-boxes, 64 B: 6 B/triangle less, but 10-20% slower to trace there, its decode costing more than its
+builds; the default, the fastest to trace) or "bvh4q" (the same BVH4 with 8-bit quantised child
+boxes, 64 B: 6 B/triangle less, but slower to trace on GPUs, its decode costing more than its
 bytes save); ray_query.glsl follows the RQ_BVH_WIDTH and RQ_BVH_QUANTIZED of `defines()`.
 """
 from __future__ import annotations

@@ -38,8 +38,8 @@ PARALLEL_VIEW_PIXELS = 256 * 256    # smaller views (llvmpipe's study sizes): th
 
 def default_workers(view_pixels: int) -> int:
     """Workers for views of `view_pixels` pixels: os.cpu_count() - 2, at least 1 (two cores stay
-    with the process that drives the GPU and its driver's thread: with 15 workers on 16 cores the
-    H200 study's frames took 36-50 ms of wall time for 0.6 ms of GPU work; RAYVR_METRIC_WORKERS
+    with the process that drives the GPU and its driver's thread: with 15 workers on 16 cores a
+    study's frames took 36-50 ms of wall time for 0.6 ms of GPU work; RAYVR_METRIC_WORKERS
     wins), 0 (judged here) below PARALLEL_VIEW_PIXELS."""
     env = os.environ.get("RAYVR_METRIC_WORKERS")
     if env is not None and env.strip():
@@ -117,9 +117,8 @@ class MetricPool:
     def quiet(self):
         """The workers stopped (SIGSTOP, where the OS has it) while the block runs, then continued:
         for timing the GPU. Timer queries count the GPU's idle time between a pass's commands, and
-        busy workers starve the thread that submits them: on the H200 the first rows of the tauray
-        study, timed while 14 workers judged, took up to 1.7x their GPU time (G-buffer 1.08 and 1.01
-        against 0.64 ms, Shadows 3.28 against 2.10)."""
+        busy workers starve the thread that submits them (timed while 14 workers judged, a study's
+        rows read up to 1.7x their GPU time)."""
         stop = getattr(signal, "SIGSTOP", None)
         processes = list(getattr(self.executor, "_processes", {}).values()) if self.executor is not None else []
         stopped = []

@@ -29,10 +29,10 @@ import time
 
 # Relative seconds per unit before any step of the kind was timed (llvmpipe's ratios).
 PRIOR = {"render": 2.5e-6, "metric": 2.5e-6, "setup": 0.4}
-# A GPU renders a unit this much faster, relative to a CPU core's metrics, than llvmpipe (H200,
-# Cornell study at 2x1440x1600: 2.8e-9 s a unit for the reference, 1.3e-6 for a judged image's
-# metrics, on one core each; without it the first ETA, learned from a judgement, said 60,497 s
-# for a 335 s study).
+# A GPU renders a unit this much faster, relative to a CPU core's metrics, than llvmpipe (a
+# datacenter GPU's Cornell study at 2x1440x1600: 2.8e-9 s a unit for the reference, 1.3e-6 for a
+# judged image's metrics, on one core each; without it the first ETA, learned from a judgement,
+# was 180x the study's length).
 HARDWARE_RENDER_SCALE = 2e-3
 
 

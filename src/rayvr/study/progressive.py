@@ -71,9 +71,9 @@ def render_mean(scene, graph, pin: str, view_set, frames: int, first_frame: int,
 def read_after(renderer, pin: str, counts, tick=None):
     """Render on, yielding a Snapshot of `pin` after each of the (increasing) frame `counts`;
     its wall seconds count the rendering only (the GPU finished before each reading). Each frame
-    is finished before the next is submitted: on the H200 a reference's 32 frames of 16 spp at
-    2x1440x1600 (~19 s of GPU work) queued between two readings left the running mean as it was
-    at the first (its halves came out identical), where a reading every 4 frames did not."""
+    is finished before the next is submitted: a reference's 32 frames of 16 spp at 2x1440x1600
+    (~19 s of GPU work) queued between two readings have left the running mean as it was at the
+    first (its halves came out identical), where a reading every 4 frames did not."""
     wall, done = 0.0, 0
     renderer.gl.finish()
     for count in counts:

@@ -180,7 +180,7 @@ class Reference:
     @property
     def halves_identical(self) -> bool:
         """Whether A and B are equal to the bit: light without noise at these settings (one point
-        light, direct light only), or a half that was never added (as the H200 once gave it)."""
+        light, direct light only), or a half that was never added (a GPU has given that)."""
         return bool(np.array_equal(self.half_a[..., :3], self.half_b[..., :3]))
 
     def stopped(self) -> str:

@@ -13,7 +13,7 @@ import time
 
 from ..errors import OptionError
 
-GPU_WARM_UP_S = 0.5    # an idle H100 clocks at ~345 MHz and needs a moment of load to reach ~1980 MHz
+GPU_WARM_UP_S = 0.5    # an idle GPU clocks down (to a sixth of its boost clock) and needs a moment of load
 SETTLE_WINDOW_S = 0.1  # after the warm-up's seconds, frames are timed (wall clock) in windows this long...
 SETTLE_TOLERANCE = 0.03   # ...until two windows' mean frame times agree this closely
 MAX_SETTLE_S = 1.0     # at most this long more
@@ -31,11 +31,10 @@ class Timing:
 
 
 def warm_up(renderer, seconds: float) -> None:
-    """Render until `seconds` have passed, so that a GPU which idled (an H100 drops to ~345 MHz)
-    has its clocks up before anything is timed; then on, in windows of SETTLE_WINDOW_S, until
-    two windows' mean frame times agree within SETTLE_TOLERANCE or MAX_SETTLE_S more have passed
-    (the H200 study's first rows, after a fixed 0.5 s, read up to 1.3x the later rows' G-buffer
-    time)."""
+    """Render until `seconds` have passed, so that a GPU which idled has its clocks up before
+    anything is timed; then on, in windows of SETTLE_WINDOW_S, until two windows' mean frame times
+    agree within SETTLE_TOLERANCE or MAX_SETTLE_S more have passed (a fixed 0.5 s alone left a
+    study's first rows reading up to 1.3x the later rows' G-buffer time)."""
     if seconds <= 0:
         return
     until = time.perf_counter() + seconds

@@ -5,8 +5,8 @@ Every material is set to one level at a time (RASTER first, as the base). From e
   an idle GPU's clocks are low). The passes that dispatch over EffectCompaction's pixel lists
   (shadows, reflections, path tracing) cost in proportion to their pixels: material m's share of
   them is its pixel count over all geometry pixels. Passes the base already has change with the
-  level too (direct lighting shrinks where rays light the pixels instead: tauray's took 0.48 ms
-  all RASTER and 0.06 all SHADOWS on the H200), and their change is shared the same way, so a
+  level too (direct lighting shrinks where rays light the pixels instead: on tauray to an eighth
+  from all RASTER to all SHADOWS), and their change is shared the same way, so a
   level on every material is predicted as the probe measured it (taken as unchanged, they made
   the model's all-SHADOWS frame 0.9 ms dearer than the study's row). Passes the level adds that
   are not list-driven (compaction, accumulation) are the level's fixed overhead.

@@ -20,8 +20,8 @@ from .cost_probe import ErrorJudge, probe_cost_model, render_assignment
 
 # The graph options the tuner tries beside each material's effect (those the graph builder takes):
 # probe GI lights RASTER, SHADOWS and REFLECTIONS materials indirectly; SVGF denoises the one-sample
-# light of every lit pixel (hybrid) or path (path_traced); both together were the least error per ms of
-# the four on tauray (H200, 2x720x800: FLIP 0.225 in 1.79 ms against 0.318 in 1.29 with probe GI alone).
+# light of every lit pixel (hybrid) or path (path_traced); both together can be the least error per ms
+# of the four (benchmarks/RESULTS.md has the tauray study), so the tuner tries each.
 OPTION_SETS = tuple(realtime_option_sets())   # none, each real-time value alone, all together
 # The keys of a study's configurations that tuned_study tries (OIDN, offline, never: it is no GPU time).
 TUNED_OPTIONS = tuple(o.name for o in OPTIONS)

@@ -4,7 +4,7 @@ from __future__ import annotations
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
-from ..dispatch import COMPUTE_GROUP, groups_2d, ray_group, ray_group_defines
+from ..dispatch import COMPUTE_GROUP, check_shape, groups_2d, ray_group, ray_group_defines
 from ..effects import effect_defines
 from ..gbuffer import channels
 from ..probe_gi import inputs as probe_inputs
@@ -31,12 +31,14 @@ class HybridComposite(RenderPass):
     EFFECT, DIRECT, SHADOWED, REFLECTION, PATH_TRACED = "effect", "direct", "shadowed", "reflection", "pathTraced"
     EMISSIVE, PATH_DIFFUSE, PATH_SPECULAR = "emissive", "pathDiffuse", "pathSpecular"
     COLOR, DIFFUSE, SPECULAR = "color", "diffuse", "specular"
-    # With the probe lookups, one-warp workgroups spanning 4 views of a camera grid (passes.dispatch.
-    # ray_group): 8x8 tiles of one view cost them a fifth more; without, 8x8 tiles of one view, which
-    # take half the time of 8x4 ones (benchmarks/RESULTS.md, session 11).
-    PROBE_TILE = (8, 4)
-    PROBE_VIEW_GROUP = 4
-    PROPERTIES = {"lobes": False}
+    # `probe_tile`, `probe_view_group`: with the probe lookups, one-warp workgroups spanning 4 views
+    # of a camera grid (passes.dispatch.ray_group), because neighbouring views' lookups share probes
+    # (8x8 tiles of one view cost them a fifth more); without probes, 8x8 tiles of one view, which
+    # take half the time of 8x4 ones (benchmarks/RESULTS.md has the measurements).
+    PROPERTIES = {"lobes": False, "probe_tile": [8, 4], "probe_view_group": 4}
+
+    def validate_property(self, key, value):
+        return check_shape(self.name, key, super().validate_property(key, value))
 
     def reflect(self, cd):
         r = Reflection()
@@ -73,7 +75,7 @@ class HybridComposite(RenderPass):
             defines["PROBE_GI"] = 1
             self._probe_sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR),
                                                           repeat_x=False, repeat_y=False))
-        self._group = (ray_group(cd.views, self.PROBE_TILE, self.PROBE_VIEW_GROUP) if self._probes
+        self._group = (ray_group(cd.views, tuple(self.probe_tile), self.probe_view_group) if self._probes
                        else (*COMPUTE_GROUP, 1))
         self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group)}
         self._prog = self.compute_program(ctx.gl, "composite.comp", {**effect_defines(), **self._defines})

@@ -1,13 +1,15 @@
 """GBufferAuto: GBufferRaster or GBufferRT, chosen when the graph compiles (the driver is known).
 
 Raster unless the GPU's fragment work is weak against its compute (Capabilities.weak_raster:
-NVIDIA datacenter compute GPUs); llvmpipe and desktop GPUs rasterise. `mode` forces either.
+datacenter compute GPUs); llvmpipe and desktop GPUs rasterise. `mode` forces either. `tile` and
+`view_group` are GBufferRT's workgroup shape (the raster G-buffer has none).
 """
 from __future__ import annotations
 
 from ...errors import OptionError
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, RenderPass
+from ..dispatch import check_shape
 from . import reflection_cutoff
 from .raster import GBufferRaster, check_multiview, gbuffer_reflection
 from .rt import GBufferRT
@@ -32,7 +34,8 @@ class GBufferAuto(RenderPass):
     """The G-buffer through GBufferRaster or GBufferRT (see the module docstring). After compile,
     `chosen` is 'raster' or 'rt' and `why` says why; defines() shows both in the compile report."""
 
-    PROPERTIES = {"mode": "auto", "multiview": "auto", "cull_back_faces": False, reflection_cutoff.PROPERTY: 1.0}
+    PROPERTIES = {"mode": "auto", "multiview": "auto", "cull_back_faces": False, reflection_cutoff.PROPERTY: 1.0,
+                  "tile": GBufferRT.PROPERTIES["tile"], "view_group": GBufferRT.PROPERTIES["view_group"]}
     USES_SCENE = True
 
     def validate_property(self, key, value):
@@ -41,6 +44,7 @@ class GBufferAuto(RenderPass):
             raise OptionError(f"pass {self.name}: property 'mode' is {value!r}; use auto, raster or rt")
         if key == reflection_cutoff.PROPERTY:
             return reflection_cutoff.validate(self.name, value)
+        value = check_shape(self.name, key, value)
         return check_multiview(self.name, value) if key == "multiview" else value
 
     def reflect(self, cd):
@@ -51,7 +55,8 @@ class GBufferAuto(RenderPass):
         self.chosen, self.why = choose_gbuffer(self.mode, ctx.caps, self.cull_back_faces)
         self.release()
         if self.chosen == "rt":
-            self.impl = GBufferRT(reflection_max_roughness=self.reflection_max_roughness)
+            self.impl = GBufferRT(reflection_max_roughness=self.reflection_max_roughness, tile=self.tile,
+                                  view_group=self.view_group)
         else:
             self.impl = GBufferRaster(multiview=self.multiview, cull_back_faces=self.cull_back_faces,
                                       reflection_max_roughness=self.reflection_max_roughness)

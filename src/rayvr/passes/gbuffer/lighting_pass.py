@@ -1,18 +1,32 @@
 """The anatomy the G-buffer lighting passes share (DirectLighting, RTShadows, RTReflections): the
 G-buffer channels as inputs, one rgba16f radiance output, and for the ray passes either the
-compaction's pixel list (indirect dispatch) or the whole image in small tiles (PIXELS_2D). The
-optional probe inputs (rayvr.passes.probe_gi.inputs), when connected, compile PROBE_GI in: the
-shader adds the probes' indirect diffuse light (glsl/probe_gi.glsl)."""
+compaction's pixel list (indirect dispatch) or the whole image in small tiles (property
+`dispatch_mode`). The optional probe inputs (rayvr.passes.probe_gi.inputs), when connected, compile
+PROBE_GI in: the shader adds the probes' indirect diffuse light (glsl/probe_gi.glsl)."""
 from __future__ import annotations
 
+from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...materials.effect import Effect
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
-from ..dispatch import COMPUTE_GROUP, groups_2d, ray_group, ray_group_defines
+from ..dispatch import COMPUTE_GROUP, VIEW_GROUP, check_shape, groups_2d, ray_group, ray_group_defines
 from ..effects import effect_defines, effects_used, scene_defines
 from ..probe_gi import inputs as probe_inputs
 from . import channels
+
+# The ray passes' `dispatch_mode` property: "image" runs over the whole image in `tile`-sized
+# workgroups, where the pixels whose effect needs no such rays leave at once; "list" runs over the
+# compaction's pixel list (indirect dispatch); "auto" takes the image unless a material is PATH_TRACED. Same
+# pixels, same random numbers, same image. Neighbouring pixels in one warp trace alike rays; the
+# list's tiles come in random order and a warp often straddles two of them.
+DISPATCHES = ("auto", "image", "list")
+TILE = [8, 4]   # one warp (ray_group spreads it over views)
+
+
+def ray_properties(view_group: int = VIEW_GROUP) -> dict:
+    """The properties of a lighting pass with a pixel list: its dispatch and workgroup shape."""
+    return {"dispatch_mode": "auto", "tile": list(TILE), "view_group": view_group}
 
 
 class GBufferLightingPass(RenderPass):
@@ -25,15 +39,15 @@ class GBufferLightingPass(RenderPass):
     OUTPUT_DESC = ""
     PIXEL_LIST: str | None = None   # input pin of the pixel list, for indirect dispatch
     SALT = 0
-    # A pass with a pixel list may instead run over the whole image in TILE-sized workgroups, where
-    # the pixels whose effect needs no such rays leave at once: True, False (the list), or None
-    # (the image unless a material is PATH_TRACED). Same pixels, same random numbers, same image.
-    # Neighbouring pixels in one warp trace alike rays; the list's tiles come in random order and
-    # a warp often straddles two of them.
-    PIXELS_2D: bool | None = None
-    TILE = (8, 4)   # one warp (ray_group spreads it over views)
-    VIEW_GROUP: int | None = None   # views a workgroup spans in a camera grid (None: dispatch.VIEW_GROUP)
     LOWEST_EFFECT = Effect.RASTER   # the pixels it lights: this effect and above
+    CHOICES = {"dispatch_mode": DISPATCHES}
+
+    def validate_property(self, key, value):
+        value = super().validate_property(key, value)
+        if key == "dispatch_mode" and value not in DISPATCHES:
+            raise OptionError(f"pass {self.name}: property 'dispatch_mode' is {value!r}; use 'auto' (the whole "
+                              f"image unless a material is PATH_TRACED), 'image' or 'list' (the compaction's pixels)")
+        return check_shape(self.name, key, value)
 
     def reflect(self, cd):
         r = Reflection()
@@ -68,7 +82,10 @@ class GBufferLightingPass(RenderPass):
 
     def compile(self, ctx, cd):
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
-        self._group = ray_group(cd.views, self.TILE, self.VIEW_GROUP)
+        if self.PIXEL_LIST:   # the ray passes: the shape is theirs to set
+            self._group = ray_group(cd.views, tuple(self.tile), self.view_group)
+        else:
+            self._group = ray_group(cd.views, tuple(TILE))
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": self.SALT, **self.shader_defines(),
                          "PIXELS_2D": int(self._pixels_2d), **ray_group_defines(self._group)}
         if self.PIXEL_LIST and not self._pixels_2d:
@@ -86,8 +103,8 @@ class GBufferLightingPass(RenderPass):
         self._groups = groups_2d(cd.size, cd.views, self._group if self._pixels_2d else COMPUTE_GROUP)
 
     def _dispatch_2d(self, cd) -> bool:
-        if self.PIXELS_2D is not None:
-            return self.PIXELS_2D
+        if self.dispatch_mode != "auto":
+            return self.dispatch_mode == "image"
         # A PATH_TRACED pixel may be on the path tracer's list instead of this one: only the list knows.
         used = effects_used(cd)
         return used is not None and Effect.PATH_TRACED not in used

@@ -12,7 +12,7 @@ from __future__ import annotations
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import RenderPass
-from ..dispatch import groups_2d, ray_group, ray_group_defines
+from ..dispatch import check_shape, groups_2d, ray_group, ray_group_defines
 from ..effects import effect_defines, scene_defines
 from . import channels, reflection_cutoff
 from .raster import gbuffer_reflection
@@ -23,22 +23,22 @@ class GBufferRT(RenderPass):
     """Traces one primary ray per pixel and view (pixel centre + the view's jitter) and writes the
     G-buffer targets (see the module docstring)."""
 
-    PROPERTIES = {reflection_cutoff.PROPERTY: 1.0}
+    # `tile`, `view_group`: a workgroup of one warp, a 4x8 tile, in a camera grid 4x4 pixels of 2
+    # views (workgroups of 64 invocations take about twice as long: benchmarks/RESULTS.md, "views a
+    # ray pass's workgroup spans").
+    PROPERTIES = {reflection_cutoff.PROPERTY: 1.0, "tile": [4, 8], "view_group": 2}
     USES_SCENE = True
-    # A workgroup of one warp: a 4x8 tile, in a camera grid 4x4 pixels of 2 views (benchmarks/RESULTS.md,
-    # "views a ray pass's workgroup spans": 64 invocations cost 64 views of 512x683 6.12 ms against 3.18).
-    TILE = (4, 8)
-    VIEW_GROUP = 2
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
+        value = check_shape(self.name, key, value)
         return reflection_cutoff.validate(self.name, value) if key == reflection_cutoff.PROPERTY else value
 
     def reflect(self, cd):
         return gbuffer_reflection()
 
     def compile(self, ctx, cd):
-        self._group = ray_group(cd.views, self.TILE, self.VIEW_GROUP)
+        self._group = ray_group(cd.views, tuple(self.tile), self.view_group)
         self._defines = {**scene_defines(ctx), **effect_defines(), **ray_group_defines(self._group),
                          **reflection_cutoff.defines(self.reflection_max_roughness)}
         self._prog = self.compute_program(ctx.gl, "gbuffer_rt.comp", self._defines)

@@ -45,24 +45,17 @@ RNG_SALT = 7
 
 @register_pass
 class PathTracer(RenderPass):
-    """Path-traced radiance per pixel (see the module docstring for the two modes).
+    """Path-traced radiance per pixel (the module docstring has the two modes and the outputs).
 
-    Properties: `samples_per_pixel` (paths per pixel per frame), `max_bounces` (scattering events;
-    1 = direct light only, 0 = emission only), `rr_start` (bounce from which Russian roulette
-    may end a path), `clamp` (0 = off; > 0 caps each sample's radiance per channel, biased),
-    `pixel_jitter` (random sub-pixel offsets in
-    "full" mode: anti-aliasing once accumulated; off: pixel centres moved by the views' TAA
-    jitter), `mode` ("full" or "gbuffer"), `sampler` ("sobol": hash-based Owen-scrambled Sobol,
-    the default; "pcg": independent PCG hash samples, for comparisons), `lobes` (also the
-    `diffuse` and `specular` outputs; then Russian roulette never ends a path at its first
-    vertex, and `clamp` caps each lobe of a sample on its own), `kernel` ("wavefront": the rays of every
-    path's vertex in a dispatch of their own, between dispatches that do the rest
-    (pt_wave_*.comp), through a state buffer of 160 bytes a pixel (176 where the scene transmits,
-    64 more with lobes), the `paths` scratch output; on the H200 1.6-2.6x faster than
-    "megakernel": all of a path's rays in one
-    invocation, no state buffer, and on llvmpipe the faster one, whose dispatches cost more than
-    a GPU's; "auto", the default: the wavefront on GPUs, the megakernel on software renderers,
-    the `paths` buffer declared either way; the same paths in every form)."""
+    Properties: `samples_per_pixel`, `max_bounces` (scattering events; 0: emission only),
+    `rr_start` (the first bounce Russian roulette may end), `clamp` (0: off; > 0 caps each sample's
+    radiance, biased), `pixel_jitter`, `mode`, `sampler` ("sobol" or "pcg"), `lobes` (the
+    `diffuse` and `specular` outputs; Russian roulette then spares the first vertex) and `kernel`:
+    "wavefront" traces each path vertex's rays in a dispatch of their own, the paths' state in the
+    `paths` buffer between them, so that the BSDF's registers do not cost the traversal its
+    occupancy; "megakernel" traces a whole path in one invocation (no state, fewer dispatches: the
+    faster form on software renderers); "auto" takes the wavefront on GPUs and the megakernel on
+    software renderers. Every form traces the same paths with the same random numbers."""
 
     COLOR = "color"
     DIFFUSE, SPECULAR = "diffuse", "specular"

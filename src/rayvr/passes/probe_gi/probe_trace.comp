@@ -1,9 +1,8 @@
 // Stage 1 of a probe update (rayvr.passes.ProbeGI; records in probe_rays.glsl): each invocation
 // traces one direction of a spherical Fibonacci set, turned by this update's random rotation, from
-// its probe and records the closest hit. Nothing else happens here: on the H200 the traversal
-// kernel runs 3x faster without the shading's registers beside it (16^3 x 128 rays: 0.20 ms
-// alone, 0.60 with the hit's shading, 0.83 with its shadow ray too), so shading and the shadow ray
-// are stages of their own.
+// its probe and records the closest hit. Nothing else happens here: the traversal kernel runs
+// about 3x faster without the shading's registers beside it, so shading and the shadow ray are
+// stages of their own (benchmarks/RESULTS.md, "where the probe update's time went").
 #define PROBE_GI 1
 #include "probe_rays.glsl"
 #include "ray_query.glsl"

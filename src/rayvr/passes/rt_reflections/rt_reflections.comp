@@ -10,8 +10,8 @@
 // with PROBE_RECORDS (the graph's way) this kernel only records what the lookups need
 // (glsl/probe_records.glsl: one record per view and bounce, an empty one past the path's end) and
 // rt_reflections_probes.comp, dispatched after it over the same pixels, looks them up and adds
-// them (the lookup's registers here cost the traversal its occupancy: 6.15 ms against 1.73 ms
-// without probes, tauray on the H200); with PROBE_GI instead they are looked up in this kernel
+// them (the lookup's registers here would cost the traversal its occupancy: several times
+// slower); with PROBE_GI instead they are looked up in this kernel
 // (only tests compile that, as the reference).
 #define GBUF_READER 1
 #include "views.glsl"

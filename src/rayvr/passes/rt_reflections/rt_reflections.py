@@ -6,7 +6,7 @@ from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access
 from ..effects import unused_effect_reason
-from ..gbuffer.lighting_pass import GBufferLightingPass
+from ..gbuffer.lighting_pass import GBufferLightingPass, ray_properties
 from ..probe_gi import inputs as probe_inputs
 
 RECORD_BYTES = 32   # one probe record: two rgba32ui texels (glsl/probe_records.glsl)
@@ -39,10 +39,9 @@ class RTReflections(GBufferLightingPass):
     PIXEL_LIST = "pixels"
     LOWEST_EFFECT = Effect.REFLECTIONS
     SALT = 3
-    PROPERTIES = {"max_bounces": 1, "light_samples": 1}
-    # Not a property: False looks the probes up in the traversal kernel, as before the records
-    # (the reference tests/test_probe_gi.py compares the deferred lookups with).
-    DEFER_PROBES = True
+    # defer_probes False looks the probes up in the traversal kernel, one dispatch and no records:
+    # the reference tests/test_reflection_probe_records.py compares the deferred lookups with.
+    PROPERTIES = {"max_bounces": 1, "light_samples": 1, **ray_properties(), "defer_probes": True}
 
     def skip_reason(self, cd):
         return unused_effect_reason(cd, Effect.REFLECTIONS)
@@ -56,7 +55,7 @@ class RTReflections(GBufferLightingPass):
 
     def defers_probes(self, cd) -> bool:
         """Whether the probe lookups run in the second dispatch (probe inputs bound and read)."""
-        return bool(self.DEFER_PROBES) and probe_inputs.bound(cd) and self.probes_unused(cd) is None
+        return bool(self.defer_probes) and probe_inputs.bound(cd) and self.probes_unused(cd) is None
 
     def record_bytes(self, size, views: int) -> int:
         """The probe records' memory at a per-view `size` (both scratch outputs)."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ..effects import unused_effect_reason
-from ..gbuffer.lighting_pass import GBufferLightingPass
+from ..gbuffer.lighting_pass import GBufferLightingPass, ray_properties
 
 
 @register_pass
@@ -20,8 +20,7 @@ class RTShadows(GBufferLightingPass):
     PIXEL_LIST = "pixels"
     LOWEST_EFFECT = Effect.SHADOWS
     SALT = 2
-    PROPERTIES = {"light_samples": 1}
-    VIEW_GROUP = 16
+    PROPERTIES = {"light_samples": 1, **ray_properties(view_group=16)}
 
     def skip_reason(self, cd):
         return unused_effect_reason(cd, Effect.SHADOWS)

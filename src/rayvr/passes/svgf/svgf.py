@@ -22,7 +22,7 @@ key (`key0/1`, rg32ui: linear depth, 0 where nothing was drawn, and octahedral n
 texel holding both lobes' illumination and variance (`filter0/1`, rgba32ui float16 pairs; rgba16f
 without `specular`). The effect word and history length only the reprojection compares
 (`surface0/1`). (A workgroup tile in shared memory, loaded once per iteration, fetches fewer
-texels and measured 1.7x slower on the H200: docs/DESIGN.md.)
+texels but measured 1.7x slower: benchmarks/RESULTS.md.)
 The colour history is the output of a-trous iteration `feedback_tap` as in the paper (0: the
 first), or with `feedback_tap` -1 (the default) the unfiltered temporal mean. Fed back, the
 filter's blur compounds frame after frame: on the Cornell box at 32x32 and 1 spp, 16 still

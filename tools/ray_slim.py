@@ -2,8 +2,8 @@
 """Builds .whlr/: a slim Ray wheel and the wheels of Ray's runtime dependencies that the lent GPU
 machine lacks, small enough to carry there (64 MiB per call for the whole tree; this is ~36 MB).
 
-    python3 tools/ray-slim                 # ray 2.60.0 (what CI's `pip install .[cluster]` gets now), cp312
-    python3 tools/ray-slim --version 2.60.0 --python 3.12 --out .whlr --wheel /tmp/raywhl/ray-...whl
+    python3 tools/ray_slim.py                 # ray 2.60.0 (what CI's `pip install .[cluster]` gets now), cp312
+    python3 tools/ray_slim.py --version 2.60.0 --python 3.12 --out .whlr --wheel /tmp/raywhl/ray-...whl
 
 The GPU machine (Python 3.12, x86-64, no network) installs them with tools/gpu-bench (pip install
 --no-index --no-deps --target /tmp/site .whl/*.whl .whlr/*.whl); carry [".gl", ".whl", ".whlr", ".scenes"].
@@ -31,7 +31,6 @@ import base64
 import csv
 import hashlib
 import io
-import os
 import shutil
 import subprocess
 import sys
@@ -120,7 +119,7 @@ def slim(wheel: Path, out_dir: Path, strip: bool) -> Path:
                 zi.compress_type = zipfile.ZIP_DEFLATED
                 zout.writestr(zi, data, compresslevel=9)
                 records.append(record_line(name, data))
-            note = ("Slimmed by rayvr's tools/ray-slim from " + wheel.name + " for rayvr.cluster (local Ray, no "
+            note = ("Slimmed by rayvr's tools/ray_slim.py from " + wheel.name + " for rayvr.cluster (local Ray, no "
                     "dashboard UI, no Java, no libraries).\nRemoved (uncompressed bytes):\n" +
                     "".join(f"  {d} {n}\n" for d, n in removed.items()) +
                     "Symbol tables stripped:\n" + "".join(f"  {s}\n" for s in stripped)).encode()

@@ -5,11 +5,12 @@ files are written); the table gives, per benchmark row and number column, the me
 side, the relative change and the spread of the rounds (max - min over median), which is the
 noise a change must beat.
 
-    git archive <base> | (mkdir -p .ab/base && tar -x -C .ab/base)      # here, before the run
-    python3 tools/gpu-ab --base .ab/base --rounds 5 -- rays --scenes .scenes/tauray_test.glb
-    python3 tools/gpu-ab --base .ab/base --rounds 5 --suite issue10     # rays, hybrid, views, pt
+    python3 tools/ab_trees.py <base> base                                # here, before the run: .ab/base
+    python3 tools/gpu_ab.py --base .ab/base --rounds 5 -- rays --scenes .scenes/tauray_test.glb
+    python3 tools/gpu_ab.py --base .ab/base --rounds 5 --suite issue10     # rays, hybrid, views, pt
 
-On the device machine, run it after gpu-prep's preamble (carry .gl, .whl, .scenes and .ab).
+On the device machine, run it after the preamble that ../shared/tools/gpu-prep prints (carry .gl,
+.whl, .scenes and .ab).
 """
 from __future__ import annotations
 

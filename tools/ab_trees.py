@@ -1,0 +1,77 @@
+#!/usr/bin/env python3
+"""Other commits checked out beside this one, for A/B runs (tools/pt_variants.py, tools/gpu_ab.py).
+
+    python3 tools/ab_trees.py COMMIT [NAME]     # .ab/NAME: a git worktree at COMMIT (NAME: its short hash)
+    python3 tools/ab_trees.py --list
+    python3 tools/ab_trees.py --remove NAME
+
+Each tree is a detached `git worktree` under .ab/ (ignored by git), so it shares this clone's
+objects and needs no copy of the history. Run it here, before a device call, and carry `.ab`
+with the call (a nested checkout travels only when carry names it): then
+`python3 tools/pt_variants.py OUT.jsonl NAME:base base` or `python3 tools/gpu_ab.py --base .ab/NAME ...`.
+"""
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+AB = ROOT / ".ab"
+
+
+def git(*args: str) -> str:
+    return subprocess.run(["git", "-C", str(ROOT), *args], check=True, capture_output=True, text=True).stdout.strip()
+
+
+def add(commit: str, name: str | None) -> Path:
+    """A detached worktree of `commit` at .ab/NAME (replacing one of that name)."""
+    full = git("rev-parse", "--verify", f"{commit}^{{commit}}")
+    name = name or git("rev-parse", "--short", full)
+    path = AB / name
+    if path.exists():
+        remove(name)
+    AB.mkdir(exist_ok=True)
+    git("worktree", "add", "--detach", str(path), full)
+    return path
+
+
+def remove(name: str) -> None:
+    path = AB / name
+    if not path.exists():
+        raise SystemExit(f"no tree .ab/{name}")
+    git("worktree", "remove", "--force", str(path))
+
+
+def listed() -> list[str]:
+    """'NAME COMMIT' of each tree under .ab/."""
+    out = []
+    for block in git("worktree", "list", "--porcelain").split("\n\n"):
+        fields = dict(line.split(" ", 1) for line in block.splitlines() if " " in line)
+        path = Path(fields.get("worktree", ""))
+        if path.parent == AB:
+            out.append(f"{path.name} {fields.get('HEAD', '?')[:10]}")
+    return out
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("commit", nargs="?", help="the commit (any git revision)")
+    p.add_argument("name", nargs="?", help="the tree's folder under .ab/ (default: the commit's short hash)")
+    p.add_argument("--list", action="store_true")
+    p.add_argument("--remove", metavar="NAME")
+    args = p.parse_args(argv)
+    if args.list:
+        print("\n".join(listed()) or "(no trees)")
+    elif args.remove:
+        remove(args.remove)
+    elif args.commit:
+        print(add(args.commit, args.name))
+    else:
+        p.error("name a commit, --list or --remove NAME")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
