@@ -23,7 +23,6 @@ from ..errors import OptionError
 from ..study import seeds
 from .options import MAX_VIEWS, integer, number, views_count
 
-TRAJECTORY_NONE = "none"
 MAX_FRAMES = 100_000
 MAX_SPP = 1024
 MAX_BOUNCES = 64
@@ -139,30 +138,16 @@ class StudyPlan:
     Refuses (OptionError, OutputError) before anything is rendered or written."""
 
     def __init__(self, args, gpu):
-        from ..study import Display, Motion, ReferenceSettings, StudySettings
+        from ..study import Display
         from ..study.defaults import machine_defaults
         from ..study.metrics import METRICS
+        from ..study.plan import plan_settings
         from ..xr.presets import get_preset
         from .options import parse_size
 
         d = machine_defaults(gpu)
-        chosen = {}
-
-        def pick(value, option, default):
-            if value is None:
-                chosen[option] = default
-                return default
-            return value
-
         self.size = parse_size(args.size, views=args.views) if args.size else parse_size(
             f"{d.size[0]}x{d.size[1]}", "the default --size", views=args.views)
-        if not args.size:
-            chosen["--size"] = f"{d.size[0]}x{d.size[1]}"
-        for option in ("reference_frames", "reference_max_frames"):
-            value = getattr(args, option)
-            if value is not None and value % 2:
-                raise OptionError(f"--{option.replace('_', '-')} {value}: the reference is two equal halves; "
-                                  f"give an even number")
         get_preset(args.preset)
         metrics = parse_list(args.metrics, "--metrics", str.lower)
         for m in metrics:
@@ -171,39 +156,14 @@ class StudyPlan:
         self.spp = parse_list(args.spp, "--spp", parse_spp)
         self.views = args.views
         self.display = Display(args.tonemap.lower(), parse_exposure(args.exposure))
-        frames = pick(args.reference_frames, "--reference-frames", d.reference_frames)
-        fixed = (args.reference_frames is not None and args.reference_max_frames is None
-                 and args.reference_seconds is None)       # a count given alone is rendered as it is
-        max_frames = None if fixed else pick(args.reference_max_frames, "--reference-max-frames",
-                                             max(d.reference_max_frames, frames))
-        if max_frames is not None and max_frames < frames:
-            raise OptionError(f"--reference-max-frames {max_frames}: fewer than the first round's {frames} frames "
-                              f"(--reference-frames); give at least {frames}")
-        self.reference = ReferenceSettings(frames, pick(args.reference_spp, "--reference-spp", d.reference_spp),
-                                           args.bounces, args.tolerance, args.bounce_tolerance,
-                                           max_frames=max_frames,
-                                           max_seconds=None if fixed else pick(args.reference_seconds,
-                                                                               "--reference-seconds",
-                                                                               d.reference_seconds))
-        motion = None
-        if args.trajectory != TRAJECTORY_NONE:
-            frames = pick(args.motion_frames, "--motion-frames", d.motion_frames)
-            samples = pick(args.motion_samples, "--motion-samples", d.motion_samples)
-            motion = Motion(args.trajectory, frames, min(samples, frames), get_preset(args.preset).default_refresh)
-            if not args.trajectory.lower().endswith(".json"):
-                from ..xr.trajectory import TRAJECTORIES
-
-                if args.trajectory not in TRAJECTORIES:
-                    raise OptionError(f"--trajectory {args.trajectory}: use one of {', '.join(TRAJECTORIES)}, "
-                                      f"a pose-log .json or none")
-        self.settings = StudySettings(
-            frames=pick(args.frames, "--frames", d.frames),
-            timing_frames=pick(args.timing_frames, "--timing-frames", d.timing_frames),
-            warmup=pick(args.warmup, "--warmup", d.warmup), warmup_s=args.warmup_s, motion=motion,
-            floors=not args.no_floors,
-            floor_fraction=pick(args.floor_fraction, "--floor-fraction", d.floor_fraction),
-            progressive_frames=pick(args.progressive_frames, "--progressive-frames", d.progressive_frames),
-            preset=args.preset, ppd=args.ppd, display=self.display, metrics=tuple(metrics))
+        given = {key: getattr(args, key) for key in (
+            "reference_frames", "reference_max_frames", "reference_seconds", "reference_spp", "bounces", "tolerance",
+            "bounce_tolerance", "trajectory", "motion_frames", "motion_samples", "frames", "timing_frames", "warmup",
+            "warmup_s", "floor_fraction", "progressive_frames", "preset", "ppd")}
+        given.update(floors=not args.no_floors, display=self.display, metrics=metrics)
+        self.reference, self.settings, picked = plan_settings(d, given, lambda key: f"--{key.replace('_', '-')}")
+        chosen = {} if args.size else {"--size": f"{d.size[0]}x{d.size[1]}"}
+        chosen.update(picked)
         self.cache = False if args.no_cache else args.cache
         self.denoised_levels = d.denoised_levels
         self.probes = {"counts": list(d.probe_counts)} if d.probe_counts and not args.configs else None
