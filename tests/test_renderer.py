@@ -146,3 +146,21 @@ def test_sample_index_restarts_when_an_instance_moves_a_light_changes_or_a_mater
             counts.append(r.sample_index)
     # two edits on consecutive frames restart twice: each frame with an edit is sample 0
     assert counts == [0, 1, 0, 1, 0, 0, 1, 0, 1]
+
+
+def test_renderers_share_one_loaded_scene_and_render_what_their_own_would(gpu):
+    from rayvr.scene.gpu_scene import GpuScene
+
+    scene = rv.scenes.cornell_box()
+    loaded = GpuScene(gpu, scene)
+
+    def image(**kw):
+        with rv.Renderer(scene, rv.graphs.hybrid(), size=(16, 16), gpu=gpu, **kw) as r:
+            r.render()
+            return r.read_output("Composite.color")
+    own = image()
+    shared = [image(gpu_scene=loaded) for _ in range(2)]     # close() leaves the shared scene loaded
+    assert all(np.array_equal(own, s) for s in shared)
+    with pytest.raises(rv.OptionError, match="gpu_scene was loaded from another scene"):
+        rv.Renderer(rv.scenes.cornell_box(), rv.graphs.hybrid(), size=(16, 16), gpu=gpu, gpu_scene=loaded)
+    loaded.release()

@@ -42,11 +42,13 @@ class Renderer:
     for it in its reflection, as TAA does).
     `first_frame`: the first frame's index (the renderer's random streams and TAA jitter follow
     the frame index, so renders started at disjoint frame ranges have independent noise).
+    `gpu_scene`: a GpuScene of `scene` on `gpu` to render from instead of uploading the scene
+    again (one loaded scene serves many Renderers one after the other; close() leaves it loaded).
     Without a sink the Renderer renders `render(view_set)` calls for its fixed views.
     """
 
     def __init__(self, scene, graph, sink=None, views=None, size=None, gpu=None, profiling: bool = True,
-                 jitter: bool | None = None, first_frame: int = 0):
+                 jitter: bool | None = None, first_frame: int = 0, gpu_scene=None):
         from .gpu import get_context
 
         if int(first_frame) != first_frame or not 0 <= first_frame < 2 ** 32:
@@ -71,7 +73,11 @@ class Renderer:
                               f"pass one or the other")
         from .scene.gpu_scene import GpuScene
 
-        self.gpu_scene = GpuScene(self.gpu, scene)
+        if gpu_scene is not None and (gpu_scene.scene is not scene or gpu_scene.gpu is not self.gpu):
+            raise OptionError("Renderer: gpu_scene was loaded from another scene or GPU context; pass the GpuScene "
+                              "of this scene on this context, or none")
+        self._owns_scene = gpu_scene is None   # a shared GpuScene stays with its owner on close()
+        self.gpu_scene = GpuScene(self.gpu, scene) if gpu_scene is None else gpu_scene
         self.views_buffer = self.gl.buffer(reserve=HEADER_BYTES + 4 * VIEW_STRUCT_FLOATS * self.view_count)
         self.profiling = profiling
         self.frame_index = int(first_frame)
@@ -213,7 +219,8 @@ class Renderer:
             self.compiled.release()   # its resources and what each pass made (RenderPass.release)
             self.compiled = None
         if self.gpu_scene is not None:
-            self.gpu_scene.release()
+            if self._owns_scene:
+                self.gpu_scene.release()
             self.gpu_scene = None
         if self.views_buffer is not None:
             self.views_buffer.release()

@@ -210,7 +210,8 @@ def measure(scene, configs, views=2, size=(64, 64), reference: ReferenceSettings
     study.plan(configs, given is None, curves)
     # rows and curves on a cluster judge their images there; only a local study needs the pool
     study.pool = MetricPool(study.metric_workers() if isinstance(runner, LocalRunner) else 0, study.progress)
-    with effects_restored(scene), study.progress, study.pool:
+    study.share_scene = True    # its configurations render from one upload of the scene
+    with effects_restored(scene), study.progress, study.pool, contextlib.closing(study):
         ref = given or study.reference(0, view_set, "reference")
         study.display = settings.display.fixed(ref.image)
         # judged while the study renders on (HDR-FLIP of a stereo 1440x1600 pair: ~1 CPU-minute)
@@ -281,6 +282,25 @@ class Study:
         self.keep_floors = False        # keep floors rendered without a cache in new_floors
         self.new_floors: dict = {}      # configuration name -> Floor
         self._digests: dict = {}        # id(reference image) -> its image_digest
+        self.share_scene = False        # the rows' Renderers share one GpuScene (loaded_scene)
+        self._gpu_scene = None
+
+    def loaded_scene(self):
+        """The GpuScene the rows' Renderers share (loaded on first use), or None when each loads
+        its own (share_scene False: a cluster worker's study)."""
+        if not self.share_scene:
+            return None
+        if self._gpu_scene is None:
+            from ..scene.gpu_scene import GpuScene
+
+            self._gpu_scene = GpuScene(self.gpu, self.scene)
+        return self._gpu_scene
+
+    def close(self) -> None:
+        """Release the shared GpuScene."""
+        if self._gpu_scene is not None:
+            self._gpu_scene.release()
+            self._gpu_scene = None
 
     def spec(self) -> dict:
         """What a worker needs to run this study's rows and curves (after the display is fixed;
@@ -454,7 +474,8 @@ class Study:
         name = f"config '{config.name}' {pin}"
         judged, first = [], None
         with p.step("setup", 1, config.name):
-            r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=seeds.TEST)
+            r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=seeds.TEST,
+                         gpu_scene=self.loaded_scene())
         with r:
             accumulators = [n for n, q in r.compiled.passes.items() if type(q).__name__ == "Accumulate"]
             # The judged frames come after a counted history of warmup + timing_frames frames. A
@@ -524,7 +545,8 @@ class Study:
         judged, last = [], None
         label = f"{config.name} in motion"
         with p.step("setup", 1, label):
-            r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=MOTION_FIRST_FRAME)
+            r = Renderer(self.scene, graph, views=self.view_set, gpu=self.gpu, first_frame=MOTION_FIRST_FRAME,
+                         gpu_scene=self.loaded_scene())
         with r:
             for i, views in enumerate(along(self.motion_frames)):
                 with p.step("render", cost, label):
