@@ -2,8 +2,8 @@
 
 Includes are resolved against the including file's folder, then the package's shared GLSL folder
 (`rayvr/glsl`), then the `rayvr` package root, so a pass writes `#include "ray_query.glsl"`.
-A few includes are generated from Python tables (`GENERATED_INCLUDES`: the G-buffer channels), so
-the GLSL that reads a table can never drift from it.
+A few includes are generated from Python tables (`GENERATED_INCLUDES`: the G-buffer channels; and
+`records.GLSL_INCLUDES`: the buffer records), so the GLSL that reads a table can never drift from it.
 Each file gets a GLSL source-string number through `#line`, which the error parser maps back
 to its path. Programs are cached per (sources, defines): a pass built twice compiles once.
 """
@@ -16,6 +16,7 @@ import moderngl
 
 from ..errors import ShaderError
 from .bindings import BINDINGS
+from .records import GLSL_INCLUDES as RECORD_INCLUDES
 
 PACKAGE_ROOT = Path(__file__).resolve().parent.parent
 SHARED_GLSL = PACKAGE_ROOT / "glsl"
@@ -54,12 +55,15 @@ GENERATED_DIR = Path("<generated>")
 def _generated_text(path: Path) -> str:
     import importlib
 
+    if path.name in RECORD_INCLUDES:
+        return RECORD_INCLUDES[path.name]()
+
     module, _, func = GENERATED_INCLUDES[path.name].partition(":")
     return getattr(importlib.import_module(module), func)()
 
 
 def _resolve(name: str, including_dir: Path, search: list[Path]) -> Path:
-    if name in GENERATED_INCLUDES:
+    if name in GENERATED_INCLUDES or name in RECORD_INCLUDES:
         return GENERATED_DIR / name
     for base in [including_dir, *search, SHARED_GLSL, PACKAGE_ROOT]:
         p = (base / name).resolve()

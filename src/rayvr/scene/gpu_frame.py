@@ -19,10 +19,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SceneError
+from ..gpu.records import INSTANCE_DATA
 from . import bvh as bvh_mod
 from . import bvh_wide
 
-INSTANCE_FLOATS = 28          # InstanceData: 6 vec4 + uvec4
 INSTANCE_HEADER_FLOATS = 8    # uvec4 scene_info + vec4 scene_shift
 LIGHT_ROWS = 4                # vec4s per PunctualLight
 RECENTRE_FRACTION = 1.0 / 8.0
@@ -90,10 +90,10 @@ class SceneFrame:
         if len(bad):
             name = gs.scene.instances[bad[0]].name
             raise SceneError(f"instance '{name}'.transform: singular or non-finite matrix; give it a non-zero scale")
-        rows = np.zeros((max(n, 1), INSTANCE_FLOATS), np.float32)   # one placeholder row when empty
-        rows[:n, 0:12] = m[:, :3].reshape(n, 12)
-        rows[:n, 12:24] = np.linalg.inv(m)[:, :3].reshape(n, 12)
-        rows[:n].view(np.uint32)[:, 24] = mesh_ids
+        rows = INSTANCE_DATA.zeros(max(n, 1))   # one placeholder row when empty
+        rows["to_render"][:n] = m[:, :3]
+        rows["to_object"][:n] = np.linalg.inv(m)[:, :3]
+        rows["info"][:n, 0] = mesh_ids
         w = np.einsum("nij,nkj->nki", m[:, :3], gs.mesh_corners[mesh_ids])   # each mesh box's corners
         live = np.flatnonzero(gs.mesh_live[mesh_ids])
         self._live_count = n if len(live) else 0     # 0: no geometry, traversal returns at once
@@ -101,7 +101,7 @@ class SceneFrame:
         header.view(np.uint32)[0] = self._live_count
         header.view(np.uint32)[1] = len(gs.scene.materials)
         header[4:7] = self.shift.astype(np.float32)
-        gs.upload("instances", np.concatenate([header, rows.reshape(-1)]))
+        gs.upload("instances", np.concatenate([header.view(np.uint8), rows.view(np.uint8)]))
         self._shift = header[4:7].copy()
         self._build_tlas(live, w.min(axis=1), w.max(axis=1))
         gs.write_emissive_clusters(mats, self.anchor)

@@ -6,6 +6,7 @@ shader adds the probes' indirect diffuse light (glsl/probe_gi.glsl)."""
 from __future__ import annotations
 
 from ...gpu.program_resources import program_resources
+from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
@@ -24,7 +25,7 @@ class GBufferLightingPass(RenderPass):
     OUTPUT = "color"
     OUTPUT_DESC = ""
     PIXEL_LIST: str | None = None   # input pin of the pixel list, for indirect dispatch
-    SALT = 0
+    SALT = RNG_SALTS["lighting"]   # its random stream (subclasses name their own)
     # A pass with a pixel list may instead run over the whole image in TILE-sized workgroups, where
     # the pixels whose effect needs no such rays leave at once: True, False (the list), or None
     # (the image unless a material is PATH_TRACED). Same pixels, same random numbers, same image.
