@@ -165,6 +165,7 @@ def _round_trip(gl, tmp_path, record: Record, include: str, data: np.ndarray) ->
 
 
 REAL = [(records.MATERIAL_DATA, "scene_records.glsl"), (records.INSTANCE_DATA, "scene_records.glsl"),
+        (records.PUNCTUAL_LIGHT, "light_records.glsl"), (records.LIGHT_ENTRY, "light_records.glsl"),
         (records.VIEW_DATA, "view_records.glsl"), (records.PROBE_RAY, "probe_ray_record.glsl"),
         (records.PROBE_VOLUME, "probe_volume_record.glsl"), (records.PROBE_RECORD_TEXELS, "")]
 

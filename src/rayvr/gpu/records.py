@@ -4,6 +4,7 @@
 
   scene_records.glsl   MaterialData (glsl/scene.glsl's material table), InstanceData, the TEX_*
                        ids of TEXTURE_SLOTS
+  light_records.glsl   PunctualLight, LightEntry (glsl/lights.glsl)
   view_records.glsl    ViewData (glsl/views.glsl)
   probe_ray_record.glsl  ProbeRay (passes/probe_gi/probe_rays.glsl)
   probe_volume_record.glsl  ProbeVolume (glsl/probe_gi.glsl)
@@ -43,6 +44,22 @@ INSTANCE_DATA = Record("InstanceData", (
     Field("to_object", "vec4", 3, meaning="rows of its inverse"),
     Field("info", "uvec4", meaning="x: mesh"),
 ), meaning="One instance (rayvr.scene.gpu_frame).")
+
+# ---- lights ---------------------------------------------------------------------------------------
+PUNCTUAL_LIGHT = Record("PunctualLight", (
+    Field("position_type", "vec4", meaning="anchor-space position (scene.glsl render_shift), type (uint bits)"),
+    Field("direction_range", "vec4", meaning="direction the light points, range (0: infinite)"),
+    Field("intensity", "vec4", meaning="colour * intensity"),
+    Field("cone", "vec4", meaning="cos(outer), 1 / (cos(inner) - cos(outer))"),
+), meaning="One punctual light (rayvr.scene.gpu_frame).")
+PUNCTUAL_LIGHTS_HEADER_BYTES = 16   # uvec4 punctual_info before the PunctualLight array
+
+LIGHT_ENTRY = Record("LightEntry", (
+    Field("ids", "uvec4", meaning="kind, index within the kind, alias entry"),
+    Field("select", "vec4", meaning="alias threshold, selection probability, the punctual lights' summed "
+                                    "probability (on a punctual entry)"),
+), meaning="One entry of the light table (rayvr.scene.light_table.LightTable.packed).")
+LIGHT_TABLE_HEADER_BYTES = 16   # vec4 light_table_info before the LightEntry array
 
 # ---- views ---------------------------------------------------------------------------------------
 VIEW_DATA = Record("ViewData", (
@@ -149,6 +166,10 @@ def _scene_glsl() -> str:
                       *slots, "", INSTANCE_DATA.glsl(), "", MATERIAL_DATA.glsl(), ""])
 
 
+def _lights_glsl() -> str:
+    return "\n".join([_header("PUNCTUAL_LIGHT", "LIGHT_ENTRY"), PUNCTUAL_LIGHT.glsl(), "", LIGHT_ENTRY.glsl(), ""])
+
+
 def _views_glsl() -> str:
     return "\n".join([_header("VIEW_DATA"), VIEW_DATA.glsl(), ""])
 
@@ -161,6 +182,6 @@ def _probe_volume_glsl() -> str:
     return "\n".join([_header("PROBE_VOLUME"), PROBE_VOLUME.glsl(), ""])
 
 
-GLSL_INCLUDES = {"scene_records.glsl": _scene_glsl, "view_records.glsl": _views_glsl,
+GLSL_INCLUDES = {"scene_records.glsl": _scene_glsl, "light_records.glsl": _lights_glsl, "view_records.glsl": _views_glsl,
                  "probe_ray_record.glsl": _probe_ray_glsl, "probe_volume_record.glsl": _probe_volume_glsl,
                  "pt_wave_fields.glsl": _pt_wave_glsl, "rng_salts.glsl": rng_salts.glsl_source}
