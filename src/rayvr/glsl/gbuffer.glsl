@@ -19,10 +19,6 @@ uint gbuf_effect_of(uint word) { return word & 0xFFu; }
 uint gbuf_material_of(uint word) { return word >> 8u; }
 uint gbuf_pack_effect(uint effect, uint material) { return (material << 8u) | (effect & 0xFFu); }
 
-// The writers' generator salt (rng_init): alphaMode BLEND surfaces are kept or dropped by the same
-// decision in GBufferRaster (a fragment, its key's ray 1) and GBufferRT (its pixel's first ray).
-#define GBUF_RNG_SALT 5u
-
 #ifdef GBUF_WRITER
 // The effect a surface of material m is shaded with: its material's, but with REFLECTION_MAX_ROUGHNESS
 // (rayvr/passes/gbuffer/reflection_cutoff.py) a REFLECTIONS surface rougher than that and not

@@ -23,6 +23,7 @@
 #pragma once
 #include "scene.glsl"
 #include "color.glsl"
+#include "light_records.glsl"   // PunctualLight, LightEntry
 
 #ifndef SCENE_HAS_PUNCTUAL_LIGHTS
 #define SCENE_HAS_PUNCTUAL_LIGHTS 0
@@ -85,11 +86,6 @@ void shadow_ray(vec3 p, vec3 origin, LightSample ls, out vec3 dir, out float tma
 }
 
 #if SCENE_HAS_LIGHTS
-struct LightEntry {
-    uvec4 ids;        // kind, index within the kind, alias entry
-    vec4 select;      // alias threshold, selection probability, the punctual lights' summed
-                      // probability (on a punctual entry)
-};
 layout(std430, binding = RAYVR_LIGHT_TABLE_SSBO) readonly buffer LightTable {
     vec4 light_table_info;   // x: count (uint bits), y: total power, z: environment probability, w: 1 / total
     LightEntry light_entries[];
@@ -100,12 +96,6 @@ uint light_count() { return floatBitsToUint(light_table_info.x); }
 
 // ---- punctual lights ----------------------------------------------------------------------------
 #if SCENE_HAS_PUNCTUAL_LIGHTS
-struct PunctualLight {
-    vec4 position_type;    // anchor-space position (scene.glsl render_shift), type (uint bits)
-    vec4 direction_range;  // direction the light points, range (0: infinite)
-    vec4 intensity;        // colour * intensity
-    vec4 cone;             // cos(outer), 1 / (cos(inner) - cos(outer))
-};
 layout(std430, binding = RAYVR_PUNCTUAL_LIGHT_SSBO) readonly buffer PunctualLights {
     uvec4 punctual_info;   // x: count
     PunctualLight punctual_lights[];

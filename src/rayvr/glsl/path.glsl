@@ -93,7 +93,7 @@ PtRays pt_vertex(inout PtPath path, PathVertex s, int bounce, inout Rng rng, con
             float w = ls.pdf > 0.0 ? power_heuristic(ls.pdf, bsdf_pdf(s.bsdf, s.n, s.v, ls.direction)) : 1.0;
             r.nee = path.beta * f * ls.weight * w;
             if (split && bounce == 0)
-                r.nee_diffuse = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction) * ls.weight * w;
+                r.nee_diffuse = bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_DIFFUSE) * ls.weight * w;
             shadow_ray(s.pos, offset_ray_origin(s.pos, s.ng), ls, r.nee_dir, r.nee_dist);   // traced from there
         }
     }
@@ -104,7 +104,7 @@ PtRays pt_vertex(inout PtPath path, PathVertex s, int bounce, inout Rng rng, con
     float side = dot(bs.l, s.ng);
     if (scattered && (bs.transmitted ? side >= 0.0 : side <= 0.0)) scattered = false;
     if (scattered && split && bounce == 0 && !bs.delta && !bs.transmitted)
-        path.share = clamp(bsdf_eval_diffuse(s.bsdf, s.n, s.v, bs.l) / (bs.pdf * max(bs.weight, vec3(1e-30))),
+        path.share = clamp(bsdf_eval_lobes(s.bsdf, s.n, s.v, bs.l, BSDF_LOBES_DIFFUSE) / (bs.pdf * max(bs.weight, vec3(1e-30))),
                            vec3(0.0), vec3(1.0));
     if (scattered && bs.transmitted && !s.bsdf.thin) path.medium = s.bsdf.inside ? vec3(0.0) : s.attenuation;
     r.dir = bs.l;

@@ -35,13 +35,7 @@
 #define PROBE_FLAG_VISIBILITY 1u
 
 #if PROBE_GI
-struct ProbeVolume {
-    vec4 origin;    // xyz: render-space position of probe (0, 0, 0); w: normal bias (scene units)
-    vec4 spacing;   // xyz: between neighbouring probes; w: view bias
-    uvec4 counts;   // xyz: probes per axis; w: atlas index of its first probe
-    vec4 lo;        // xyz: the box it serves (render space); w: depth moments' maximum distance
-    vec4 hi;
-};
+#include "probe_volume_record.glsl"   // ProbeVolume
 layout(std430) readonly buffer ProbeVolumes {
     uvec4 probe_info;   // x: volumes, y: tiles per atlas row, z: probes in all, w: flags
     ProbeVolume probe_volumes[];

@@ -2,6 +2,7 @@
 // Samplers (Owen-scrambled Sobol, PCG), cosine hemisphere, GGX visible-normal sampling (Heitz 2018),
 // an orthonormal basis (Duff et al. 2017) and the MIS power heuristic.
 #pragma once
+#include "rng_salts.glsl"   // RNG_SALT_<NAME>: the salts of rng_init's streams
 
 #ifndef RAYVR_PI
 #define RAYVR_PI 3.14159265358979323846

@@ -53,16 +53,7 @@
 #define ALPHA_MODE_MASK 1u
 #define ALPHA_MODE_BLEND 2u
 
-// material texture slots (two vec4 rows each in MaterialData.tex)
-#define TEX_BASE_COLOR 0
-#define TEX_METALLIC_ROUGHNESS 1
-#define TEX_NORMAL 2
-#define TEX_OCCLUSION 3
-#define TEX_EMISSIVE 4
-#define TEX_TRANSMISSION 5
-#define TEX_SPECULAR 6
-#define TEX_SPECULAR_COLOR 7
-#define TEX_THICKNESS 8
+#include "scene_records.glsl"   // TEX_* slot ids, InstanceData, MaterialData
 
 struct VertexData {
     vec4 position_u;   // object-space position, uv.x
@@ -71,23 +62,6 @@ struct VertexData {
 
 struct MeshData {
     uvec4 info;        // x: BLAS root node, y: first BVH triangle slot, z: first scene triangle, w: triangle count
-};
-
-struct InstanceData {
-    vec4 to_render[3];  // rows of the 3x4 object -> render space matrix
-    vec4 to_object[3];  // rows of its inverse
-    uvec4 info;         // x: mesh
-};
-
-struct MaterialData {
-    vec4 base_color;
-    vec4 emission_cutoff;  // rgb: emissive * emissive_strength, a: alpha cutoff
-    vec4 pbr;              // metallic, roughness, transmission, ior (1e30: Fresnel 1 everywhere)
-    uvec4 flags;           // x: Effect id, y: alpha mode, z: double sided, w: a volume (thickness > 0)
-    vec4 specular;         // rgb: specular colour (F0 tint), a: specular factor (KHR_materials_specular)
-    vec4 volume;           // rgb: attenuation colour, a: attenuation distance (KHR_materials_volume)
-    vec4 extra;            // x: thickness
-    vec4 tex[18];          // per slot: (m00, m01, m02, layer or -1), (m10, m11, m12, scale/strength)
 };
 
 layout(std430, binding = RAYVR_VERTEX_SSBO) readonly buffer SceneVertices { VertexData scene_vertices[]; };

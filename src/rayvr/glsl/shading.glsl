@@ -22,9 +22,9 @@ vec3 light_sample_unshadowed(PathVertex s, vec3 u, bool specular_traced, out Lig
     if (!ls.valid || dot(ls.direction, s.ng) <= 0.0) return vec3(0.0);
     vec3 f;
     if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0)
-        f = bsdf_eval_diffuse(s.bsdf, s.n, s.v, ls.direction)
+        f = bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_DIFFUSE)
           + power_heuristic(ls.pdf, bsdf_pdf_specular(s.bsdf, s.n, s.v, ls.direction))
-          * bsdf_eval_reflection(s.bsdf, s.n, s.v, ls.direction);
+          * bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_SPECULAR);
     else
         f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
     if (f.x + f.y + f.z <= 0.0) return vec3(0.0);

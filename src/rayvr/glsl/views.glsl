@@ -3,18 +3,7 @@
 // the CPU, usually the head position), so scenes far from the world origin stay precise.
 #pragma once
 
-struct ViewData {
-    mat4 view;            // render space -> eye space
-    mat4 proj;            // eye -> clip (OpenGL clip, z in [-1,1]; reversed-Z when flagged)
-    mat4 view_proj;       // render space -> clip
-    mat4 inv_view;        // eye -> render space
-    mat4 prev_view_proj;  // last frame's view_proj, in this frame's render space (motion vectors)
-    vec4 eye;             // xyz eye position in render space
-    vec4 fov_tan;         // tan(angleLeft), tan(angleRight), tan(angleDown), tan(angleUp): left/down < 0
-    vec4 clip;            // near, far, width px, height px
-    vec4 jitter;          // xy sub-pixel jitter in pixels (TAA), z the view's index in its whole frame (uint
-                          // bits: random streams follow it, so a frame split by views draws the same numbers), w unused
-};
+#include "view_records.glsl"   // ViewData
 
 layout(std430, binding = RAYVR_VIEWS_SSBO) readonly buffer ViewsBlock {
     uvec4 frame_info;     // x: view count, y: frame index, z: accumulated sample index, w: flags

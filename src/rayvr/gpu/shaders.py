@@ -2,9 +2,9 @@
 
 Includes are resolved against the including file's folder, then the package's shared GLSL folder
 (`rayvr/glsl`), then the `rayvr` package root, so a pass writes `#include "ray_query.glsl"`.
-A few includes are generated from Python tables (the G-buffer channels), so the GLSL that reads
-a table can never drift from it: the table's module registers its include (`register_include`)
-when it is imported.
+A few includes are generated from Python tables (the G-buffer channels, the buffer records of
+`records.py`), so the GLSL that reads a table can never drift from it: the table's module
+registers its include (`register_include`).
 Each file gets a GLSL source-string number through `#line`, which the error parser maps back
 to its path. Programs are cached per (sources, defines): a pass built twice compiles once.
 """
@@ -18,6 +18,7 @@ import moderngl
 
 from ..errors import ShaderError
 from .bindings import BINDINGS
+from .records import GLSL_INCLUDES as RECORD_INCLUDES
 
 PACKAGE_ROOT = Path(__file__).resolve().parent.parent
 SHARED_GLSL = PACKAGE_ROOT / "glsl"
@@ -58,8 +59,13 @@ def register_include(name: str, source: Callable[[], str]) -> None:
     GENERATED_INCLUDES[name] = source
 
 
+
 def _generated_text(path: Path) -> str:
     return GENERATED_INCLUDES[path.name]()
+
+
+for _name, _source in RECORD_INCLUDES.items():    # the buffer records (gpu/records.py)
+    register_include(_name, _source)
 
 
 def _resolve(name: str, including_dir: Path, search: list[Path]) -> Path:

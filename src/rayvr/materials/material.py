@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from ..errors import SceneError, did_you_mean
+from ..gpu import records
 from .effect import Effect
 
 
@@ -40,10 +41,8 @@ class TextureRef:
         return (tr @ rot @ sc)[:2]
 
 
-# The texture fields of a Material, in the order of MaterialData.tex in scene.glsl (TEX_* ids).
-TEXTURE_SLOTS = ("base_color_texture", "metallic_roughness_texture", "normal_texture",
-                 "occlusion_texture", "emissive_texture", "transmission_texture",
-                 "specular_texture", "specular_color_texture", "thickness_texture")
+# The texture fields of a Material, in the order of the material record's slots (TEX_* ids).
+TEXTURE_SLOTS = tuple(f"{slot}_texture" for slot in records.TEXTURE_SLOTS)
 
 # Fields whose change the GPU's material table must follow (every one pack_materials reads).
 _VERSIONED = {"effect", "base_color", "metallic", "roughness", "emissive", "emissive_strength",

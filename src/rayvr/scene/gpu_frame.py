@@ -19,12 +19,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SceneError
+from ..gpu.records import INSTANCE_DATA, PUNCTUAL_LIGHT
 from . import bvh as bvh_mod
 from . import bvh_wide
 
-INSTANCE_FLOATS = 28          # InstanceData: 6 vec4 + uvec4
 INSTANCE_HEADER_FLOATS = 8    # uvec4 scene_info + vec4 scene_shift
-LIGHT_ROWS = 4                # vec4s per PunctualLight
 RECENTRE_FRACTION = 1.0 / 8.0
 
 
@@ -90,10 +89,10 @@ class SceneFrame:
         if len(bad):
             name = gs.scene.instances[bad[0]].name
             raise SceneError(f"instance '{name}'.transform: singular or non-finite matrix; give it a non-zero scale")
-        rows = np.zeros((max(n, 1), INSTANCE_FLOATS), np.float32)   # one placeholder row when empty
-        rows[:n, 0:12] = m[:, :3].reshape(n, 12)
-        rows[:n, 12:24] = np.linalg.inv(m)[:, :3].reshape(n, 12)
-        rows[:n].view(np.uint32)[:, 24] = mesh_ids
+        rows = INSTANCE_DATA.zeros(max(n, 1))   # one placeholder row when empty
+        rows["to_render"][:n] = m[:, :3]
+        rows["to_object"][:n] = np.linalg.inv(m)[:, :3]
+        rows["info"][:n, 0] = mesh_ids
         w = np.einsum("nij,nkj->nki", m[:, :3], gs.mesh_corners[mesh_ids])   # each mesh box's corners
         live = np.flatnonzero(gs.mesh_live[mesh_ids])
         self._live_count = n if len(live) else 0     # 0: no geometry, traversal returns at once
@@ -101,7 +100,7 @@ class SceneFrame:
         header.view(np.uint32)[0] = self._live_count
         header.view(np.uint32)[1] = len(gs.scene.materials)
         header[4:7] = self.shift.astype(np.float32)
-        gs.upload("instances", np.concatenate([header, rows.reshape(-1)]))
+        gs.upload("instances", np.concatenate([header.view(np.uint8), rows.view(np.uint8)]))
         self._shift = header[4:7].copy()
         self._build_tlas(live, w.min(axis=1), w.max(axis=1))
         gs.write_emissive_clusters(mats, self.anchor)
@@ -126,18 +125,15 @@ class SceneFrame:
         key = (lights.version, tuple(self.anchor))
         if not lights or key == self._lights:
             return False
-        out = np.zeros((1 + LIGHT_ROWS * len(lights), 4), np.float32)
-        out.view(np.uint32)[0, 0] = len(lights)
+        header = np.array([len(lights), 0, 0, 0], np.uint32)   # uvec4 punctual_info
+        out = PUNCTUAL_LIGHT.zeros(len(lights))
         for k, L in enumerate(lights):
-            r = 1 + LIGHT_ROWS * k
-            out[r, 0:3] = L.position - self.anchor
-            out[r].view(np.uint32)[3] = L.type
-            out[r + 1, 0:3] = L.direction
-            out[r + 1, 3] = L.range
-            out[r + 2, 0:3] = np.asarray(L.color) * L.intensity
+            out["position_type"][k, :3] = L.position - self.anchor
+            out["position_type"].view(np.uint32)[k, 3] = L.type
+            out["direction_range"][k] = (*L.direction, L.range)
+            out["intensity"][k, :3] = np.asarray(L.color) * L.intensity
             cos_outer, cos_inner = np.cos(L.outer_cone_angle), np.cos(L.inner_cone_angle)
-            out[r + 3, 0] = cos_outer
-            out[r + 3, 1] = 1.0 / max(cos_inner - cos_outer, 1e-4)
-        self.gs.upload("punctual_lights", out)
+            out["cone"][k, :2] = (cos_outer, 1.0 / max(cos_inner - cos_outer, 1e-4))
+        self.gs.upload("punctual_lights", np.concatenate([header.view(np.uint8), out.view(np.uint8)]))
         self._lights = key
         return True

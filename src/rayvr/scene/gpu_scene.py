@@ -20,15 +20,14 @@ import numpy as np
 
 from ..errors import GpuError, OptionError, SceneError
 from ..gpu.bindings import BINDINGS
+from ..gpu.records import MATERIAL_DATA, TEXTURE_ROWS, TEXTURE_SLOTS
 from ..materials import bsdf_tables
-from ..materials.material import TEXTURE_SLOTS, Material
+from ..materials.material import Material
 from . import bvh as bvh_mod
 from . import bvh_wide, light_table
 from .gpu_frame import SceneFrame
 from .model import DEFAULT_ENVIRONMENT, FEATURES, Scene
 
-MATERIAL_FLOATS = 100         # 400 B, see MaterialData: 7 vec4 + 2 per texture slot
-MATERIAL_TEX_ROW = 28         # float offset of MaterialData.tex
 MAX_TEXTURE_SIZE = 2048
 MAX_ENVIRONMENT_HEIGHT = 1024   # environment maps above 2048x1024 are box-filtered down to it
 GPU_BVH_MIN = 200_000         # 'auto' builds meshes this big on the GPU (hardware drivers only)
@@ -49,30 +48,27 @@ def scene_scale(scene: Scene) -> float:
 
 
 def pack_materials(materials, texture_layers: dict[int, int] | None = None) -> np.ndarray:
-    """MaterialData records (see scene.glsl) as float32 (M, 64); uint fields hold their bits."""
+    """The scene's material table: a `records.MATERIAL_DATA` record per material (one default
+    material when there are none)."""
     mats = list(materials) or [Material()]
-    out = np.zeros((len(mats), MATERIAL_FLOATS), np.float32)
-    bits = out.view(np.uint32)
+    out = MATERIAL_DATA.zeros(len(mats))
+    tex = out["tex"]   # TEXTURE_ROWS rows per slot
     for i, m in enumerate(mats):
-        out[i, 0:4] = m.base_color
-        out[i, 4:7] = m.emission
-        out[i, 7] = m.alpha_cutoff
-        out[i, 8:12] = (m.metallic, m.roughness, m.transmission, min(m.ior, 1e30))
-        bits[i, 12:16] = (int(m.effect), int(m.alpha_mode), int(bool(m.double_sided)), int(m.is_volume))
-        out[i, 16:19], out[i, 19] = m.specular_color, m.specular
-        out[i, 20:23], out[i, 23] = m.attenuation_color, min(m.attenuation_distance, 3e38)
-        out[i, 24] = m.thickness
+        out["base_color"][i] = m.base_color
+        out["emission_cutoff"][i] = (*m.emission, m.alpha_cutoff)
+        out["pbr"][i] = (m.metallic, m.roughness, m.transmission, min(m.ior, 1e30))
+        out["flags"][i] = (int(m.effect), int(m.alpha_mode), int(bool(m.double_sided)), int(m.is_volume))
+        out["specular"][i] = (*m.specular_color, m.specular)
+        out["volume"][i] = (*m.attenuation_color, min(m.attenuation_distance, 3e38))
+        out["extra"][i, 0] = m.thickness
         for s, slot in enumerate(TEXTURE_SLOTS):
-            row = MATERIAL_TEX_ROW + 8 * s
-            ref = getattr(m, slot)
+            ref = getattr(m, f"{slot}_texture")
             layer = -1.0
             if ref is not None and texture_layers is not None and ref.texture in texture_layers:
                 layer = float(texture_layers[ref.texture])
             mat = ref.uv_matrix() if ref is not None else np.array([[1.0, 0, 0], [0, 1.0, 0]])
-            out[i, row:row + 3] = mat[0]
-            out[i, row + 3] = layer
-            out[i, row + 4:row + 7] = mat[1]
-            out[i, row + 7] = ref.strength if ref is not None else 1.0
+            tex[i, TEXTURE_ROWS * s] = (*mat[0], layer)
+            tex[i, TEXTURE_ROWS * s + 1] = (*mat[1], ref.strength if ref is not None else 1.0)
     return out
 
 

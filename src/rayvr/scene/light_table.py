@@ -32,6 +32,8 @@ import math
 
 import numpy as np
 
+from ..gpu.records import LIGHT_ENTRY
+
 POINT, SPOT, DIRECTIONAL = 0, 1, 2
 KIND_PUNCTUAL, KIND_EMISSIVE, KIND_ENVIRONMENT = 0, 1, 2
 EMISSIVE_CLUSTERS_MAX = 16   # as glsl/lights.glsl: more emissive instances fall back to the table
@@ -119,21 +121,20 @@ class LightTable:
         return float(self.probabilities[self.kinds == kind].sum())
 
     def packed(self) -> np.ndarray:
-        """The SSBO rows of glsl/lights.glsl: header vec4 (count bits, total power, environment
-        probability, 1 / total), then per entry uvec4 (kind, index, alias, -) and vec4 (threshold,
-        probability, the punctual lights' summed probability on a punctual entry else 0, -), as
-        float32 with uint fields as bits."""
-        out = np.zeros((1 + 2 * max(self.count, 1), 4), np.float32)
-        bits = out.view(np.uint32)
-        bits[0, 0] = self.count
-        out[0, 1] = self.total_power
-        out[0, 2] = self.probability_of(KIND_ENVIRONMENT)
-        out[0, 3] = 1.0 / self.total_power if self.total_power > 0 else 0.0
-        rows = 1 + 2 * np.arange(self.count)
-        bits[rows, 0], bits[rows, 1], bits[rows, 2] = self.kinds, self.indices, self.alias
-        out[rows + 1, 0], out[rows + 1, 1] = self.threshold, self.probabilities
-        out[rows + 1, 2] = np.where(self.kinds == KIND_PUNCTUAL, self.probability_of(KIND_PUNCTUAL), 0.0)
-        return out
+        """The SSBO of glsl/lights.glsl as float32 rows of 4: header vec4 (count bits, total power,
+        environment probability, 1 / total), then a `records.LIGHT_ENTRY` per entry (one zeroed
+        entry for an empty table)."""
+        header = np.zeros(4, np.float32)   # vec4 light_table_info
+        header.view(np.uint32)[0] = self.count
+        header[1] = self.total_power
+        header[2] = self.probability_of(KIND_ENVIRONMENT)
+        header[3] = 1.0 / self.total_power if self.total_power > 0 else 0.0
+        entries = LIGHT_ENTRY.zeros(max(self.count, 1))
+        n = self.count
+        entries["ids"][:n, 0], entries["ids"][:n, 1], entries["ids"][:n, 2] = self.kinds, self.indices, self.alias
+        entries["select"][:n, 0], entries["select"][:n, 1] = self.threshold, self.probabilities
+        entries["select"][:n, 2] = np.where(self.kinds == KIND_PUNCTUAL, self.probability_of(KIND_PUNCTUAL), 0.0)
+        return np.concatenate([header, entries.view(np.float32)]).reshape(-1, 4)
 
 
 def build_light_table(punctual: np.ndarray, emissive: np.ndarray, environment: float) -> LightTable:

@@ -12,10 +12,11 @@ import math
 import numpy as np
 
 from ..errors import XrError
+from ..gpu.records import VIEW_DATA, VIEWS_HEADER_BYTES
 from . import quaternion
 
-VIEW_STRUCT_FLOATS = 5 * 16 + 4 * 4   # five mat4 + four vec4 (std430)
-HEADER_BYTES = 16                     # uvec4 frame_info
+VIEW_STRUCT_FLOATS = VIEW_DATA.size // 4   # floats per view record
+HEADER_BYTES = VIEWS_HEADER_BYTES          # uvec4 frame_info
 FLAG_REVERSED_Z = 1                   # frame_info.w bit: projections are reversed-Z (infinite far)
 
 
@@ -258,14 +259,15 @@ class ViewSet:
             shift[:3, 3] = origin - porigin   # this frame's render space -> last frame's
             prev = pvp @ shift
         self._prev_view_proj = (m["view_proj"], origin)
-        body = np.zeros((n, VIEW_STRUCT_FLOATS), dtype=np.float32)
-        mats = [m["view"], m["proj"], m["view_proj"], m["inv_view"], prev]
-        # GLSL is column-major: write each matrix transposed.
-        body[:, :80] = np.concatenate([x.transpose(0, 2, 1).reshape(n, 16) for x in mats], axis=1)
-        body[:, 80:83] = m["inv_view"][:, :3, 3]
-        body[:, 83] = 1.0
-        body[:, 84:88] = c[:, 7:11]
-        body[:, 88:92] = c[:, 11:15]
-        body[:, 92:94] = jitter
-        body.view(np.uint32)[:, 94] = self.first_view_index + np.arange(n, dtype=np.uint32)
+        body = VIEW_DATA.zeros(n)
+        # GLSL is column-major: the record's mat4 fields are indexed [column, row]
+        for name, x in (("view", m["view"]), ("proj", m["proj"]), ("view_proj", m["view_proj"]),
+                        ("inv_view", m["inv_view"]), ("prev_view_proj", prev)):
+            body[name] = x.transpose(0, 2, 1)
+        body["eye"][:, :3] = m["inv_view"][:, :3, 3]
+        body["eye"][:, 3] = 1.0
+        body["fov_tan"] = c[:, 7:11]
+        body["clip"] = c[:, 11:15]
+        body["jitter"][:, :2] = jitter
+        body["jitter"].view(np.uint32)[:, 2] = self.first_view_index + np.arange(n, dtype=np.uint32)
         return header.tobytes() + body.tobytes()

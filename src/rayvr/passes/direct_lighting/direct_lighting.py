@@ -1,6 +1,7 @@
 """DirectLighting: emission + unshadowed direct light for every pixel (no rays)."""
 from __future__ import annotations
 
+from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ..gbuffer.lighting_pass import GBufferLightingPass
@@ -15,7 +16,7 @@ class DirectLighting(GBufferLightingPass):
     SHADER = "direct_lighting.comp"
     OUTPUT = "direct"
     OUTPUT_DESC = "emission + unshadowed direct light; the environment where nothing was drawn"
-    SALT = 1
+    SALT = RNG_SALTS["direct_lighting"]
     PROPERTIES = {"light_samples": 1, "raster_only": False}
 
     def lit_effects(self):

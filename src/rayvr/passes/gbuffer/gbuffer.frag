@@ -28,7 +28,7 @@ void main() {
     // stochastic transparency: drawn with probability alpha, by GBufferRT's decision for this
     // pixel's ray (ray 1 of its generator, t from the near plane; scene.glsl alpha_blend_u)
     if (m.alpha_mode == ALPHA_MODE_BLEND) {
-        Rng rng = rng_init(uvec2(gl_FragCoord.xy), view_global_index(v_view), frame_index(), GBUF_RNG_SALT);
+        Rng rng = rng_init(uvec2(gl_FragCoord.xy), view_global_index(v_view), frame_index(), RNG_SALT_GBUFFER);
         vec3 ray = v_pos - views[v_view].eye.xyz;
         float dist = length(ray);
         float t = dist - views[v_view].clip.x * dist / -(views[v_view].view * vec4(ray, 0.0)).z;

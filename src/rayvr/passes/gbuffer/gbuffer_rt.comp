@@ -1,7 +1,7 @@
 // Ray-traced G-buffer: one primary ray per pixel of every view (ray_group.glsl: a warp spans views), through
 // the pixel centre + the view's TAA jitter like GBufferRaster samples; the same encoding
 // (gbuf_encode) and the same targets. Alpha-masked materials are cut in the ray query's any-hit step,
-// alphaMode BLEND ones kept with probability alpha there, by the raster's decision (GBUF_RNG_SALT).
+// alphaMode BLEND ones kept with probability alpha there, by the raster's decision (RNG_SALT_GBUFFER).
 // Textures are read at the level of the pixel's ray cone, as the raster's derivatives choose it.
 #define GBUF_WRITER 1
 #include "views.glsl"
@@ -20,7 +20,7 @@ GBufferTexel primary_surface(uint v, ivec2 pixel) {
     float t_near = views[v].clip.x / depth_per_t;
     float t_far = views_reversed_z() ? 1e30 : views[v].clip.y / depth_per_t;
     Hit hit;
-    rq_blend_begin(rng_init(uvec2(pixel), view_global_index(v), frame_index(), GBUF_RNG_SALT));   // alphaMode BLEND
+    rq_blend_begin(rng_init(uvec2(pixel), view_global_index(v), frame_index(), RNG_SALT_GBUFFER));   // alphaMode BLEND
     if (!trace_closest(o + d * t_near, d, t_far - t_near, hit)) return gbuf_no_geometry();
     // surface_at_cone turns the shading normal to the (viewer-facing) face normal's side, as the raster path does
     SurfacePoint s = surface_at_cone(hit, d, (t_near + hit.t) * view_pixel_spread(v));

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from ...errors import OptionError
 from ...gpu.program_resources import program_resources
+from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
@@ -38,7 +39,7 @@ class GBufferLightingPass(RenderPass):
     OUTPUT = "color"
     OUTPUT_DESC = ""
     PIXEL_LIST: str | None = None   # input pin of the pixel list, for indirect dispatch
-    SALT = 0
+    SALT = RNG_SALTS["lighting"]   # its random stream (subclasses name their own)
     LOWEST_EFFECT = Effect.RASTER   # the pixels it lights: this effect and above
     CHOICES = {"dispatch_mode": DISPATCHES}
 

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 from ...errors import OptionError
 from ...gpu.program_resources import program_resources
+from ...gpu.records import PATH_WAVE_FIELD_BYTES, path_wave_fields
+from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
@@ -32,15 +34,11 @@ from ..gbuffer import channels
 
 MODES = ("full", "gbuffer")
 KERNELS = ("auto", "wavefront", "megakernel")
-# The wavefront form's state per path slot (pt_wave.glsl): 10 fields of 16 bytes, one more where
-# the scene transmits (the path's medium), 4 more with lobes.
-WAVE_FIELDS, WAVE_MEDIUM_FIELDS, WAVE_LOBE_FIELDS, WAVE_FIELD_BYTES = 10, 1, 4, 16
 SAMPLERS = {"sobol": 1, "pcg": 0}   # glsl/sampling.glsl RAYVR_SAMPLER
 # Paths per invocation per dispatch on software renderers (path_tracer.comp PT_SAMPLE_SLICES):
 # llvmpipe stops an invocation's loops after 65,535 iterations in all, so a frame's paths are
 # traced in dispatches of this many. 0: all in one dispatch, as on GPUs.
 SOFTWARE_PATHS_PER_DISPATCH = 1
-RNG_SALT = 7
 
 
 @register_pass
@@ -110,8 +108,8 @@ class PathTracer(RenderPass):
 
     def wave_slot_bytes(self, scene=None) -> int:
         """Bytes of the wavefront's state per path slot (wave_has_medium: one field more)."""
-        return (WAVE_FIELDS + (WAVE_MEDIUM_FIELDS if self.wave_has_medium(scene) else 0)
-                + (WAVE_LOBE_FIELDS if self.lobes else 0)) * WAVE_FIELD_BYTES
+        fields = path_wave_fields(PTW_HAS_MEDIUM=self.wave_has_medium(scene), PT_LOBES=bool(self.lobes))
+        return fields * PATH_WAVE_FIELD_BYTES
 
     @staticmethod
     def wave_slots(size, views: int) -> int:
@@ -129,7 +127,7 @@ class PathTracer(RenderPass):
 
     def compile(self, ctx, cd):
         listed = self.mode == "gbuffer" and self.PIXELS in cd.input_formats
-        self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALT,
+        self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALTS["path_tracer"],
                          "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PIXEL_LIST_INPUT": int(listed),
                          "RAYVR_SAMPLER": SAMPLERS[self.sampler], "PT_LOBES": int(bool(self.lobes))}
         software = getattr(getattr(ctx, "caps", None), "is_software", False)

@@ -9,23 +9,10 @@
 layout(std430) buffer PtWave { uvec4 pt_wave[]; };
 uniform uint pt_wave_paths;   // slots in all: the stride between fields
 
-// Fields the shade kernel keeps for itself, then what the trace kernel reads and answers. A path's
-// generator is kept as its one changing word (rng_word): the rest is the pixel's and the sample's.
-#define PTW_RADIANCE 0u   // path radiance, rays' pdf
-#define PTW_BETA 1u       // path beta, rays' cone width
-#define PTW_NEE 2u        // rays' light sample contribution, rng_word
-#define PTW_POS 3u        // rays' vertex, flags (both kernels)
-#define PTW_DIR 4u        // BSDF ray direction (both kernels), rays' cone spread
-#define PTW_NG 5u         // trace kernel: rays' geometric normal, shadow distance (< 0: none)
-#define PTW_NEE_DIR 6u    // trace kernel: shadow ray direction
-#define PTW_EMITTED 7u    // what the first vertex emits towards the eye (or the background)
-#define PTW_HIT 8u        // trace kernel's answer: t, barycentrics, instance
-#define PTW_ANSWER 9u     // trace kernel's answer: primitive, PTW_FOUND | PTW_OCCLUDED | PTW_SHADOW, BLEND rays traced so far
-#define PTW_MEDIUM 10u    // PTW_HAS_MEDIUM: path medium
-#define PTW_FIRST_DIFFUSE (10u + uint(PTW_HAS_MEDIUM))   // PT_LOBES: the split's fields
-#define PTW_FIRST_TOTAL (PTW_FIRST_DIFFUSE + 1u)
-#define PTW_SHARE (PTW_FIRST_DIFFUSE + 2u)
-#define PTW_NEE_DIFFUSE (PTW_FIRST_DIFFUSE + 3u)
+// The fields (PTW_RADIANCE, ...: rayvr/gpu/records.py PATH_WAVE_FIELDS): first those the shade
+// kernel keeps for itself, then what the trace kernel reads and answers. A path's generator is
+// kept as its one changing word (rng_word): the rest is the pixel's and the sample's.
+#include "pt_wave_fields.glsl"
 
 #define PTW_ALIVE 1u         // the path goes on
 #define PTW_SCATTERED 2u     // rays.scattered: its BSDF ray is to be traced

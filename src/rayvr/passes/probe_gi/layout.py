@@ -16,12 +16,13 @@ import math
 import numpy as np
 
 from ...errors import OptionError
+from ...gpu.records import PROBE_VOLUME, PROBE_VOLUMES_HEADER_BYTES
 
 IRRADIANCE_TILE = 8    # texels per side, border included (6x6 interior), as in glsl/probe_gi.glsl
 DEPTH_TILE = 16        # (14x14 interior)
 STATE_TILE = 1
-VOLUME_HEADER_BYTES = 16   # uvec4 probe_info
-VOLUME_BYTES = 80          # five vec4 per ProbeVolume (std430)
+VOLUME_HEADER_BYTES = PROBE_VOLUMES_HEADER_BYTES   # uvec4 probe_info
+VOLUME_BYTES = PROBE_VOLUME.size                  # one ProbeVolume record
 FLAG_VISIBILITY = 1        # probe_info.w bit: Chebyshev visibility on
 
 
@@ -126,22 +127,17 @@ def pack_volumes(volumes: list[ProbeVolume], atlas: Atlas, origin, normal_bias: 
     spacing.xyz + view bias, counts.xyz + first probe, the box served (lo.xyz + max depth, hi)."""
     origin = np.zeros(3) if origin is None else np.asarray(origin, np.float64)
     head = np.array([len(volumes), atlas.columns, atlas.probes, FLAG_VISIBILITY if visibility else 0], np.uint32)
-    rows, first = [], 0
-    for v in volumes:
+    rows, first = PROBE_VOLUME.zeros(len(volumes)), 0
+    for row, v in zip(rows, volumes):
         spacing = v.spacing
         least = float(spacing.min())
-        row = np.zeros(20, np.float32)
-        row[0:3] = v.first_probe_position - origin
-        row[3] = normal_bias * least
-        row[4:7] = spacing
-        row[7] = view_bias * least
-        row.view(np.uint32)[8:12] = [*v.counts, first]
-        row[12:15] = np.asarray(v.lo) - origin
-        row[15] = 1.5 * float(np.linalg.norm(spacing))   # depth moments stop here
-        row[16:19] = np.asarray(v.hi) - origin
-        rows.append(row)
+        row["origin"] = (*(v.first_probe_position - origin), normal_bias * least)
+        row["spacing"] = (*spacing, view_bias * least)
+        row["counts"] = (*v.counts, first)
+        row["lo"] = (*(np.asarray(v.lo) - origin), 1.5 * float(np.linalg.norm(spacing)))   # depth moments stop here
+        row["hi"][:3] = np.asarray(v.hi) - origin
         first += v.probe_count
-    return head.tobytes() + b"".join(r.tobytes() for r in rows)
+    return head.tobytes() + rows.tobytes()
 
 
 def volume_bytes(count: int) -> int:

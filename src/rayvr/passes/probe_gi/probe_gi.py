@@ -26,6 +26,7 @@ import math
 
 from ...errors import OptionError
 from ...gpu.program_resources import program_resources
+from ...gpu.records import PROBE_RAY
 from ...rendergraph.formats import get_format
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
@@ -33,10 +34,9 @@ from ...rendergraph.report import human_bytes
 from ..effects import scene_defines
 from . import layout as L
 
-RNG_SALT = 11
 MAX_GROUPS_X = 65535
 STAGES = ("probe_trace.comp", "probe_shade.comp", "probe_shadow.comp")   # before the blend (probe_update.comp)
-RAY_RECORD_BYTES = 64   # one ProbeRay (probe_rays.glsl): hit, ids, radiance, direct
+RAY_RECORD_BYTES = PROBE_RAY.size   # one ProbeRay (probe_rays.glsl)
 # pin -> (output format, history format, texels per probe side). The readers sample the irradiance
 # as float16 (half the texture traffic of the lookups every pixel makes); the update blends in
 # float32 history, where float16's rounding would stall the hysteresis 1% short of its target.
@@ -131,7 +131,7 @@ class ProbeGI(RenderPass):
         self._volumes = self.volumes_for(cd.scene)
         self._atlas = self.atlas()
         self._defines = {**scene_defines(ctx), "PROBE_RAYS": int(self.rays_per_probe), "SHADE_SHADOWS": 1,
-                         "LIGHT_SAMPLES": 1, "RNG_SALT": RNG_SALT}
+                         "LIGHT_SAMPLES": 1}
         # four dispatches per update (probe_rays.glsl): the closest hits; their shading and light samples;
         # the shadow rays; the blend. Each traversal runs in a kernel with no shading beside it, whose
         # registers would cost it occupancy (probe_trace.comp).

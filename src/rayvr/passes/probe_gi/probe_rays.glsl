@@ -14,12 +14,7 @@ const float PROBE_RAY_SPREAD = sqrt(4.0 * RAYVR_PI / float(PROBE_RAYS));   // a 
 #define PROBE_RAY_SURFACE 1u
 #define PROBE_RAY_BACKFACE 2u
 
-struct ProbeRay {
-    vec4 hit;        // trace: t, barycentrics, kind (uint bits: PROBE_RAY_*); shade: the shadow ray's origin, tmax
-    uvec4 ids;       // trace: instance, primitive; shade: the shadow ray's direction (float bits), kind
-    vec4 radiance;   // shade: rgb what needs no ray (a miss's environment, the bounce); a: distance for the depth moments
-    vec4 direct;     // shade: rgb the light sample's unshadowed contribution (0: no shadow ray); shadow: a, its visibility
-};
+#include "probe_ray_record.glsl"   // ProbeRay
 layout(std430) buffer ProbeRays { ProbeRay probe_rays[]; };
 
 // Direction i of n on the spherical Fibonacci lattice (equal areas).

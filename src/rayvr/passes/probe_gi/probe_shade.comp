@@ -50,7 +50,7 @@ void main() {
             radiance.a = min(hit.t, radiance.a);
             if (probe_history != 0) radiance.rgb = probe_gi_diffuse(s);
 #if SCENE_HAS_LIGHTS
-            Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT + 1u);
+            Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT_PROBE_SHADE);
             LightSample ls;
             direct = nonfinite_scrub(light_sample_unshadowed(s, rng_next3(rng), false, ls));
             if (direct.x + direct.y + direct.z > 0.0) {

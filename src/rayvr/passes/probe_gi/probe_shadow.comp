@@ -20,7 +20,7 @@ void main() {
     if (direct.x + direct.y + direct.z <= 0.0) return;
     vec4 origin = probe_rays[i].hit;   // xyz, w: tmax
     vec3 dir = uintBitsToFloat(probe_rays[i].ids.xyz);
-    Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT + 2u);
+    Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT_PROBE_SHADOW);
     rq_blend_begin(rng);
     probe_rays[i].direct.a = trace_transmittance(origin.xyz, dir, origin.w);
 }

@@ -17,7 +17,7 @@ void main() {
     uint ray = gl_LocalInvocationID.x;
     if (probe >= probe_info.z) return;
     vec3 origin = probe_position(probe_volumes[probe_volume_of(probe)], probe);
-    Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT);
+    Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT_PROBE_TRACE);
     rq_blend_begin(rng);   // alphaMode BLEND: this ray's decisions
     Hit hit;
     bool found = trace_closest(origin, probe_ray_direction(ray), 1e29, hit);

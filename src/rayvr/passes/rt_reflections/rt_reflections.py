@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 from ...gpu.program_resources import program_resources
+from ...gpu.records import PROBE_RECORD_TEXELS
+from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access
@@ -9,7 +11,7 @@ from ..effects import unused_effect_reason
 from ..gbuffer.lighting_pass import GBufferLightingPass, ray_properties
 from ..probe_gi import inputs as probe_inputs
 
-RECORD_BYTES = 32   # one probe record: two rgba32ui texels (glsl/probe_records.glsl)
+RECORD_BYTES = PROBE_RECORD_TEXELS.size   # one deferred probe lookup (glsl/probe_records.glsl)
 
 
 @register_pass
@@ -38,7 +40,7 @@ class RTReflections(GBufferLightingPass):
     PROBE_HITS, PROBE_FACTORS = "probeHits", "probeFactors"
     PIXEL_LIST = "pixels"
     LOWEST_EFFECT = Effect.REFLECTIONS
-    SALT = 3
+    SALT = RNG_SALTS["rt_reflections"]
     # defer_probes False looks the probes up in the traversal kernel, one dispatch and no records:
     # the reference tests/test_reflection_probe_records.py compares the deferred lookups with.
     PROPERTIES = {"max_bounces": 1, "light_samples": 1, **ray_properties(), "defer_probes": True}

@@ -1,6 +1,7 @@
 """RTShadows: emission + ray-traced shadowed direct light, only where a material asks for it."""
 from __future__ import annotations
 
+from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ..effects import unused_effect_reason
@@ -19,7 +20,7 @@ class RTShadows(GBufferLightingPass):
     OUTPUT_DESC = "emission + shadowed direct light (listed pixels only)"
     PIXEL_LIST = "pixels"
     LOWEST_EFFECT = Effect.SHADOWS
-    SALT = 2
+    SALT = RNG_SALTS["rt_shadows"]
     PROPERTIES = {"light_samples": 1, **ray_properties(view_group=16)}
 
     def skip_reason(self, cd):
