@@ -15,6 +15,7 @@ from ..study.metrics import DEFAULT_EPS
 from ..study.reference import Reference, ReferenceSettings, cached_reference
 from ..study.timing import make_views
 from .budget import FRAME_BUDGET_MS, TuneResult, back_off, choose_among, choose_effects
+from . import cost_probe
 from .cost_probe import ErrorJudge, probe_cost_model, render_assignment
 
 
@@ -158,7 +159,7 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
     with MetricPool(workers) as pool:
         judge = ErrorJudge(reference, settings.display.fixed(reference.image), settings.pixels_per_degree(), metric,
                            settings.eps, pool=pool if workers else None)
-        probe = getattr(runner, "probe", probe_cost_model)   # the runner's own (a cluster worker's), else here
+        probe = getattr(runner, "probe", cost_probe.probe_cost_model)   # the runner's own (a worker's), else here
         models = [(opts, probe(scene, view_set, hybrid_graph, opts, judge, levels=levels,
                                       frames=settings.timing_frames, warmup=settings.warmup,
                                       warmup_s=settings.warmup_s, trials=trials, progress=progress, gpu=gpu)[0])
