@@ -136,12 +136,12 @@ def _render_frames(c, scene, payload, view_set, settings: ReferenceSettings, fir
     graph, _ = _graph_for(reference_graph(settings), [PIN])
     pieces = shares or SHARES_PER_WORKER * c.size
     jobs = [Share(i, "samples", {"graph": graph, "views": view_set, "pin": PIN, "frames": b - a,
-                                 "first_frame": first + a}, work=b - a, meta={"part": "b"})
+                                 "first_frame": first + a}, work=b - a, meta={"part": "extension"})
             for i, (a, b) in enumerate(_cut([0, frames], pieces))]
     fold = _Fold()
     c.run(jobs, c.scene_ref(payload), on_result=fold.add, desc=f"reference {scene.name}", unit="frame",
           progress=progress)
-    return fold.mean("b").astype(np.float32)
+    return fold.mean("extension").astype(np.float32)
 
 
 def converge_reference(scene, views=2, size=(256, 256), settings: ReferenceSettings | None = None,

@@ -16,7 +16,7 @@ from ..study.reference import Reference, ReferenceSettings, cached_reference
 from ..study.timing import make_views
 from .budget import FRAME_BUDGET_MS, TuneResult, back_off, choose_among, choose_effects
 from . import cost_probe
-from .cost_probe import ErrorJudge, probe_cost_model, render_assignment
+from .cost_probe import ErrorJudge, render_assignment
 
 
 # The graph options the tuner tries beside each material's effect (those the graph builder takes):
@@ -92,8 +92,8 @@ def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=Non
     options = dict(options or {})
     if accepts(builder, "path_bounces"):
         options.setdefault("path_bounces", judge.reference.settings.max_bounces)
-    models = [(opts, probe_cost_model(scene, view_set, builder, opts, judge, levels, frames, warmup, warmup_s,
-                                      trials, progress, gpu)[0])
+    models = [(opts, cost_probe.probe_cost_model(scene, view_set, builder, opts, judge, levels, frames, warmup,
+                                                 warmup_s, trials, progress, gpu)[0])
               for opts in option_sets_for(builder, options, option_sets)]
     def choose(ask_ms):
         return choose_with_options(models, options, ask_ms, levels, fixed)
