@@ -109,7 +109,7 @@ def run(args) -> dict:
         return frames + rv.tune.ReferenceSettings(frames, spf).bounce_check_frames
 
     def views_job(c):
-        return rc.render_views(scene, rv.graphs.hybrid(), lf_views, cluster=c, payload=payload, progress=False)
+        return rc.render_views(scene, rv.graphs.hybrid(preset="raw"), lf_views, cluster=c, payload=payload, progress=False)
 
     def timed(fn):
         t0 = time.perf_counter()
@@ -164,9 +164,9 @@ def run(args) -> dict:
             base = None
             for n in counts:
                 def body(c, startup):
-                    rc.render_sequence(scene, rv.graphs.hybrid(), rc.TrajectoryViews(lf_views, "turn", frames=c.size),
+                    rc.render_sequence(scene, rv.graphs.hybrid(preset="raw"), rc.TrajectoryViews(lf_views, "turn", frames=c.size),
                                        pins=(), chunk=1, cluster=c, payload=payload, progress=False)
-                    result = rc.render_sequence(scene, rv.graphs.hybrid(), seq, pins=(), cluster=c, payload=payload,
+                    result = rc.render_sequence(scene, rv.graphs.hybrid(preset="raw"), seq, pins=(), cluster=c, payload=payload,
                                                 progress=False)
                     return startup, result.seconds
 
@@ -183,7 +183,7 @@ def run(args) -> dict:
                              f"{one_ms:.4g} ms/frame", "the driver renders every view, no copies"))
             for n in counts:
                 def body(c, startup):
-                    with rc.HostFrameSplitter(scene, rv.graphs.hybrid(), split_set, cluster=c, payload=payload) as s:
+                    with rc.HostFrameSplitter(scene, rv.graphs.hybrid(preset="raw"), split_set, cluster=c, payload=payload) as s:
                         for _ in range(4 + 2 * c.size):       # compile, then let the shares settle
                             s.render()
                         t0 = time.perf_counter()
@@ -249,5 +249,5 @@ def _one_process_ms(scene, views, frames: int) -> float:
 
     from ._timing import wall_ms_per_frame
 
-    with rv.Renderer(scene, rv.graphs.hybrid(), views=views) as r:
+    with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), views=views) as r:
         return wall_ms_per_frame(r, frames, 2)

@@ -77,10 +77,10 @@ def run(args) -> dict:
     for label in ("all RASTER", "all SHADOWS", "SHADOWS + REFLECTIONS"):
         for m in scene.materials:
             m.effect = rv.Effect.RASTER if label == "all RASTER" else rv.Effect.SHADOWS
-        g = rv.graphs.hybrid(light_samples=args.light_samples, gbuffer=args.gbuffer)
+        g = rv.graphs.hybrid(preset="raw", light_samples=args.light_samples, gbuffer=args.gbuffer)
         g.mark_output("GBuffer.effect")   # counts the reflective pixels (a marked compaction list would keep it running)
         if label.endswith("REFLECTIONS"):
-            probe_graph = rv.graphs.hybrid()
+            probe_graph = rv.graphs.hybrid(preset="raw")
             probe_graph.mark_output("GBuffer.effect")
             with Renderer(scene, probe_graph, views=views) as probe:
                 probe.render()

@@ -72,7 +72,7 @@ def run(args) -> dict:
 def _graph(gi: bool, **probes):
     import rayvr as rv
 
-    return rv.graphs.hybrid(gi="probes" if gi else None, probes=probes if gi else None)
+    return rv.graphs.hybrid(preset="raw", gi="probes" if gi else None, probes=probes if gi else None)
 
 
 def _effects(scene, mirror: bool = True) -> None:

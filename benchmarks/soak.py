@@ -132,7 +132,7 @@ def run(args) -> dict:
         size = sizes[(done // resize_every) % len(sizes)]
         segment = min(resize_every - done % resize_every, frames - done)
         headset = rv.xr.SimulatedHeadset(preset="index", size=size, trajectory="turn", frames=segment)
-        with rv.Renderer(scene, rv.graphs.hybrid(), sink=headset, gpu=gpu) as r:
+        with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), sink=headset, gpu=gpu) as r:
             renderers += 1
             t0 = time.perf_counter()
             for frame in r.frames():

@@ -40,7 +40,7 @@ def measure(scene, size, views: int, frames: int, warmup: int, block: int = 2) -
     surface = OffscreenSurface((size[0] * views, size[1]))
     frame_ms = {False: [], True: []}
     phases = {False: [], True: []}
-    with Viewer(scene, hybrid(), views=views, size=size, surface=surface, dt=1 / 90) as viewer:
+    with Viewer(scene, hybrid(preset="raw"), views=views, size=size, surface=surface, dt=1 / 90) as viewer:
         gl = viewer.gpu.gl
         viewer.run(warmup)
         gl.finish()

@@ -37,7 +37,7 @@ def _measure(scene, view_set, frames: int, warmup: int, repeats: int) -> tuple[f
     """(wall ms per frame: the fastest of `repeats` blocks, GPU ms per frame or None)."""
     import rayvr as rv
 
-    with rv.Renderer(scene, rv.graphs.hybrid(), views=view_set) as r:
+    with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), views=view_set) as r:
         wall = min(wall_ms_per_frame(r, frames, warmup if k == 0 else 0) for k in range(repeats))
         return wall, (r.profile().total_ms if r.gpu.caps.timer_queries else None)
 

@@ -128,7 +128,7 @@ def test_mean_over_frames_is_the_alpha_blend_of_the_veil_over_the_wall(gpu, grap
             mean = r.read_output(PT).astype(np.float64)[0, ..., :3]
         rtol = 1e-5
     else:
-        imgs = frames_of(scene, rv.graphs.hybrid(gbuffer=graph), views, HYBRID)
+        imgs = frames_of(scene, rv.graphs.hybrid(preset="raw", gbuffer=graph), views, HYBRID)
         # every frame shows either the veil or the wall at a pixel, never a mixture
         v = imgs[:, inside, 0]
         assert (np.isclose(v, FRONT, rtol=HALF_RTOL) | np.isclose(v, BEHIND, rtol=HALF_RTOL)).all()
@@ -156,8 +156,8 @@ def test_raster_and_rt_gbuffers_make_the_same_decisions(gpu):
     xy = plane_hits(views, plane_z=0.0)
     off_diagonal = inside & (np.abs(xy[..., 0] - xy[..., 1]) > 0.05) & (np.abs(xy[..., 0] + xy[..., 1]) > 0.05)
     scene = veil_scene()
-    a = frames_of(scene, rv.graphs.hybrid(gbuffer="raster"), views, HYBRID, frames=8)[:, off_diagonal, 0]
-    b = frames_of(scene, rv.graphs.hybrid(gbuffer="rt"), views, HYBRID, frames=8)[:, off_diagonal, 0]
+    a = frames_of(scene, rv.graphs.hybrid(preset="raw", gbuffer="raster"), views, HYBRID, frames=8)[:, off_diagonal, 0]
+    b = frames_of(scene, rv.graphs.hybrid(preset="raw", gbuffer="rt"), views, HYBRID, frames=8)[:, off_diagonal, 0]
     same = np.isclose(a, b, rtol=HALF_RTOL).mean()
     assert same > 0.97, f"raster and RT G-buffers agree at {same:.1%} of the veil's pixels x frames"
 
@@ -167,7 +167,7 @@ def test_raster_and_rt_gbuffers_make_the_same_decisions(gpu):
 def test_alpha_one_is_opaque_and_alpha_zero_invisible_in_every_frame(gpu, graph, alpha, want):
     views = view_set(*VEIL_VIEWS)
     inside, outside = veil_masks(views)
-    g = path_traced() if graph == "pt" else rv.graphs.hybrid(gbuffer=graph)
+    g = path_traced() if graph == "pt" else rv.graphs.hybrid(preset="raw", gbuffer=graph)
     pin = PT if graph == "pt" else HYBRID
     imgs = frames_of(veil_scene(alpha), g, views, pin, frames=6)
     np.testing.assert_allclose(imgs[:, inside], want, rtol=HALF_RTOL)
@@ -187,7 +187,7 @@ def test_light_sampled_from_a_blend_emitter_is_alpha_times_its_light(gpu, effect
         s.materials["Wall"].base_color = (0.8, 0.8, 0.8, 1.0)
         s.materials["Wall"].emissive = (0.0, 0.0, 0.0)
         s.materials["Veil"].double_sided = True
-        lit[alpha] = frames_of(s, rv.graphs.hybrid(gbuffer="rt"), views, HYBRID, frames=2)[:, outside]
+        lit[alpha] = frames_of(s, rv.graphs.hybrid(preset="raw", gbuffer="rt"), views, HYBRID, frames=2)[:, outside]
     assert (lit[1.0] > 1e-3).mean() > 0.9, "the veil lights the wall around it"
     np.testing.assert_allclose(lit[ALPHA], ALPHA * lit[1.0], rtol=2 * HALF_RTOL, atol=1e-6)
 
@@ -230,13 +230,13 @@ def test_a_shadow_through_the_veil_keeps_one_minus_alpha_of_the_light(gpu, graph
                 r.render()
             mean, rtol = r.read_output(PT).astype(np.float64)[0, ..., :3], 1e-5
     else:
-        imgs = frames_of(scene, rv.graphs.hybrid(gbuffer=graph), views, HYBRID)
+        imgs = frames_of(scene, rv.graphs.hybrid(preset="raw", gbuffer=graph), views, HYBRID)
         # the hybrid accumulates its path-traced pixels: the last frame is their mean
         mean, rtol = (imgs[-1] if effect == rv.Effect.PATH_TRACED else imgs.mean(0)), HALF_RTOL
     assert_blend_mean(mean, inside, outside, ALPHA, 0.0, lit, FRAMES, rtol, f"{graph} {effect.name}")
     # alpha 1 casts a full shadow, alpha 0 none, in the first frame already
     for alpha, want in ((1.0, 0.0), (0.0, lit)):
-        g = path_traced() if graph == "pt" else rv.graphs.hybrid(gbuffer=graph)
+        g = path_traced() if graph == "pt" else rv.graphs.hybrid(preset="raw", gbuffer=graph)
         img = frames_of(shadow_scene(alpha, effect), g, views, PT if graph == "pt" else HYBRID, frames=1)[0]
         np.testing.assert_allclose(img[inside], want, rtol=HALF_RTOL, atol=1e-6)
 
@@ -253,7 +253,7 @@ def test_the_hybrids_shadow_rays_take_the_veils_transmittance_in_every_frame(gpu
     scene.add_material(blend_material("Veil2", 0.5, effect=rv.Effect.SHADOWS, double_sided=True))
     scene.add_object("Veil2", *quad_mesh([[-0.6, 1.3, -0.6], [0.6, 1.3, -0.6], [0.6, 1.3, 0.6], [-0.6, 1.3, 0.6]],
                                          (0, 1, 0)), "Veil2")
-    imgs = frames_of(scene, rv.graphs.hybrid(gbuffer=graph), views, HYBRID, frames=4)
+    imgs = frames_of(scene, rv.graphs.hybrid(preset="raw", gbuffer=graph), views, HYBRID, frames=4)
     want = (1 - ALPHA) * 0.5 * RHO / math.pi * E
     np.testing.assert_allclose(imgs[:, inside], want, rtol=HALF_RTOL, atol=1e-6)
 
@@ -266,7 +266,7 @@ def test_blend_code_is_compiled_only_for_scenes_with_blend(gpu):
         scene = veil_scene(effect=rv.Effect.SHADOWS)
         scene.materials["Veil"].alpha_mode = alpha_mode
         assert ("SCENE_HAS_ALPHA_BLEND" in scene.features) == bool(want)
-        with Renderer(scene, rv.graphs.hybrid(gbuffer="rt"), views=view_set(*VEIL_VIEWS)) as r:
+        with Renderer(scene, rv.graphs.hybrid(preset="raw", gbuffer="rt"), views=view_set(*VEIL_VIEWS)) as r:
             r.render()
             compiled = r.compiled
             seen = {name: p.defines()["SCENE_HAS_ALPHA_BLEND"] for name, p in compiled.passes.items()

@@ -411,7 +411,7 @@ def test_broken_glb_through_tune_and_graph_show(tmp_path, capsys, monkeypatch, c
     path = folder / "scene.glb"
     path.write_bytes(data)
     graphs = tmp_path / "graphs"
-    rv.graphs.hybrid().save(graphs / "g.json")
+    rv.graphs.hybrid(preset="raw").save(graphs / "g.json")
     argv = (["tune", str(path), "--quiet", "--size", "8x8", "--report", str(tmp_path / "out" / "report"),
              "--cache", str(tmp_path / "out" / "cache")] if command == "tune"
             else ["graph", "show", str(graphs / "g.json"), "--scene", str(path),

@@ -248,7 +248,7 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_nothing(gpu, tmp_path, capsys, m
     from rayvr.rendergraph.graph import RenderGraph
 
     graph = tmp_path / "in" / "g.json"
-    rv.graphs.hybrid().save(graph)
+    rv.graphs.hybrid(preset="raw").save(graph)
     out = tmp_path / "out"
     argv = ["render", *TINY, "--out", str(out / "x.png")]
     if target == "render":

@@ -40,8 +40,8 @@ def test_four_view_grid_split_by_views_equals_one_process(cluster):
     scene = shadows_scene()
     views = default_views(scene, 4, SIZE, grid=(2, 2))
     pins = ["Composite.color", "ToneMap.dst"]
-    got = rc.render_views(scene, rv.graphs.hybrid(), views, pins=pins, cluster=cluster, progress=False)
-    want = one_process(scene, rv.graphs.hybrid(), views, pins)
+    got = rc.render_views(scene, rv.graphs.hybrid(preset="raw"), views, pins=pins, cluster=cluster, progress=False)
+    want = one_process(scene, rv.graphs.hybrid(preset="raw"), views, pins)
     assert len(got.shares) == 2 and {s["worker"] for s in got.shares} == set(got_workers(cluster))
     for pin in pins:
         assert got.pixels[pin].dtype == want[pin].dtype
@@ -58,9 +58,9 @@ def test_random_passes_split_by_views_are_exact(cluster):
     # frame (views.glsl view_global_index): every share draws the frame's own random numbers.
     scene = rv.scenes.cornell_box()
     views = default_views(scene, 4, SIZE)
-    got = rc.render_views(scene, rv.graphs.hybrid(), views, pins=["Composite.color"], cluster=cluster,
+    got = rc.render_views(scene, rv.graphs.hybrid(preset="raw"), views, pins=["Composite.color"], cluster=cluster,
                           progress=False).pixels["Composite.color"]
-    want = one_process(scene, rv.graphs.hybrid(), views, ["Composite.color"])["Composite.color"]
+    want = one_process(scene, rv.graphs.hybrid(preset="raw"), views, ["Composite.color"])["Composite.color"]
     assert np.array_equal(got, want)
 
 
@@ -126,9 +126,9 @@ def test_sequence_split_into_chunks_equals_one_chunk(cluster):
     scene = rv.scenes.cornell_box()     # random numbers follow the absolute frame index: exact anyway
     seq = rc.TrajectoryViews(default_views(scene, 2, SIZE), "turn", frames=8, fps=30)
     seen = []
-    split = rc.render_sequence(scene, rv.graphs.hybrid(), seq, pins=["Composite.color"], chunk=2, warmup=1,
+    split = rc.render_sequence(scene, rv.graphs.hybrid(preset="raw"), seq, pins=["Composite.color"], chunk=2, warmup=1,
                                on_frame=lambda i, f: seen.append(i), cluster=cluster, progress=False)
-    whole = rc.render_sequence(scene, rv.graphs.hybrid(), seq, pins=["Composite.color"], chunk=8,
+    whole = rc.render_sequence(scene, rv.graphs.hybrid(preset="raw"), seq, pins=["Composite.color"], chunk=8,
                                cluster=cluster, progress=False)
     assert seen == list(range(8)) and len(split.chunks) == 4 and len(whole.chunks) == 1
     a, b = split.frames["Composite.color"], whole.frames["Composite.color"]
@@ -174,8 +174,8 @@ def test_error_study_split_by_configuration_matches_one_process(cluster, gpu, tm
 def test_host_split_gathers_exact_pixels_and_balances_a_skewed_start(cluster):
     scene = shadows_scene()
     views = default_views(scene, 4, (64, 64))
-    want = one_process(scene, rv.graphs.hybrid(), views, ["Composite.color"])["Composite.color"]
-    with rc.HostFrameSplitter(scene, rv.graphs.hybrid(), views, pin="Composite.color", cluster=cluster,
+    want = one_process(scene, rv.graphs.hybrid(preset="raw"), views, ["Composite.color"])["Composite.color"]
+    with rc.HostFrameSplitter(scene, rv.graphs.hybrid(preset="raw"), views, pin="Composite.color", cluster=cluster,
                               initial_shares=[1, 3]) as split:
         timings = [split.render() for _ in range(8)]
         assert np.array_equal(split.pixels(), want)
@@ -201,9 +201,9 @@ def test_killed_worker_views_rerun_elsewhere(cluster):
     views = default_views(scene, 4, SIZE)
     victim = cluster.handles[1]
     ray.kill(victim)
-    got = rc.render_views(scene, rv.graphs.hybrid(), views, pins=["Composite.color"], cluster=cluster,
+    got = rc.render_views(scene, rv.graphs.hybrid(preset="raw"), views, pins=["Composite.color"], cluster=cluster,
                           progress=False)
-    want = one_process(scene, rv.graphs.hybrid(), views, ["Composite.color"])
+    want = one_process(scene, rv.graphs.hybrid(preset="raw"), views, ["Composite.color"])
     assert np.array_equal(got.pixels["Composite.color"], want["Composite.color"])
     with pytest.raises(ray.exceptions.RayActorError):
         ray.get(victim.ping.remote())
@@ -238,7 +238,7 @@ def test_ctrl_c_stops_the_busy_workers_and_the_next_job_runs(cluster, monkeypatc
 
 def test_progress_bar_aggregates_the_workers(cluster, capsys):
     scene = shadows_scene()
-    rc.render_views(scene, rv.graphs.hybrid(), default_views(scene, 4, SIZE), frames=3, cluster=cluster,
+    rc.render_views(scene, rv.graphs.hybrid(preset="raw"), default_views(scene, 4, SIZE), frames=3, cluster=cluster,
                     progress=True)
     err = capsys.readouterr().err
     assert "views box_on_plane" in err and "12/12" in err      # 4 views x 3 frames over both workers

@@ -114,10 +114,10 @@ def test_worker_views_and_samples_in_this_process_equal_a_renderer(gpu):
     views = default_views(scene, 4, (16, 16))
     payload = ScenePayload.of(scene)
     worker = RenderWorker("local", gpu=gpu)
-    graph = rv.graphs.hybrid().to_dict()
+    graph = rv.graphs.hybrid(preset="raw").to_dict()
     got = worker.run("views", (payload.key, [payload]), None, graph=graph, views=view_range(views, 1, 3),
                      pins=["Composite.color"])
-    with rv.Renderer(scene, rv.graphs.hybrid(), views=views) as r:
+    with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), views=views) as r:
         r.render()
         whole = r.read_output("Composite.color", flip_y=True)
     assert np.array_equal(got["pixels"]["Composite.color"], whole[1:3])
@@ -180,7 +180,7 @@ def test_render_with_workers_sums_the_shares_non_finite_counts(gpu, monkeypatch,
     monkeypatch.setattr(cluster_cli, "open_cluster", lambda args: contextlib.nullcontext(None))
     monkeypatch.setattr(jobs, "render_views", lambda *a, **k: jobs.ViewsResult({"Composite.color": radiance}, shares, 0.0))
     args = argparse.Namespace(frames=1, report=False)
-    cluster_cli.render(args, "quad", scene, rv.graphs.hybrid(), views, hdr=True)
+    cluster_cli.render(args, "quad", scene, rv.graphs.hybrid(preset="raw"), views, hdr=True)
     err = capsys.readouterr().err
     assert err == "rayvr: warning: 5 non-finite samples in pass Direct were set to 0\n"
 

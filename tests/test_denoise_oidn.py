@@ -60,7 +60,7 @@ def test_render_denoise_options_write_the_denoised_images(gpu, tmp_path, capsys,
     for denoise in ("none", "svgf", "oidn"):
         out = tmp_path / f"{denoise}.exr"
         code, text, err = run_render(capsys, "--size", "16x16", "--frames", "3", "--effect", "*=path_traced",
-                                     "--denoise", denoise, "--out", str(out))
+                                     "--preset", "raw", "--denoise", denoise, "--out", str(out))
         assert code == 0, err
         assert ("SVGF" in text) == (denoise == "svgf") and ("Denoise" in text) == (denoise == "oidn")
         import OpenEXR

@@ -12,7 +12,7 @@ from rayvr.xr.cameras import default_views
 def hybrid_everything():
     """A graph whose passes all make objects of their own in compile(): TAA (a sampler), auto
     exposure (two buffers), the raster G-buffer (a framebuffer and a depth array), Blit (a sampler)."""
-    g = rv.graphs.hybrid_taa(auto_exposure=True, gbuffer="raster")
+    g = rv.graphs.hybrid_taa(preset="raw", auto_exposure=True, gbuffer="raster")
     g.add_pass(rv.passes.Blit({"format": "rgba16f"}), "Copy")
     g.add_edge("TAA.dst", "Copy.src")
     g.mark_output("Copy.dst")

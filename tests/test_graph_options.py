@@ -32,7 +32,9 @@ def test_the_command_line_reads_the_table():
     assert options["denoise"].choices == DENOISE.cli_choices == (NONE, "svgf", "oidn")
     assert options["gi"].choices == GI.cli_choices == (NONE, "probes")
     assert options["denoise"].help == ("none; svgf (SVGF + TAA over the frames, real time); oidn (Intel Open Image "
-                                       "Denoise on the last frame, offline: needs rayvr[oidn]); default none")
+                                       "Denoise on the last frame, offline: needs rayvr[oidn]); default the preset's "
+                                       "for hybrid, none for path_traced")
+    assert options["preset"].choices == ("clean", "raw") and options["preset"].default == "clean"
     assert options["graph"].help == ("hybrid (per-material effects; default) or path_traced (every pixel, "
                                      "accumulated: reference renders)")
 
@@ -47,7 +49,7 @@ def test_a_new_denoiser_is_one_entry(extra_denoiser):
     names = [c.name for c in rv.tune.standard_configs(rv.scenes.cornell_box(), spp=(1,))]
     assert "PATH_TRACED 1 spp + FAKE" in names and "all SHADOWS + FAKE" in names
     with pytest.raises(OptionError, match=r"denoise='x': use None \('none'\), 'svgf', 'oidn' or 'fake'"):
-        rv.graphs.hybrid(denoise="x")
+        rv.graphs.hybrid(preset="raw", denoise="x")
 
 
 def test_the_tuner_tries_the_real_time_values_and_the_study_those_installed(monkeypatch):
@@ -87,19 +89,19 @@ def test_the_viewer_rebuilds_a_graph_opened_by_name_with_an_option(gpu):
 
     scene = rv.scenes.cornell_box()
     with Viewer(scene, "hybrid", views=1, size=(16, 16), surface=OffscreenSurface((32, 32), gpu)) as v:
-        v.step()
-        assert v.graph_builder == "hybrid" and "SVGF" not in v.renderer.graph.passes
+        v.step()   # the clean preset
+        assert v.graph_builder == "hybrid" and {"SVGF", "Probes"} <= set(v.renderer.graph.passes)
         from rayvr.viewer.panels import graph as graph_section   # its options' combos draw
 
         v.ui.frame(v.surface.window_size, v.surface.framebuffer_size, 0.1, lambda: graph_section.draw(v, v.panels.state))
-        v.set_graph_option("denoise", "svgf")
-        v.set_graph_option("gi", "probes")
-        v.step()
-        assert v.graph_options == {"denoise": "svgf", "gi": "probes"}
-        assert {"SVGF", "Probes"} <= set(v.renderer.graph.passes) and v.renderer.graph is v.graph
         v.set_graph_option("denoise", NONE)
+        v.set_graph_option("gi", NONE)
         v.step()
-        assert v.graph_options == {"gi": "probes"} and "SVGF" not in v.renderer.graph.passes
+        assert v.graph_options == {"denoise": None, "gi": None}
+        assert not {"SVGF", "Probes"} & set(v.renderer.graph.passes) and v.renderer.graph is v.graph
+        v.set_graph_option("denoise", "svgf")
+        v.step()
+        assert v.graph_options == {"denoise": "svgf", "gi": None} and "SVGF" in v.renderer.graph.passes
         with pytest.raises(OptionError, match=r"graph option taa: hybrid takes gi, denoise"):
             v.set_graph_option("taa", True)
     given = rv.graphs.path_traced()
@@ -108,3 +110,36 @@ def test_the_viewer_rebuilds_a_graph_opened_by_name_with_an_option(gpu):
         with pytest.raises(OptionError, match=r"was given or loaded"):
             v.set_graph_option("denoise", "svgf")
         assert v.graph is given
+
+
+def test_the_hybrid_presets_clean_by_default_raw_one_flag_away():
+    from rayvr.graph_options import PRESETS
+
+    clean, raw = rv.graphs.hybrid(), rv.graphs.hybrid(preset="raw")
+    assert {"Probes", "SVGF", "TAA"} <= set(clean.passes) and clean.outputs[-1] == "TAA.dst"
+    assert not {"Probes", "SVGF", "TAA"} & set(raw.passes) and raw.outputs == ["ToneMap.dst", "Composite.color"]
+    assert PRESETS["clean"] == {"gi": "probes", "denoise": "svgf", "taa": True}
+    # an option given explicitly overrides the preset's, None included
+    assert "Probes" not in rv.graphs.hybrid(gi=None).passes and "SVGF" in rv.graphs.hybrid(gi=None).passes
+    g = rv.graphs.hybrid(preset="raw", taa=True)
+    assert "TAA" in g.passes and "SVGF" not in g.passes and g.get_pass("GBuffer") is not None
+    assert BUILDERS["hybrid"].defaults()["gi"] == "probes" and BUILDERS["hybrid"].defaults("raw")["gi"] is None
+    with pytest.raises(OptionError, match=r"hybrid\(preset='cleen'\): unknown preset \(did you mean 'clean'\?\); use 'clean' or 'raw'"):
+        rv.graphs.hybrid(preset="cleen")
+
+
+def test_the_command_line_takes_the_preset_and_overrides_it():
+    from rayvr.cli.render import build_graph, resolve_graph_options
+
+    parser = build_parser()
+
+    def graph_of(*argv):
+        args = parser.parse_args(["render", *argv])
+        resolve_graph_options(args)
+        return build_graph(args, 0.0, True, {} if args.gi == "probes" else None)
+
+    assert {"Probes", "SVGF", "TAA"} <= set(graph_of().passes)
+    assert not {"Probes", "SVGF", "TAA"} & set(graph_of("--preset", "raw").passes)
+    assert set(graph_of("--preset", "raw", "--taa", "on").passes) & {"Probes", "SVGF", "TAA"} == {"TAA"}
+    assert "Probes" not in graph_of("--gi", "none").passes
+    assert "SVGF" not in graph_of("--graph", "path_traced").passes

@@ -192,7 +192,7 @@ def test_hybrid_graph_barriers(gpu):
     for m in scene.materials:
         m.effect = rv.Effect.PATH_TRACED
     scene.materials["Floor"].effect = rv.Effect.REFLECTIONS
-    plan = rv.graphs.hybrid(gbuffer="raster").plan(scene=scene, size=(8, 8), views=2, caps=gpu.caps)
+    plan = rv.graphs.hybrid(preset="raw", gbuffer="raster").plan(scene=scene, size=(8, 8), views=2, caps=gpu.caps)
     before, final = dict(zip(plan.order, frame_barriers(plan)[0])), frame_barriers(plan)[1]
     assert before["GBuffer"] == 0 and before["Direct"] == 0
     assert before["Shadows"] & barrier_bits([Access.INDIRECT]) == barrier_bits([Access.INDIRECT])

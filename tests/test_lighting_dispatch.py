@@ -30,7 +30,7 @@ def scene_with_every_light_kind():
 
 
 def render(gpu, scene, monkeypatch, pixels_2d, max_bounces, tile=(8, 4), views=2):
-    g = rv.graphs.hybrid(light_samples=2, max_bounces=max_bounces)
+    g = rv.graphs.hybrid(preset="raw", light_samples=2, max_bounces=max_bounces)
     for name in ("Shadows", "Reflections"):
         g.update_pass(name, {"dispatch_mode": "image" if pixels_2d else "list", "tile": list(tile)})
     for name in (*OUTPUTS[:2], "GBuffer.effect"):
@@ -76,7 +76,7 @@ def test_ray_passes_run_on_the_image_unless_a_material_is_path_traced(gpu, path_
     scene = scene_with_every_light_kind()
     if path_traced:
         scene.materials["ShortBox"].effect = rv.Effect.PATH_TRACED
-    with Renderer(scene, rv.graphs.hybrid(), views=default_views(scene, 1, (8, 8)), gpu=gpu) as r:
+    with Renderer(scene, rv.graphs.hybrid(preset="raw"), views=default_views(scene, 1, (8, 8)), gpu=gpu) as r:
         assert r.compiled.passes["Reflections"].defines()["PIXELS_2D"] == int(not path_traced)
         assert r.compiled.passes["Shadows"].defines()["PIXELS_2D"] == int(not path_traced)
         # the pixel lists are made only when a pass reads them; the report says why not

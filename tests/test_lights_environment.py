@@ -93,7 +93,7 @@ def test_ten_thousand_point_lights_match_the_float64_sum(gpu):
     want = (intensity * np.maximum(cos, 0) / dist2).sum(-1) / math.pi     # rho = 1
     for m in scene.materials:
         m.effect = rv.Effect.SHADOWS
-    got = mean_image(scene, rv.graphs.hybrid(), views, "Composite.color", 48)[..., 0]
+    got = mean_image(scene, rv.graphs.hybrid(preset="raw"), views, "Composite.color", 48)[..., 0]
     assert abs(got.mean() / want.mean() - 1.0) < 0.03, (got.mean(), want.mean())
 
 
@@ -122,7 +122,7 @@ def test_a_spot_that_does_not_reach_a_point_takes_none_of_its_light_samples(gpu)
     outside, inside = cos_axis < math.cos(0.2) - 0.01, k > 0.99
     assert outside.sum() > 100 and inside.sum() >= 4
     frames = []
-    with rv.Renderer(scene, rv.graphs.hybrid(), views=views) as r:
+    with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), views=views) as r:
         for _ in range(16):
             r.render()
             frames.append(r.read_output("Composite.color")[0, ..., 0].astype(np.float64))
@@ -142,7 +142,7 @@ def test_lambert_plane_under_a_uniform_environment_is_albedo_times_radiance(gpu,
     scene.environment = Environment((2.0, 1.0, 0.5), name="uniform")
     for m in scene.materials:
         m.effect = effect
-    got = mean_image(scene, rv.graphs.hybrid(), down_view(), "Composite.color", 32)
+    got = mean_image(scene, rv.graphs.hybrid(preset="raw"), down_view(), "Composite.color", 32)
     np.testing.assert_allclose(got.mean(axis=(0, 1)), albedo * np.array([2.0, 1.0, 0.5]), rtol=0.02)
 
 

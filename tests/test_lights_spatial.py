@@ -63,7 +63,7 @@ def test_a_moving_lamp_takes_its_cluster_along(gpu):
     """The clusters' spheres follow their instances (and the render origin): after the lamp moves
     the buffer holds its new centre, as the renderer's frame update writes it."""
     scene = lamp_scene(lambert("White", (0.8,) * 3), 4.0)
-    with rv.Renderer(scene, rv.graphs.hybrid(), views=down_view()) as r:
+    with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), views=down_view()) as r:
         r.render()
         gs = r.gpu_scene
         lamp = next(i for i, inst in enumerate(scene.instances) if inst.name == "Lamp")
@@ -148,7 +148,7 @@ def test_a_small_lamp_beside_a_bright_point_light_is_drawn_where_it_lights(gpu):
     for spatial in (True, False):
         scene = lamp_scene(lambert("White", (0.8,) * 3), 4.0, spatial)
         scene.materials["White"].effect = rv.Effect.SHADOWS
-        f = frames_of(scene, rv.graphs.hybrid(), views, "Composite.color", 64)[..., 0]
+        f = frames_of(scene, rv.graphs.hybrid(preset="raw"), views, "Composite.color", 64)[..., 0]
         var[spatial] = f[:, under].var(0).mean()
         if spatial:
             got = f.mean(0)[seen]

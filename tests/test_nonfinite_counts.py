@@ -134,7 +134,7 @@ def test_path_tracer_counts_every_sample_under_a_nan_light(gpu, spp):
 @pytest.mark.parametrize("effect, counting", [(rv.Effect.RASTER, "Direct"), (rv.Effect.SHADOWS, "Shadows"),
                                               (rv.Effect.PATH_TRACED, "PathTracer")])
 def test_hybrid_lighting_passes_count_every_pixel_under_a_nan_light(gpu, effect, counting):
-    clean, dirty, img = counts_before_and_after(plane_scene(effect), rv.graphs.hybrid())
+    clean, dirty, img = counts_before_and_after(plane_scene(effect), rv.graphs.hybrid(preset="raw"))
     assert counting in clean and not any(clean.values()), clean
     assert dirty == {**{p: 0 for p in clean}, counting: 3 * W * H}, dirty
     assert np.isfinite(img).all()
@@ -144,8 +144,8 @@ def test_finite_scenes_report_zero_in_every_counting_pass(gpu):
     """box_on_plane through SVGF and TAA, and with probe GI and reflections: every counting pass
     is there and counted nothing."""
     scene = rv.scene.builtin.box_on_plane()
-    graphs = {"svgf": (rv.graphs.hybrid(denoise="svgf"), rv.Effect.SHADOWS, {"SVGF", "TAA"}),
-              "probes": (rv.graphs.hybrid_taa(gi="probes", probes={"counts": [2, 2, 2]}), rv.Effect.REFLECTIONS,
+    graphs = {"svgf": (rv.graphs.hybrid(preset="raw", denoise="svgf"), rv.Effect.SHADOWS, {"SVGF", "TAA"}),
+              "probes": (rv.graphs.hybrid_taa(preset="raw", gi="probes", probes={"counts": [2, 2, 2]}), rv.Effect.REFLECTIONS,
                          {"Probes", "Reflections", "TAA"})}
     for name, (graph, effect, extra) in graphs.items():
         for m in scene.materials:

@@ -106,7 +106,7 @@ def test_far_from_the_origin_renders_like_near_it(gpu):
             inst.transform[:3, 3] += offset
         scene.lights[0].position = scene.lights[0].position + offset
         scene.cameras[:] = [Camera.look_at(np.array([1.5, 2.0, 1.5]) + offset, offset)]
-        with Renderer(scene, rv.graphs.hybrid(), views=2, size=(32, 32)) as r:
+        with Renderer(scene, rv.graphs.hybrid(preset="raw"), views=2, size=(32, 32)) as r:
             r.render()
             images.append(r.read_output("Composite.color").astype(np.float64))
     near, far = images

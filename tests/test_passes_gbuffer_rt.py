@@ -199,7 +199,7 @@ def test_hybrid_gbuffer_option_renders_the_same_image(gpu):
     scene = builtin.box_on_plane()
     images = {}
     for mode in ("raster", "rt"):   # forced both ways, so every driver compares the two
-        with Renderer(scene, rv.graphs.hybrid(gbuffer=mode), views=2, size=(32, 32)) as r:
+        with Renderer(scene, rv.graphs.hybrid(preset="raw", gbuffer=mode), views=2, size=(32, 32)) as r:
             r.render()
             assert r.compiled.passes["GBuffer"].chosen == mode
             assert ("GBufferRT" if mode == "rt" else "GBufferRaster") in str(r.report())
@@ -210,12 +210,12 @@ def test_hybrid_gbuffer_option_renders_the_same_image(gpu):
 
 def test_unknown_gbuffer_mode_is_refused(gpu):
     with pytest.raises(rv.OptionError, match="'mode'.*auto, raster or rt"):
-        rv.graphs.hybrid(gbuffer="fast")
+        rv.graphs.hybrid(preset="raw", gbuffer="fast")
 
 
 @pytest.mark.parametrize("suffix", [".json", ".py"])
 def test_hybrid_with_rt_gbuffer_saves_and_loads(tmp_path, suffix):
-    g = rv.graphs.hybrid(gbuffer="rt")
+    g = rv.graphs.hybrid(preset="raw", gbuffer="rt")
     loaded = rv.RenderGraph.load(g.save(tmp_path / f"hybrid{suffix}"))
     gb = loaded.passes["GBuffer"]
     assert type(gb).__name__ == "GBufferAuto" and gb.mode == "rt"

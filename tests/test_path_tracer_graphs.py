@@ -59,14 +59,14 @@ def _moving_camera_frames(graph, size=(32, 32)):
 
 
 def test_hybrid_taa_reprojects_with_gbuffer_motion_vectors(gpu):
-    g = hybrid_taa(alpha=0.5)
+    g = hybrid_taa(preset="raw", alpha=0.5)
     g.get_pass("TAA").set_properties({"clamp": False})   # reprojection alone
     taa, current, plan = _moving_camera_frames(g)
     assert plan.order.index("Composite") < plan.order.index("TAA") < plan.order.index("ToneMap")
     # the lit plane reprojected by its motion vectors agrees with this frame's shading
     np.testing.assert_allclose(taa, current, atol=2e-3)
     # the same frames without motion vectors blend mismatched pixels
-    still = hybrid_taa(alpha=0.5)
+    still = hybrid_taa(preset="raw", alpha=0.5)
     still.get_pass("TAA").set_properties({"clamp": False})
     still.remove_edge("GBuffer.motion", "TAA.motion")
     taa_still, current_still, _ = _moving_camera_frames(still)
@@ -105,7 +105,7 @@ def test_hybrid_path_traced_pixels_match_the_full_screen_path_tracer(gpu):
         for _ in range(16):
             r.render()
         want = r.read_output("Accumulate.dst")[..., :3].astype(np.float64)
-    with Renderer(scene, rv.graphs.hybrid(path_bounces=3), size=(16, 16)) as r:
+    with Renderer(scene, rv.graphs.hybrid(preset="raw", path_bounces=3), size=(16, 16)) as r:
         for _ in range(16):
             r.render()
         assert "PathTracer" in r.compiled.plan.order
@@ -119,7 +119,7 @@ def test_graphs_round_trip_through_json_and_python(tmp_path):
 
     import rayvr as rv
 
-    for g in (path_traced(samples_per_pixel=2, clamp=5.0, max_frames=100), hybrid_taa(alpha=0.2, sigma=1.5)):
+    for g in (path_traced(samples_per_pixel=2, clamp=5.0, max_frames=100), hybrid_taa(preset="raw", alpha=0.2, sigma=1.5)):
         d = g.to_dict()
         assert rv.RenderGraph.from_dict(json.loads(json.dumps(d))).to_dict() == d
         for ext in ("py", "json"):

@@ -79,7 +79,7 @@ def test_gbuffer_paths_are_the_megakernels(gpu, listed, size):
         scene.materials[name].effect = rv.Effect.PATH_TRACED
 
     def graph():
-        g = rv.graphs.hybrid(path_bounces=3)
+        g = rv.graphs.hybrid(preset="raw", path_bounces=3)
         g.mark_output("PathTracer.color")
         if not listed:   # the whole image, pixels of other effects left at 0
             g.remove_edge("Compaction.pathPixels", "PathTracer.pixels")

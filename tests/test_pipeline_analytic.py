@@ -12,7 +12,7 @@ SIZE = (40, 40)
 
 
 def render(scene, extra_outputs=(), size=SIZE, views=1, **graph_kw):
-    g = rv.graphs.hybrid(**graph_kw)
+    g = rv.graphs.hybrid(preset="raw", **graph_kw)
     for o in extra_outputs:
         g.mark_output(o)
     r = Renderer(scene, g, views=views, size=size)

@@ -45,7 +45,7 @@ def closed_box(albedo=0.6, light=(0.1, 0.3, -0.2)):
 
 
 def probe_graph(views_gi=True, **probes):
-    g = rv.graphs.hybrid(gi="probes", probes=probes)
+    g = rv.graphs.hybrid(preset="raw", gi="probes", probes=probes)
     for name in ("irradiance", "state"):
         g.mark_output(f"Probes.{name}")
     return g
@@ -132,7 +132,7 @@ def test_thin_wall_leaks_no_light_into_the_dark_room(gpu, counts):
     views = wall_views()
 
     def render(gi, visibility=True):
-        g = rv.graphs.hybrid(gi=gi, probes={"counts": counts, "rays_per_probe": 64, "warmup": 4,
+        g = rv.graphs.hybrid(preset="raw", gi=gi, probes={"counts": counts, "rays_per_probe": 64, "warmup": 4,
                                             "visibility": visibility} if gi else None)
         with rv.Renderer(scene, g, views=views, gpu=gpu) as r:
             for _ in range(2):
@@ -197,7 +197,7 @@ def test_one_probe_set_serves_every_view(gpu):
     images, atlases = {}, {}
     for name, views in (("mono", mono), ("stereo", stereo)):
         for gi in (None, "probes"):
-            g = probe_graph(**probes) if gi else rv.graphs.hybrid()
+            g = probe_graph(**probes) if gi else rv.graphs.hybrid(preset="raw")
             with rv.Renderer(scene, g, views=views, gpu=gpu) as r:
                 for _ in range(2):
                     r.render()
@@ -275,7 +275,7 @@ def test_reflected_surfaces_get_the_same_probe_light_as_seen_directly(gpu):
     probes = {"counts": [3, 3, 3], "rays_per_probe": 64, "warmup": 4, "view_bias": 0.0}
 
     def render(scene, gi):
-        g = rv.graphs.hybrid(max_bounces=1, gi=gi, probes=probes if gi else None)
+        g = rv.graphs.hybrid(preset="raw", max_bounces=1, gi=gi, probes=probes if gi else None)
         with rv.Renderer(scene, g, views=views, gpu=gpu) as r:
             for _ in range(2):
                 r.render()
@@ -341,9 +341,9 @@ def test_static_scene_probes_are_stable_and_a_moved_light_is_followed(gpu):
 
 def test_graph_option_report_and_bad_values(gpu):
     scene = rv.scenes.cornell_box()
-    plain = rv.graphs.hybrid()
+    plain = rv.graphs.hybrid(preset="raw")
     assert "Probes" not in plain.passes
-    with_gi = rv.graphs.hybrid(gi="probes", probes={"counts": [2, 2, 2], "rays_per_probe": 32, "warmup": 0})
+    with_gi = rv.graphs.hybrid(preset="raw", gi="probes", probes={"counts": [2, 2, 2], "rays_per_probe": 32, "warmup": 0})
     compiled = with_gi.compile(scene=scene, size=(8, 8), views=2, gpu=gpu,
                                gpu_scene=rv.scene.GpuScene(gpu, scene))
     try:
@@ -360,9 +360,9 @@ def test_graph_option_report_and_bad_values(gpu):
     finally:
         compiled.release()
     with pytest.raises(OptionError, match="gi='radiosity'"):
-        rv.graphs.hybrid(gi="radiosity")
+        rv.graphs.hybrid(preset="raw", gi="radiosity")
     with pytest.raises(OptionError, match="need gi='probes'"):
-        rv.graphs.hybrid(probes={"counts": [4, 4, 4]})
+        rv.graphs.hybrid(preset="raw", probes={"counts": [4, 4, 4]})
     for bad, match in (({"rays_per_probe": 8}, "rays_per_probe"), ({"hysteresis": 1.0}, "hysteresis"),
                        ({"counts": [4, 0, 4]}, "counts"), ({"volumes": [{"min": [0, 0, 0], "max": [1, 0, 1]}]},
                                                            "max must exceed min")):
@@ -389,7 +389,7 @@ def test_user_volumes_pick_the_first_that_holds_a_point():
 
 def test_probe_graph_saves_and_loads(tmp_path):
     volumes = [{"min": [0, 0, 0], "max": [1, 2, 1], "counts": [2, 4, 2]}]
-    g = rv.graphs.hybrid(gi="probes", probes={"volumes": volumes, "rays_per_probe": 64})
+    g = rv.graphs.hybrid(preset="raw", gi="probes", probes={"volumes": volumes, "rays_per_probe": 64})
     for suffix in (".py", ".json"):
         path = tmp_path / f"g{suffix}"
         g.save(path)
@@ -420,7 +420,8 @@ def test_cli_render_with_probes(tmp_path, capsys):
                  "--probe-rays", "32", "--out", str(out), "--report"])
     assert code == 0 and out.exists()
     assert "rays_per_frame=256" in capsys.readouterr().out
-    assert main(["render", "--size", "16x16", "--probes", "2x2x2", "--out", str(tmp_path / "x.png")]) == 2
+    assert main(["render", "--size", "16x16", "--preset", "raw", "--probes", "2x2x2", "--out",
+                 str(tmp_path / "x.png")]) == 2
     assert "add --gi probes" in capsys.readouterr().err
     assert main(["render", "--size", "16x16", "--gi", "probes", "--probes", "2x2", "--out",
                  str(tmp_path / "x.png")]) == 2
@@ -457,7 +458,7 @@ def test_untraced_glossy_light_comes_from_the_probes(gpu, roughness):
     index = scene.materials.names().index("TallBox")
     for m in scene.materials:
         m.effect = rv.Effect.SHADOWS
-    g = rv.graphs.hybrid(gi="probes")
+    g = rv.graphs.hybrid(preset="raw", gi="probes")
     pin = effect_pin(g)
     g.mark_output(pin)
     with rv.Renderer(scene, g, views=1, size=(32, 32), jitter=False) as r:
@@ -494,7 +495,7 @@ def test_rough_reflections_go_to_the_probes_and_smooth_or_transmissive_ones_stay
     probes = {"counts": [2, 2, 2], "rays_per_probe": 32, "warmup": 1}
 
     def effects(gi, **kw):
-        g = rv.graphs.hybrid(gi=gi, probes=probes if gi else None, **kw)
+        g = rv.graphs.hybrid(preset="raw", gi=gi, probes=probes if gi else None, **kw)
         g.mark_output("GBuffer.effect")
         with rv.Renderer(s, g, views=ViewSet([view]), gpu=gpu) as r:
             r.render()
@@ -507,4 +508,4 @@ def test_rough_reflections_go_to_the_probes_and_smooth_or_transmissive_ones_stay
     assert effects(None) == traced
     assert effects("probes", reflection_max_roughness=1.0) == traced
     with pytest.raises(OptionError, match="GBuffer.*reflection_max_roughness"):
-        rv.graphs.hybrid(gi="probes", reflection_max_roughness=1.5)
+        rv.graphs.hybrid(preset="raw", gi="probes", reflection_max_roughness=1.5)

@@ -33,7 +33,7 @@ def reflective_scene():
 
 
 def render(gpu, scene, monkeypatch, *, gi, defer, max_bounces, pixels_2d, frames=2):
-    g = rv.graphs.hybrid(max_bounces=max_bounces, gi="probes" if gi else None, probes=PROBES if gi else None)
+    g = rv.graphs.hybrid(preset="raw", max_bounces=max_bounces, gi="probes" if gi else None, probes=PROBES if gi else None)
     g.update_pass("Reflections", {"dispatch_mode": "image" if pixels_2d else "list", "defer_probes": defer})
     g.mark_output("Reflections.reflection")
     views = default_views(scene, 2, (32, 28))
@@ -73,7 +73,7 @@ def test_records_only_with_probes_and_their_memory(gpu):
     views, size = 2, (24, 16)
     for gi in (None, "probes"):
         for bounces in (1, 3):
-            g = rv.graphs.hybrid(max_bounces=bounces, gi=gi, probes=PROBES if gi else None)
+            g = rv.graphs.hybrid(preset="raw", max_bounces=bounces, gi=gi, probes=PROBES if gi else None)
             compiled = g.compile(scene=scene, size=size, views=views, gpu=gpu,
                                  gpu_scene=rv.scene.GpuScene(gpu, scene))
             try:

@@ -1,5 +1,5 @@
 """rv.Renderer: frames driven by a sink, run-time effect changes (recompile only when the set of
-used effects changes), outputs, profile and report; rv.graphs.hybrid() round-trips through JSON."""
+used effects changes), outputs, profile and report; rv.graphs.hybrid(preset="raw") round-trips through JSON."""
 import numpy as np
 import pytest
 
@@ -16,7 +16,7 @@ def test_frames_drive_the_headset_and_effects_switch_at_run_time(gpu):
         m.effect = rv.Effect.RASTER
     headset = rv.xr.SimulatedHeadset(preset="index", size=(24, 20), frames=4)
     orders = []
-    with Renderer(scene, rv.graphs.hybrid(), sink=headset) as r:
+    with Renderer(scene, rv.graphs.hybrid(preset="raw"), sink=headset) as r:
         assert "Shadows" in r.compiled.plan.pruned
         for frame in r.frames():
             if frame.index == 1:
@@ -41,7 +41,7 @@ def test_frames_drive_the_headset_and_effects_switch_at_run_time(gpu):
 
 def test_material_colour_change_reaches_the_pixels_without_recompiling(gpu):
     scene = builtin.plane_with_point_light()
-    with Renderer(scene, rv.graphs.hybrid(tonemap="linear"), views=1, size=(16, 16)) as r:
+    with Renderer(scene, rv.graphs.hybrid(preset="raw", tonemap="linear"), views=1, size=(16, 16)) as r:
         r.render()
         before = r.read_output("Composite.color").astype(np.float64)
         scene.materials["Plane"].base_color = (0.4, 0.4, 0.4, 1.0)
@@ -54,7 +54,7 @@ def test_material_colour_change_reaches_the_pixels_without_recompiling(gpu):
 
 def test_report_names_pruned_passes_and_the_scene(gpu):
     scene = builtin.cornell_box()
-    with Renderer(scene, rv.graphs.hybrid(), views=2, size=(16, 16)) as r:
+    with Renderer(scene, rv.graphs.hybrid(preset="raw"), views=2, size=(16, 16)) as r:
         text = str(r.report())
     assert "Reflections: no material uses REFLECTIONS" in text
     assert "cornell_box" in text
@@ -62,14 +62,14 @@ def test_report_names_pruned_passes_and_the_scene(gpu):
 
 def test_render_rejects_views_of_another_size(gpu):
     scene = builtin.quad()
-    with Renderer(scene, rv.graphs.hybrid(), views=1, size=(16, 16)) as r:
+    with Renderer(scene, rv.graphs.hybrid(preset="raw"), views=1, size=(16, 16)) as r:
         other = default_views(scene, 1, (8, 8))
         with pytest.raises(OptionError, match="compiled for 1 of \\(16, 16\\)"):
             r.render(other)
 
 
 def test_hybrid_graph_round_trips_through_json(tmp_path):
-    g = rv.graphs.hybrid(max_bounces=2, tonemap="reinhard")
+    g = rv.graphs.hybrid(preset="raw", max_bounces=2, tonemap="reinhard")
     path = g.save(tmp_path / "hybrid.json")
     h = rv.RenderGraph.load(path)
     assert list(h.passes) == list(g.passes)
@@ -80,7 +80,7 @@ def test_hybrid_graph_round_trips_through_json(tmp_path):
 
 def test_graph_options_are_checked():
     with pytest.raises(OptionError, match="operator"):
-        rv.graphs.hybrid(tonemap="sepia")
+        rv.graphs.hybrid(preset="raw", tonemap="sepia")
     with pytest.raises(OptionError, match="multiview"):
         rv.passes.GBufferRaster(multiview="sometimes")
 
@@ -90,7 +90,7 @@ def test_swapping_effects_between_materials_moves_ray_work_without_recompiling(g
 
     scene = builtin.cornell_box()
     scene.materials["Floor"].effect = rv.Effect.REFLECTIONS
-    g = rv.graphs.hybrid()
+    g = rv.graphs.hybrid(preset="raw")
     g.mark_output("Compaction.reflectionPixels")
     g.mark_output("GBuffer.effect")
     names = [m.name for m in scene.materials]
@@ -115,7 +115,7 @@ def test_sample_index_restarts_when_the_head_only_translates(gpu):
 
     scene = builtin.cornell_box()
     views = default_views(scene, 2, (8, 8))
-    with Renderer(scene, rv.graphs.hybrid(), views=views) as r:
+    with Renderer(scene, rv.graphs.hybrid(preset="raw"), views=views) as r:
         r.render(views)
         r.render(views)
         assert r.sample_index == 1
@@ -131,7 +131,7 @@ def test_sample_index_restarts_when_the_head_only_translates(gpu):
 def test_sample_index_restarts_when_an_instance_moves_a_light_changes_or_a_material(gpu):
     scene = builtin.cornell_box()
     scene.lights.append(rv.scene.Light("point", position=(0.0, 1.0, 0.5), intensity=0.5))
-    with Renderer(scene, rv.graphs.hybrid(), views=1, size=(8, 8)) as r:
+    with Renderer(scene, rv.graphs.hybrid(preset="raw"), views=1, size=(8, 8)) as r:
         counts = []
         for edit in (None, None, "instance", None, "light", "light again", None, "material", None):
             if edit == "instance":
@@ -155,12 +155,12 @@ def test_renderers_share_one_loaded_scene_and_render_what_their_own_would(gpu):
     loaded = GpuScene(gpu, scene)
 
     def image(**kw):
-        with rv.Renderer(scene, rv.graphs.hybrid(), size=(16, 16), gpu=gpu, **kw) as r:
+        with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), size=(16, 16), gpu=gpu, **kw) as r:
             r.render()
             return r.read_output("Composite.color")
     own = image()
     shared = [image(gpu_scene=loaded) for _ in range(2)]     # close() leaves the shared scene loaded
     assert all(np.array_equal(own, s) for s in shared)
     with pytest.raises(rv.OptionError, match="gpu_scene was loaded from another scene"):
-        rv.Renderer(rv.scenes.cornell_box(), rv.graphs.hybrid(), size=(16, 16), gpu=gpu, gpu_scene=loaded)
+        rv.Renderer(rv.scenes.cornell_box(), rv.graphs.hybrid(preset="raw"), size=(16, 16), gpu=gpu, gpu_scene=loaded)
     loaded.release()

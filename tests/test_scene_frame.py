@@ -21,7 +21,7 @@ def test_a_walking_head_shifts_render_space_without_rebuilding(gpu):
         m.effect = rv.Effect.SHADOWS
     base = default_views(scene, 2, (32, 32))
     step = np.array([0.02, 0.0, -0.03])
-    with rv.Renderer(scene, rv.graphs.hybrid(), views=base, gpu=gpu) as walking:
+    with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), views=base, gpu=gpu) as walking:
         for k in range(1, 6):
             walking.render(moved(base, k * step))
         rebuilds = walking.gpu_scene.frame.rebuilds
@@ -30,7 +30,7 @@ def test_a_walking_head_shifts_render_space_without_rebuilding(gpu):
         assert walking.gpu_scene.frame.rebuilds == rebuilds and walking.gpu_scene.version == version
         assert np.linalg.norm(walking.gpu_scene.frame.shift) > 0
         walked = walking.read_output(rv.graphs.HDR_OUTPUT)
-    with rv.Renderer(scene, rv.graphs.hybrid(), views=moved(base, 6 * step), gpu=gpu) as fresh:
+    with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), views=moved(base, 6 * step), gpu=gpu) as fresh:
         fresh.frame_index = walking.frame_index - 1   # the same random numbers as the last walked frame
         fresh.render()
         assert np.linalg.norm(fresh.gpu_scene.frame.shift) == 0

@@ -57,7 +57,7 @@ HYBRID_OUT = "Composite.color"
 
 @pytest.fixture(scope="module")
 def unit_images(gpu):
-    hyb = render(all_effect(transformed_cornell(), rv.Effect.REFLECTIONS), rv.graphs.hybrid(), HYBRID_OUT)
+    hyb = render(all_effect(transformed_cornell(), rv.Effect.REFLECTIONS), rv.graphs.hybrid(preset="raw"), HYBRID_OUT)
     pt = render(transformed_cornell(), path_traced(samples_per_pixel=2, max_bounces=3), "Accumulate.dst")
     return hyb, pt
 
@@ -70,7 +70,7 @@ def unit_images(gpu):
 ])
 def test_extreme_scales_and_offsets_render_the_unit_image(gpu, unit_images, scale, offset):
     hyb_ref, pt_ref = unit_images
-    hyb = render(all_effect(transformed_cornell(scale, offset), rv.Effect.REFLECTIONS), rv.graphs.hybrid(), HYBRID_OUT)
+    hyb = render(all_effect(transformed_cornell(scale, offset), rv.Effect.REFLECTIONS), rv.graphs.hybrid(preset="raw"), HYBRID_OUT)
     pt = render(transformed_cornell(scale, offset), path_traced(samples_per_pixel=2, max_bounces=3), "Accumulate.dst")
     for img, ref, what in ((hyb, hyb_ref, "hybrid"), (pt, pt_ref, "path traced")):
         assert_finite(img, f"{what} at scale {scale}, offset {offset}")
@@ -93,7 +93,7 @@ def test_grazing_mirror_roughness_zero_degenerate_triangles_and_a_blinding_light
     lo, hi = scene.bounds()
     eye = np.array([0.5 * (lo[0] + hi[0]), lo[1] + 0.004, hi[2] - 0.01])
     scene.cameras[:] = [Camera.look_at(eye, eye + [0.0, -0.0087, -1.0], yfov_deg=40.0)]
-    for graph, out in ((rv.graphs.hybrid(), HYBRID_OUT),
+    for graph, out in ((rv.graphs.hybrid(preset="raw"), HYBRID_OUT),
                        (path_traced(samples_per_pixel=2, max_bounces=4), "Accumulate.dst")):
         img = render(scene, graph, out, views=2, frames=2)
         assert_finite(img, f"{graph.name} on the grazing mirror")

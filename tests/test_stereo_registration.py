@@ -81,7 +81,7 @@ def ray_traced_positions(renderer, tmp_path) -> np.ndarray:
 
 @pytest.mark.parametrize("distance", [1.5, 6.0])
 def test_disparity_is_ipd_f_over_d_in_raster_and_rays(gpu, tmp_path, distance):
-    g = rv.graphs.hybrid()
+    g = rv.graphs.hybrid(preset="raw")
     g.mark_output("GBuffer.posW")
     with Renderer(wall(distance), g, views=stereo()) as r:
         r.render()
@@ -101,7 +101,7 @@ def test_disparity_is_ipd_f_over_d_in_raster_and_rays(gpu, tmp_path, distance):
 
 def test_point_at_infinity_lands_on_the_same_pixel(gpu, tmp_path):
     distance = 1e5
-    g = rv.graphs.hybrid()
+    g = rv.graphs.hybrid(preset="raw")
     g.mark_output("GBuffer.posW")
     with Renderer(wall(distance), g, views=stereo(far=1e6)) as r:
         r.render()
@@ -124,7 +124,7 @@ def test_mono_and_view_zero_of_stereo_agree(gpu):
     mono = ViewSet([View(views[0].pose, views[0].fov, *SIZE)])
     out = []
     for vs in (mono, views):
-        with Renderer(scene, rv.graphs.hybrid(), views=vs) as r:
+        with Renderer(scene, rv.graphs.hybrid(preset="raw"), views=vs) as r:
             r.render()
             out.append(r.read_output())
     assert out[0].shape[0] == 1 and out[1].shape[0] == 2

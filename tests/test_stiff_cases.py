@@ -37,7 +37,7 @@ def view_set(eye, target, fov=40.0, size=SIZE, near=0.01, far=100.0, up=(0.0, 1.
 
 
 def hybrid(**kw):
-    return rv.graphs.hybrid(**kw)
+    return rv.graphs.hybrid(**{"preset": "raw", **kw})
 
 
 def path_traced(spp=1, bounces=1, rr_start=3, jitter=False):

@@ -332,12 +332,12 @@ def test_graphs_list_the_denoiser_and_allocate_nothing_without_it(gpu):
     for effect in ("shadows", "path_traced"):
         for m in scene.materials:
             m.effect = rv.Effect.parse(effect)
-        with Renderer(scene, rv.graphs.hybrid(), size=(8, 8), views=2) as r:
+        with Renderer(scene, rv.graphs.hybrid(preset="raw"), size=(8, 8), views=2) as r:
             plain = r.compiled
             assert not any(n.startswith("SVGF.") or n.endswith((".diffuse", ".specular")) for n in plain.resources)
             assert "SVGF" not in plain.order and "TAA" not in plain.order
             assert ("Accumulate" in plain.order) == (effect == "path_traced")
-        with Renderer(scene, rv.graphs.hybrid(denoise="svgf"), size=(8, 8), views=2) as r:
+        with Renderer(scene, rv.graphs.hybrid(preset="raw", denoise="svgf"), size=(8, 8), views=2) as r:
             report = str(r.report())
             assert r.compiled.plan.order[-3:] == ["SVGF", "TAA", "ToneMap"]
             assert "SVGF.historyDiffuse" in report and "SVGF.moments0" in report and "Composite.diffuse" in report
@@ -353,14 +353,14 @@ def test_hybrid_svgf_improves_with_frames(gpu):
     scene = builtin.cornell_box()
     for m in scene.materials:
         m.effect = rv.Effect.SHADOWS
-    plain = rv.graphs.hybrid()
+    plain = rv.graphs.hybrid(preset="raw")
     with Renderer(scene, plain, size=SIZE, first_frame=1 << 24) as r:
         total = 0.0
         for _ in range(64):
             r.render()
             total = total + rgb(r, "Composite.color")
         reference = total / 64
-    g = rv.graphs.hybrid(denoise="svgf")
+    g = rv.graphs.hybrid(preset="raw", denoise="svgf")
     with Renderer(scene, g, size=SIZE, jitter=False) as r:
         r.render()
         raw, first = rgb(r, "Composite.color"), rgb(r, "TAA.dst")
@@ -374,5 +374,5 @@ def test_hybrid_svgf_improves_with_frames(gpu):
 
 def test_bad_denoise_option_names_the_choices():
     with pytest.raises(OptionError, match="'svgf' or 'oidn'"):
-        rv.graphs.hybrid(denoise="bm3d")
-    assert rv.graphs.hybrid(denoise="none").outputs == rv.graphs.hybrid().outputs
+        rv.graphs.hybrid(preset="raw", denoise="bm3d")
+    assert rv.graphs.hybrid(preset="raw", denoise="none").outputs == rv.graphs.hybrid(preset="raw").outputs

@@ -23,7 +23,7 @@ def tool():
 
 
 def graphs():
-    return [rv.graphs.hybrid(gi="probes"), rv.graphs.hybrid(), rv.graphs.path_traced()]
+    return [rv.graphs.hybrid(preset="raw", gi="probes"), rv.graphs.hybrid(preset="raw"), rv.graphs.path_traced()]
 
 
 def test_every_variant_applies_to_the_ready_made_graphs(tool):
@@ -39,7 +39,7 @@ def test_every_variant_applies_to_the_ready_made_graphs(tool):
 
 
 def test_defaults_are_the_shapes_the_passes_had():
-    g = rv.graphs.hybrid(gi="probes")
+    g = rv.graphs.hybrid(preset="raw", gi="probes")
     assert g.get_pass("GBuffer").get_properties()["tile"] == [4, 8]
     assert g.get_pass("GBuffer").get_properties()["view_group"] == 2
     assert {k: g.get_pass("Shadows").get_properties()[k] for k in ("dispatch_mode", "tile", "view_group")} == \
@@ -57,7 +57,7 @@ def test_a_variant_changes_the_defines_its_passes_compile_with(gpu, tool):
     scene.materials["Floor"].effect = rv.Effect.REFLECTIONS
     defines = {}
     for name in ("base", "sh_vg4", "reflections_list"):
-        g = rv.graphs.hybrid()
+        g = rv.graphs.hybrid(preset="raw")
         assert tool.apply_variant(g, tool.VARIANTS[name]) == set(tool.VARIANTS[name])
         compiled = g.compile(scene=scene, size=(16, 16), views=8, gpu=gpu, gpu_scene=rv.scene.GpuScene(gpu, scene))
         try:
@@ -74,7 +74,7 @@ def test_a_variant_changes_the_defines_its_passes_compile_with(gpu, tool):
 
 
 def test_unknown_properties_and_bad_values_are_refused(tool):
-    g = rv.graphs.hybrid()
+    g = rv.graphs.hybrid(preset="raw")
     with pytest.raises(OptionError, match=r"unknown property 'view_groups' \(did you mean 'view_group'\?\)"):
         tool.apply_variant(g, {"Shadows": {"view_groups": 4}})
     with pytest.raises(OptionError, match=r"Shadows.*'tile' must be \[x, y\]"):
@@ -87,7 +87,7 @@ def test_unknown_properties_and_bad_values_are_refused(tool):
 
 
 def test_shape_properties_round_trip_the_json_form():
-    g = rv.graphs.hybrid(gi="probes")
+    g = rv.graphs.hybrid(preset="raw", gi="probes")
     g.update_pass("GBuffer", {"tile": (8, 8), "view_group": 4.0})   # a tuple, a whole float (the viewer's)
     assert g.get_pass("GBuffer").get_properties()["tile"] == [8, 8]
     back = rv.RenderGraph.from_dict(g.to_dict())

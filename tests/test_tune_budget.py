@@ -166,3 +166,36 @@ def test_back_off_replaces_a_choice_that_measures_over_the_budget():
     measured.clear()
     out = back_off(choose_effects(slow, 5.2), lambda ask: choose_effects(slow, ask), measure, 5.2)
     assert out.assignment == {"A": R} and len(measured) == 1 and "over the budget" in out.notes[-1]
+
+
+def test_spend_budget_raises_the_knob_with_the_most_error_per_ms_while_it_fits():
+    from rayvr.tune.budget import Knob, spend_budget
+
+    m = model({"A": {R: 0, S: 1.0}}, {"A": {R: 1.0, S: 0.5}})
+    result = choose_effects(m, budget_ms=11.1, levels=[R, S])
+    result.record_measurement(3.0, 0.5, "timer")
+    knobs = (Knob("light_samples", (1, 2, 4, 8)), Knob("spp", (1, 2, 4), lambda r: False),
+             Knob("probes", ("coarse", "fine"), lambda r: True))
+    # light samples: each doubling +2 ms, error x0.7; finer probes: +6 ms, error -0.05
+    calls = []
+
+    def measure(assignment, options):
+        calls.append(dict(options))
+        ls = options.get("light_samples", 1)
+        fine = options.get("probes") == "fine"
+        steps = {1: 0, 2: 1, 4: 2, 8: 3}[ls]
+        return 3.0 + 2.0 * steps + 6.0 * fine, 0.5 * 0.7 ** steps - 0.05 * fine
+
+    out = spend_budget(result, measure, 11.1, knobs, base_options={"gi": "probes"})
+    # 1 -> 2 -> 4 light samples (0.15/2 ms, then 0.105/2 ms beat the probes' 0.05/6 ms); at 4 the
+    # frame is 7 ms: 8 samples (9 ms, -0.074) still beat fine probes (13 ms: over the budget)
+    assert out.options == {"light_samples": 8}
+    assert out.measured_ms == pytest.approx(9.0) and out.measured_error == pytest.approx(0.5 * 0.7 ** 3)
+    assert all(c["gi"] == "probes" for c in calls) and not any("spp" in c for c in calls)
+    assert "light_samples 8" in out.notes[-1]
+    # a choice over its budget, or one whose raises do not lower the error, stays as it was
+    flat = choose_effects(m, budget_ms=11.1, levels=[R, S])
+    flat.record_measurement(3.0, 0.5, "timer")
+    assert spend_budget(flat, lambda a, o: (4.0, 0.499), 11.1, knobs).options == {}
+    with pytest.raises(OptionError, match="measure the choice first"):
+        spend_budget(choose_effects(m, budget_ms=11.1), measure, 11.1, knobs)

@@ -159,7 +159,7 @@ def test_tune_effects_fits_the_budget_or_says_why(gpu, scene, reference):
 
 
 def test_tune_effects_on_a_renderer_uses_its_views_and_graph(gpu, scene, reference):
-    with rv.Renderer(scene, rv.graphs.hybrid(), views=1, size=SIZE) as r:
+    with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), views=1, size=SIZE) as r:
         with pytest.raises(OptionError, match="brings its own views"):
             rv.tune.tune_effects(r, size=SIZE)
         tuned = rv.tune.tune_effects(r, budget_ms=1e4, levels=[Effect.RASTER, Effect.SHADOWS], frames=1, warmup=1,

@@ -133,7 +133,7 @@ def test_first_frame_starts_the_frame_index_jitter_and_accumulation(gpu, scene):
     from rayvr.passes.taa import halton_jitter
 
     views = default_views(scene, 1, SIZE)
-    with rv.Renderer(scene, rv.graphs.hybrid_taa(), views=views, gpu=gpu, first_frame=1000) as r:
+    with rv.Renderer(scene, rv.graphs.hybrid_taa(preset="raw"), views=views, gpu=gpu, first_frame=1000) as r:
         assert r.frame_index == 1000
         r.render()
         packed = np.frombuffer(r.views_buffer.read(), np.uint32)

@@ -273,12 +273,12 @@ def test_render_replays_a_camera_path_frame_per_pose(gpu, tmp_path, capsys):
         path.append(i / 90, Pose(base[0].pose.position + [0.0, 0.0, -0.1 * i], base[0].pose.orientation))
     path.save(tmp_path / "p.json")
     code = main(["render", "--camera-path", str(tmp_path / "p.json"), "--views", "1", "--size", "16x16",
-                 "--effect", "*=raster", "--exposure", "0", "--out", str(tmp_path / "f.png")])
+                 "--effect", "*=raster", "--exposure", "0", "--preset", "raw", "--out", str(tmp_path / "f.png")])
     assert code == 0, capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.glob("f_*.png")) == ["f_0000.png", "f_0001.png", "f_0002.png"]
     from PIL import Image
 
-    with rv.Renderer(scene_raster(), rv.graphs.hybrid(), views=base) as r:
+    with rv.Renderer(scene_raster(), rv.graphs.hybrid(preset="raw"), views=base) as r:
         r.render(path.view_set(0, base))
         r.render(path.view_set(1, base))
         expected = r.read_output(flip_y=True)[0][..., :3]

@@ -275,7 +275,7 @@ import json, numpy as np, rayvr as rv
 scene = rv.scenes.cornell_box()
 for m in scene.materials:
     m.effect = rv.Effect.RASTER
-graph = rv.graphs.hybrid()
+graph = rv.graphs.hybrid(preset="raw")
 log = []
 def hook(v):
     i = v.frame_index
@@ -352,7 +352,7 @@ scene = rv.scenes.cornell_box()
 for m in scene.materials:
     m.effect = rv.Effect.RASTER
 def frame():
-    with rv.Renderer(scene, rv.graphs.hybrid(), views=1, size=(32, 32)) as r:
+    with rv.Renderer(scene, rv.graphs.hybrid(preset="raw"), views=1, size=(32, 32)) as r:
         r.render()
         return r.read_output()
 before = frame()

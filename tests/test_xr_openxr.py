@@ -543,14 +543,14 @@ def test_depth_sink_driven_by_the_renderer_refuses_instead_of_dropping_depth(gpu
     rt = TrackingRuntime({1: [S.SYNCHRONIZED, S.VISIBLE]}, formats=(GL_SRGB8_ALPHA8, GL_DEPTH_COMPONENT32F))
     sink = OpenXRSink(api=rt, depth=True, frames=4)
     with pytest.raises(XrError, match=r"depth=True.*without depth_array.*depth=False"):
-        with rv.Renderer(rv.scenes.quad(), rv.graphs.hybrid(), sink=sink) as r:
+        with rv.Renderer(rv.scenes.quad(), rv.graphs.hybrid(preset="raw"), sink=sink) as r:
             for _ in r.frames():
                 pass
     assert rt.calls[-1] == "destroy_instance"          # closed cleanly all the same
     # the same sink without depth runs under the Renderer, and creates no depth swapchain
     rt = TrackingRuntime({1: [S.SYNCHRONIZED, S.VISIBLE]}, formats=(GL_SRGB8_ALPHA8, GL_DEPTH_COMPONENT32F))
     sink = OpenXRSink(api=rt, frames=3)
-    with rv.Renderer(rv.scenes.quad(), rv.graphs.hybrid(), sink=sink) as r:
+    with rv.Renderer(rv.scenes.quad(), rv.graphs.hybrid(preset="raw"), sink=sink) as r:
         assert sum(1 for _ in r.frames()) >= 3
     assert rt.calls.count("create_swapchain:2") == 1 and not sink.depth_swapchains
 

@@ -90,6 +90,16 @@ def apply_variant(graph, props: dict) -> set[str]:
     return applied
 
 
+def raw_hybrid(**kw):
+    """The tree's bare hybrid graph: `preset="raw"`, or in trees from before presets the default."""
+    import inspect
+
+    import rayvr as rv
+
+    raw = {"preset": "raw"} if "preset" in inspect.signature(rv.graphs.hybrid).parameters else {}
+    return rv.graphs.hybrid(**raw, **kw)
+
+
 class Child:
     """One RUN's measures in its tree (the child process): every graph goes through `graph()`."""
 
@@ -174,15 +184,15 @@ class Child:
         for effect in ("SHADOWS", "REFLECTIONS"):
             for m in scene.materials:
                 m.effect = getattr(rv.Effect, effect)
-            out[f"all_{effect.lower()}_ms"] = self.frame(scene, rv.graphs.hybrid(), 2, self.div(1440, 1600))
+            out[f"all_{effect.lower()}_ms"] = self.frame(scene, raw_hybrid(), 2, self.div(1440, 1600))
         return out
 
     def views(self) -> dict:
         import rayvr as rv
 
         scene = self.scene("tauray_test.glb")
-        many = self.frame(scene, rv.graphs.hybrid(), 64, self.div(512, 683))
-        one = self.frame(scene, rv.graphs.hybrid(), 1, tuple(8 * s for s in self.div(512, 683)))
+        many = self.frame(scene, raw_hybrid(), 64, self.div(512, 683))
+        one = self.frame(scene, raw_hybrid(), 1, tuple(8 * s for s in self.div(512, 683)))
         if isinstance(many, dict):
             return {"views64": many, "one_view": one, "ratio": round(many["total"] / one["total"], 4)}
         return {"views64_ms": many, "one_view_ms": one, "ratio": round(many / one, 4)}

@@ -116,18 +116,21 @@ def configurations() -> list[tuple[str, object, Effect | None]]:
     from . import graphs
 
     out = []
-    svgf = functools.partial(graphs.hybrid, denoise="svgf")
-    for name, factory in (("hybrid", graphs.hybrid), ("hybrid_taa", graphs.hybrid_taa), ("hybrid svgf", svgf)):
+    raw = functools.partial(graphs.hybrid, preset="raw")
+    svgf = functools.partial(graphs.hybrid, preset="raw", denoise="svgf")
+    taa = functools.partial(graphs.hybrid_taa, preset="raw")
+    for name, factory in (("hybrid", raw), ("hybrid_taa", taa), ("hybrid svgf", svgf)):
         out += [(f"{name} {e.name}", factory, e) for e in Effect]
     # probe GI reaches DirectLighting at RASTER and every lighting pass at REFLECTIONS
-    out += [(f"hybrid gi=probes {e.name}", _probe_gi_graph, e) for e in (Effect.RASTER, Effect.REFLECTIONS)]
+    out += [(f"hybrid clean {e.name}", _probe_gi_graph, e) for e in (Effect.RASTER, Effect.REFLECTIONS)]
     out.append(("path_traced", graphs.path_traced, None))
     out.append(("path_traced svgf", functools.partial(graphs.path_traced, denoise="svgf"), None))
     return out
 
 
 def _probe_gi_graph():
-    """hybrid(gi="probes") with a small probe grid (check looks for NaN and Inf, not quality)."""
+    """The clean hybrid (probe GI, SVGF, TAA) with a small probe grid (check looks for NaN and Inf,
+    not quality)."""
     from . import graphs
 
     return graphs.hybrid(gi="probes", probes={"counts": [4, 4, 4], "rays_per_probe": 32, "warmup": 2})

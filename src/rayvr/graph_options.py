@@ -60,11 +60,10 @@ class GraphOption:
         """The command line's values: 'none' first."""
         return (NONE, *self.values)
 
-    @property
-    def cli_help(self) -> str:
-        """The command line's help: every value and what it does."""
+    def cli_help(self, default: str = NONE) -> str:
+        """The command line's help: every value and what it does, and the default."""
         listed = "; ".join([NONE, *(f"{c.value} ({c.help})" for c in self.choices)])
-        return f"{self.help}: {listed}; default {NONE}" if self.help else f"{listed}; default {NONE}"
+        return f"{self.help}: {listed}; default {default}" if self.help else f"{listed}; default {default}"
 
     def either(self) -> str:
         """The values quoted, for a message: "'svgf' or 'oidn'", "'a', 'b' or 'c'"."""
@@ -104,6 +103,39 @@ GI = GraphOption("gi", "indirect light for RASTER, SHADOWS and REFLECTIONS mater
 OPTIONS = (GI, DENOISE)
 
 
+class _FromPreset:
+    """The default of a graph option that its preset decides (a singleton: FROM_PRESET)."""
+
+    def __repr__(self) -> str:
+        return "FROM_PRESET"
+
+
+FROM_PRESET = _FromPreset()
+
+# Named configurations of the hybrid graph; an option a call does not give takes its preset's value.
+# "clean" is what a user should see by default: indirect light from the probes and every ray-traced
+# term denoised and accumulated over frames, so a still view converges (the least error per frame
+# budget measured: benchmarks/RESULTS.md). "raw" is the bare pipeline: each frame's own light, no
+# indirect light for RASTER, SHADOWS and REFLECTIONS materials, nothing carried across frames.
+PRESETS = {
+    "clean": {"gi": "probes", "denoise": "svgf", "taa": True},
+    "raw": {"gi": None, "denoise": None, "taa": False},
+}
+DEFAULT_PRESET = "clean"
+
+
+def preset_options(preset: str, where: str = "hybrid", given: dict | None = None, **options) -> dict:
+    """`given` and `options` ({option: value}) with each value left FROM_PRESET taken from `preset`
+    (a name of PRESETS); OptionError naming `where` for an unknown preset."""
+    given = {**(given or {}), **options}
+    if preset not in PRESETS:
+        from .errors import did_you_mean
+
+        raise OptionError(f"{where}(preset={preset!r}): unknown preset{did_you_mean(str(preset), PRESETS)}; use "
+                          f"{' or '.join(repr(p) for p in PRESETS)}")
+    return {k: PRESETS[preset].get(k) if v is FROM_PRESET else v for k, v in given.items()}
+
+
 @dataclasses.dataclass(frozen=True)
 class GraphBuilder:
     """A ready-made graph: its name, the function that builds it, the GraphOptions it takes,
@@ -117,13 +149,16 @@ class GraphBuilder:
     command_line: bool = True
     extends: Callable | None = None
 
-    def defaults(self) -> dict:
-        """Every keyword `build` takes (with those it passes on), with its default."""
+    def defaults(self, preset: str | None = None) -> dict:
+        """Every keyword `build` takes (with those it passes on), with its default; an option its
+        preset decides has the value of `preset` (default: the builder's own default preset)."""
         out = {}
         for fn in (self.extends, self.build):
             if fn is not None:
                 out.update({name: p.default for name, p in inspect.signature(fn).parameters.items()
                             if p.default is not inspect.Parameter.empty})
+        if any(v is FROM_PRESET for v in out.values()):
+            out = preset_options(preset or out.get("preset", DEFAULT_PRESET), self.name, out)
         return out
 
     def takes(self, option: str) -> bool:

@@ -1,15 +1,17 @@
 """Ready-made render graphs. `hybrid()` is rayvr's main job: the Ray-VR pipeline.
 
-    hybrid():
+    hybrid(preset="raw"):
     GBuffer ─┬─> Direct ───────────────────────────────────────┐
              ├─> Compaction ─┬─> Shadows ──────────────────────┤
              │               ├─> Reflections ──────────────────┼─> Composite ─> ToneMap
              │               └─> PathTracer ─> Accumulate ─────┘
              └─(G-buffer pins to every lighting pass; effect ids to Compaction and Composite)
-    hybrid(gi="probes"): + Probes (ProbeGI, once per frame) ─> Composite, Reflections
+    gi="probes": + Probes (ProbeGI, once per frame) ─> Composite, Reflections
+    taa=True: TAA between Composite and ToneMap, fed GBuffer.motion
+    hybrid(): the "clean" preset, gi="probes" + denoise="svgf" (graph_options.PRESETS)
 
     path_traced():  PathTracer ─> Accumulate ─> ToneMap      (progressive reference renders)
-    hybrid_taa():   hybrid() with TAA between Composite and ToneMap, fed GBuffer.motion
+    hybrid_taa():   hybrid() with TAA on and its alpha and sigma
 
     denoise="svgf" (hybrid and path_traced): the light as two lobes (Composite or PathTracer
     `diffuse`/`specular`) ─> SVGF ─> TAA ─> ToneMap, with the G-buffer's surfaces and motion;
@@ -25,7 +27,7 @@ Passes that no material needs are pruned at compile time (see the compile report
 from __future__ import annotations
 
 from .errors import OptionError
-from .graph_options import DENOISE, GI, GraphBuilder
+from .graph_options import DEFAULT_PRESET, DENOISE, FROM_PRESET, GI, GraphBuilder, preset_options
 from .rendergraph.graph import RenderGraph
 
 OUTPUT = "ToneMap.dst"        # display-referred rgba8, sRGB encoded
@@ -87,29 +89,37 @@ def _denoised(g: RenderGraph, denoise: str | None, color: str, lobes: tuple[str,
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
            auto_exposure: bool = False, light_samples: int = 1,
            multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid",
-           gbuffer: str = "auto", denoise: str | None = None, gi: str | None = None,
-           probes: dict | None = None, reflection_max_roughness: float | None = None) -> RenderGraph:
+           gbuffer: str = "auto", denoise=FROM_PRESET, gi=FROM_PRESET, taa=FROM_PRESET,
+           probes: dict | None = None, reflection_max_roughness: float | None = None,
+           preset: str = DEFAULT_PRESET) -> RenderGraph:
     """The hybrid raster + ray-traced graph: multiview G-buffer, direct light for every pixel,
     ray-traced shadows and reflections only for the pixels whose material's effect asks for them,
     path tracing (rayvr.passes.PathTracer in G-buffer mode) for PATH_TRACED materials, composite
-    and tone map. `gbuffer`: 'raster', 'rt' (ray-traced, rayvr.passes.GBufferRT) or 'auto' (raster
+    and tone map. `preset`: 'clean' (the default: probe GI, SVGF and TAA, so the frame is
+    denoised and a still view converges) or 'raw' (the bare pipeline: no GI, no denoiser, nothing
+    carried across frames); `gi`, `denoise` and `taa` given explicitly override the preset's
+    (rayvr.graph_options.PRESETS). `gbuffer`: 'raster', 'rt' (ray-traced, rayvr.passes.GBufferRT) or 'auto' (raster
     unless the GPU's raster is weak against its compute: Capabilities.weak_raster, chosen at compile
     and named in the compile report); the pass is "GBuffer" either way. `denoise`: None, 'svgf'
     (the composite's diffuse and specular light through SVGF and TAA: shadows, reflections and
     path-traced pixels converge over frames) or 'oidn' (offline; see the module docstring).
+    `taa`: TAA after the composite (before OIDN; SVGF brings its own): jittered frames averaged
+    along the motion vectors, exactly while the view is still (rayvr.passes.TAA).
     `gi="probes"` adds indirect light to RASTER, SHADOWS and REFLECTIONS materials from a volume of
     irradiance probes ray traced once per frame for every view (rayvr.passes.ProbeGI, pass
     "Probes", with `probes` as its properties); PATH_TRACED materials trace their own.
     `reflection_max_roughness`: REFLECTIONS surfaces rougher than this (and not transmissive) are
     shaded as SHADOWS, their specular light from the probes (the G-buffer's property of that name,
     rayvr.passes.gbuffer.reflection_cutoff); None: 0.6 with probe GI, 1 (every one traced) without.
-    Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR), with a denoiser then its HDR
-    output (`TAA.dst` or `Denoise.dst`; `hdr_output(graph)` names a graph's)."""
+    Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR), with TAA or a denoiser then
+    its HDR output (`TAA.dst` or `Denoise.dst`; `hdr_output(graph)` names a graph's)."""
     from . import passes as P
     from .errors import OptionError
     from .passes.gbuffer import channels, reflection_cutoff
     from .passes.probe_gi import inputs as probe_inputs
 
+    chosen = preset_options(preset, "hybrid", gi=gi, denoise=denoise, taa=taa)
+    gi, denoise, taa = chosen["gi"], chosen["denoise"], bool(chosen["taa"])
     if gi not in (None, "none", *GI.values):
         raise OptionError(f"hybrid(gi={gi!r}): unknown global illumination; use one of {', '.join(GI.values)} "
                           f"or None")
@@ -162,7 +172,24 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.mark_output(OUTPUT)
     g.mark_output(HDR_OUTPUT)
     _denoised(g, denoise, HDR_OUTPUT, ("Composite.diffuse", "Composite.specular"))
+    if taa and not svgf:
+        _add_taa(g)
     return g
+
+
+def _add_taa(g: RenderGraph, alpha: float | None = None, sigma: float | None = None) -> None:
+    """TAA on the composited radiance (motion vectors from the G-buffer) in front of its reader
+    (ToneMap, or Denoise with OIDN); marks TAA.dst."""
+    from .passes import TAA
+
+    reader = next(e.dst for e in g.edges if e.src == HDR_OUTPUT and e.dst_pass in ("ToneMap", "Denoise"))
+    props = {k: v for k, v in (("alpha", alpha), ("sigma", sigma)) if v is not None}
+    g.add_pass(TAA(props), "TAA")
+    g.remove_edge(HDR_OUTPUT, reader)
+    g.add_edge("Composite.color", "TAA.color")
+    g.add_edge("GBuffer.motion", "TAA.motion")
+    g.add_edge("TAA.dst", reader)
+    g.mark_output(TAA_HDR_OUTPUT)
 
 
 def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int = 3, clamp: float = 0.0,
@@ -196,25 +223,18 @@ def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int 
     return g
 
 
-def hybrid_taa(alpha: float = 0.1, sigma: float = 1.0, name: str = "HybridTAA", **hybrid_kw) -> RenderGraph:
-    """`rayvr.graphs.hybrid(**hybrid_kw)` with TAA on the composited radiance (motion vectors from
-    the G-buffer) before tone mapping (and before OIDN with denoise='oidn'; with 'svgf' the
-    hybrid's own TAA after SVGF takes `alpha` and `sigma`). Outputs: `ToneMap.dst`,
-    `Composite.color` and `TAA.dst`. TAA asks for sub-pixel camera jitter in its reflection; the
-    Renderer packs `rayvr.passes.taa.halton_jitter(frame)` into the views and the G-buffer applies it."""
-    from .passes import TAA
-
-    g = hybrid(name=name, **hybrid_kw)
-    if "TAA" in g.passes:
-        g.update_pass("TAA", {"alpha": alpha, "sigma": sigma})
-        return g
-    reader = next(e.dst for e in g.edges if e.src == HDR_OUTPUT and e.dst_pass in ("ToneMap", "Denoise"))
-    g.add_pass(TAA(alpha=alpha, sigma=sigma), "TAA")
-    g.remove_edge(HDR_OUTPUT, reader)
-    g.add_edge("Composite.color", "TAA.color")
-    g.add_edge("GBuffer.motion", "TAA.motion")
-    g.add_edge("TAA.dst", reader)
-    g.mark_output(TAA_HDR_OUTPUT)
+def hybrid_taa(alpha: float = 0.1, sigma: float = 1.0, name: str = "HybridTAA", taa: bool = True,
+               **hybrid_kw) -> RenderGraph:
+    """`rayvr.graphs.hybrid(**hybrid_kw)` with TAA on (whatever the preset) and its `alpha` and
+    `sigma`: on the composited radiance (motion vectors from the G-buffer) before tone mapping (and
+    before OIDN with denoise='oidn'; with 'svgf' the hybrid's own TAA after SVGF). Outputs:
+    `ToneMap.dst`, `Composite.color` and `TAA.dst`. TAA asks for sub-pixel camera jitter in its
+    reflection; the Renderer packs `rayvr.passes.taa.halton_jitter(frame)` into the views and the
+    G-buffer applies it."""
+    if not taa:
+        raise OptionError("hybrid_taa(taa=False): this graph is the hybrid with TAA; use rv.graphs.hybrid(taa=False)")
+    g = hybrid(name=name, taa=True, **hybrid_kw)
+    g.update_pass("TAA", {"alpha": alpha, "sigma": sigma})
     return g
 
 

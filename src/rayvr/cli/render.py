@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
-from ..graph_options import DENOISE, GI, NONE
+from ..graph_options import DEFAULT_PRESET, DENOISE, GI, NONE, PRESETS
 from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
 from . import cluster as cluster_cli
 from .options import (MAX_VIEWS, add_lighting_arguments, apply_lighting, integer, load_scene_arg, number,
@@ -87,8 +87,16 @@ def register(sub) -> None:
                         "light, so B = 1 is direct light only; Mitsuba 3's max_depth is B + 1, Tauray's "
                         "'2 bounces + NEE' is B = 3 (default: 8 path_traced, 4 hybrid)")
     add_lighting_arguments(p)
+    p.add_argument("--preset", default=DEFAULT_PRESET, choices=tuple(PRESETS),
+                   help="hybrid: clean (default: probe GI, SVGF and TAA, a denoised frame that converges while "
+                        "the view is still) or raw (the bare pipeline: one frame's light, nothing across frames); "
+                        "--gi, --denoise and --taa override it")
     for option in (DENOISE, GI):
-        p.add_argument(f"--{option.name}", default=NONE, choices=option.cli_choices, help=option.cli_help)
+        p.add_argument(f"--{option.name}", choices=option.cli_choices,
+                       help=option.cli_help("the preset's for hybrid, none for path_traced"))
+    p.add_argument("--taa", choices=("on", "off"),
+                   help="hybrid: TAA after the composite (jittered frames averaged, exactly while the view is "
+                        "still); default the preset's")
     p.add_argument("--probes", metavar="XxYxZ", help="with --gi probes: probes per axis over the scene's bounds "
                                                      "(default 8x8x8)")
     p.add_argument("--probe-rays", type=integer("--probe-rays", 16, 1024), help="with --gi probes: rays per probe "
@@ -99,6 +107,17 @@ def register(sub) -> None:
                    help="replay a camera path JSON (rayvr view records them): one frame per pose, "
                         "written as OUT_0000, OUT_0001, ...")
     p.set_defaults(func=run)
+
+
+def resolve_graph_options(args) -> None:
+    """Fill --gi, --denoise and --taa left out: the preset's for hybrid, off for path_traced (a
+    given --gi there is refused later, with the reason)."""
+    preset = PRESETS[args.preset] if args.graph == "hybrid" else {}
+    for key in ("gi", "denoise"):
+        if getattr(args, key) is None:
+            setattr(args, key, preset.get(key) or NONE)
+    if args.taa is None:
+        args.taa = "on" if preset.get("taa") else "off"
 
 
 def probe_options(args) -> dict | None:
@@ -206,6 +225,7 @@ def run(args) -> int:
     from ..passes.tonemap import OPERATORS
     from ..xr.cameras import default_views
 
+    resolve_graph_options(args)
     size = parse_size(args.size, views=args.views)
     if args.tonemap.lower() not in OPERATORS:
         raise OptionError(f"--tonemap {args.tonemap}: use one of {', '.join(OPERATORS)}")
@@ -213,10 +233,10 @@ def run(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() not in OUT_SUFFIXES:
         raise OptionError(f"--out {args.out}: write .png or .jpg (tone mapped) or .exr (HDR)")
-    probes = probe_options(args)
-    if probes is not None and args.graph == "path_traced":
+    if args.graph == "path_traced" and args.gi != NONE:
         raise OptionError("--gi probes: lights the hybrid graph's materials; --graph path_traced traces its own "
                           "indirect light (leave --gi out)")
+    probes = probe_options(args)
     grid = choose_grid(args)
     quilt = quilt_path(args, grid, size)
     paths = output_paths(out, args.views, args.layout)
@@ -301,7 +321,7 @@ def build_graph(args, exposure: float, auto_exposure: bool, probes: dict | None 
     g = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
                auto_exposure=auto_exposure, light_samples=args.light_samples, multiview=args.multiview,
                gbuffer=args.gbuffer, path_bounces=args.bounces or 4, denoise=args.denoise,
-               gi=None if args.gi == "none" else args.gi, probes=probes)
+               gi=None if args.gi == NONE else args.gi, taa=args.taa == "on", probes=probes)
     if args.spp is not None:
         g.update_pass("PathTracer", {"samples_per_pixel": args.spp})
     return g

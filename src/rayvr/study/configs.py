@@ -34,24 +34,31 @@ from .reference import ReferenceSettings
 DEFAULT_BOUNCES = ReferenceSettings.max_bounces
 
 
+# The study's configurations name every option they turn on: the graphs start from the raw preset.
+STUDY_PRESET = "raw"
+
+
 def hybrid_graph(spp: int = 1, max_bounces: int = 1, path_bounces: int = DEFAULT_BOUNCES, light_samples: int = 1,
-                 **kw):
+                 preset: str = STUDY_PRESET, **kw):
     """`rv.graphs.hybrid(...)` with `spp` paths per pixel per frame for PATH_TRACED materials
-    (`path_bounces` bounces; `max_bounces` is the reflections')."""
+    (`path_bounces` bounces; `max_bounces` is the reflections'), from the raw preset unless
+    `preset` names another."""
     from ..graphs import hybrid
 
-    g = hybrid(max_bounces=max_bounces, path_bounces=path_bounces, light_samples=light_samples, **kw)
+    g = hybrid(max_bounces=max_bounces, path_bounces=path_bounces, light_samples=light_samples, preset=preset, **kw)
     if "PathTracer" in g.passes:
         g.update_pass("PathTracer", {"samples_per_pixel": int(spp)})
     return g
 
 
 def hybrid_taa_graph(spp: int = 1, max_bounces: int = 1, path_bounces: int = DEFAULT_BOUNCES,
-                     light_samples: int = 1, **kw):
-    """`rv.graphs.hybrid_taa(...)` (TAA before tone mapping) with `spp` as in `hybrid_graph`."""
+                     light_samples: int = 1, preset: str = STUDY_PRESET, **kw):
+    """`rv.graphs.hybrid_taa(...)` (TAA before tone mapping) with `spp` and the preset as in
+    `hybrid_graph`."""
     from ..graphs import hybrid_taa
 
-    g = hybrid_taa(max_bounces=max_bounces, path_bounces=path_bounces, light_samples=light_samples, **kw)
+    g = hybrid_taa(max_bounces=max_bounces, path_bounces=path_bounces, light_samples=light_samples, preset=preset,
+                   **kw)
     if "PathTracer" in g.passes:
         g.update_pass("PathTracer", {"samples_per_pixel": int(spp)})
     return g
@@ -74,11 +81,9 @@ def builder_defaults(builder) -> dict:
     """Every keyword the builder takes and its default: its own, over those of the ready-made
     graph it wraps (rayvr.graphs.BUILDERS, by its name in GRAPHS)."""
     name = next((k for k, v in GRAPHS.items() if v is builder), None)
-    out = BUILDERS[name].defaults() if name else {}
-    for key, p in inspect.signature(builder).parameters.items():
-        if p.default is not inspect.Parameter.empty:
-            out[key] = p.default
-    return out
+    own = {key: p.default for key, p in inspect.signature(builder).parameters.items()
+           if p.default is not inspect.Parameter.empty}
+    return {**(BUILDERS[name].defaults(own.get("preset")) if name else {}), **own}
 
 
 def accepts(builder, option: str) -> bool:

@@ -197,6 +197,86 @@ def back_off(first: TuneResult, choose, measure, budget_ms: float, tries: int = 
     return result
 
 
+@dataclasses.dataclass(frozen=True)
+class Knob:
+    """A quality setting the tuner may raise when a choice leaves time in the budget: graph option
+    `name`, its `values` from the cheapest (the graph's default) up, and `applies(result)`, whether
+    it can change this choice's image (light samples need a ray-traced light; probe density needs
+    probe GI; paths per pixel a PATH_TRACED material)."""
+
+    name: str
+    values: tuple
+    applies: object = None   # callable(TuneResult) -> bool; None: always
+
+    def level(self, options: dict) -> int:
+        """The index of `options`' value of this knob in `values` (0 when not set)."""
+        value = options.get(self.name, self.values[0])
+        return self.values.index(value) if value in self.values else 0
+
+
+def _uses(effect):
+    return lambda r: any(e >= effect for e in r.assignment.values())
+
+
+# What a choice may raise with time left, cheapest first. Light samples and paths per pixel scale a
+# pass's rays; denser probes and more rays per probe sharpen and steady the indirect light.
+KNOBS = (
+    Knob("light_samples", (1, 2, 4, 8)),
+    Knob("spp", (1, 2, 4, 8), _uses(Effect.PATH_TRACED)),
+    Knob("probes", ({"counts": [8, 8, 8], "rays_per_probe": 128}, {"counts": [12, 12, 12], "rays_per_probe": 128},
+                    {"counts": [16, 16, 16], "rays_per_probe": 256}),
+         lambda r: r.options.get("gi") == "probes"),
+)
+# A raise must lower the measured error by this fraction to count: less is the judge's noise.
+SPEND_MIN_GAIN = 0.02
+
+
+def spend_budget(result: TuneResult, measure, budget_ms: float, knobs=KNOBS, base_options: dict | None = None,
+                 min_gain: float = SPEND_MIN_GAIN, max_steps: int = 8) -> TuneResult:
+    """Raise `result`'s quality knobs while its measured frame fits `budget_ms`: each step measures
+    every knob one value up (`measure(assignment, options)` -> (ms, error), options being
+    `base_options` with the result's and the knob's over them) and takes the one with the largest
+    error reduction per added ms among those that fit and lower the error by at least `min_gain`
+    of it; it stops when none does. `result` must carry a measurement (record_measurement). Its
+    options, measured ms and error follow the steps, and a note lists them."""
+    if result.measured_ms is None or result.measured_error is None:
+        raise OptionError("spend_budget: measure the choice first (TuneResult.record_measurement)")
+    base = dict(base_options or {})
+    ms, error = float(result.measured_ms), float(result.measured_error)
+    taken, seen = [], {}
+    for _ in range(max_steps):
+        if ms > budget_ms:
+            break
+        best = None
+        for knob in knobs:
+            if knob.applies is not None and not knob.applies(result):
+                continue
+            level = knob.level(result.options)
+            if level + 1 >= len(knob.values):
+                continue
+            options = {**result.options, knob.name: knob.values[level + 1]}
+            key = repr(sorted(options.items()))
+            if key not in seen:
+                seen[key] = measure(result.assignment, {**base, **options})
+            new_ms, new_error = seen[key]
+            gain = error - new_error
+            if new_ms > budget_ms or gain < min_gain * error:
+                continue
+            score = gain / max(new_ms - ms, 1e-6)
+            if best is None or score > best[0]:
+                best = (score, knob, options, new_ms, new_error)
+        if best is None:
+            break
+        _, knob, result.options, new_ms, new_error = best
+        taken.append(f"{knob.name} {knob.values[knob.level(result.options)]!r} ({ms:.3g} -> {new_ms:.3g} ms, "
+                     f"{result.model.metric} {error:.4g} -> {new_error:.4g})")
+        ms, error = new_ms, new_error
+    if taken:
+        result.measured_ms, result.measured_error = ms, error
+        result.notes.append("spent the budget's headroom: " + "; ".join(taken))
+    return result
+
+
 def choose_among(results) -> TuneResult:
     """Of choices made on several CostModels (one per graph option set), the one that fits with the
     least predicted error (ties: the faster); when none fits, the fastest. A note names the others."""

@@ -14,7 +14,7 @@ from ..study.display import Display
 from ..study.metrics import DEFAULT_EPS
 from ..study.reference import Reference, ReferenceSettings, cached_reference
 from ..study.timing import make_views
-from .budget import FRAME_BUDGET_MS, TuneResult, back_off, choose_among, choose_effects
+from .budget import FRAME_BUDGET_MS, KNOBS, TuneResult, back_off, choose_among, choose_effects, spend_budget
 from . import cost_probe
 from .cost_probe import ErrorJudge, render_assignment
 
@@ -71,7 +71,7 @@ def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=Non
                  frames: int = 10, warmup: int = 3, warmup_s: float | None = None, trials: int = 2,
                  reference=None, cache_dir=None, display: Display = Display(), preset: str = "index",
                  ppd: float | None = None, verify: bool = True, apply: bool = True, progress: bool = True,
-                 gpu=None, option_sets=None) -> TuneResult:
+                 gpu=None, option_sets=None, spend: bool = True, knobs=KNOBS) -> TuneResult:
     """Measure a CostModel on the GPU (`rayvr.tune.cost_probe.probe_cost_model`: one render per effect
     level, timed after `warmup_s` seconds of warm-up, default 0.5 s on GPUs with timer queries),
     choose effects with `choose_effects`, then (with `verify`) render the choice and record its
@@ -86,7 +86,9 @@ def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=Non
     materials get the reference's bounces). `reference`: a Reference or ReferenceSettings.
     `option_sets`: graph options tried beside the effects (default OPTION_SETS, those `graph`
     takes; [{}]: `options` alone): one cost model each, and the choice that fits with the least
-    predicted error wins (its `options` say which)."""
+    predicted error wins (its `options` say which). With `spend` (and `verify`) a choice that
+    measures under the budget then raises `knobs` (light samples, paths per pixel, probe density:
+    rayvr.tune.budget.spend_budget) while the measured frame still fits and the error falls."""
     scene, view_set, builder, gpu = _target(renderer_or_scene, size, views, graph, gpu)
     judge = make_judge(scene, view_set, metric, reference, cache_dir, display, preset, ppd, gpu=gpu)
     options = dict(options or {})
@@ -98,14 +100,19 @@ def tune_effects(renderer_or_scene, budget_ms: float = FRAME_BUDGET_MS, size=Non
     def choose(ask_ms):
         return choose_with_options(models, options, ask_ms, levels, fixed)
 
+    def render(assignment, opts):
+        return render_assignment(scene, view_set, builder, opts, assignment, judge, frames, warmup, warmup_s,
+                                 trials, gpu)
+
     def verify_choice(choice):
-        choice.record_measurement(*render_assignment(scene, view_set, builder, {**options, **choice.options},
-                                                     choice.assignment, judge, frames, warmup, warmup_s, trials, gpu))
+        choice.record_measurement(*render(choice.assignment, {**options, **choice.options}))
         return choice.measured_ms
 
     result = choose(budget_ms)
     if verify:
         result = back_off(result, choose, verify_choice, budget_ms)
+        if spend:
+            result = spend_budget(result, lambda a, o: render(a, o)[:2], budget_ms, knobs, base_options=options)
     if apply:
         set_effects(scene, result.assignment)
     return result
@@ -132,7 +139,8 @@ def _target(renderer_or_scene, size, views, graph, gpu):
 
 def tuned_study(scene, view_set, reference: Reference, settings, configs, budgets=(FRAME_BUDGET_MS,), metric: str = "flip",
                 levels=tuple(Effect), trials: int = 2, cache_dir=None, progress: bool = True, gpu=None,
-                notes=(), budget_option: str = "budget_ms", runner=None, option_sets=None):
+                notes=(), budget_option: str = "budget_ms", runner=None, option_sets=None, spend: bool = True,
+                knobs=KNOBS):
     """The error study with the tuner on top: probe a cost model against `reference` (judged as
     the study judges), choose effects for each of `budgets`, and measure `configs` plus one
     "tuned for B ms" row per budget alike. A tuned row that measures over its budget is chosen
@@ -142,7 +150,9 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
     first. `runner`: where the probe and the study run
     (default here; rayvr.cluster.StudyRunner: the probe on one worker, the rows over all).
     `option_sets`: the graph options tuned beside the effects (default: those of `configs` on the
-    hybrid graph, e.g. probe GI and SVGF, and none), one cost model each (tune_effects)."""
+    hybrid graph, e.g. probe GI and SVGF, and none), one cost model each (tune_effects). With
+    `spend` a tuned row that measures under its budget raises `knobs` as tune_effects does (here,
+    with a local runner) and is measured again."""
     from ..study.configs import Config
     from ..study.measure import measure
     from ..study.pool import MetricPool
@@ -175,19 +185,32 @@ def tuned_study(scene, view_set, reference: Reference, settings, configs, budget
                       reference=reference, settings=settings, cache_dir=cache_dir, progress=progress, gpu=gpu,
                       notes=notes, runner=runner)
 
-    def measured_row(b, choice):
-        """The study's row for `choice` (measured with the rest, or now alone after an overrun:
-        its row only, the progressive curves are the study's)."""
+    def measured_row(b, choice, again: bool = False):
+        """The study's row for `choice` (measured with the rest, or now alone after an overrun or
+        a raised knob: its row only, the progressive curves are the study's)."""
         config = row_config(b, choice)
-        if choice is not first[b]:
-            again = measure(scene, [config], views=view_set, reference=reference, settings=settings,
+        if again or choice is not first[b]:
+            alone = measure(scene, [config], views=view_set, reference=reference, settings=settings,
                             cache_dir=cache_dir, progress=progress, gpu=gpu, curves=False, runner=runner)
-            results.rows[[r.name for r in results.rows].index(config.name)] = again[config.name]
+            results.rows[[r.name for r in results.rows].index(config.name)] = alone[config.name]
         row = results[config.name]
         row.tuned = True
         choice.record_measurement(row.gpu_ms, row.mean(metric), results.method, budget_option)
         return row.gpu_ms
 
     tuned = {b: back_off(t, choose, lambda choice, b=b: measured_row(b, choice), b) for b, t in first.items()}
+    if spend and isinstance(runner, LocalRunner):
+        judge = ErrorJudge(reference, settings.display.fixed(reference.image), settings.pixels_per_degree(), metric,
+                           settings.eps)
+
+        def render(assignment, opts):
+            return render_assignment(scene, view_set, hybrid_graph, opts, assignment, judge, settings.timing_frames,
+                                     settings.warmup, settings.warmup_s, trials, gpu)[:2]
+
+        for b, t in tuned.items():
+            before = dict(t.options)
+            spend_budget(t, render, b, knobs, base_options=options)
+            if t.options != before:
+                measured_row(b, t, again=True)
     results.tuned = next(iter(tuned.values()))
     return results, tuned

@@ -29,6 +29,9 @@ from .script import InputScript, ScriptAction
 from .view_rig import ViewRig
 
 BUDGET_MS = FRAME_BUDGET_MS   # 90 Hz
+# Frames of a still view's running mean after which the summary calls it converged: its noise is
+# a sixteenth of one frame's (1 / sqrt(256)), below what an 8-bit display shows of most scenes.
+CONVERGED_FRAMES = 256
 HISTORY = 240             # frames of timing kept for the plots
 MAX_WINDOW = (1600, 900)  # the default window's largest size
 
@@ -226,7 +229,8 @@ class Viewer:
         if not builder.takes(option):
             raise OptionError(f"graph option {option}: {builder.name} takes "
                               f"{', '.join(o.name for o in builder.options)}")
-        options = {k: v for k, v in {**self.graph_options, option: value}.items() if v not in (None, NONE)}
+        # an option turned off is passed as None: the builder's preset may turn it on otherwise
+        options = {k: (None if v == NONE else v) for k, v in {**self.graph_options, option: value}.items()}
         self.graph = builder.build(**options)
         self.graph_options = options
         self._pending_rebuild = True
@@ -327,7 +331,11 @@ class Viewer:
         where the graph runs one, else frames since the view last changed."""
         from ..passes.accumulate import Accumulate
 
-        counts = [p.frame_count for p in self.renderer.compiled.passes.values() if isinstance(p, Accumulate)]
+        from ..passes.taa import TAA
+
+        passes = self.renderer.compiled.passes.values()
+        counts = [p.frame_count for p in passes if isinstance(p, Accumulate) and p.enabled]
+        counts += [p.still_frames for p in passes if isinstance(p, TAA)]   # a still view's exact mean
         frames = max(counts) if counts else self.renderer.sample_index + 1
         return frames, time.perf_counter() - self._accum_started
 
@@ -339,6 +347,11 @@ class Viewer:
         frames, seconds = self.accumulated()
         return bool((self.target_frames and frames >= self.target_frames)
                     or (self.target_seconds and seconds >= self.target_seconds))
+
+    def settled(self) -> bool:
+        """Whether the view counts as converged: rendering paused at a target, or a still view's
+        running mean has CONVERGED_FRAMES frames."""
+        return (self.rendered_once and not self.rendered) or self.accumulated()[0] >= CONVERGED_FRAMES
 
     # -- input ---------------------------------------------------------------------------------------
     def handle_event(self, event: InputEvent) -> None:

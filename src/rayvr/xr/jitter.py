@@ -1,7 +1,10 @@
 """Sub-pixel camera jitter: the Halton (2, 3) sequence that temporal anti-aliasing resolves."""
 from __future__ import annotations
 
-JITTER_SEQUENCE_LENGTH = 16
+# A still view averages its jittered frames without bound (rayvr.passes.TAA), so the cycle is long:
+# its points are the quadrature of the pixel's box filter, and any run of consecutive frames of it
+# still covers the pixel evenly for TAA in motion.
+JITTER_SEQUENCE_LENGTH = 1024
 
 
 def halton(index: int, base: int) -> float:

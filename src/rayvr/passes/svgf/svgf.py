@@ -49,16 +49,11 @@ from ...rendergraph.render_pass import Access, Reflection, RenderPass
 from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
+from ..history import LightingWatch, still_frame
 
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
 KERNELS = (3, 5)     # a-trous kernel widths: 3x3 (1/2, 1/4 per axis), 5x5 (B3 spline 3/8, 1/4, 1/16)
-
-
-def lights_key(scene) -> tuple:
-    """What the scene's punctual lights look like (a change invalidates the lighting history)."""
-    return tuple((l.type, tuple(l.position), tuple(l.direction), tuple(l.color), l.intensity, l.range,
-                  l.inner_cone_angle, l.outer_cone_angle) for l in scene.lights)
 
 
 @register_pass
@@ -72,7 +67,9 @@ class SVGF(RenderPass):
     `feedback_tap` (the iteration whose output becomes the colour history; -1: the unfiltered
     temporal mean), `alpha` and
     `moments_alpha` (weights of the new frame's colour and moments, at least 1 / history length),
-    `max_history` (frames the history length counts to), `phi_color`, `phi_normal`, `phi_depth`
+    `max_history` (frames the history length counts to while the view moves), `still_max_history`
+    (the same on a still frame, where a pixel that did not move keeps an exact running mean:
+    rayvr.passes.history; the float16 colour history bounds it), `phi_color`, `phi_normal`, `phi_depth`
     (the edge-stopping sigmas of luminance, normal and depth)."""
 
     DIFFUSE, SPECULAR, COLOR = "diffuse", "specular", "color"
@@ -84,15 +81,14 @@ class SVGF(RenderPass):
     GRADIENT = "gradient"
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"iterations": 5, "kernel": 3, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2,
-                  "max_history": 32, "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
+                  "max_history": 32, "still_max_history": 256, "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
     USES_SCENE = True
 
     def __init__(self, props: dict | None = None, **kwargs):
         super().__init__(props, **kwargs)
         self._frames = 0
         self._history_valid = False
-        self._scene_version = None
-        self._scene_key = None
+        self._lighting = LightingWatch()
         self.resets = 0   # histories dropped by scene edits (lighting changed) since compile
 
     def validate_property(self, key, value):
@@ -103,7 +99,7 @@ class SVGF(RenderPass):
         if key == "kernel" and value not in KERNELS:
             raise OptionError(f"pass {self.name}: property 'kernel' must be 3 (a 3x3 a-trous kernel, 9 taps) or 5 "
                               f"(the 5x5 B3 spline, 25 taps), got {value!r}")
-        low = {"feedback_tap": -1, "max_history": 1}.get(key)
+        low = {"feedback_tap": -1, "max_history": 1, "still_max_history": 1}.get(key)
         if low is not None and (int(value) != value or value < low):
             raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= {low}, got {value!r}")
         if key in ("alpha", "moments_alpha") and not 0.0 < value <= 1.0:
@@ -113,7 +109,7 @@ class SVGF(RenderPass):
             raise OptionError(f"pass {self.name}: property '{key}' must be > 0, got {value!r}")
         if key == "phi_normal" and not value >= 0.0:
             raise OptionError(f"pass {self.name}: property 'phi_normal' must be >= 0, got {value!r}")
-        return int(value) if key in ("iterations", "kernel", "feedback_tap", "max_history") else value
+        return int(value) if key in ("iterations", "kernel", "feedback_tap", "max_history", "still_max_history") else value
 
     def reset(self) -> None:
         """Forget the history: the next frame starts it again."""
@@ -164,8 +160,7 @@ class SVGF(RenderPass):
         self._atrous_program(final=True)
         self._groups = groups_2d(cd.size, cd.views)
         self._frames = 0
-        self._scene_version = None
-        self._scene_key = None
+        self._lighting.forget()
         self.resets = 0
         self.reset()
 
@@ -183,18 +178,6 @@ class SVGF(RenderPass):
         if not hasattr(self, "_defines"):
             return {}
         return {**self._defines, "SVGF_KERNEL": int(self.kernel)}   # the a-trous stage's kernel
-
-    def _lighting_edited(self, ctx) -> bool:
-        """Whether the materials or lights changed since the last frame (instances alone do not
-        count: the disocclusion test handles what they uncover)."""
-        gs = ctx.scene
-        if gs is None or gs.version == self._scene_version:
-            return False
-        self._scene_version = gs.version
-        key = (gs.scene.materials.version, lights_key(gs.scene))
-        edited = key != self._scene_key
-        self._scene_key = key
-        return edited
 
     def _histories(self, res, data) -> None:
         """Bind the colour histories as the images `history_diffuse` (and `_specular`) of `res`."""
@@ -222,7 +205,7 @@ class SVGF(RenderPass):
         res.set("svgf_phi_color", float(self.phi_color))
 
     def execute(self, ctx, data):
-        if self._lighting_edited(ctx) and self._history_valid:
+        if self._lighting.edited(ctx) and self._history_valid:
             self.resets += 1
             self.reset()
         prev, cur = self._frames % 2, (self._frames + 1) % 2
@@ -248,6 +231,8 @@ class SVGF(RenderPass):
         res.set("svgf_alpha", float(self.alpha))
         res.set("svgf_moments_alpha", float(self.moments_alpha))
         res.set("svgf_max_history", float(self.max_history))
+        res.set("svgf_still_max_history", float(max(self.still_max_history, self.max_history)))
+        res.set("svgf_still", still_frame(ctx))
         res.set("svgf_history_valid", self._history_valid)
         res.prog.run(*self._groups)
         ctx.barrier(*between)

@@ -25,6 +25,8 @@ layout(rg32ui) writeonly uniform uimage2DArray surface_out;
 uniform float svgf_alpha;           // weight of this frame's illumination (at least 1 / history)
 uniform float svgf_moments_alpha;   // the same for the moments
 uniform float svgf_max_history;
+uniform float svgf_still_max_history;   // the cap of a pixel that did not move on a still frame
+uniform bool svgf_still;            // this frame's views and scene are last frame's (passes/history.py)
 uniform bool svgf_history_valid;    // false on the first frame and after a scene edit
 
 // The history this pixel reprojects to, summed over the taps of last frame that show its surface.
@@ -99,9 +101,13 @@ void main() {
         }
     }
     bool found = r.weight >= 1e-3;
-    float history = found ? min(r.history / r.weight + 1.0, svgf_max_history) : 1.0;
-    float alpha = found ? max(svgf_alpha, 1.0 / history) : 1.0;
-    float moments_alpha = found ? max(svgf_moments_alpha, 1.0 / history) : 1.0;
+    // a pixel that did not move on a still frame sees last frame's surface under the same light:
+    // its history is an exact running mean (alpha 1 / length), so its variance, and with it the
+    // a-trous filter, falls towards zero as the still view converges
+    bool still = found && svgf_still && dot(gbuf_fetch_motion(p), gbuf_fetch_motion(p)) < 1e-6;
+    float history = found ? min(r.history / r.weight + 1.0, still ? svgf_still_max_history : svgf_max_history) : 1.0;
+    float alpha = found ? (still ? 1.0 / history : max(svgf_alpha, 1.0 / history)) : 1.0;
+    float moments_alpha = found ? (still ? 1.0 / history : max(svgf_moments_alpha, 1.0 / history)) : 1.0;
     float inv = found ? 1.0 / r.weight : 0.0;
     float ld = luminance(diffuse), ls = luminance(specular);
     vec4 moments = mix(r.moments * inv, vec4(ld, ld * ld, ls, ls * ls), moments_alpha);
@@ -109,7 +115,7 @@ void main() {
     // frames (1 / alpha's exponential window once the history is long), whose mean has
     // 1 / samples of it: the filter then backs off as the history grows, and a still view
     // converges to the temporal mean instead of staying blurred
-    float samples = min(history, (2.0 - svgf_alpha) / svgf_alpha);
+    float samples = still ? history : min(history, (2.0 - svgf_alpha) / svgf_alpha);
     vec2 variance = max(vec2(moments.y - moments.x * moments.x, moments.w - moments.z * moments.z), 0.0) / samples;
     imageStore(out_illum, p, svgf_illum_pack(vec4(to_half_range(mix(r.diffuse * inv, diffuse, alpha)), variance.x),
                                              vec4(to_half_range(mix(r.specular * inv, specular, alpha)), variance.y)));

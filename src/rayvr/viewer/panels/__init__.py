@@ -65,7 +65,7 @@ class Panels:
         gpu_ms = f"{total[-1]:.2f} ms GPU" if total else "-"
         imgui.text(f"{v.scene.name}: {v.rig.views} x {v.rig.size[0]}x{v.rig.size[1]}  {gpu_ms}")
         imgui.text(f"frame {v.frame_index}  accumulated {frames}  {seconds:.1f} s"
-                   + ("  (converged)" if not v.rendered else ""))
+                   + ("  (converged)" if v.settled() else ""))
         imgui.text_disabled(f"render {v.phase_ms['render']:.1f}  display {v.phase_ms['display']:.1f}  "
                             f"UI {v.phase_ms['ui']:.1f} ms (CPU); {r.compiles} compile(s)")
         if v.status:

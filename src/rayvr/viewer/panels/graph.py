@@ -15,7 +15,7 @@ def draw(v, state) -> None:
     if v.graph_builder is not None:
         for option in BUILDERS[v.graph_builder].options:
             values = [NONE, *option.realtime_values()]   # a live view: no offline denoiser
-            current = v.graph_options.get(option.name, NONE)
+            current = v.graph_options.get(option.name, BUILDERS[v.graph_builder].defaults().get(option.name)) or NONE
             imgui.set_next_item_width(140)
             changed, index = imgui.combo(option.name, values.index(current) if current in values else 0, values)
             if changed:
