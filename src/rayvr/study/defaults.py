@@ -10,7 +10,7 @@ or 60 s), one judged frame along the trajectory (each needs its own reference), 
 1/16 of the reference's first 64 frames (a probe-GI floor of 256 frames took 37 s there: the
 probe update, whatever the image's size) and 16-frame progressive curves; on a GPU, 2 views of
 720x800 (a quarter of the Valve Index's pixels), a reference rendered 256 x 16 spp at a time until
-converged (at most 16384 frames or 480 s of rendering, summed over the runs that resume it from
+converged (at most 16384 frames or 960 s of rendering, summed over the runs that resume it from
 the cache) and floors at 1/4 of its first 256 frames. Bigger scenes take longer; every figure can
 be given instead, and the report says which were chosen and why.
 """
@@ -34,7 +34,10 @@ class MachineDefaults:
     motion_samples: int
     progressive_frames: int
     reference_max_frames: int = 16384   # the reference renders on until converged, up to this many frames
-    reference_seconds: float = 480.0    # or until this much rendering time (each reference, over its runs)
+    # or until this much rendering time (each reference, summed over its runs: tauray/test.glb at
+    # 2x720x800 converges after about 5,100 frames of 16 spp, 12-14 minutes on one datacenter GPU;
+    # benchmarks/RESULTS.md)
+    reference_seconds: float = 960.0
     floor_fraction: float = 0.25    # of the reference's first-round paths per pixel, for each bias floor
     denoised_levels: bool = True    # rayvr.study.standard_configs' hybrid levels through SVGF
     probe_counts: tuple | None = None   # the probe GI rows' probes per axis (None: the pass's 8^3)
