@@ -179,7 +179,8 @@ def test_tune_effects_is_still_where_it_was_imported_from():
 
 def test_tune_effects_tries_the_graph_options_and_keeps_what_pays(gpu, scene, reference):
     kw = {"size": SIZE, "views": 1, "levels": [Effect.RASTER, Effect.SHADOWS], "frames": 2, "warmup": 4,
-          "trials": 1, "reference": reference, "progress": False, "metric": "relmse", "gpu": gpu, "apply": False}
+          "trials": 1, "reference": reference, "progress": False, "metric": "relmse", "gpu": gpu, "apply": False,
+          "spend": False}   # the choice among option sets alone (spending: the next test)
     both = rv.tune.tune_effects(scene, budget_ms=1e4, option_sets=[{}, {"gi": "probes"}], **kw)
     # the box's indirect light is most of its radiance: the probes cut the error, whatever they cost
     assert both.options == {"gi": "probes"} and "graph options chosen among gi=probes" in both.notes[-1]
@@ -193,6 +194,21 @@ def test_tune_effects_tries_the_graph_options_and_keeps_what_pays(gpu, scene, re
     from rayvr.study.configs import hybrid_graph   # the hybrid takes both, and both together
     assert option_sets_for(hybrid_graph, {}) == [{}, {"gi": "probes"}, {"denoise": "svgf"},
                                                  {"gi": "probes", "denoise": "svgf"}]
+
+
+def test_tune_effects_spends_the_headroom_where_the_error_falls(gpu, scene, reference):
+    """A choice far under its budget raises its knobs while the measured error falls: more light
+    samples for the area light's soft shadows lower the measured relMSE."""
+    from rayvr.tune.budget import Knob
+
+    kw = {"size": SIZE, "views": 1, "levels": [Effect.SHADOWS], "frames": 2, "warmup": 2, "trials": 2,
+          "reference": reference, "progress": False, "metric": "relmse", "gpu": gpu, "apply": False,
+          "option_sets": [{}]}
+    plain = rv.tune.tune_effects(scene, budget_ms=1e4, spend=False, **kw)
+    spent = rv.tune.tune_effects(scene, budget_ms=1e4, knobs=(Knob("light_samples", (1, 4, 16)),), **kw)
+    assert spent.options.get("light_samples") in (4, 16) and "spent the budget's headroom" in spent.notes[-1]
+    assert spent.measured_error < plain.measured_error
+    assert spent.measured_ms <= 1e4
 
 
 def test_judged_frames_do_not_depend_on_a_timed_warm_up(gpu, scene, reference):
@@ -331,7 +347,7 @@ def test_a_tuned_row_over_its_budget_is_chosen_again_and_measured_alone(gpu, sce
     monkeypatch.setattr(importlib.import_module("rayvr.study.measure"), "measure", fake_measure)
     settings = dataclasses.replace(TINY, metric_workers=0)
     results, tuned = tuned_study(scene, default_views(scene, 1, SIZE), reference, settings, [], budgets=(6.0, 10.0),
-                                 progress=False, runner=Probe(), option_sets=[{}])
+                                 progress=False, runner=Probe(), option_sets=[{}], spend=False)
     # the study with its curves, then the backed-off row alone, without them
     assert measured == [(["tuned for 6 ms", "tuned for 10 ms"], True), (["tuned for 6 ms"], False)]
     six, ten = tuned[6.0], tuned[10.0]
