@@ -49,16 +49,11 @@ from ...rendergraph.render_pass import Access, Reflection, RenderPass
 from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
+from ..history import LightingHistory
 
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
 KERNELS = (3, 5)     # a-trous kernel widths: 3x3 (1/2, 1/4 per axis), 5x5 (B3 spline 3/8, 1/4, 1/16)
-
-
-def lights_key(scene) -> tuple:
-    """What the scene's punctual lights look like (a change invalidates the lighting history)."""
-    return tuple((l.type, tuple(l.position), tuple(l.direction), tuple(l.color), l.intensity, l.range,
-                  l.inner_cone_angle, l.outer_cone_angle) for l in scene.lights)
 
 
 @register_pass
@@ -89,11 +84,7 @@ class SVGF(RenderPass):
 
     def __init__(self, props: dict | None = None, **kwargs):
         super().__init__(props, **kwargs)
-        self._frames = 0
-        self._history_valid = False
-        self._scene_version = None
-        self._scene_key = None
-        self.resets = 0   # histories dropped by scene edits (lighting changed) since compile
+        self._history = LightingHistory()
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -117,12 +108,17 @@ class SVGF(RenderPass):
 
     def reset(self) -> None:
         """Forget the history: the next frame starts it again."""
-        self._history_valid = False
+        self._history.reset()
 
     @property
     def history_valid(self) -> bool:
         """Whether the next frame reprojects a history (False after a reset or a scene edit)."""
-        return self._history_valid
+        return self._history.valid
+
+    @property
+    def resets(self) -> int:
+        """Histories dropped by scene edits (lighting changed) since compile."""
+        return self._history.resets
 
     def reflect(self, cd):
         r = Reflection()
@@ -163,11 +159,7 @@ class SVGF(RenderPass):
         self._atrous_program()
         self._atrous_program(final=True)
         self._groups = groups_2d(cd.size, cd.views)
-        self._frames = 0
-        self._scene_version = None
-        self._scene_key = None
-        self.resets = 0
-        self.reset()
+        self._history.restart()
 
     def _atrous_program(self, final: bool = False):
         """The a-trous stage's program for the current `kernel`, the last iteration's (which also
@@ -183,18 +175,6 @@ class SVGF(RenderPass):
         if not hasattr(self, "_defines"):
             return {}
         return {**self._defines, "SVGF_KERNEL": int(self.kernel)}   # the a-trous stage's kernel
-
-    def _lighting_edited(self, ctx) -> bool:
-        """Whether the materials or lights changed since the last frame (instances alone do not
-        count: the disocclusion test handles what they uncover)."""
-        gs = ctx.scene
-        if gs is None or gs.version == self._scene_version:
-            return False
-        self._scene_version = gs.version
-        key = (gs.scene.materials.version, lights_key(gs.scene))
-        edited = key != self._scene_key
-        self._scene_key = key
-        return edited
 
     def _histories(self, res, data) -> None:
         """Bind the colour histories as the images `history_diffuse` (and `_specular`) of `res`."""
@@ -222,10 +202,7 @@ class SVGF(RenderPass):
         res.set("svgf_phi_color", float(self.phi_color))
 
     def execute(self, ctx, data):
-        if self._lighting_edited(ctx) and self._history_valid:
-            self.resets += 1
-            self.reset()
-        prev, cur = self._frames % 2, (self._frames + 1) % 2
+        prev, cur = self._history.begin_frame(ctx)
         scratch = [data[name] for name in self.FILTER]
         iterations = int(self.iterations)
         tap = min(int(self.feedback_tap), iterations - 1)   # < 0: the unfiltered temporal mean
@@ -248,7 +225,7 @@ class SVGF(RenderPass):
         res.set("svgf_alpha", float(self.alpha))
         res.set("svgf_moments_alpha", float(self.moments_alpha))
         res.set("svgf_max_history", float(self.max_history))
-        res.set("svgf_history_valid", self._history_valid)
+        res.set("svgf_history_valid", self._history.valid)
         res.prog.run(*self._groups)
         ctx.barrier(*between)
 
@@ -289,5 +266,4 @@ class SVGF(RenderPass):
             self._bind_modulate(res, data)
             res.texture("src_illum", scratch[src])
             res.prog.run(*self._groups)
-        self._frames += 1
-        self._history_valid = True
+        self._history.end_frame()
