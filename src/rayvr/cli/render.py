@@ -17,7 +17,8 @@ none of them.
 out_0000, out_0001, ...
 `--denoise svgf` filters the light with SVGF and TAA (shadows, reflections and path-traced pixels
 then converge over --frames); `--denoise oidn` runs Intel Open Image Denoise on the last frame
-(the `oidn` extra: pip install 'rayvr[oidn]').
+(the `oidn` extra: pip install 'rayvr[oidn]'). `--direct restir` samples the direct light of
+SHADOWS materials and above by ReSTIR (rayvr.passes.ReSTIRDI) instead of the light table alone.
 """
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ import numpy as np
 
 from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
-from ..graph_options import DENOISE, GI, NONE
+from ..graph_options import NONE, OPTIONS
 from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
 from . import cluster as cluster_cli
 from .options import (MAX_VIEWS, add_lighting_arguments, apply_lighting, integer, load_scene_arg, number,
@@ -87,7 +88,7 @@ def register(sub) -> None:
                         "light, so B = 1 is direct light only; Mitsuba 3's max_depth is B + 1, Tauray's "
                         "'2 bounces + NEE' is B = 3 (default: 8 path_traced, 4 hybrid)")
     add_lighting_arguments(p)
-    for option in (DENOISE, GI):
+    for option in OPTIONS:
         p.add_argument(f"--{option.name}", default=NONE, choices=option.cli_choices, help=option.cli_help)
     p.add_argument("--probes", metavar="XxYxZ", help="with --gi probes: probes per axis over the scene's bounds "
                                                      "(default 8x8x8)")
@@ -217,6 +218,9 @@ def run(args) -> int:
     if probes is not None and args.graph == "path_traced":
         raise OptionError("--gi probes: lights the hybrid graph's materials; --graph path_traced traces its own "
                           "indirect light (leave --gi out)")
+    if args.direct != NONE and args.graph == "path_traced":
+        raise OptionError(f"--direct {args.direct}: samples the hybrid graph's direct light; --graph path_traced "
+                          f"samples its own (leave --direct out)")
     grid = choose_grid(args)
     quilt = quilt_path(args, grid, size)
     paths = output_paths(out, args.views, args.layout)
@@ -240,7 +244,7 @@ def run(args) -> int:
     if args.graph == "path_traced" and args.spp is not None and args.frames != 1:
         raise OptionError(f"--spp {args.spp} and --frames {args.frames}: path_traced accumulates --spp samples "
                           f"over as many frames as it needs; give one of them")
-    for option in (DENOISE, GI):   # what a choice needs (pyoidn for --denoise oidn), before the scene loads
+    for option in OPTIONS:   # what a choice needs (pyoidn for --denoise oidn), before the scene loads
         value = getattr(args, option.name)
         if value != NONE:
             option[value].require(f"--{option.name} {value}")
@@ -301,7 +305,8 @@ def build_graph(args, exposure: float, auto_exposure: bool, probes: dict | None 
     g = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
                auto_exposure=auto_exposure, light_samples=args.light_samples, multiview=args.multiview,
                gbuffer=args.gbuffer, path_bounces=args.bounces or 4, denoise=args.denoise,
-               gi=None if args.gi == "none" else args.gi, probes=probes)
+               gi=None if args.gi == NONE else args.gi, probes=probes,
+               direct=None if args.direct == NONE else args.direct)
     if args.spp is not None:
         g.update_pass("PathTracer", {"samples_per_pixel": args.spp})
     return g
