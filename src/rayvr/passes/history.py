@@ -55,3 +55,23 @@ class LightingHistory:
         """The frame wrote its history: the next one may read it."""
         self.frames += 1
         self.valid = True
+
+
+class HistoryOwner:
+    """A pass's face of its LightingHistory (`self._history`): `reset()`, `history_valid`, `resets`."""
+
+    _history: LightingHistory
+
+    def reset(self) -> None:
+        """Forget the history: the next frame starts it again."""
+        self._history.reset()
+
+    @property
+    def history_valid(self) -> bool:
+        """Whether the next frame reads a history (False after a reset or a lighting edit)."""
+        return self._history.valid
+
+    @property
+    def resets(self) -> int:
+        """Histories dropped by lighting edits since compile."""
+        return self._history.resets

@@ -51,7 +51,7 @@ from ...rendergraph.render_pass import Access
 from ..effects import unused_effect_reason
 from ..gbuffer import channels
 from ..gbuffer.lighting_pass import GBufferLightingPass, ray_properties
-from ..history import LightingHistory
+from ..history import HistoryOwner, LightingHistory
 
 MAX_CANDIDATES = 64
 MAX_SPATIAL_SAMPLES = 16
@@ -60,7 +60,7 @@ RESERVOIR_FORMAT = "rgba32ui"   # gpu/records.py RESERVOIR, RESERVOIR_SURFACE: o
 
 
 @register_pass
-class ReSTIRDI(GBufferLightingPass):
+class ReSTIRDI(HistoryOwner, GBufferLightingPass):
     """Emission + ray-traced direct light by ReSTIR for SHADOWS pixels and above: RTShadows' pins,
     its image at lower noise (see the module docstring).
 
@@ -105,20 +105,6 @@ class ReSTIRDI(GBufferLightingPass):
 
     def skip_reason(self, cd):
         return unused_effect_reason(cd, Effect.SHADOWS)
-
-    def reset(self) -> None:
-        """Forget the history: the next frame starts it again."""
-        self._history.reset()
-
-    @property
-    def history_valid(self) -> bool:
-        """Whether the next frame reuses last frame's reservoirs (False after a reset or a lighting edit)."""
-        return self._history.valid
-
-    @property
-    def resets(self) -> int:
-        """Histories dropped by lighting edits since compile."""
-        return self._history.resets
 
     def gbuffer_channels(self) -> tuple[str, ...]:
         """The lighting channels, and with temporal reuse the motion vectors."""

@@ -2,8 +2,8 @@
 // RESTIR_SPATIAL_SAMPLES pixels drawn uniformly within RESTIR_SPATIAL_RADIUS pixels of it that show
 // its surface (restir_neighbour_matches) and hold a sample (a neighbour that found no visible light
 // gives none: restir_di.py on visibility reuse), combined by generalized RIS with pairwise MIS of the
-// unshadowed targets (restir_di.glsl): each target is evaluated at its own pixel's surface, so the
-// result is unbiased whichever neighbours pass the test. With RESTIR_SHARE_VIEWS a pixel of view
+// unshadowed targets (restir_di.glsl): each target is evaluated at its own pixel's surface, so
+// which neighbours pass the surface test changes the noise, not the mean. With RESTIR_SHARE_VIEWS a pixel of view
 // v > 0 also takes view 0's reservoir where this surface point lies in view 0 (its view_proj; the
 // same test), so the views of a frame share their samples; each view keeps its own target, MIS
 // weights and shadow rays, so no light passes between them.

@@ -49,7 +49,7 @@ from ...rendergraph.render_pass import Access, Reflection, RenderPass
 from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
-from ..history import LightingHistory
+from ..history import HistoryOwner, LightingHistory
 
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
@@ -57,7 +57,7 @@ KERNELS = (3, 5)     # a-trous kernel widths: 3x3 (1/2, 1/4 per axis), 5x5 (B3 s
 
 
 @register_pass
-class SVGF(RenderPass):
+class SVGF(HistoryOwner, RenderPass):
     """Denoises `diffuse` (+ optional `specular`) first-vertex radiance into `color` (rgba16f);
     see the module docstring.
 
@@ -105,20 +105,6 @@ class SVGF(RenderPass):
         if key == "phi_normal" and not value >= 0.0:
             raise OptionError(f"pass {self.name}: property 'phi_normal' must be >= 0, got {value!r}")
         return int(value) if key in ("iterations", "kernel", "feedback_tap", "max_history") else value
-
-    def reset(self) -> None:
-        """Forget the history: the next frame starts it again."""
-        self._history.reset()
-
-    @property
-    def history_valid(self) -> bool:
-        """Whether the next frame reprojects a history (False after a reset or a scene edit)."""
-        return self._history.valid
-
-    @property
-    def resets(self) -> int:
-        """Histories dropped by scene edits (lighting changed) since compile."""
-        return self._history.resets
 
     def reflect(self, cd):
         r = Reflection()
