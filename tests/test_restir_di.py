@@ -412,6 +412,9 @@ def test_properties_round_trip_and_bad_values_name_pass_and_key():
     g = rv.graphs.hybrid(direct="restir", restir={"candidates": 16})
     again = rv.RenderGraph.from_dict(json.loads(json.dumps(g.to_dict())))
     assert type(again.passes["Shadows"]) is ReSTIRDI and again.passes["Shadows"].candidates == 16
+    scope = {}
+    exec(g.to_script(), scope)   # the Falcor-style script builds it again
+    assert scope["hybrid"].passes["Shadows"].get_properties() == g.passes["Shadows"].get_properties()
     bad = [("candidates", 0, r"'candidates' must be an integer from 1 to 64"),
            ("candidates", 2.5, r"'candidates' must be an integer"),
            ("spatial_samples", 17, r"'spatial_samples' must be an integer from 0 to 16"),
