@@ -8,7 +8,7 @@ import pytest
 import rayvr as rv
 from rayvr.cli.main import build_parser
 from rayvr.errors import OptionError
-from rayvr.graph_options import DENOISE, GI, NONE, OPTIONS, Choice, realtime_option_sets
+from rayvr.graph_options import DENOISE, DIRECT, GI, NONE, OPTIONS, Choice, realtime_option_sets
 from rayvr.graphs import BUILDERS, COMMAND_LINE_GRAPHS
 
 
@@ -31,6 +31,7 @@ def test_the_command_line_reads_the_table():
     assert options["graph"].choices == COMMAND_LINE_GRAPHS == ("hybrid", "path_traced")
     assert options["denoise"].choices == DENOISE.cli_choices == (NONE, "svgf", "oidn")
     assert options["gi"].choices == GI.cli_choices == (NONE, "probes")
+    assert options["direct"].choices == DIRECT.cli_choices == (NONE, "restir")
     assert options["denoise"].help == ("none; svgf (SVGF + TAA over the frames, real time); oidn (Intel Open Image "
                                        "Denoise on the last frame, offline: needs rayvr[oidn]); default the preset's "
                                        "for hybrid, none for path_traced")
@@ -56,10 +57,11 @@ def test_the_tuner_tries_the_real_time_values_and_the_study_those_installed(monk
     from rayvr.study.configs import available_denoisers, available_gi, hybrid_graph
     from rayvr.tune.tuner import OPTION_SETS, TUNED_OPTIONS, option_sets_for
 
-    sets = [{}, {"gi": "probes"}, {"denoise": "svgf"}, {"gi": "probes", "denoise": "svgf"}]
+    base = [{}, {"gi": "probes"}, {"denoise": "svgf"}, {"gi": "probes", "denoise": "svgf"}]
+    sets = base + [{**s, "direct": "restir"} for s in base]
     assert realtime_option_sets() == list(OPTION_SETS) == sets
     assert [list(s) for s in OPTION_SETS] == [list(s) for s in sets]   # the keys in the same order too
-    assert TUNED_OPTIONS == ("gi", "denoise") == tuple(o.name for o in OPTIONS)
+    assert TUNED_OPTIONS == ("gi", "denoise", "direct") == tuple(o.name for o in OPTIONS)
     assert option_sets_for(hybrid_graph, {}) == sets
     assert not DENOISE["oidn"].realtime and DENOISE.is_realtime(None) and not DENOISE.is_realtime("oidn")
     assert available_gi() == ["probes"]
@@ -102,7 +104,7 @@ def test_the_viewer_rebuilds_a_graph_opened_by_name_with_an_option(gpu):
         v.set_graph_option("denoise", "svgf")
         v.step()
         assert v.graph_options == {"denoise": "svgf", "gi": None} and "SVGF" in v.renderer.graph.passes
-        with pytest.raises(OptionError, match=r"graph option taa: hybrid takes gi, denoise"):
+        with pytest.raises(OptionError, match=r"graph option taa: hybrid takes gi, denoise, direct"):
             v.set_graph_option("taa", True)
     given = rv.graphs.path_traced()
     with Viewer(scene, given, views=1, size=(16, 16), surface=OffscreenSurface((32, 32), gpu)) as v:

@@ -191,9 +191,9 @@ def test_tune_effects_tries_the_graph_options_and_keeps_what_pays(gpu, scene, re
         rv.tune.tune_effects(scene, budget_ms=1e4, option_sets=["gi"], **kw)
     from rayvr.tune.tuner import option_sets_for
     assert option_sets_for(rv.tune.path_traced_graph, {"spp": 1}) == [{"spp": 1}, {"spp": 1, "denoise": "svgf"}]
-    from rayvr.study.configs import hybrid_graph   # the hybrid takes both, and both together
-    assert option_sets_for(hybrid_graph, {}) == [{}, {"gi": "probes"}, {"denoise": "svgf"},
-                                                 {"gi": "probes", "denoise": "svgf"}]
+    from rayvr.study.configs import hybrid_graph   # the hybrid takes each, and them together
+    base = [{}, {"gi": "probes"}, {"denoise": "svgf"}, {"gi": "probes", "denoise": "svgf"}]
+    assert option_sets_for(hybrid_graph, {}) == base + [{**s, "direct": "restir"} for s in base]
 
 
 def test_tune_effects_spends_the_headroom_where_the_error_falls(gpu, scene, reference):

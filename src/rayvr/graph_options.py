@@ -3,7 +3,8 @@ choice needs and whether it fits a frame budget, and each graph builder with the
 
 `rayvr.graphs.BUILDERS` is the table of builders. The command line's choices and help, the
 viewer's graph names, the error study's rows and the tuner's option sets are read from it, so a
-new denoiser is one `Choice` in `DENOISE` (and its branch where the graphs wire it).
+new denoiser is one `Choice` in `DENOISE` (and its branch where the graphs wire it), a way of
+sampling direct light one in `DIRECT`.
 """
 from __future__ import annotations
 
@@ -100,7 +101,11 @@ DENOISE = GraphOption("denoise", "", (
 GI = GraphOption("gi", "indirect light for RASTER, SHADOWS and REFLECTIONS materials", (
     Choice("probes", "irradiance probes ray traced once per frame for all views"),
 ))
-OPTIONS = (GI, DENOISE)
+DIRECT = GraphOption("direct", "how SHADOWS materials and above sample direct light (none: the light table's "
+                                "light_samples per pixel)", (
+    Choice("restir", "ReSTIR: candidates from the light table resampled over space, time and the views"),
+))
+OPTIONS = (GI, DENOISE, DIRECT)
 
 
 class _FromPreset:

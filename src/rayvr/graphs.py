@@ -9,6 +9,8 @@
     gi="probes": + Probes (ProbeGI, once per frame) ─> Composite, Reflections
     taa=True: TAA between Composite and ToneMap, fed GBuffer.motion
     hybrid(): the "clean" preset, gi="probes" + denoise="svgf" (graph_options.PRESETS)
+    direct="restir": Shadows is ReSTIRDI (spatiotemporal reservoir resampling) instead of
+    RTShadows, with the same pins
 
     path_traced():  PathTracer ─> Accumulate ─> ToneMap      (progressive reference renders)
     hybrid_taa():   hybrid() with TAA on and its alpha and sigma
@@ -22,12 +24,12 @@
 
 Passes that no material needs are pruned at compile time (see the compile report).
 `BUILDERS` names these builders with the options each takes (rayvr.graph_options: the choices of
-`gi=` and `denoise=`, what each needs, which fit a frame budget).
+`gi=`, `denoise=` and `direct=`, what each needs, which fit a frame budget).
 """
 from __future__ import annotations
 
 from .errors import OptionError
-from .graph_options import DEFAULT_PRESET, DENOISE, FROM_PRESET, GI, GraphBuilder, preset_options
+from .graph_options import DEFAULT_PRESET, DENOISE, DIRECT, FROM_PRESET, GI, GraphBuilder, preset_options
 from .rendergraph.graph import RenderGraph
 
 OUTPUT = "ToneMap.dst"        # display-referred rgba8, sRGB encoded
@@ -91,7 +93,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
            multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid",
            gbuffer: str = "auto", denoise=FROM_PRESET, gi=FROM_PRESET, taa=FROM_PRESET,
            probes: dict | None = None, reflection_max_roughness: float | None = None,
-           preset: str = DEFAULT_PRESET) -> RenderGraph:
+           direct: str | None = None, restir: dict | None = None, preset: str = DEFAULT_PRESET) -> RenderGraph:
     """The hybrid raster + ray-traced graph: multiview G-buffer, direct light for every pixel,
     ray-traced shadows and reflections only for the pixels whose material's effect asks for them,
     path tracing (rayvr.passes.PathTracer in G-buffer mode) for PATH_TRACED materials, composite
@@ -111,6 +113,8 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     `reflection_max_roughness`: REFLECTIONS surfaces rougher than this (and not transmissive) are
     shaded as SHADOWS, their specular light from the probes (the G-buffer's property of that name,
     rayvr.passes.gbuffer.reflection_cutoff); None: 0.6 with probe GI, 1 (every one traced) without.
+    `direct="restir"`: the "Shadows" pass is rayvr.passes.ReSTIRDI (with `restir` as its
+    properties) instead of RTShadows with `light_samples`; None: RTShadows.
     Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR), with TAA or a denoiser then
     its HDR output (`TAA.dst` or `Denoise.dst`; `hdr_output(graph)` names a graph's)."""
     from . import passes as P
@@ -125,6 +129,10 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
                           f"or None")
     if probes and gi != "probes":
         raise OptionError("hybrid(probes=...): probe settings need gi='probes'")
+    if direct not in (None, "none", *DIRECT.values):
+        raise OptionError(f"hybrid(direct={direct!r}): use None ('none') or {DIRECT.either()}")
+    if restir and direct != "restir":
+        raise OptionError("hybrid(restir=...): ReSTIR settings need direct='restir'")
     denoise = denoiser(denoise)
     svgf = denoise == "svgf"
     g = RenderGraph(name)
@@ -135,7 +143,10 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_pass(P.DirectLighting(light_samples=light_samples, raster_only=True),
                "Direct")
     g.add_pass(P.EffectCompaction(path_list=True), "Compaction")
-    g.add_pass(P.RTShadows(light_samples=light_samples), "Shadows")
+    if direct == "restir":
+        g.add_pass(P.ReSTIRDI(dict(restir or {})), "Shadows")
+    else:
+        g.add_pass(P.RTShadows(light_samples=light_samples), "Shadows")
     g.add_pass(P.RTReflections(max_bounces=max_bounces, light_samples=light_samples), "Reflections")
     g.add_pass(P.PathTracer(mode="gbuffer", max_bounces=path_bounces, lobes=svgf), "PathTracer")
     if not svgf:
@@ -143,7 +154,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     g.add_pass(P.HybridComposite(lobes=svgf), "Composite")
     g.add_pass(P.ToneMapper(operator=tonemap, exposure=exposure, auto_exposure=auto_exposure), "ToneMap")
     for lighting in ("Direct", "Shadows", "Reflections", "PathTracer"):
-        channels.wire(g, "GBuffer", lighting)
+        channels.wire(g, "GBuffer", lighting, channels.read_by(g.passes[lighting]))
     g.add_edge("GBuffer.effect", "Compaction.effect")
     g.add_edge("Compaction.shadowPixels", "Shadows.pixels")
     g.add_edge("Compaction.reflectionPixels", "Reflections.pixels")
@@ -240,8 +251,9 @@ def hybrid_taa(alpha: float = 0.1, sigma: float = 1.0, name: str = "HybridTAA", 
 
 # The ready-made graphs by name, with the options each takes (rayvr.graph_options).
 BUILDERS = {b.name: b for b in (
-    GraphBuilder("hybrid", hybrid, (GI, DENOISE), "per-material effects; default"),
-    GraphBuilder("hybrid_taa", hybrid_taa, (GI, DENOISE), "hybrid with TAA before tone mapping", command_line=False,
+    GraphBuilder("hybrid", hybrid, (GI, DENOISE, DIRECT), "per-material effects; default"),
+    GraphBuilder("hybrid_taa", hybrid_taa, (GI, DENOISE, DIRECT), "hybrid with TAA before tone mapping",
+                 command_line=False,
                  extends=hybrid),
     GraphBuilder("path_traced", path_traced, (DENOISE,), "every pixel, accumulated: reference renders"),
 )}

@@ -17,7 +17,8 @@ none of them.
 out_0000, out_0001, ...
 `--denoise svgf` filters the light with SVGF and TAA (shadows, reflections and path-traced pixels
 then converge over --frames); `--denoise oidn` runs Intel Open Image Denoise on the last frame
-(the `oidn` extra: pip install 'rayvr[oidn]').
+(the `oidn` extra: pip install 'rayvr[oidn]'). `--direct restir` samples the direct light of
+SHADOWS materials and above by ReSTIR (rayvr.passes.ReSTIRDI) instead of the light table alone.
 """
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ import numpy as np
 
 from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
-from ..graph_options import DEFAULT_PRESET, DENOISE, GI, NONE, PRESETS
+from ..graph_options import DEFAULT_PRESET, DIRECT, NONE, OPTIONS, PRESETS
 from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
 from . import cluster as cluster_cli
 from .options import (MAX_VIEWS, add_lighting_arguments, apply_lighting, integer, load_scene_arg, number,
@@ -91,9 +92,10 @@ def register(sub) -> None:
                    help="hybrid: clean (default: probe GI, SVGF and TAA, a denoised frame that converges while "
                         "the view is still) or raw (the bare pipeline: one frame's light, nothing across frames); "
                         "--gi, --denoise and --taa override it")
-    for option in (DENOISE, GI):
+    for option in OPTIONS:
+        preset_decides = option.name in PRESETS[DEFAULT_PRESET]
         p.add_argument(f"--{option.name}", choices=option.cli_choices,
-                       help=option.cli_help("the preset's for hybrid, none for path_traced"))
+                       help=option.cli_help("the preset's for hybrid, none for path_traced" if preset_decides else NONE))
     p.add_argument("--taa", choices=("on", "off"),
                    help="hybrid: TAA after the composite (jittered frames averaged, exactly while the view is "
                         "still); default the preset's")
@@ -113,7 +115,7 @@ def resolve_graph_options(args) -> None:
     """Fill --gi, --denoise and --taa left out: the preset's for hybrid, off for path_traced (a
     given --gi there is refused later, with the reason)."""
     preset = PRESETS[args.preset] if args.graph == "hybrid" else {}
-    for key in ("gi", "denoise"):
+    for key in (o.name for o in OPTIONS):
         if getattr(args, key) is None:
             setattr(args, key, preset.get(key) or NONE)
     if args.taa is None:
@@ -236,6 +238,9 @@ def run(args) -> int:
     if args.graph == "path_traced" and args.gi != NONE:
         raise OptionError("--gi probes: lights the hybrid graph's materials; --graph path_traced traces its own "
                           "indirect light (leave --gi out)")
+    if args.direct != NONE and args.graph == "path_traced":
+        raise OptionError(f"--direct {args.direct}: samples the hybrid graph's direct light; --graph path_traced "
+                          f"samples its own (leave --direct out)")
     probes = probe_options(args)
     grid = choose_grid(args)
     quilt = quilt_path(args, grid, size)
@@ -260,7 +265,7 @@ def run(args) -> int:
     if args.graph == "path_traced" and args.spp is not None and args.frames != 1:
         raise OptionError(f"--spp {args.spp} and --frames {args.frames}: path_traced accumulates --spp samples "
                           f"over as many frames as it needs; give one of them")
-    for option in (DENOISE, GI):   # what a choice needs (pyoidn for --denoise oidn), before the scene loads
+    for option in OPTIONS:   # what a choice needs (pyoidn for --denoise oidn), before the scene loads
         value = getattr(args, option.name)
         if value != NONE:
             option[value].require(f"--{option.name} {value}")
@@ -321,7 +326,8 @@ def build_graph(args, exposure: float, auto_exposure: bool, probes: dict | None 
     g = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
                auto_exposure=auto_exposure, light_samples=args.light_samples, multiview=args.multiview,
                gbuffer=args.gbuffer, path_bounces=args.bounces or 4, denoise=args.denoise,
-               gi=None if args.gi == NONE else args.gi, taa=args.taa == "on", probes=probes)
+               gi=None if args.gi == NONE else args.gi, taa=args.taa == "on", probes=probes,
+               direct=None if args.direct == NONE else args.direct)
     if args.spp is not None:
         g.update_pass("PathTracer", {"samples_per_pixel": args.spp})
     return g

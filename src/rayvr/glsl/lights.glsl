@@ -9,6 +9,9 @@
 //   float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p)   the same for point q on an
 //         emissive triangle seen from p
 //   LightSample eval_punctual_light(uint i, vec3 p)   light i alone, weight without selection
+//   LightSample sample_light_id(vec3 p, vec3 u, out uvec2 id)   sample_light, and the sample's
+//         identity: which light and which point of it (see "Light identities" below)
+//   LightSample light_id_eval(uvec2 id, vec3 p)   that same point of that light seen from another p
 //
 // Which punctual light: the table draws the punctual lights' group by their share of the power;
 // in a scene of at most LOCAL_PUNCTUAL_MAX of them the light within the group is then drawn by its
@@ -23,6 +26,7 @@
 #pragma once
 #include "scene.glsl"
 #include "color.glsl"
+#include "octahedral.glsl"
 #include "light_records.glsl"   // PunctualLight, LightEntry
 
 #ifndef SCENE_HAS_PUNCTUAL_LIGHTS
@@ -57,6 +61,18 @@ struct LightSample {
 LightSample no_light_sample() {
     return LightSample(vec3(0.0, 1.0, 0.0), 0.0, vec3(0.0), 0.0, false);
 }
+
+// ---- light identities ---------------------------------------------------------------------------
+// A sample's identity names the light and the point of it, so that the same sample can be
+// evaluated at another shading point (ReSTIR's reuse, passes/restir_di): x = kind << 30 | index
+// (the punctual light; the emissive triangle's entry; 0 for the environment), y = the point
+// (an emissive triangle's two random numbers as unorm16, from which its barycentrics follow; the
+// environment's direction as octahedral snorm16; 0 for a punctual light). sample_light_id draws
+// those points from the rounded numbers, so an identity evaluates to exactly the point drawn.
+const uint LIGHT_ID_NONE = 0xFFFFFFFFu;   // kind 3: no sample
+uvec2 light_id(uint kind, uint index, uint point) { return uvec2((kind << 30u) | index, point); }
+uint light_id_kind(uvec2 id) { return id.x >> 30u; }
+uint light_id_index(uvec2 id) { return id.x & 0x3FFFFFFFu; }
 
 // One step of a single-pass weighted choice (a reservoir of one): a candidate of weight w > 0
 // joins `total` and replaces the pick so far with probability w / total (true), r in [0, 1)
@@ -143,11 +159,12 @@ LightSample eval_punctual_light(uint i, vec3 p) {
 // The weight the local choices give punctual light sample c: its unshadowed irradiance (luminance).
 float punctual_local_weight(LightSample c) { return c.valid ? luminance(c.weight) : 0.0; }
 
-// sample_punctual_local's choice: the pick, its weight and the n lights' summed weight.
-LightSample punctual_local_pick(vec3 p, uint n, float r, out float total, out float w_pick) {
+// sample_punctual_local's choice: the pick, its weight and index and the n lights' summed weight.
+LightSample punctual_local_pick(vec3 p, uint n, float r, out float total, out float w_pick, out uint index) {
     LightSample pick = no_light_sample();
     total = 0.0;
     w_pick = 0.0;
+    index = 0u;
     for (uint i = 0u; i < n; ++i) {
         LightSample c = eval_punctual_light(i, p);
         float w = punctual_local_weight(c);
@@ -155,6 +172,7 @@ LightSample punctual_local_pick(vec3 p, uint n, float r, out float total, out fl
         if (reservoir_take(w, total, r)) {
             pick = c;
             w_pick = w;
+            index = i;
         }
     }
     return pick;
@@ -164,9 +182,9 @@ LightSample punctual_local_pick(vec3 p, uint n, float r, out float total, out fl
 // with r in [0, 1); `share`: the probability with which the table drew the punctual group. One
 // pass, no array (a small shader: llvmpipe compiles every pass that lights): light i replaces the
 // pick so far with probability w_i / (w_0 + ... + w_i), r rescaled to stay uniform.
-LightSample sample_punctual_local(vec3 p, uint n, float r, float share) {
+LightSample sample_punctual_local(vec3 p, uint n, float r, float share, out uint index) {
     float total, w_pick;
-    LightSample pick = punctual_local_pick(p, n, r, total, w_pick);
+    LightSample pick = punctual_local_pick(p, n, r, total, w_pick, index);
     if (!(w_pick > 0.0) || !(share > 0.0)) return no_light_sample();
     pick.weight *= total / (w_pick * share);
     return pick;
@@ -237,8 +255,12 @@ float emissive_area_pdf(uint m, float per_power) {
     return RAYVR_PI * sides * luminance(scene_materials[m].emission_cutoff.rgb) * per_power;
 }
 
-LightSample sample_emissive(uint k, vec3 p, vec2 u, float per_power) {
+// The point of emissive triangle entry k that random numbers u name, seen from p: the LightSample
+// (pdf: drawn with probability `per_power` per unit power), and `radiance_g` = its radiance x
+// |cos_l| / d^2, what it gives p per unit area (however it was drawn).
+LightSample emissive_point(uint k, vec3 p, vec2 u, float per_power, out vec3 radiance_g) {
     LightSample s = no_light_sample();
+    radiance_g = vec3(0.0);
     EmissiveTriangle e = emissive_triangles[k];
     uint inst = e.ids.x;
     uint tri = scene_triangle(inst, e.ids.y);
@@ -259,14 +281,21 @@ LightSample sample_emissive(uint k, vec3 p, vec2 u, float per_power) {
     float cos_l = dot(nl, -s.direction);
     MaterialParams m = material_params(e.ids.z, triangle_uv(tri, bary));
     if (cos_l <= 0.0 && !m.double_sided) return s;   // the back of a single-sided emitter is dark
-    s.pdf = emissive_area_pdf(e.ids.z, per_power) * d2 / max(abs(cos_l), 1e-12);
-    s.weight = m.emissive / s.pdf;
+    vec3 emitted = m.emissive;
 #if SCENE_HAS_ALPHA_BLEND
     // a BLEND emitter is there for a ray with probability alpha (scene.glsl): its expected light
-    if (m.alpha_mode == ALPHA_MODE_BLEND) s.weight *= m.alpha;
+    if (m.alpha_mode == ALPHA_MODE_BLEND) emitted *= m.alpha;
 #endif
+    s.pdf = emissive_area_pdf(e.ids.z, per_power) * d2 / max(abs(cos_l), 1e-12);
+    s.weight = emitted / s.pdf;
     s.valid = s.pdf > 0.0;
+    radiance_g = emitted * (abs(cos_l) / d2);
     return s;
+}
+
+LightSample sample_emissive(uint k, vec3 p, vec2 u, float per_power) {
+    vec3 radiance_g;
+    return emissive_point(k, p, u, per_power, radiance_g);
 }
 
 #if LIGHTS_SPATIAL
@@ -302,15 +331,19 @@ float emissive_spatial_per_power(uint instance, vec3 p) {
 }
 #endif
 
+// Probability per unit power with which sample_light draws `instance`'s emissive triangles at p.
+float emissive_per_power(uint instance, vec3 p) {
+#if LIGHTS_SPATIAL
+    if (lights_spatial()) return emissive_spatial_per_power(instance, p);
+#endif
+    return light_table_info.w;
+}
+
 float emissive_light_pdf(SurfacePoint q, uint instance, vec3 p) {
     vec3 to = q.position - p;
     float d2 = dot(to, to);
     float cos_l = abs(dot(q.geometric_normal, to)) * inversesqrt(max(d2, 1e-30));
-    float per_power = light_table_info.w;
-#if LIGHTS_SPATIAL
-    if (lights_spatial()) per_power = emissive_spatial_per_power(instance, p);
-#endif
-    return emissive_area_pdf(q.material, per_power) * d2 / max(cos_l, 1e-12);
+    return emissive_area_pdf(q.material, emissive_per_power(instance, p)) * d2 / max(cos_l, 1e-12);
 }
 #endif
 
@@ -375,8 +408,20 @@ float environment_direction_pdf(vec3 dir) {
 
 float environment_light_pdf(vec3 dir) { return light_table_info.z * environment_direction_pdf(dir); }
 
-LightSample sample_environment(vec2 u) {
+// The environment's light from unit direction dir, as sample_light draws it.
+LightSample environment_toward(vec3 dir) {
     LightSample s;
+    s.direction = dir;
+    s.distance = 1e30;
+    s.pdf = environment_light_pdf(dir);
+    s.weight = environment_radiance(dir) / max(s.pdf, 1e-30);
+    s.valid = s.pdf > 0.0;
+    return s;
+}
+
+// The direction random numbers u draw from the environment (importance sampled).
+vec3 sample_environment_direction(vec2 u) {
+    vec3 direction;
 #if SCENE_HAS_ENVIRONMENT_MAP
     uint w = floatBitsToUint(env_info.x), h = floatBitsToUint(env_info.y);
     uint row = env_find(0u, h, u.y);
@@ -386,17 +431,13 @@ LightSample sample_environment(vec2 u) {
     uint col = env_find(first, w, u.x);
     float c0 = col > 0u ? env_cdf[first + col - 1u] : 0.0;
     float fx = (u.x - c0) / max(env_cdf[first + col] - c0, 1e-30);
-    s.direction = environment_direction(vec2((float(col) + clamp(fx, 0.0, 1.0)) / float(w),
-                                             (float(row) + clamp(fy, 0.0, 1.0)) / float(h)));
+    direction = environment_direction(vec2((float(col) + clamp(fx, 0.0, 1.0)) / float(w),
+                                           (float(row) + clamp(fy, 0.0, 1.0)) / float(h)));
 #else
     float z = 1.0 - 2.0 * u.x, r = sqrt(max(0.0, 1.0 - z * z)), phi = 2.0 * RAYVR_PI * u.y;
-    s.direction = vec3(r * cos(phi), z, r * sin(phi));
+    direction = vec3(r * cos(phi), z, r * sin(phi));
 #endif
-    s.distance = 1e30;
-    s.pdf = environment_light_pdf(s.direction);
-    s.weight = environment_radiance(s.direction) / max(s.pdf, 1e-30);
-    s.valid = s.pdf > 0.0;
-    return s;
+    return direction;
 }
 #else
 vec3 environment_radiance(vec3 dir) { return vec3(0.0); }
@@ -404,23 +445,44 @@ float environment_light_pdf(vec3 dir) { return 0.0; }
 #endif
 
 // ---- one sample of all of them ------------------------------------------------------------------
+// `named`: the sample's point is rounded to what its identity `id` holds (light identities above),
+// so that light_id_eval(id, p) gives this sample again; sample_light keeps the exact point.
+#if SCENE_HAS_ENVIRONMENT
+LightSample environment_sample(vec2 u, bool named, out uvec2 id) {
+    vec3 d = sample_environment_direction(u);
+    uint bits = oct_pack_snorm16(d);
+    id = light_id(LIGHT_KIND_ENVIRONMENT, 0u, bits);
+    return environment_toward(named ? oct_unpack_snorm16(bits) : d);
+}
+#endif
+
+#if SCENE_HAS_EMISSIVE_TRIANGLES
+LightSample emissive_sample(uint k, vec3 p, vec2 u, float per_power, bool named, out uvec2 id) {
+    uint bits = packUnorm2x16(u);
+    id = light_id(LIGHT_KIND_EMISSIVE, k, bits);
+    return sample_emissive(k, p, named ? unpackUnorm2x16(bits) : u, per_power);
+}
+#endif
+
 #if SCENE_HAS_EMISSIVE_TRIANGLES && LIGHTS_SPATIAL
 // Spatial selection (light_table.py): the environment by its share of the power; below it the
 // punctual lights (drawn among themselves as sample_punctual_local does) and each emissive
 // cluster, by their irradiance estimates at p, in one pass over the candidates (each replaces the
 // pick so far with probability w / running sum, x rescaled to stay uniform); within a cluster a
 // triangle by its power (the cluster's alias table). u.x makes the choices, u.yz the point.
-LightSample sample_light_spatial(vec3 p, vec3 u) {
+LightSample sample_light_spatial(vec3 p, vec3 u, bool named, out uvec2 id) {
+    id = uvec2(LIGHT_ID_NONE, 0u);
     float x = u.x;
     float rest = 1.0 - light_table_info.z;   // what the environment leaves
 #if SCENE_HAS_ENVIRONMENT
-    if (x < light_table_info.z) return sample_environment(u.yz);
+    if (x < light_table_info.z) return environment_sample(u.yz, named, id);
     x = min((x - light_table_info.z) / rest, 0.99999994);
 #endif
     float sum = 0.0, w_pick = 0.0;
+    uint index = 0u;
     LightSample pick = no_light_sample();
 #if SCENE_HAS_PUNCTUAL_LIGHTS
-    pick = punctual_local_pick(p, punctual_light_count(), u.y, sum, w_pick);
+    pick = punctual_local_pick(p, punctual_light_count(), u.y, sum, w_pick, index);
 #endif
     float w_chosen = sum;   // the punctual lights' estimate while they are the pick
     uint chosen = 0xFFFFFFFFu;
@@ -435,6 +497,7 @@ LightSample sample_light_spatial(vec3 p, vec3 u) {
     if (chosen == 0xFFFFFFFFu) {
         if (!(w_pick > 0.0)) return no_light_sample();
         pick.weight *= sum / (w_pick * rest);   // 1 / (rest * w_pick / sum)
+        id = light_id(LIGHT_KIND_PUNCTUAL, index, 0u);
         return pick;
     }
     uvec4 k = emissive_clusters[chosen].ids;
@@ -442,14 +505,15 @@ LightSample sample_light_spatial(vec3 p, vec3 u) {
     uint i = min(uint(y), k.z - 1u);
     uint j = k.y + i;
     if (y - float(i) >= emissive_triangles[j].select.x) j = emissive_triangles[j].ids.w;
-    return sample_emissive(j, p, u.yz, rest * w_chosen / (sum * uintBitsToFloat(k.w)));
+    return emissive_sample(j, p, u.yz, rest * w_chosen / (sum * uintBitsToFloat(k.w)), named, id);
 }
 #endif
 
-LightSample sample_light(vec3 p, vec3 u) {
+LightSample sample_light_named(vec3 p, vec3 u, bool named, out uvec2 id) {
+    id = uvec2(LIGHT_ID_NONE, 0u);
 #if SCENE_HAS_LIGHTS
 #if SCENE_HAS_EMISSIVE_TRIANGLES && LIGHTS_SPATIAL
-    if (lights_spatial()) return sample_light_spatial(p, u);
+    if (lights_spatial()) return sample_light_spatial(p, u, named, id);
 #endif
     uint n = light_count();
     if (n == 0u) return no_light_sample();
@@ -464,17 +528,64 @@ LightSample sample_light(vec3 p, vec3 u) {
 #if SCENE_HAS_PUNCTUAL_LIGHTS
     if (e.ids.x == LIGHT_KIND_PUNCTUAL) {
         uint np = punctual_light_count();
-        if (np > 1u && np <= uint(LOCAL_PUNCTUAL_MAX)) return sample_punctual_local(p, np, u.y, e.select.z);
-        LightSample s = eval_punctual_light(e.ids.y, p);
-        s.weight /= p_select;
+        uint index = e.ids.y;
+        LightSample s;
+        if (np > 1u && np <= uint(LOCAL_PUNCTUAL_MAX)) {
+            s = sample_punctual_local(p, np, u.y, e.select.z, index);
+        } else {
+            s = eval_punctual_light(index, p);
+            s.weight /= p_select;
+        }
+        if (s.valid) id = light_id(LIGHT_KIND_PUNCTUAL, index, 0u);
         return s;
     }
 #endif
 #if SCENE_HAS_EMISSIVE_TRIANGLES
-    if (e.ids.x == LIGHT_KIND_EMISSIVE) return sample_emissive(e.ids.y, p, u.yz, light_table_info.w);
+    if (e.ids.x == LIGHT_KIND_EMISSIVE) return emissive_sample(e.ids.y, p, u.yz, light_table_info.w, named, id);
 #endif
 #if SCENE_HAS_ENVIRONMENT
-    if (e.ids.x == LIGHT_KIND_ENVIRONMENT) return sample_environment(u.yz);
+    if (e.ids.x == LIGHT_KIND_ENVIRONMENT) return environment_sample(u.yz, named, id);
+#endif
+#endif
+    return no_light_sample();
+}
+
+LightSample sample_light(vec3 p, vec3 u) {
+    uvec2 id;
+    return sample_light_named(p, u, false, id);
+}
+
+LightSample sample_light_id(vec3 p, vec3 u, out uvec2 id) { return sample_light_named(p, u, true, id); }
+
+// The light sample that identity `id` names, seen from p: direction, distance and `pdf` as
+// sample_light draws it there (solid angle; 0 for a punctual light), and `weight` its radiance
+// times the geometry factor of its light's measure (an emissive point's |cos_l| / d^2 per unit
+// area; a punctual light's falloff, range and cone; 1 for an environment direction): what a
+// contribution weight in that measure multiplies. `valid`: it gives p any light.
+LightSample light_id_eval(uvec2 id, vec3 p) {
+#if SCENE_HAS_LIGHTS
+    uint kind = light_id_kind(id);
+#if SCENE_HAS_PUNCTUAL_LIGHTS
+    if (kind == LIGHT_KIND_PUNCTUAL) return eval_punctual_light(light_id_index(id), p);
+#endif
+#if SCENE_HAS_EMISSIVE_TRIANGLES
+    if (kind == LIGHT_KIND_EMISSIVE) {
+        uint k = light_id_index(id);
+        vec3 radiance_g;
+        LightSample s = emissive_point(k, p, unpackUnorm2x16(id.y), emissive_per_power(emissive_triangles[k].ids.x, p),
+                                       radiance_g);
+        s.weight = radiance_g;
+        s.valid = max3(radiance_g) > 0.0;
+        return s;
+    }
+#endif
+#if SCENE_HAS_ENVIRONMENT
+    if (kind == LIGHT_KIND_ENVIRONMENT) {
+        LightSample s = environment_toward(oct_unpack_snorm16(id.y));
+        s.weight = environment_radiance(s.direction);
+        s.valid = max3(s.weight) > 0.0;
+        return s;
+    }
 #endif
 #endif
     return no_light_sample();

@@ -75,12 +75,13 @@ MaterialParams gbuf_material_params(GSurface g) {
     return m;
 }
 
-// The vertex of G-buffer texel g, seen from view `view`'s eye (its primary ray's cone).
-PathVertex path_vertex_at_gbuffer(GSurface g, uint view) {
+// The vertex of G-buffer texel g seen along unit v (towards the viewer), with view `view`'s
+// primary ray cone.
+PathVertex path_vertex_at_gbuffer_seen(GSurface g, uint view, vec3 v) {
     PathVertex s;
     s.pos = g.pos;
     s.ng = g.ng;
-    s.v = normalize(views[view].eye.xyz - g.pos);
+    s.v = v;
     s.n = adapt_shading_normal(g.n, s.ng, s.v);
     MaterialParams m = gbuf_material_params(g);
     s.bsdf = bsdf_params(m);
@@ -90,5 +91,10 @@ PathVertex path_vertex_at_gbuffer(GSurface g, uint view) {
     s.cone_spread = view_pixel_spread(view);
     s.cone_width = distance(views[view].eye.xyz, g.pos) * s.cone_spread;
     return s;
+}
+
+// The vertex of G-buffer texel g, seen from view `view`'s eye (its primary ray's cone).
+PathVertex path_vertex_at_gbuffer(GSurface g, uint view) {
+    return path_vertex_at_gbuffer_seen(g, view, normalize(views[view].eye.xyz - g.pos));
 }
 #endif

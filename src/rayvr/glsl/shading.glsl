@@ -13,20 +13,25 @@
 #define LIGHT_SAMPLES 1
 #endif
 
+// f(v, l) cos at s towards light sample ls, zero when the light is below s's geometric horizon;
+// with `specular_traced` (see shade_direct_mis) the specular lobes weighted by the power heuristic
+// of ls.pdf against theirs (a punctual light, pdf 0, keeps them whole).
+vec3 light_bsdf(PathVertex s, LightSample ls, bool specular_traced) {
+    if (!ls.valid || dot(ls.direction, s.ng) <= 0.0) return vec3(0.0);
+    if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0)
+        return bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_DIFFUSE)
+             + power_heuristic(ls.pdf, bsdf_pdf_specular(s.bsdf, s.n, s.v, ls.direction))
+             * bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_SPECULAR);
+    return bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
+}
+
 #if SCENE_HAS_LIGHTS
 // One light sample at s from random numbers u, unshadowed: f(v, l) cos * Le / pdf, zero when the
 // light is below s's geometric horizon or the BSDF reflects none of it; `ls` is the sample (its
 // direction and distance make the shadow ray: shadow_ray in lights.glsl).
 vec3 light_sample_unshadowed(PathVertex s, vec3 u, bool specular_traced, out LightSample ls) {
     ls = sample_light(s.pos, u);
-    if (!ls.valid || dot(ls.direction, s.ng) <= 0.0) return vec3(0.0);
-    vec3 f;
-    if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0)
-        f = bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_DIFFUSE)
-          + power_heuristic(ls.pdf, bsdf_pdf_specular(s.bsdf, s.n, s.v, ls.direction))
-          * bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_SPECULAR);
-    else
-        f = bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
+    vec3 f = light_bsdf(s, ls, specular_traced);
     if (f.x + f.y + f.z <= 0.0) return vec3(0.0);
     return f * ls.weight;   // weight = radiance / pdf (lights.glsl)
 }

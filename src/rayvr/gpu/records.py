@@ -10,6 +10,7 @@
   probe_volume_record.glsl  ProbeVolume (glsl/probe_gi.glsl)
   pt_wave_fields.glsl  the PTW_* field numbers of the wavefront path state (PATH_WAVE_FIELDS)
   rng_salts.glsl       the random streams' salts (rng_salts.RNG_SALTS)
+  reservoir_records.glsl  Reservoir, ReservoirSurface: ReSTIR DI's texels (glsl/reservoir.glsl)
 
 The probe records a reflection pass defers (glsl/probe_records.glsl) are PROBE_RECORD_TEXELS.
 """
@@ -104,6 +105,21 @@ PROBE_RECORD_TEXELS = Record("ProbeRecordTexels", (
 ))
 
 
+# ---- ReSTIR DI (passes/restir_di): one rgba32ui texel each, a layer per view -------------------------
+RESERVOIR = Record("Reservoir", (
+    Field("light", "uint", meaning="the sample's light: kind << 30 | index (lights.glsl light_id; ~0u: none)"),
+    Field("point", "uint", meaning="the point on it: rounded random numbers or an octahedral direction"),
+    Field("weight", "float", meaning="W, the sample's unbiased contribution weight in its light's measure"),
+    Field("confidence", "float", meaning="M, the candidates it stands for"),
+), meaning="A reservoir of one light sample (ReSTIR DI).")
+RESERVOIR_SURFACE = Record("ReservoirSurface", (
+    Field("depth", "float", meaning="linear eye depth (0: not a pixel the pass lit)"),
+    Field("normal", "uint", meaning="shading normal, octahedral snorm16 x2"),
+    Field("word", "uint", meaning="the G-buffer's effect word"),
+    Field("view_dir", "uint", meaning="towards the eye, octahedral snorm16 x2"),
+), meaning="The surface a history reservoir was made at (ReSTIR DI's reprojection).")
+
+
 # ---- the wavefront path state --------------------------------------------------------------------
 @dataclasses.dataclass(frozen=True)
 class WaveField:
@@ -182,6 +198,11 @@ def _probe_volume_glsl() -> str:
     return "\n".join([_header("PROBE_VOLUME"), PROBE_VOLUME.glsl(), ""])
 
 
+def _reservoir_glsl() -> str:
+    return "\n".join([_header("RESERVOIR", "RESERVOIR_SURFACE"), RESERVOIR.glsl(), "", RESERVOIR_SURFACE.glsl(), ""])
+
+
 GLSL_INCLUDES = {"scene_records.glsl": _scene_glsl, "light_records.glsl": _lights_glsl, "view_records.glsl": _views_glsl,
                  "probe_ray_record.glsl": _probe_ray_glsl, "probe_volume_record.glsl": _probe_volume_glsl,
-                 "pt_wave_fields.glsl": _pt_wave_glsl, "rng_salts.glsl": rng_salts.glsl_source}
+                 "pt_wave_fields.glsl": _pt_wave_glsl, "rng_salts.glsl": rng_salts.glsl_source,
+                 "reservoir_records.glsl": _reservoir_glsl}

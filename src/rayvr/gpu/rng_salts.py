@@ -17,6 +17,9 @@ RNG_SALTS = {
     "probe_trace": 11,      # the probe update's stages (passes/probe_gi)
     "probe_shade": 12,
     "probe_shadow": 13,
+    "restir_candidates": 17,   # ReSTIR DI's stages (passes/restir_di)
+    "restir_temporal": 19,
+    "restir_spatial": 23,
 }
 assert len(set(RNG_SALTS.values())) == len(RNG_SALTS), "two random streams share a salt"
 

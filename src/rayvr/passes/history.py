@@ -1,9 +1,10 @@
-"""What the temporal passes (SVGF, TAA, ReSTIR's reservoirs) share: when a history must be
-dropped, and when a frame is still.
+"""What the temporal passes (SVGF, TAA, ReSTIR DI) share: when a history must be dropped, and when
+a frame is still.
 
-A history survives camera motion (reprojection follows the head) and moved instances (their
-pixels fail a disocclusion test or a colour clamp), but not an edit of the lighting: a moved or
-recoloured light, a changed material or effect makes every stored sample wrong at once.
+A history survives camera motion (reprojection follows the head) and moved instances (the
+disocclusion test of glsl/reprojection.glsl or a colour clamp rejects the pixels whose surface
+changed), but not an edit of the lighting: a moved or recoloured light, a changed material or
+effect makes every stored sample wrong at once.
 
 A frame is *still* when its views and everything the GPU scene uploaded are those of the frame
 before (the Renderer's `sample_index` > 0). Then a pixel whose motion vector is zero sees the same
@@ -28,9 +29,8 @@ def still_frame(ctx) -> bool:
 
 
 class LightingWatch:
-    """Tells a temporal pass when the materials or lights changed since the last frame it saw
-    (instances alone do not count: the disocclusion test or the colour clamp handles what they
-    uncover)."""
+    """Tells a temporal pass when the materials, lights or environment changed since the last
+    frame it saw (instances alone do not count)."""
 
     def __init__(self):
         self.forget()
@@ -50,3 +50,55 @@ class LightingWatch:
         edited = key != self._key
         self._key = key
         return edited
+
+
+class LightingHistory:
+    """Whether a pass's history may be read this frame; `frames` counts the frames since compile
+    (a pass's histories used in turn: frame parity), `resets` the histories lighting edits dropped."""
+
+    def __init__(self):
+        self.frames = 0
+        self.valid = False
+        self.resets = 0
+        self._watch = LightingWatch()
+
+    def restart(self) -> None:
+        """A new compile: no history, nothing counted."""
+        self.__init__()
+
+    def reset(self) -> None:
+        """Forget the history: the next frame starts it again."""
+        self.valid = False
+
+    def begin_frame(self, ctx) -> tuple[int, int]:
+        """Drop the history on a lighting edit; (previous, current): which of two histories used in
+        turn this frame reads and which it writes."""
+        if self._watch.edited(ctx) and self.valid:
+            self.resets += 1
+            self.reset()
+        return self.frames % 2, (self.frames + 1) % 2
+
+    def end_frame(self) -> None:
+        """The frame wrote its history: the next one may read it."""
+        self.frames += 1
+        self.valid = True
+
+
+class HistoryOwner:
+    """A pass's face of its LightingHistory (`self._history`): `reset()`, `history_valid`, `resets`."""
+
+    _history: LightingHistory
+
+    def reset(self) -> None:
+        """Forget the history: the next frame starts it again."""
+        self._history.reset()
+
+    @property
+    def history_valid(self) -> bool:
+        """Whether the next frame reads a history (False after a reset or a lighting edit)."""
+        return self._history.valid
+
+    @property
+    def resets(self) -> int:
+        """Histories dropped by lighting edits since compile."""
+        return self._history.resets

@@ -1,13 +1,14 @@
 """What the error study renders: a named configuration = graph + per-material effects + settings
-(spp, bounces, light samples, frames accumulated, denoiser, GI), and the standard set of them.
+(spp, bounces, light samples, frames accumulated, denoiser, GI, direct light sampling), and the
+standard set of them.
 
 A configuration states its settings in full (`Config.settings(scene)`): the graph builder's
 defaults with the configuration's options over them, so every row of a report says what it ran.
 The PATH_TRACED levels default to the reference's bounces, so that they converge to it.
 
-A denoiser or probe GI is one more option of the graph builder (`denoise=`, `gi=`); the standard
-set includes a row for each value rayvr.graph_options lists for an option the builder takes
-(rayvr.graphs.BUILDERS), those whose extra is installed.
+A denoiser, probe GI or ReSTIR is one more option of the graph builder (`denoise=`, `gi=`,
+`direct=`); the standard set includes a row for each value rayvr.graph_options lists for an option
+the builder takes (rayvr.graphs.BUILDERS), those whose extra is installed.
 
 Configurations from a file (`load_configs`): JSON, a list or {"configs": [...]} of
     {"name": "mirror floor", "effects": {"*": "shadows", "Floor": "reflections"},
@@ -26,7 +27,7 @@ import numpy as np
 
 from ..fileio import read_json
 from ..errors import OptionError, did_you_mean
-from ..graph_options import DENOISE, GI
+from ..graph_options import DENOISE, DIRECT, GI
 from ..graphs import BUILDERS, HDR_OUTPUTS
 from ..materials.effect import Effect
 from .reference import ReferenceSettings
@@ -175,7 +176,8 @@ class Config:
 
     def settings(self, scene=None) -> dict:
         """Everything this configuration renders with, stated: graph, spp, bounces, reflection
-        bounces, light samples, frames accumulated, denoiser, GI (and the effects on `scene`)."""
+        bounces, light samples, frames accumulated, denoiser, GI, direct light sampling (and the
+        effects on `scene`)."""
         merged = {**builder_defaults(self.builder), **self.options}
         path_traced = self.builder is path_traced_graph
         out = {"graph": self.graph_name,
@@ -186,6 +188,7 @@ class Config:
                "frames_accumulated": int(self.accumulate),
                "denoiser": merged.get("denoise") or "none",
                "gi": merged.get("gi") or "none",
+               "direct": merged.get("direct") or "none",
                "options": dict(self.options)}
         if scene is not None:
             out["effects"] = {k: v.name for k, v in self.assignment(scene).items()}
@@ -249,14 +252,20 @@ def available_gi(builder=hybrid_graph) -> list[str]:
     return list(GI.available_values()) if accepts(builder, "gi") else []
 
 
+def available_direct(builder=hybrid_graph) -> list[str]:
+    """The direct-light samplers (rayvr.graph_options.DIRECT), if `builder` takes `direct=`."""
+    return list(DIRECT.available_values()) if accepts(builder, "direct") else []
+
+
 def standard_configs(scene, reference: ReferenceSettings | None = None, reflect: str = "auto", spp=(1, 4, 16),
                      taa: bool = True, denoised_levels: bool = True, probes: dict | None = None,
                      **options) -> list[Config]:
     """Every effect level alone (all RASTER, all SHADOWS, all REFLECTIONS, all PATH_TRACED at each
     `spp`) and mixed (SHADOWS with REFLECTIONS on one material); PATH_TRACED 1 spp + TAA (judged in
     motion); each PATH_TRACED level with every available denoiser, each other level with probe GI
-    where the graphs have it and (`denoised_levels`) with the real-time denoiser, with and without
-    probe GI. PATH_TRACED uses the reference's bounces. `probes`: the probe GI rows' ProbeGI
+    where the graphs have it, with each direct-light sampler where it has ray-traced shadows
+    (`all SHADOWS + restir direct`) and (`denoised_levels`) with the real-time denoiser, with and
+    without probe GI. PATH_TRACED uses the reference's bounces. `probes`: the probe GI rows' ProbeGI
     properties (e.g. {"counts": [4, 4, 4]}; default the pass's)."""
     bounces = (reference or ReferenceSettings()).max_bounces
     opts = {"path_bounces": bounces, **options}
@@ -267,6 +276,9 @@ def standard_configs(scene, reference: ReferenceSettings | None = None, reflect:
     for mode in available_gi():
         configs += [Config(f"{name} + {mode} GI", effects, options={**opts, **_gi(mode, probes)})
                     for name, effects in levels]
+    for mode in available_direct():
+        configs += [Config(f"{name} + {mode} direct", effects, options={**opts, "direct": mode})
+                    for name, effects in levels if effects != Effect.RASTER]
     traced = [(f"PATH_TRACED {n} spp", {**opts, "spp": int(n)}) for n in spp]
     configs += [Config(name, Effect.PATH_TRACED, options=o) for name, o in traced]
     if taa:

@@ -176,7 +176,7 @@ class Results:
     def settings_data(self) -> tuple[list[str], list[list[str]]]:
         """(columns, cells): every row's settings, stated."""
         keys = ["graph", "spp", "bounces", "reflection_bounces", "light_samples", "frames_accumulated", "denoiser",
-                "gi"]
+                "gi", "direct"]
         rows = []
         for r in self.rows:
             rows.append([r.name, *(fmt(r.settings.get(k)) for k in keys), effects_text(r.settings.get("effects", {}))])

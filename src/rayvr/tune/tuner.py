@@ -21,9 +21,10 @@ from .cost_probe import ErrorJudge, render_assignment
 
 # The graph options the tuner tries beside each material's effect (those the graph builder takes):
 # probe GI lights RASTER, SHADOWS and REFLECTIONS materials indirectly; SVGF denoises the one-sample
-# light of every lit pixel (hybrid) or path (path_traced); both together can be the least error per ms
-# of the four (benchmarks/RESULTS.md has the tauray study), so the tuner tries each.
-OPTION_SETS = tuple(realtime_option_sets())   # none, each real-time value alone, all together
+# light of every lit pixel (hybrid) or path (path_traced); ReSTIR resamples the direct light of SHADOWS
+# pixels and above; GI and SVGF together can be the least error per ms (benchmarks/RESULTS.md has the
+# tauray study), so the tuner tries every combination.
+OPTION_SETS = tuple(realtime_option_sets())   # none, each real-time value alone, the combinations
 # The keys of a study's configurations that tuned_study tries (OIDN, offline, never: it is no GPU time).
 TUNED_OPTIONS = tuple(o.name for o in OPTIONS)
 

@@ -87,6 +87,12 @@ def wire(graph, gbuffer: str, reader: str, names=LIGHTING) -> None:
         graph.add_edge(f"{gbuffer}.{name}", f"{reader}.{channel(name).name}")
 
 
+def read_by(render_pass) -> tuple[str, ...]:
+    """The channels a G-buffer reader declares: its `gbuffer_channels()`, else LIGHTING."""
+    names = getattr(render_pass, "gbuffer_channels", None)
+    return tuple(names()) if names is not None else LIGHTING
+
+
 def bind_inputs(res, data, names=LIGHTING) -> None:
     """Bind the G-buffer inputs `names` of RenderData `data` to their samplers `gbuf_<name>`."""
     for name in names:

@@ -52,7 +52,7 @@ class GBufferLightingPass(RenderPass):
 
     def reflect(self, cd):
         r = Reflection()
-        channels.add_inputs(r)
+        channels.add_inputs(r, self.gbuffer_channels())
         if self.PIXEL_LIST:
             pin = r.add_input(self.PIXEL_LIST, "pixels to work on (EffectCompaction)").buffer(
                 pixel_list_bytes(cd.size, cd.views)).indirect()
@@ -61,6 +61,10 @@ class GBufferLightingPass(RenderPass):
         r.add_output(self.OUTPUT, self.OUTPUT_DESC).format("rgba16f")
         probe_inputs.add_inputs(r, self.probes_unused(cd))
         return r
+
+    def gbuffer_channels(self) -> tuple[str, ...]:
+        """The G-buffer channels the pass reads (graphs wire them: channels.wire)."""
+        return channels.LIGHTING
 
     def lit_effects(self) -> set:
         """The effects of the pixels this pass lights."""
@@ -131,7 +135,7 @@ class GBufferLightingPass(RenderPass):
     def bind_pixels(self, res, data) -> None:
         """Bind what a program of the pass needs to find its pixels and their surfaces: the G-buffer
         channels and, when it reads one, the pixel list."""
-        channels.bind_inputs(res, data)
+        channels.bind_inputs(res, data, self.gbuffer_channels())
         if self.PIXEL_LIST and not self._pixels_2d:
             res.buffer("PixelList", data[self.PIXEL_LIST])
 

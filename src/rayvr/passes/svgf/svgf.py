@@ -49,7 +49,7 @@ from ...rendergraph.render_pass import Access, Reflection, RenderPass
 from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
-from ..history import LightingWatch, still_frame
+from ..history import HistoryOwner, LightingHistory, still_frame
 
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
@@ -57,7 +57,7 @@ KERNELS = (3, 5)     # a-trous kernel widths: 3x3 (1/2, 1/4 per axis), 5x5 (B3 s
 
 
 @register_pass
-class SVGF(RenderPass):
+class SVGF(HistoryOwner, RenderPass):
     """Denoises `diffuse` (+ optional `specular`) first-vertex radiance into `color` (rgba16f);
     see the module docstring.
 
@@ -86,10 +86,7 @@ class SVGF(RenderPass):
 
     def __init__(self, props: dict | None = None, **kwargs):
         super().__init__(props, **kwargs)
-        self._frames = 0
-        self._history_valid = False
-        self._lighting = LightingWatch()
-        self.resets = 0   # histories dropped by scene edits (lighting changed) since compile
+        self._history = LightingHistory()
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -110,15 +107,6 @@ class SVGF(RenderPass):
         if key == "phi_normal" and not value >= 0.0:
             raise OptionError(f"pass {self.name}: property 'phi_normal' must be >= 0, got {value!r}")
         return int(value) if key in ("iterations", "kernel", "feedback_tap", "max_history", "still_max_history") else value
-
-    def reset(self) -> None:
-        """Forget the history: the next frame starts it again."""
-        self._history_valid = False
-
-    @property
-    def history_valid(self) -> bool:
-        """Whether the next frame reprojects a history (False after a reset or a scene edit)."""
-        return self._history_valid
 
     def reflect(self, cd):
         r = Reflection()
@@ -159,10 +147,7 @@ class SVGF(RenderPass):
         self._atrous_program()
         self._atrous_program(final=True)
         self._groups = groups_2d(cd.size, cd.views)
-        self._frames = 0
-        self._lighting.forget()
-        self.resets = 0
-        self.reset()
+        self._history.restart()
 
     def _atrous_program(self, final: bool = False):
         """The a-trous stage's program for the current `kernel`, the last iteration's (which also
@@ -205,10 +190,7 @@ class SVGF(RenderPass):
         res.set("svgf_phi_color", float(self.phi_color))
 
     def execute(self, ctx, data):
-        if self._lighting.edited(ctx) and self._history_valid:
-            self.resets += 1
-            self.reset()
-        prev, cur = self._frames % 2, (self._frames + 1) % 2
+        prev, cur = self._history.begin_frame(ctx)
         scratch = [data[name] for name in self.FILTER]
         iterations = int(self.iterations)
         tap = min(int(self.feedback_tap), iterations - 1)   # < 0: the unfiltered temporal mean
@@ -233,7 +215,7 @@ class SVGF(RenderPass):
         res.set("svgf_max_history", float(self.max_history))
         res.set("svgf_still_max_history", float(max(self.still_max_history, self.max_history)))
         res.set("svgf_still", still_frame(ctx))
-        res.set("svgf_history_valid", self._history_valid)
+        res.set("svgf_history_valid", self._history.valid)
         res.prog.run(*self._groups)
         ctx.barrier(*between)
 
@@ -274,5 +256,4 @@ class SVGF(RenderPass):
             self._bind_modulate(res, data)
             res.texture("src_illum", scratch[src])
             res.prog.run(*self._groups)
-        self._frames += 1
-        self._history_valid = True
+        self._history.end_frame()

@@ -12,16 +12,11 @@
 #include "path_vertex.glsl"
 #include "nonfinite.glsl"
 #include "octahedral.glsl"
+#include "reprojection.glsl"   // the disocclusion test and depth gradients
 
 // Demodulation divides by max(albedo, SVGF_ALBEDO_EPS) and remodulation multiplies by the same,
 // so a black lobe round-trips exactly.
 const float SVGF_ALBEDO_EPS = 1e-3;
-// Disocclusion: last frame's surface at the reprojected pixel is this one when its normal is
-// within ~25 degrees, its effect word (effect | material << 8) is the same and its depth is the
-// depth this point had in last frame's view, within SVGF_DEPTH_TOLERANCE of it plus two pixels'
-// depth gradient.
-const float SVGF_NORMAL_COS = 0.9;
-const float SVGF_DEPTH_TOLERANCE = 0.02;
 // Below this history length the variance comes from a 7x7 neighbourhood (section 4.2).
 const float SVGF_MIN_HISTORY = 4.0;
 
@@ -90,7 +85,7 @@ SvgfSurface svgf_no_geometry() {
     return s;
 }
 
-bool svgf_inside(ivec2 q, ivec2 size) { return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, size)); }
+bool svgf_inside(ivec2 q, ivec2 size) { return pixel_inside(q, size); }
 
 // The directional albedos of the diffuse and specular lobes at G-buffer surface g seen from `view`.
 void svgf_albedo(GSurface g, uint view, out vec3 diffuse, out vec3 specular) {
@@ -115,21 +110,6 @@ vec3 svgf_color(ivec3 p, vec3 diffuse, vec3 specular) {
     c += svgf_remodulate(specular, albedo_s);
 #endif
     return c;
-}
-
-// One axis of the depth gradient: the smaller of the one-sided differences towards neighbours
-// that have geometry (depth > 0), so the gradient of a pixel on an edge is its own surface's.
-float svgf_depth_slope(float z, float before, float after) {
-    float a = before > 0.0 ? z - before : 1e30;
-    float b = after > 0.0 ? after - z : 1e30;
-    float s = abs(a) < abs(b) ? a : b;
-    return s > 1e29 ? 0.0 : s;
-}
-
-// The depth gradient (per pixel) at a pixel of depth z from its neighbours' depths (0: no
-// geometry, or outside the view) left, right, below and above.
-vec2 svgf_depth_gradient(float z, float left, float right, float below, float above) {
-    return vec2(svgf_depth_slope(z, left, right), svgf_depth_slope(z, below, above));
 }
 
 // The depth gradient as the a-trous iterations read it (the variance stage writes it once a
@@ -165,7 +145,7 @@ float svgf_depth_at(ivec3 q, ivec2 size) {
 
 // The depth gradient (per pixel) at p, whose depth is z, from the key.
 vec2 svgf_depth_gradient(ivec3 p, float z, ivec2 size) {
-    return svgf_depth_gradient(z, svgf_depth_at(p + ivec3(-1, 0, 0), size), svgf_depth_at(p + ivec3(1, 0, 0), size),
-                               svgf_depth_at(p + ivec3(0, -1, 0), size), svgf_depth_at(p + ivec3(0, 1, 0), size));
+    return depth_gradient(z, svgf_depth_at(p + ivec3(-1, 0, 0), size), svgf_depth_at(p + ivec3(1, 0, 0), size),
+                          svgf_depth_at(p + ivec3(0, -1, 0), size), svgf_depth_at(p + ivec3(0, 1, 0), size));
 }
 #endif

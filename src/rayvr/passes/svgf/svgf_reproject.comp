@@ -41,8 +41,7 @@ struct Reprojected {
 void add_tap(inout Reprojected r, ivec3 q, float w, uint word, vec3 n, float prev_depth, float tolerance) {
     if (w <= 0.0 || !svgf_inside(q.xy, textureSize(key_prev, 0).xy)) return;
     SvgfSurface s = svgf_unpack(texelFetch(key_prev, q, 0).xy, texelFetch(surface_prev, q, 0).xy);
-    if (s.history <= 0.0 || s.word != word || dot(s.n, n) < SVGF_NORMAL_COS
-        || abs(s.depth - prev_depth) > tolerance) return;
+    if (s.history <= 0.0 || !reprojection_matches(s.depth, s.n, s.word, prev_depth, n, word, tolerance)) return;
     r.weight += w;
     r.diffuse += w * texelFetch(history_diffuse, q, 0).rgb;
 #if SVGF_SPECULAR
@@ -51,8 +50,6 @@ void add_tap(inout Reprojected r, ivec3 q, float w, uint word, vec3 n, float pre
     r.moments += w * texelFetch(moments_prev, q, 0);
     r.history += w * s.history;
 }
-
-float depth_at(ivec3 q, ivec2 size) { return svgf_inside(q.xy, size) ? gbuf_fetch_posW(q).w : 0.0; }
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
@@ -76,15 +73,14 @@ void main() {
     specular = svgf_demodulate(texelFetch(svgf_specular_in, p, 0).rgb, albedo_s);
 #endif
     float depth = gbuf_fetch_posW(p).w;
-    vec2 gradient = svgf_depth_gradient(depth, depth_at(p + ivec3(-1, 0, 0), size.xy), depth_at(p + ivec3(1, 0, 0), size.xy),
-                                        depth_at(p + ivec3(0, -1, 0), size.xy), depth_at(p + ivec3(0, 1, 0), size.xy));
+    vec2 gradient = gbuf_depth_gradient(p, depth, size.xy);
 
     Reprojected r = Reprojected(0.0, vec3(0.0), vec3(0.0), vec4(0.0), 0.0);
     if (svgf_history_valid) {
         // where this surface point was in last frame's view, and the depth it had there
-        vec2 prev = vec2(p.xy) + 0.5 - gbuf_fetch_motion(p);
-        float prev_depth = (views[p.z].prev_view_proj * vec4(g.pos, 1.0)).w;
-        float tolerance = SVGF_DEPTH_TOLERANCE * prev_depth + 2.0 * (abs(gradient.x) + abs(gradient.y));
+        vec2 prev = reprojected_pixel(p);
+        float prev_depth = reprojected_depth(uint(p.z), g.pos);
+        float tolerance = reprojection_tolerance(prev_depth, gradient);
         vec2 b = prev - 0.5;
         ivec2 base = ivec2(floor(b));
         vec2 f = b - vec2(base);

@@ -1,0 +1,179 @@
+"""ReSTIRDI: emission + ray-traced direct light by spatiotemporal reservoir resampling (Bitterli et
+al. 2020, "Spatiotemporal reservoir resampling for real-time ray tracing with dynamic direct
+lighting"), a drop-in for RTShadows (the same pins and pixels: `rv.graphs.hybrid(direct="restir")`).
+
+Four stages, one compute shader each, over the pixels whose effect is SHADOWS or above (the shadow
+list, or the whole image in one-warp tiles, as RTShadows: `dispatch_mode`):
+    candidates  `candidates` light samples from the light table, one kept by resampled importance
+                sampling with the target p_hat (the luminance of its unshadowed contribution);
+                with `visibility_reuse` a shadow ray to it, and an occluded one is dropped
+    temporal    (`temporal_reuse`) combined with last frame's temporal reservoir where the motion
+                vector points (the disocclusion test of glsl/reprojection.glsl), its confidence
+                capped at `max_history_m` x `candidates`: next frame's history
+    spatial     (`spatial_samples` > 0, or `share_views` in a frame of several views) combined with
+                the reservoirs of up to `spatial_samples` pixels within `spatial_radius` pixels that
+                show the same surface and hold a sample, and in views after the first with view 0's
+                reservoir where the pixel's surface point lies in view 0: the views share samples
+    shade       emission + the final sample's contribution with its own shadow ray (expected
+                transmittance through BLEND surfaces) + the probes' indirect diffuse light when
+                the probe inputs are bound: RTShadows' output
+Reservoirs are 16 bytes (gpu/records.py RESERVOIR: the sample's light identity, its weight W and
+confidence M); each pixel's temporal reservoir is next frame's history (`history0/1`, used in
+turn, with the surfaces they were made at, `surface0/1`). The stages combine reservoirs by
+generalized RIS with pairwise MIS of the unshadowed targets (glsl/restir_di.glsl), each target
+evaluated at its own pixel's surface: without visibility reuse that is unbiased.
+
+Visibility reuse makes each pixel's reservoirs hold samples it sees, which is unbiased for the
+pixel itself (its own chain over frames, for a static occluder) but not for the pixels that reuse
+them, whose MIS weights count a neighbour as able to draw every light its unshadowed target has.
+Two choices bound that bias: the history is the temporal stage's output, not the spatial one's
+(fed back, the spatial bias compounds frame over frame: 10% darker on a hard shadow's surround
+in 64 frames, against none), and a neighbour whose reservoir holds no sample (it found no visible
+light) is not reused (a fully shadowed neighbour can give none of the light: exact at a single
+light's shadow edge). What remains: a pixel is darker where an accepted neighbour within
+`spatial_radius` sees other lights but not this pixel's (at worst by the neighbours' share of the
+confidence, for that light alone, and not compounded: 4% of the mean on a plane under 60 point
+lights with a box's shadows, 32x32, the radius spanning the image), and slightly brighter in the
+first frames of a history where a partly lit neighbour happened to find nothing. Light never
+passes an occluder: every pixel's light passes its own shadow ray. docs/materials.md has the
+details.
+
+History resets on the first frame, on `reset()` and on lighting edits (passes/history.py), as SVGF's.
+"""
+from __future__ import annotations
+
+from ...errors import OptionError
+from ...gpu.program_resources import program_resources
+from ...gpu.textures import zero_texture
+from ...materials.effect import Effect
+from ...rendergraph.registry import register_pass
+from ...rendergraph.render_pass import Access
+from ..effects import unused_effect_reason
+from ..gbuffer import channels
+from ..gbuffer.lighting_pass import GBufferLightingPass, ray_properties
+from ..history import HistoryOwner, LightingHistory
+
+MAX_CANDIDATES = 64
+MAX_SPATIAL_SAMPLES = 16
+MAX_SPATIAL_RADIUS = 256.0
+RESERVOIR_FORMAT = "rgba32ui"   # gpu/records.py RESERVOIR, RESERVOIR_SURFACE: one texel each
+
+
+@register_pass
+class ReSTIRDI(HistoryOwner, GBufferLightingPass):
+    """Emission + ray-traced direct light by ReSTIR for SHADOWS pixels and above: RTShadows' pins,
+    its image at lower noise (see the module docstring).
+
+    Properties: `candidates` (light samples per pixel a frame, 1-64), `visibility_reuse` (a shadow
+    ray to each pixel's pick before it is shared), `temporal_reuse`, `max_history_m` (the history's
+    confidence cap, in frames of candidates), `spatial_samples` (neighbours, 0-16), `spatial_radius`
+    (pixels, 1-256), `share_views` (views after the first reuse view 0's reservoirs), and the ray
+    passes' `dispatch_mode`, `tile`, `view_group`."""
+
+    SHADER = "restir_shade.comp"
+    OUTPUT = "shadowed"
+    OUTPUT_DESC = "emission + shadowed direct light (listed pixels only)"
+    PIXEL_LIST = "pixels"
+    LOWEST_EFFECT = Effect.SHADOWS
+    STAGES = ("candidates", "temporal", "spatial")   # then the shading program (SHADER)
+    CANDIDATES, REUSED = "reservoirs0", "reservoirs1"
+    HISTORY = ("history0", "history1")
+    SURFACE = ("surface0", "surface1")
+    PROPERTIES = {"candidates": 8, "visibility_reuse": True, "temporal_reuse": True, "max_history_m": 20,
+                  "spatial_samples": 4, "spatial_radius": 30.0, "share_views": True,
+                  **ray_properties(view_group=16)}
+
+    def __init__(self, props: dict | None = None, **kwargs):
+        super().__init__(props, **kwargs)
+        self._history = LightingHistory()
+
+    def validate_property(self, key, value):
+        value = super().validate_property(key, value)
+        ranges = {"candidates": (1, MAX_CANDIDATES, "light samples per pixel a frame"),
+                  "max_history_m": (1, 1 << 16, "the history's confidence cap, in frames of candidates"),
+                  "spatial_samples": (0, MAX_SPATIAL_SAMPLES, "neighbours reused per pixel")}
+        if key in ranges:
+            low, high, what = ranges[key]
+            if int(value) != value or not low <= value <= high:
+                raise OptionError(f"pass {self.name}: property '{key}' must be an integer from {low} to {high} "
+                                  f"({what}), got {value!r}")
+            return int(value)
+        if key == "spatial_radius" and not 1.0 <= value <= MAX_SPATIAL_RADIUS:
+            raise OptionError(f"pass {self.name}: property 'spatial_radius' must be from 1 to {MAX_SPATIAL_RADIUS:g} "
+                              f"pixels, got {value!r}")
+        return value
+
+    def skip_reason(self, cd):
+        return unused_effect_reason(cd, Effect.SHADOWS)
+
+    def gbuffer_channels(self) -> tuple[str, ...]:
+        """The lighting channels, and with temporal reuse the motion vectors."""
+        return channels.LIGHTING + ("motion",) * bool(self.temporal_reuse)
+
+    def stages(self, views: int) -> tuple[str, ...]:
+        """The reservoir stages a frame of `views` views runs, in order (the shading follows)."""
+        spatial = self.spatial_samples > 0 or (self.share_views and views > 1)
+        return tuple(s for s, on in zip(self.STAGES, (True, self.temporal_reuse, spatial)) if on)
+
+    def reflect(self, cd):
+        r = super().reflect(cd)
+        stages = self.stages(cd.views)
+        r.add_output(self.CANDIDATES, "each pixel's candidate reservoir (scratch)").format(RESERVOIR_FORMAT)
+        if "spatial" in stages:
+            r.add_output(self.REUSED, "the spatial stage's reservoirs: the final ones (scratch)").format(RESERVOIR_FORMAT)
+        if self.temporal_reuse:
+            for name in self.HISTORY:
+                r.add_internal(name, "the temporal stage's reservoirs: last frame's are this one's history (used "
+                                     "in turn)").format(RESERVOIR_FORMAT)
+            for name in self.SURFACE:
+                r.add_internal(name, "the surface each history reservoir was made at: depth, normal, effect word, "
+                                     "view direction (used in turn)").format(RESERVOIR_FORMAT)
+        return r
+
+    def shader_defines(self) -> dict:
+        return {"RESTIR_CANDIDATES": int(self.candidates), "RESTIR_VISIBILITY_REUSE": bool(self.visibility_reuse),
+                "RESTIR_TEMPORAL": bool(self.temporal_reuse),
+                "RESTIR_MAX_HISTORY": float(self.max_history_m * self.candidates),
+                "RESTIR_SPATIAL_SAMPLES": int(self.spatial_samples),
+                "RESTIR_SPATIAL_RADIUS": float(self.spatial_radius), "RESTIR_SHARE_VIEWS": bool(self.share_views)}
+
+    def compile(self, ctx, cd):
+        super().compile(ctx, cd)   # the shading program, with the probes when they are bound
+        self._stages = self.stages(cd.views)
+        defines = {k: v for k, v in self._defines.items() if k != "PROBE_GI"}
+        self._stage_res = {stage: program_resources(self.compute_program(ctx.gl, f"restir_{stage}.comp", defines))
+                           for stage in self._stages}
+        self._history.restart()
+
+    def _targets(self, cur: int) -> dict:
+        """Each stage's output pin, and the final reservoirs' (key "shade"): the temporal stage
+        writes the history, which the spatial stage reads."""
+        out = {"candidates": self.CANDIDATES, "temporal": self.HISTORY[cur], "spatial": self.REUSED}
+        out["shade"] = out[self._stages[-1]]
+        return out
+
+    def execute(self, ctx, data):
+        prev, cur = self._history.begin_frame(ctx)
+        if self.temporal_reuse and not self._history.valid:   # no surface of an old frame may match
+            for name in self.SURFACE:
+                zero_texture(data[name])
+        targets = self._targets(cur)
+        source = None
+        for stage in self._stages:
+            res = self._stage_res[stage]
+            self.bind_pixels(res, data)
+            if source is not None:
+                res.image("reservoirs_in", data[source], read=True, write=False)
+            res.image("reservoirs_out", data[targets[stage]])
+            if stage == "candidates" and self.temporal_reuse:
+                res.image("surface_out", data[self.SURFACE[cur]])
+            elif stage == "temporal":
+                res.image("history_in", data[self.HISTORY[prev]], read=True, write=False)
+                res.image("surface_in", data[self.SURFACE[prev]], read=True, write=False)
+                res.set("restir_history_valid", self._history.valid)
+            self.dispatch(res.prog, data)
+            ctx.barrier(Access.IMAGE)
+            source = targets[stage]
+        self._res.image("reservoirs_in", data[targets["shade"]], read=True, write=False)
+        super().execute(ctx, data)
+        self._history.end_frame()
