@@ -12,15 +12,17 @@ from rayvr.scene import GpuScene, bvh8, bvh_wide
 from rayvr.scene.bvh import build, triangle_bounds
 
 
-def walk(w, tris):
+def walk(w, tris, nodes=None, order=None):
     """From the root as the shader walks it: each triangle slot reached once, each node once, every
-    triangle inside every decoded box on its way, and each node's children as the layout says."""
-    nodes = w.nodes
+    triangle inside every decoded box on its way, and each node's children as the layout says.
+    nodes, order: others than w's (the GPU's), else w.nodes and w.order."""
+    nodes = w.nodes if nodes is None else nodes
+    order = w.order if order is None else order
     bits = nodes.view(np.uint32)
-    lo, hi = w.child_boxes()
-    t_lo, t_hi = triangle_bounds(tris[w.order])
-    reached = np.zeros(len(w.order), np.int64)
-    visited = np.zeros(w.node_count, np.int64)
+    lo, hi = bvh8.decode(nodes)
+    t_lo, t_hi = triangle_bounds(tris[order])
+    reached = np.zeros(len(order), np.int64)
+    visited = np.zeros(len(nodes), np.int64)
 
     def subtree(node, path_lo, path_hi):
         visited[node] += 1

@@ -549,17 +549,15 @@ bool rq_step() {
         uvec4 m = floatBitsToUint(n[1]), qx = floatBitsToUint(n[2]), qy = floatBitsToUint(n[3]), qz = floatBitsToUint(n[4]);
         vec4 t0 = rq_qbox4(n[0].xyz, scale, uvec3(qx.x, qy.x, qz.x), uvec3(qx.z, qy.z, qz.z), rq_r.inv, rq_r.oi, rq_tmax);
         vec4 t1 = rq_qbox4(n[0].xyz, scale, uvec3(qx.y, qy.y, qz.y), uvec3(qx.w, qy.w, qz.w), rq_r.inv, rq_r.oi, rq_tmax);
-        uvec4 h0 = uvec4(lessThan(t0, vec4(RQ_MISS))) << uvec4(0u, 1u, 2u, 3u);
-        uvec4 h1 = uvec4(lessThan(t1, vec4(RQ_MISS))) << uvec4(4u, 5u, 6u, 7u);
+        bvec4 hit0 = lessThan(t0, vec4(RQ_MISS)), hit1 = lessThan(t1, vec4(RQ_MISS));
+        uvec4 h0 = uvec4(hit0) << uvec4(0u, 1u, 2u, 3u), h1 = uvec4(hit1) << uvec4(4u, 5u, 6u, 7u);
         uint hits = (h0.x | h0.y) | (h0.z | h0.w) | (h1.x | h1.y) | (h1.z | h1.w);
         uint imask = e >> 24;
-        uint leaves = hits & ~imask, triangles = 0u;
-        while (leaves != 0u) {   // each hit leaf's triangles: meta >> 5 of them from bit meta & 31 (empty slots: meta 0)
-            uint k = uint(findLSB(leaves));
-            leaves &= leaves - 1u;
-            uint meta = ((k < 4u ? m.z : m.w) >> (8u * (k & 3u))) & 0xFFu;
-            triangles |= ((1u << (meta >> 5)) - 1u) << (meta & 31u);
-        }
+        // each hit leaf's triangles: meta >> 5 of them from bit meta & 31 (internal and empty slots: meta 0)
+        uvec4 meta0 = (uvec4(m.z) >> uvec4(0u, 8u, 16u, 24u)) & 0xFFu, meta1 = (uvec4(m.w) >> uvec4(0u, 8u, 16u, 24u)) & 0xFFu;
+        uvec4 tri0 = mix(uvec4(0u), ((uvec4(1u) << (meta0 >> 5u)) - 1u) << (meta0 & 31u), hit0);
+        uvec4 tri1 = mix(uvec4(0u), ((uvec4(1u) << (meta1 >> 5u)) - 1u) << (meta1 & 31u), hit1);
+        uint triangles = (tri0.x | tri0.y) | (tri0.z | tri0.w) | (tri1.x | tri1.y) | (tri1.z | tri1.w);
         if (rq_group.y >= 0x100u && rq_sp < RQ_STACK_ENTRIES) rq_stack[rq_sp++] = rq_group;
         rq_group = uvec2(m.x, (rq_ranks(hits & imask, oct) << 8) | imask);
         rq_leaves = uvec2(m.y, triangles);

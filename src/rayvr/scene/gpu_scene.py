@@ -193,8 +193,8 @@ class GpuScene:
         GIL), a single big mesh uses the threaded LBVH itself. method 'gpu': every mesh on the
         GPU builder (bvh_gpu); 'auto': the GPU builder for meshes of GPU_BVH_MIN triangles and
         more on a hardware driver, binned SAH / LBVH on the CPU otherwise. Each a `Bvh`, except the
-        GPU-built ones in layout "bvh4": collapsed on the GPU too, a `bvh_wide.WideBvh` (greedy;
-        the CPU-built ones get bvh_wide's SAH-optimal collapse in _build_meshes)."""
+        GPU-built ones in layouts "bvh4" and "bvh8": collapsed on the GPU too, a `bvh_wide.WideBvh`
+        or `bvh8.Bvh8` (greedy; the CPU-built ones get the SAH-optimal collapse in _build_meshes)."""
         import os
         from concurrent.futures import ThreadPoolExecutor
 
@@ -207,7 +207,7 @@ class GpuScene:
         on_gpu = [m.triangle_count > 0 and (method == "gpu" or (method == "auto" and hardware
                                                                   and m.triangle_count >= GPU_BVH_MIN))
                   for m in self.scene.meshes]
-        build = bvh_gpu.build_gpu_bvh4 if self.bvh_layout == "bvh4" else bvh_gpu.build_gpu
+        build = {"bvh4": bvh_gpu.build_gpu_bvh4, "bvh8": bvh_gpu.build_gpu_bvh8}.get(self.bvh_layout, bvh_gpu.build_gpu)
         gpu_built = {k: build(self.gpu, m.triangles())   # GL calls: this thread only
                      for k, (m, g) in enumerate(zip(self.scene.meshes, on_gpu)) if g}
         if gpu_built:
