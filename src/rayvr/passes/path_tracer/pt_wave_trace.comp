@@ -14,9 +14,9 @@ layout(local_size_x = RAY_GROUP_SIZE) in;
 uniform int pt_sample;
 
 void main() {
+    uint i;
     ivec3 p;
-    if (!ptw_pixel(p)) return;
-    uint i = ptw_slot();
+    if (!ptw_path(i, p)) return;
     uint answer = 0u;
     vec3 o, d;
     bool closest = true;   // a BSDF or camera ray to trace (one call site: the traversal is inlined once)
