@@ -36,7 +36,10 @@ MODES = ("full", "gbuffer")
 KERNELS = ("auto", "wavefront", "megakernel")
 SAMPLERS = {"sobol": 1, "pcg": 0}   # glsl/sampling.glsl RAYVR_SAMPLER
 PIXEL_LIST_GROUP = 64   # glsl/pixel_list.glsl: the local size of a dispatch over a pixel list
-QUEUE_ARGS_BYTES = 16   # pt_wave.glsl PtQueue: a queue's indirect dispatch (and count), ahead of the slots
+QUEUE_ARGS_BYTES = 16   # pt_wave.glsl PtQueue: a queue's indirect dispatch (and count); 3 such ahead of the slots
+PERSISTENT_GROUPS = 2048   # workgroups of the persistent trace kernel (benchmarks rays' persistent layout's count)
+SUBGROUP_EXTENSIONS = "#extension GL_ARB_shader_ballot : require\n#extension GL_ARB_shader_group_vote : require\n" \
+                      "#extension GL_ARB_gpu_shader_int64 : require\n"
 # Paths per invocation per dispatch on software renderers (path_tracer.comp PT_SAMPLE_SLICES):
 # llvmpipe stops an invocation's loops after 65,535 iterations in all, so a frame's paths are
 # traced in dispatches of this many. 0: all in one dispatch, as on GPUs.
@@ -60,7 +63,9 @@ class PathTracer(RenderPass):
     The wavefront's knobs: `tile` and `view_group`, the image-wide dispatches' workgroups (as the
     other ray passes', passes/dispatch.py); `compact`: after a sample's first shading, every
     dispatch runs over a queue of the paths still going (the `queue` buffer, indirect dispatch)
-    instead of every slot, ended paths adding their light at once."""
+    instead of every slot, ended paths adding their light at once; `persistent` (implies the
+    queues; needs subgroup ballots): the trace kernel's lanes take the queue's paths as their rays
+    finish, in a fixed set of workgroups, so no warp waits on its longest ray."""
 
     COLOR = "color"
     DIFFUSE, SPECULAR = "diffuse", "specular"
@@ -70,7 +75,8 @@ class PathTracer(RenderPass):
     QUEUE = "queue"
     PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
                   "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol", "lobes": False, "kernel": "auto",
-                  "tile": list(COMPUTE_GROUP), "view_group": VIEW_GROUP, "compact": False}
+                  "tile": list(COMPUTE_GROUP), "view_group": VIEW_GROUP, "compact": False,
+                  "persistent": False}
     USES_SCENE = True
 
     def validate_property(self, key, value):
@@ -107,9 +113,9 @@ class PathTracer(RenderPass):
             slots = self.wave_slots(cd.size, cd.views)
             r.add_output(self.PATHS, "the wavefront's path state between its dispatches (scratch)").buffer(
                 slots * self.wave_slot_bytes(cd.scene))
-            if self.compact:
+            if self.compact or self.persistent:
                 r.add_output(self.QUEUE, "the wavefront's queues of paths still going (scratch)").buffer(
-                    2 * QUEUE_ARGS_BYTES + 2 * 4 * slots).indirect()
+                    3 * QUEUE_ARGS_BYTES + 2 * 4 * slots).indirect()
         return r
 
     @staticmethod
@@ -156,13 +162,19 @@ class PathTracer(RenderPass):
         self._group = self.workgroup(cd.views)
         self._defines.update(ray_group_defines(self._group))
         self._groups = groups_2d(cd.size, cd.views, self._group)
-        self._compact = self._wave and bool(self.compact)
+        self._compact = self._wave and bool(self.compact or self.persistent)
+        self._persistent = self._wave and bool(self.persistent)
+        if self._persistent and not getattr(getattr(ctx, "caps", None), "subgroups", False):
+            raise OptionError(f"pass {self.name}: property 'persistent' needs subgroup ballots "
+                              f"(GL_ARB_shader_ballot), which this driver lacks; set it False")
         if self._wave:
             self._defines["PTW_HAS_MEDIUM"] = int(self.wave_has_medium(cd.scene))
             self._defines["PTW_COMPACT"] = int(self._compact)
             self._defines["PTW_GROUP_SIZE"] = PIXEL_LIST_GROUP if listed else self._group[0] * self._group[1] * self._group[2]
             self._shade = self.compute_program(ctx.gl, "pt_wave_shade.comp", self._defines)
-            self._trace = self.compute_program(ctx.gl, "pt_wave_trace.comp", self._defines)
+            self._trace = self.compute_program(ctx.gl, "pt_wave_trace.comp",
+                                               {**self._defines, "PTW_PERSISTENT": int(self._persistent)},
+                                               header=SUBGROUP_EXTENSIONS if self._persistent else "")
             self._res = program_resources(self._shade)
             self._trace_res = program_resources(self._trace)
             self._camera = self._camera_res = None
@@ -273,7 +285,11 @@ class PathTracer(RenderPass):
                         self._queue.run(1)
                         ctx.barrier(Access.INDIRECT)
                         into = out
-                        self._run_queue(self._trace, trace, pixels, into, 2)
+                        if self._persistent:
+                            trace.set("ptq_in", into)
+                            self._trace.run(PERSISTENT_GROUPS)
+                        else:
+                            self._run_queue(self._trace, trace, pixels, into, 2)
                     ctx.barrier(Access.STORAGE)
             ctx.barrier(Access.IMAGE, Access.STORAGE)   # the next sample adds to the outputs
 

@@ -50,8 +50,9 @@ uniform ivec3 pt_wave_size;   // the output's width, height, views
 
 #if PTW_COMPACT
 // Two queues of path slots: per queue uvec4(workgroups, 1, 1, paths) (its indirect dispatch, 16 B
-// each), then the slots of queue 0, then those of queue 1, pt_wave_paths each.
-layout(std430) buffer PtQueue { uvec4 ptq_args[2]; uint ptq_items[]; };
+// each), uvec4(the persistent trace kernel's next path, 0, 0, 0), then the slots of queue 0, then
+// those of queue 1, pt_wave_paths each.
+layout(std430) buffer PtQueue { uvec4 ptq_args[3]; uint ptq_items[]; };
 uniform uint ptq_in;           // the queue this dispatch runs over; 2: none (the image or the list)
 uniform uint ptq_out;          // the queue a shading dispatch appends the paths it continues to
 uniform uvec3 ptw_groups;      // the image-wide dispatch's workgroups (a slot's pixel)

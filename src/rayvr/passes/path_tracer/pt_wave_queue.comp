@@ -9,6 +9,7 @@ layout(local_size_x = 1) in;
 uniform bool ptq_reset;
 
 void main() {
+    ptq_args[2] = uvec4(0u);   // the persistent trace kernel starts at the queue's first path
     if (ptq_reset) {
         ptq_args[0] = ptq_args[1] = uvec4(0u, 1u, 1u, 0u);
         return;
