@@ -172,3 +172,39 @@ def test_bvh8_finds_bvh4s_closest_hits_and_embrees(gl, tmp_path):
         same = (i8 == i4) & (p8 == p4)
         assert same.mean() >= 0.9999, f"{name}: {(~same).sum()} rays differ"
         np.testing.assert_allclose(t8[same], t4[same], rtol=1e-6)
+
+
+@pytest.mark.parametrize("fma", [1, 0])
+@pytest.mark.parametrize("shape", ["far", "tiny", "flat"])
+def test_quantised_boxes_never_lose_a_hit_bvh4_finds(gl, tmp_path, fma, shape):
+    """Rays aimed at the triangles' corners and edges, where they graze the child boxes, over a
+    mesh 1e5 from its instance origin, a sub-millimetre one and a flat one: every ray bvh4 (float
+    boxes) hits, bvh8 hits as near, with its fma box test (RQ_BVH8_FMA_BOX 1) or the exact decode
+    (which enters every box bvh4 enters)."""
+    from test_ray_query import gpu_trace, scene_of
+
+    m = trimesh.creation.torus(1.0, 0.3, major_sections=24, minor_sections=12)
+    v = {"far": m.vertices + 1e5, "tiny": m.vertices * 1e-4, "flat": m.vertices * [1.0, 1.0, 0.0]}[shape]
+    scene = scene_of(v, m.faces, [np.eye(4)])
+    tris = v[m.faces]
+    rng = np.random.default_rng(7)
+    w = rng.dirichlet([0.05, 0.05, 0.05], size=len(tris) * 2)              # mostly near corners and edges
+    target = np.einsum("nk,nkd->nd", w, np.repeat(tris, 2, axis=0))
+    size = np.ptp(v, axis=0).max()
+    d = rng.normal(size=target.shape)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    o = target - d * size * 2.0
+    out = {}
+    for layout in ("bvh4", "bvh8"):
+        gs = GpuScene(get_context(), scene, bvh_layout=layout)
+        gs.update(v.mean(axis=0))                       # render space beside the mesh
+        out[layout] = gpu_trace(gl, gs, o - v.mean(axis=0), d, tmp_path, defines={"RQ_BVH8_FMA_BOX": fma})
+        gs.release()
+    t4, t8 = out["bvh4"][0], out["bvh8"][0]
+    hit4 = out["bvh4"][1] != 0xFFFFFFFF
+    assert hit4.mean() > 0.5
+    assert (out["bvh8"][1][hit4] != 0xFFFFFFFF).all(), "bvh8 lost a hit"
+    assert (t8[hit4] <= t4[hit4] * (1 + 1e-6)).all(), "bvh8 found a farther hit"
+    assert out["bvh8"][3][out["bvh4"][3]].all(), "bvh8 lost an occluder"
+    # bvh8's wider boxes may find a grazing hit that bvh4's float boxes round away, rarely
+    assert (out["bvh8"][1] != out["bvh4"][1]).mean() < 0.005

@@ -65,6 +65,8 @@
 // (exact at edges, ~1.5x slower primary rays); 2 the same without its fp64 edge fallback.
 // RQ_STACK_SIZE (64; bvh8: half as many uvec2 groups, the same bytes). RQ_BVH_WIDTH 2, 4 or 8,
 // RQ_BVH_QUANTIZED 0 or 1 (the uploaded layout).
+// RQ_BVH8_FMA_BOX (1): bvh8's box test as one fma per plane, widened by a bound of its rounding (0:
+// the decode and slab test of bvh4q, entering exactly the boxes of the decoded planes).
 // RQ_BLEND_ROULETTE (0.0): trace_transmittance's roulette threshold (0: the exact product; 1: a
 // coin per BLEND surface, as trace_occluded; between: exact while the product stays above it).
 // RQ_STATS 1: count per invocation rq_stat_nodes (internal nodes visited, of RQ_BVH_WIDTH),
@@ -83,6 +85,9 @@
 #endif
 #ifndef RQ_STATS
 #define RQ_STATS 0
+#endif
+#ifndef RQ_BVH8_FMA_BOX
+#define RQ_BVH8_FMA_BOX 1       // bvh8: one fma per box plane, widened to stay conservative (0: bvh4q's exact decode)
 #endif
 #ifndef RQ_BLEND_ROULETTE
 #define RQ_BLEND_ROULETTE 0.0   // trace_transmittance: below this product of (1 - alpha), Russian roulette (0: exact)
@@ -161,8 +166,12 @@ vec4 rq_box4(vec4 lox, vec4 hix, vec4 loy, vec4 hiy, vec4 loz, vec4 hiz, vec3 in
 }
 
 #if RQ_BVH_QUANTIZED
-// The 4 bytes of a word, one per child, as floats.
-vec4 rq_bytes(uint w) { return vec4((uvec4(w) >> uvec4(0u, 8u, 16u, 24u)) & 0xFFu); }
+// The 4 bytes of a word, one per child, as floats: each byte as the low mantissa bits of 2^23
+// (one OR), minus 2^23, which is exact and avoids an int-to-float conversion (a quarter-rate op).
+vec4 rq_bytes(uint w) {
+    uvec4 b = (uvec4(w) >> uvec4(0u, 8u, 16u, 24u)) & 0xFFu;
+    return uintBitsToFloat(b | 0x4B000000u) - 8388608.0;
+}
 
 // The grid steps 2^e of a quantised node from its exponent bytes (bits 0..23 of `e`).
 vec3 rq_grid_scale(uint e) { return uintBitsToFloat((uvec3(e, e >> 8, e >> 16) & 0xFFu) << 23); }
@@ -183,6 +192,32 @@ vec4 rq_qbox4(vec3 origin, vec3 scale, uvec3 lo, uvec3 hi, vec3 inv, vec3 oi, fl
     vec4 leave = min(min(fx, fy), min(fz, vec4(tmax))) * 1.00000024;
     return mix(vec4(RQ_MISS), enter, lessThanEqual(enter, leave));
 }
+
+#if RQ_BVH_WIDTH == 8 && RQ_BVH8_FMA_BOX
+// rq_qbox4 with one fma per plane (after Ylitie et al.): t = q * (scale * inv) + (origin - o) * inv,
+// the near planes' constant lowered and the far planes' raised by a bound of that form's rounding
+// against the decoded box's exact slab distances (each of the three roundings of t is within
+// 2^-24 of |q * scale * inv| + |(origin - o) * inv|, and the real plane origin + q * scale lies
+// within 2^-24 |plane| of the float one that holds the box; 2^-21 covers all with room), so it
+// enters every box rq_qbox4 enters. s, cn, cf: the node's per-axis scale * inv and near / far
+// constants (rq_qbox_consts).
+void rq_qbox_consts(vec3 origin, vec3 scale, vec3 inv, vec3 o, out vec3 s, out vec3 cn, out vec3 cf) {
+    s = scale * inv;
+    vec3 c = (origin - o) * inv;
+    vec3 err = 4.76837158e-7 * (256.0 * abs(s) + abs(c) + abs(origin * inv));   // 2^-21 x
+    cn = c - err;
+    cf = c + err;
+}
+
+vec4 rq_qbox4_fma(vec3 s, vec3 cn, vec3 cf, uvec3 lo, uvec3 hi, bvec3 neg, float tmax) {
+    vec4 nx = rq_bytes(neg.x ? hi.x : lo.x) * s.x + cn.x, fx = rq_bytes(neg.x ? lo.x : hi.x) * s.x + cf.x;
+    vec4 ny = rq_bytes(neg.y ? hi.y : lo.y) * s.y + cn.y, fy = rq_bytes(neg.y ? lo.y : hi.y) * s.y + cf.y;
+    vec4 nz = rq_bytes(neg.z ? hi.z : lo.z) * s.z + cn.z, fz = rq_bytes(neg.z ? lo.z : hi.z) * s.z + cf.z;
+    vec4 enter = max(max(nx, ny), max(nz, vec4(0.0)));
+    vec4 leave = min(min(fx, fy), min(fz, vec4(tmax))) * 1.00000024;
+    return mix(vec4(RQ_MISS), enter, lessThanEqual(enter, leave));
+}
+#endif
 
 #if RQ_BVH_WIDTH == 4
 // rq_box4 of a bvh4q node (header: origin, exponent bytes; q: lo.x, hi.x, lo.y, hi.y bytes; qz: lo.z,
@@ -547,8 +582,16 @@ bool rq_step() {
         uint e = floatBitsToUint(n[0].w);
         vec3 scale = rq_grid_scale(e);
         uvec4 m = floatBitsToUint(n[1]), qx = floatBitsToUint(n[2]), qy = floatBitsToUint(n[3]), qz = floatBitsToUint(n[4]);
+#if RQ_BVH8_FMA_BOX
+        vec3 s, cn, cf;
+        rq_qbox_consts(n[0].xyz, scale, rq_r.inv, rq_r.o, s, cn, cf);
+        bvec3 neg = lessThan(rq_r.inv, vec3(0.0));
+        vec4 t0 = rq_qbox4_fma(s, cn, cf, uvec3(qx.x, qy.x, qz.x), uvec3(qx.z, qy.z, qz.z), neg, rq_tmax);
+        vec4 t1 = rq_qbox4_fma(s, cn, cf, uvec3(qx.y, qy.y, qz.y), uvec3(qx.w, qy.w, qz.w), neg, rq_tmax);
+#else
         vec4 t0 = rq_qbox4(n[0].xyz, scale, uvec3(qx.x, qy.x, qz.x), uvec3(qx.z, qy.z, qz.z), rq_r.inv, rq_r.oi, rq_tmax);
         vec4 t1 = rq_qbox4(n[0].xyz, scale, uvec3(qx.y, qy.y, qz.y), uvec3(qx.w, qy.w, qz.w), rq_r.inv, rq_r.oi, rq_tmax);
+#endif
         bvec4 hit0 = lessThan(t0, vec4(RQ_MISS)), hit1 = lessThan(t1, vec4(RQ_MISS));
         uvec4 h0 = uvec4(hit0) << uvec4(0u, 1u, 2u, 3u), h1 = uvec4(hit1) << uvec4(4u, 5u, 6u, 7u);
         uint hits = (h0.x | h0.y) | (h0.z | h0.w) | (h1.x | h1.y) | (h1.z | h1.w);
