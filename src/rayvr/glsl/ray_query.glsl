@@ -52,8 +52,9 @@
 // state struct passed inout is copied, and was far slower). bvh4q decodes a node's 4 boxes
 // (one fma per plane whose only rounding is the add's: the float box bvh_wide.decode computes,
 // which holds the exact one) and slab-tests them with bvh4's float operations, near and far
-// planes picked by the ray's signs: it enters every box bvh4 enters, and a few more. bvh8 decodes
-// its boxes the same way. Its stack holds groups, not nodes (after Ylitie et al.): a node group is
+// planes picked by the ray's signs: it enters every box bvh4 enters, and a few more. bvh8 takes
+// each plane's slab distance in one fma from per-node constants, widened by a bound of its
+// rounding (RQ_BVH8_FMA_BOX; 0: bvh4q's decode). Its stack holds groups, not nodes (after Ylitie et al.): a node group is
 // a node's hit internal children (child base, hit bits by visiting rank, imask), a leaf group a
 // node's hit leaves (first slot, a bit per triangle slot; in the TLAS a bit per instance); a step
 // visits the group's nearest child node and keeps the rest as the current group, or tests a leaf

@@ -295,18 +295,29 @@ def _optimal_splits(b: Bvh, link, internal, area, width: int):
     for level in reversed(b.levels()):
         s = (2 * level[:, None] + np.arange(2)).reshape(-1)
         s = s[internal[s]]
-        best = {k: _best_pair(cost, 2 * link[s], k) for k in range(2, width + 1)}
-        as_node = area[s] + best[width][0]
+        opened, j = _best_pairs(cost, 2 * link[s], width)
+        as_node = area[s] + opened[:, width]
         cost[s, 1] = as_node
-        for k, (opened, j) in best.items():
-            cost[s, k] = np.minimum(as_node, opened)
-            split[s, k] = np.where(opened < as_node, j, 0)
+        cost[s, 2:] = np.minimum(as_node[:, None], opened[:, 2:])
+        split[s, 2:] = np.where(opened[:, 2:] < as_node[:, None], j[:, 2:], 0)
     return cost, split
 
 
+def _best_pairs(cost, first, width: int):
+    """For sibling slots (first, first + 1) sharing k = 2..width places: the least cost[first, j]
+    + cost[first + 1, k - j] over j = 1..k-1 and that j, as (n, width + 1) arrays (columns 0, 1 unused)."""
+    pair = cost[first, 1:width, None] + cost[first + 1, None, 1:width]   # (n, j - 1, m - 1)
+    best = np.full((len(first), width + 1), np.inf)
+    arg = np.zeros((len(first), width + 1), np.int64)
+    for k in range(2, width + 1):
+        js = np.arange(1, k)
+        c = pair[:, js - 1, k - js - 1]
+        best[:, k], arg[:, k] = c.min(axis=1), c.argmin(axis=1) + 1
+    return best, arg
+
+
 def _best_pair(cost, first, k: int):
-    """For sibling slots (first, first + 1) sharing k places: the least cost[first, j] +
-    cost[first + 1, k - j] over j = 1..k-1, and that j."""
-    c = np.stack([cost[first, j] + cost[first + 1, k - j] for j in range(1, k)], axis=1)
-    return c.min(axis=1), c.argmin(axis=1) + 1
+    """_best_pairs for one k: the least cost and the first child's places, each (n,)."""
+    best, arg = _best_pairs(cost, first, k)
+    return best[:, k], arg[:, k]
 
