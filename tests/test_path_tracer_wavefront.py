@@ -53,13 +53,14 @@ def glass_and_blend_scene():
 
 COMPACT = {"compact": True}
 PERSISTENT = {"persistent": True}   # the trace kernel's lanes take the queue's paths as they finish
+SORTED = {"sort_directions": True}  # each bounce's queue sorted by its rays' octants
 # the wavefront's forms: as it is; paths compacted per bounce; workgroups of one warp over one view
 # or over several views (view_group: frames of 4 views and more)
 FORMS = [None, COMPACT, {"tile": [8, 4], "view_group": 1}, {**COMPACT, "tile": [4, 4], "view_group": 4}]
 
 
 @pytest.mark.parametrize("spp, bounces, form", [(s, b, f) for s, b in [(1, 4), (3, 2), (1, 0), (2, 1)]
-                                                for f in (None, COMPACT)] + [(2, 3, PERSISTENT)])
+                                                for f in (None, COMPACT)] + [(2, 3, PERSISTENT), (2, 3, SORTED)])
 def test_full_screen_paths_are_the_megakernels(gpu, spp, bounces, form):
     assert_same(builtin.cornell_box(), lambda: rv.graphs.path_traced(samples_per_pixel=spp, max_bounces=bounces),
                 ["Accumulate.dst"], form)
@@ -89,7 +90,7 @@ def test_lobes_for_svgf_are_the_megakernels(gpu, form):
     assert_same(glossy_cornell(), lobes_graph, LOBES, form, frames=1)
 
 
-@pytest.mark.parametrize("form", [None, COMPACT, PERSISTENT])
+@pytest.mark.parametrize("form", [None, COMPACT, PERSISTENT, {**SORTED, **PERSISTENT}])
 def test_glass_and_stochastic_transparency_are_the_megakernels(gpu, form):
     assert_same(glass_and_blend_scene(), lambda: rv.graphs.path_traced(samples_per_pixel=2, max_bounces=6),
                 ["Accumulate.dst"], form)
@@ -98,7 +99,8 @@ def test_glass_and_stochastic_transparency_are_the_megakernels(gpu, form):
 @pytest.mark.parametrize("listed, size, form", [(listed, size, form) for listed, size in [(True, SIZE), (False, SIZE),
                                                                                           (False, (23, 19))]
                                                  for form in (None, COMPACT)] + [(True, SIZE, PERSISTENT),
-                                                                                 (False, (23, 19), PERSISTENT)])
+                                                                                 (False, (23, 19), PERSISTENT),
+                                                                                 (True, SIZE, SORTED)])
 def test_gbuffer_paths_are_the_megakernels(gpu, listed, size, form):
     scene = glossy_cornell()
     for name in ("TallBox", "Floor"):
@@ -130,10 +132,11 @@ def test_the_state_buffer_is_scratch_of_the_wavefront_alone(gpu):
 
 def test_compaction_declares_its_queue_and_the_shapes_are_checked(gpu):
     scene = builtin.cornell_box()
-    g = rv.graphs.path_traced()
-    g.get_pass("PathTracer").set_properties({"compact": True})
-    _, report = images(scene, g, ["Accumulate.dst"], "wavefront", frames=1, views=1)
-    assert "PathTracer.queue" in report
+    for form in (COMPACT, PERSISTENT, SORTED):
+        g = rv.graphs.path_traced()
+        g.get_pass("PathTracer").set_properties(form)
+        _, report = images(scene, g, ["Accumulate.dst"], "wavefront", frames=1, views=1)
+        assert "PathTracer.queue" in report
     g = rv.graphs.path_traced()
     _, report = images(scene, g, ["Accumulate.dst"], "wavefront", frames=1, views=1)
     assert "PathTracer.queue" not in report

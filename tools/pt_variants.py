@@ -82,12 +82,15 @@ VARIANTS: dict[str, dict] = {
     # the traced BVH: compressed 8-wide nodes (rayvr.scene.bvh8) instead of the BVH4
     "bvh8": {SCENE: {"bvh_layout": "bvh8"}},
     # the wavefront path tracer's knobs: per-bounce queues of the paths still going, the trace kernel's
-    # persistent threads over them, one-warp workgroups (8x4 of one view)
+    # persistent threads over them, one-warp workgroups (8x4 of one view), the queues sorted by direction
     "compact": {"PathTracer": {"compact": True}},
     "persistent": {"PathTracer": {"persistent": True}},
     "pt_tile84": {"PathTracer": {"tile": [8, 4], "view_group": 1}},
     "bvh8_compact": {SCENE: {"bvh_layout": "bvh8"}, "PathTracer": {"compact": True}},
     "bvh8_persistent": {SCENE: {"bvh_layout": "bvh8"}, "PathTracer": {"persistent": True}},
+    # each bounce's queue sorted by the octant of its BSDF rays
+    "sort_dirs": {"PathTracer": {"sort_directions": True}},
+    "bvh8_sort": {SCENE: {"bvh_layout": "bvh8"}, "PathTracer": {"sort_directions": True}},
     # RTShadows' shadow rays through alphaMode BLEND: Russian roulette below a transmittance of 0.25,
     # or a coin per surface (1.0), against the exact product
     "blend_rr25": {"Shadows": {"blend_roulette": 0.25}},

@@ -36,7 +36,9 @@ MODES = ("full", "gbuffer")
 KERNELS = ("auto", "wavefront", "megakernel")
 SAMPLERS = {"sobol": 1, "pcg": 0}   # glsl/sampling.glsl RAYVR_SAMPLER
 PIXEL_LIST_GROUP = 64   # glsl/pixel_list.glsl: the local size of a dispatch over a pixel list
-QUEUE_ARGS_BYTES = 16   # pt_wave.glsl PtQueue: a queue's indirect dispatch (and count); 3 such ahead of the slots
+QUEUE_ARGS_BYTES = 16   # pt_wave.glsl PtQueue: a queue's indirect dispatch (and count)
+QUEUE_HEADER_BYTES = 3 * QUEUE_ARGS_BYTES + 3 * 8 * 4   # PtQueue ahead of its slots: 3 uvec4, 3 x PTW_BINS counters
+SORTABLE_SLOTS = 1 << 29   # PTW_SORT keeps a slot's octant in bits 29..31
 PERSISTENT_GROUPS = 2048   # workgroups of the persistent trace kernel (benchmarks rays' persistent layout's count)
 SUBGROUP_EXTENSIONS = "#extension GL_ARB_shader_ballot : require\n#extension GL_ARB_shader_group_vote : require\n" \
                       "#extension GL_ARB_gpu_shader_int64 : require\n"
@@ -65,7 +67,9 @@ class PathTracer(RenderPass):
     dispatch runs over a queue of the paths still going (the `queue` buffer, indirect dispatch)
     instead of every slot, ended paths adding their light at once; `persistent` (implies the
     queues; needs subgroup ballots): the trace kernel's lanes take the queue's paths as their rays
-    finish, in a fixed set of workgroups, so no warp waits on its longest ray."""
+    finish, in a fixed set of workgroups, so no warp waits on its longest ray; `sort_directions`
+    (implies the queues): each bounce's queue sorted by the octant of its BSDF rays (a counting
+    sort), so a warp's rays agree on the BVH's child order."""
 
     COLOR = "color"
     DIFFUSE, SPECULAR = "diffuse", "specular"
@@ -76,7 +80,7 @@ class PathTracer(RenderPass):
     PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
                   "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol", "lobes": False, "kernel": "auto",
                   "tile": list(COMPUTE_GROUP), "view_group": VIEW_GROUP, "compact": False,
-                  "persistent": False}
+                  "persistent": False, "sort_directions": False}
     USES_SCENE = True
 
     def validate_property(self, key, value):
@@ -113,9 +117,9 @@ class PathTracer(RenderPass):
             slots = self.wave_slots(cd.size, cd.views)
             r.add_output(self.PATHS, "the wavefront's path state between its dispatches (scratch)").buffer(
                 slots * self.wave_slot_bytes(cd.scene))
-            if self.compact or self.persistent:
+            if self.compact or self.persistent or self.sort_directions:
                 r.add_output(self.QUEUE, "the wavefront's queues of paths still going (scratch)").buffer(
-                    3 * QUEUE_ARGS_BYTES + 2 * 4 * slots).indirect()
+                    QUEUE_HEADER_BYTES + 2 * 4 * slots).indirect()
         return r
 
     @staticmethod
@@ -162,14 +166,16 @@ class PathTracer(RenderPass):
         self._group = self.workgroup(cd.views)
         self._defines.update(ray_group_defines(self._group))
         self._groups = groups_2d(cd.size, cd.views, self._group)
-        self._compact = self._wave and bool(self.compact or self.persistent)
+        self._compact = self._wave and bool(self.compact or self.persistent or self.sort_directions)
         self._persistent = self._wave and bool(self.persistent)
+        self._sort = self._wave and bool(self.sort_directions)
         if self._persistent and not getattr(getattr(ctx, "caps", None), "subgroups", False):
             raise OptionError(f"pass {self.name}: property 'persistent' needs subgroup ballots "
                               f"(GL_ARB_shader_ballot), which this driver lacks; set it False")
         if self._wave:
             self._defines["PTW_HAS_MEDIUM"] = int(self.wave_has_medium(cd.scene))
             self._defines["PTW_COMPACT"] = int(self._compact)
+            self._defines["PTW_SORT"] = int(self._sort)
             self._defines["PTW_GROUP_SIZE"] = PIXEL_LIST_GROUP if listed else self._group[0] * self._group[1] * self._group[2]
             self._shade = self.compute_program(ctx.gl, "pt_wave_shade.comp", self._defines)
             self._trace = self.compute_program(ctx.gl, "pt_wave_trace.comp",
@@ -181,10 +187,16 @@ class PathTracer(RenderPass):
             if self.mode != "gbuffer":   # the camera rays: their code would cost the bounces' traversal registers
                 self._camera = self.compute_program(ctx.gl, "pt_wave_trace.comp", {**self._defines, "PTW_CAMERA_RAYS": 1})
                 self._camera_res = program_resources(self._camera)
-            self._queue = self._queue_res = None
+            self._queue = self._queue_res = self._sorter = self._sort_res = None
             if self._compact:
                 self._queue = self.compute_program(ctx.gl, "pt_wave_queue.comp", self._defines)
                 self._queue_res = program_resources(self._queue)
+            if self._sort:
+                if self.wave_slots(cd.size, cd.views) >= SORTABLE_SLOTS:
+                    raise OptionError(f"pass {self.name}: property 'sort_directions' takes at most "
+                                      f"{SORTABLE_SLOTS - 1} path slots; render fewer pixels or set it False")
+                self._sorter = self.compute_program(ctx.gl, "pt_wave_sort.comp", self._defines)
+                self._sort_res = program_resources(self._sorter)
             self._slots = self.wave_slots(cd.size, cd.views)
             self._wave_size = (int(cd.size[0]), int(cd.size[1]), int(cd.views))
         else:
@@ -239,7 +251,7 @@ class PathTracer(RenderPass):
         sample to the outputs (compact: a path's shade adds it when the path ends)."""
         shade, trace, camera = self._res, self._trace_res, self._camera_res
         gbuffer = camera is None
-        programs = tuple(p for p in (shade, trace, camera, self._queue_res) if p is not None)
+        programs = tuple(p for p in (shade, trace, camera, self._queue_res, self._sort_res) if p is not None)
         queue = self._queue_buffer = data[self.QUEUE] if self._compact else None
         for res in programs:
             res.buffer("PtWave", data[self.PATHS])
@@ -272,8 +284,8 @@ class PathTracer(RenderPass):
                 shade.set("pt_last", stage == rays)
                 if queue is None:
                     self._run(self._shade, pixels)
-                else:
-                    out = 0 if into != 0 else 1
+                else:   # sorted: the shading fills queue 0, the sort moves it to queue 1
+                    out = 0 if into != 0 or self._sort else 1
                     self._run_queue(self._shade, shade, pixels, into, out)
                 if stage < rays:
                     ctx.barrier(Access.STORAGE)
@@ -285,6 +297,10 @@ class PathTracer(RenderPass):
                         self._queue.run(1)
                         ctx.barrier(Access.INDIRECT)
                         into = out
+                        if self._sort:
+                            self._sorter.run_indirect(queue, 0)
+                            ctx.barrier(Access.STORAGE)
+                            into = 1
                         if self._persistent:
                             trace.set("ptq_in", into)
                             self._trace.run(PERSISTENT_GROUPS)

@@ -50,14 +50,27 @@ uniform ivec3 pt_wave_size;   // the output's width, height, views
 
 #if PTW_COMPACT
 // Two queues of path slots: per queue uvec4(workgroups, 1, 1, paths) (its indirect dispatch, 16 B
-// each), uvec4(the persistent trace kernel's next path, 0, 0, 0), then the slots of queue 0, then
-// those of queue 1, pt_wave_paths each.
-layout(std430) buffer PtQueue { uvec4 ptq_args[3]; uint ptq_items[]; };
+// each), uvec4(the persistent trace kernel's next path, 0, 0, 0), PTW_BINS x 3 counters of the
+// direction sort (the paths per bin, each bin's first place, the places taken), then the slots of
+// queue 0, then those of queue 1, pt_wave_paths each. With PTW_SORT a shading appends to queue 0
+// each slot with its BSDF ray's octant in bits 29..31, and pt_wave_sort.comp places them in
+// queue 1 by octant (a counting sort), so a warp's rays take their BVH children in one order.
+#define PTW_BINS 8u
+#define PTW_BIN_SHIFT 29
+layout(std430) buffer PtQueue { uvec4 ptq_args[3]; uint ptq_bins[3u * PTW_BINS]; uint ptq_items[]; };
 uniform uint ptq_in;           // the queue this dispatch runs over; 2: none (the image or the list)
 uniform uint ptq_out;          // the queue a shading dispatch appends the paths it continues to
 uniform uvec3 ptw_groups;      // the image-wide dispatch's workgroups (a slot's pixel)
 
-void ptq_push(uint i) { ptq_items[ptq_out * pt_wave_paths + atomicAdd(ptq_args[ptq_out].w, 1u)] = i; }
+// Queue path slot i (whose next BSDF ray runs along d) for the next stage.
+void ptq_push(uint i, vec3 d) {
+#if PTW_SORT
+    uint bin = uint(d.x < 0.0) | (uint(d.y < 0.0) << 1) | (uint(d.z < 0.0) << 2);
+    atomicAdd(ptq_bins[bin], 1u);
+    i |= bin << PTW_BIN_SHIFT;
+#endif
+    ptq_items[ptq_out * pt_wave_paths + atomicAdd(ptq_args[ptq_out].w, 1u)] = i;
+}
 #endif
 
 // The pixel of slot i (ptw_slot inverted).

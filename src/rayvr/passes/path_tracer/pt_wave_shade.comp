@@ -214,7 +214,7 @@ void main() {
         ptw_output(p, path, flags, emitted);
     } else {
         ptw_store_state(i, path, r, flags, rng);
-        ptq_push(i);
+        ptq_push(i, r.dir);
     }
 #else
     if (pt_last) ptw_output(p, path, flags, emitted);
