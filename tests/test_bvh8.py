@@ -208,3 +208,26 @@ def test_quantised_boxes_never_lose_a_hit_bvh4_finds(gl, tmp_path, fma, shape):
     assert out["bvh8"][3][out["bvh4"][3]].all(), "bvh8 lost an occluder"
     # bvh8's wider boxes may find a grazing hit that bvh4's float boxes round away, rarely
     assert (out["bvh8"][1] != out["bvh4"][1]).mean() < 0.005
+
+
+def test_the_scene_picks_its_layout_and_the_image_stays(gpu):
+    """Scene.bvh_layout reaches the renderer's GpuScene (an unknown one is refused), and the path
+    tracer's image through bvh8 is bvh4's: the same hits, the same random numbers."""
+    import rayvr as rv
+    from rayvr.scene import builtin
+
+    images = {}
+    for layout in ("bvh4", "bvh8"):
+        scene = builtin.cornell_box()
+        scene.bvh_layout = layout
+        with rv.Renderer(scene, rv.graphs.path_traced(max_bounces=3), size=(24, 24)) as r:
+            r.render()
+            assert r.gpu_scene.bvh_layout == layout
+            assert r.gpu_scene.defines()["RQ_BVH_WIDTH"] == int(layout[-1])
+            images[layout] = np.asarray(r.read_output("Accumulate.dst"))[..., :3].astype(np.float64)
+    close = np.isclose(images["bvh8"], images["bvh4"], rtol=1e-5, atol=1e-6).all(axis=-1)
+    assert close.mean() >= 0.998 and images["bvh4"].mean() > 0, close.mean()
+    scene = builtin.cornell_box()
+    scene.bvh_layout = "bvh16"
+    with pytest.raises(SceneError, match="bvh_layout"):
+        GpuScene(get_context(), scene)
