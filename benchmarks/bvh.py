@@ -39,6 +39,8 @@ def add_arguments(parser) -> None:
                         help="largest triangle count given a binned-SAH reference build")
     parser.add_argument("--no-gpu-scene", action="store_true", help="skip uploading a GpuScene (bytes/triangle)")
     parser.add_argument("--threads", type=int, default=0, help="build threads (default: all cores)")
+    parser.add_argument("--bvh-layout", default=None,
+                        help="GpuScene's layout for gpu_bytes_per_tri and gpu_scene_blas_ms (default: its default)")
 
 
 def generated_mesh(n_triangles: int):
@@ -101,8 +103,9 @@ def _timed_build(lo, hi, method, repeat, threads=None):
 def _timed_gpu_build(tris, repeat):
     """GPU LBVH: upload + all kernels + glFinish (the fastest of `repeat`; the first build, which
     also compiles the kernels and allocates scratch, is reported apart), the same plus the GPU
-    collapse to "bvh4" (fastest of `repeat`), then the read-back of both. Returns the BVH2, its
-    GPU-collapsed WideBvh and the times in ms: build, build + collapse, first build, read-back."""
+    collapse to "bvh4" and to "bvh8" (fastest of `repeat` each), then the read-back of the BVH2.
+    Returns the BVH2, its GPU-collapsed WideBvh and Bvh8 and the times in ms: build, build +
+    collapse to bvh4, to bvh8, first build, read-back."""
     from rayvr.gpu import get_context
     from rayvr.scene.bvh_gpu import builder_for
 
@@ -110,30 +113,35 @@ def _timed_gpu_build(tris, repeat):
     t0 = time.perf_counter()
     builder = builder_for(gpu)
     builder.collapse_bvh4(builder.build(tris))
+    builder.collapse_bvh8(builder.build(tris))
     gpu.gl.finish()
     first = time.perf_counter() - t0
-    best = best4 = float("inf")
-    for _ in range(max(1, repeat)):
-        t0 = time.perf_counter()
-        g = builder.build(tris)
-        gpu.gl.finish()
-        best = min(best, time.perf_counter() - t0)
-    for _ in range(max(1, repeat)):
-        t0 = time.perf_counter()
-        g = builder.build(tris)
-        g4 = builder.collapse_bvh4(g)
-        gpu.gl.finish()
-        best4 = min(best4, time.perf_counter() - t0)
+
+    def fastest(collapse):
+        best = float("inf")
+        for _ in range(max(1, repeat)):
+            t0 = time.perf_counter()
+            g = builder.build(tris)
+            wide = collapse(g)
+            gpu.gl.finish()
+            best = min(best, time.perf_counter() - t0)
+        return g, wide, best * 1e3
+
+    _, _, build_ms = fastest(lambda g: None)
+    _, _, bvh4_ms = fastest(builder.collapse_bvh4)
+    g, g8, bvh8_ms = fastest(builder.collapse_bvh8)
     t0 = time.perf_counter()
     b = g.to_bvh()
     readback = time.perf_counter() - t0
-    return b, g4.to_wide(b), best * 1e3, best4 * 1e3, first * 1e3, readback * 1e3
+    w8 = g8.to_bvh8(b)                              # its links, before the bvh4 collapse reuses the buffers
+    w4 = builder.collapse_bvh4(g).to_wide(b)        # of the same BVH2
+    return b, w4, w8, build_ms, bvh4_ms, bvh8_ms, first * 1e3, readback * 1e3
 
 
 def run(args) -> dict:
     from rayvr.gpu import get_context
     from rayvr.scene import GpuScene
-    from rayvr.scene import bvh_wide
+    from rayvr.scene import bvh8, bvh_wide
     from rayvr.scene.bvh import NODE_BYTES, triangle_bounds
     from rayvr.scene.bvh_gpu import MIN_TRIANGLES
 
@@ -149,9 +157,9 @@ def run(args) -> dict:
         t0 = time.perf_counter()
         lo, hi = triangle_bounds(tris)
         bounds_ms = (time.perf_counter() - t0) * 1e3
-        gpu_ms = gpu4_ms = gpu_first_ms = gpu_read_ms = gpu_cost = gpu4 = None
+        gpu_ms = gpu4_ms = gpu8_ms = gpu_first_ms = gpu_read_ms = gpu_cost = gpu4 = gpu8 = None
         if n >= MIN_TRIANGLES and (args.method == "gpu" or not args.no_gpu_build):
-            gb, gpu4, gpu_ms, gpu4_ms, gpu_first_ms, gpu_read_ms = _timed_gpu_build(tris, repeat)
+            gb, gpu4, gpu8, gpu_ms, gpu4_ms, gpu8_ms, gpu_first_ms, gpu_read_ms = _timed_gpu_build(tris, repeat)
             gpu_cost = gb.sah_cost()
         traced_ms = None     # the time meets_target counts
         if args.method == "gpu" and gpu_ms is not None:
@@ -164,6 +172,11 @@ def run(args) -> dict:
         wide = bvh_wide.collapse(b)
         collapse_ms = (time.perf_counter() - t0) * 1e3
         gpu4_vs_cpu = gpu4.sah_cost() / wide.sah_cost() if gpu4 is not None and gpu4.source is b else None
+        t0 = time.perf_counter()
+        wide8 = bvh8.collapse(b)
+        wide8.nodes
+        collapse8_ms = (time.perf_counter() - t0) * 1e3
+        gpu8_vs_cpu = gpu8.sah_cost() / wide8.sah_cost() if gpu8 is not None and gpu8.source is b else None
         quantized = dataclasses.replace(wide, quantized=True)
         t0 = time.perf_counter()
         quantized.nodes
@@ -176,7 +189,7 @@ def run(args) -> dict:
         gpu_bpt = blas_ms = None
         if not args.no_gpu_scene:
             try:
-                gs = GpuScene(get_context(), scene, progress=False,
+                gs = GpuScene(get_context(), scene, progress=False, bvh_layout=args.bvh_layout,
                               bvh_method="gpu" if args.method == "gpu" else "auto")
                 gpu_bpt = gs.report()["geometry_bytes_per_triangle"]
                 blas_ms = gs.timings["blas_build_ms"]
@@ -194,6 +207,10 @@ def run(args) -> dict:
             "bvh4_bytes_per_tri": (wide.nbytes + n * 48) / max(n, 1),
             "bvh4q_bytes_per_tri": (wide.node_count * bvh_wide.QUANTIZED_NODE_BYTES + n * 48) / max(n, 1),
             "bvh4q_pack_ms": quantize_ms,
+            "bvh8_nodes": wide8.node_count, "bvh8_collapse_ms": collapse8_ms,
+            "bvh8_bytes_per_tri": (wide8.nbytes + n * 48) / max(n, 1),
+            "bvh8_node_visits_vs_bvh4": wide8.sah_cost(c_tri=0) / wide.sah_cost(c_tri=0),
+            "gpu_bvh8_ms": _blank(gpu8_ms), "gpu_bvh8_sah_vs_cpu_bvh8": _blank(gpu8_vs_cpu),
             "gpu_bytes_per_tri": _blank(gpu_bpt), "load_s": load_s,
             "meshes": len(scene.meshes), "gpu_scene_blas_ms": _blank(blas_ms),
             "gpu_build_ms": _blank(gpu_ms), "gpu_bvh4_ms": _blank(gpu4_ms),
@@ -209,19 +226,26 @@ def run(args) -> dict:
                  "collapse to the traced 'bvh4' layout (greedy, one dispatch per BVH4 level) + glFinish, fastest of "
                  "--repeat; gpu_bvh4_sah_vs_cpu_bvh4: its SAH cost over the CPU's SAH-optimal collapse of the same "
                  "BVH2 (--method gpu); gpu_first_build_ms: the first build and collapse (kernel compile + scratch "
-                 "allocation); gpu_readback_ms: copying nodes and order back to a CPU Bvh (not needed to trace)")
+                 "allocation); gpu_readback_ms: copying nodes and order back to a CPU Bvh (not needed to trace); "
+                 "gpu_bvh8_ms: the same build plus the GPU collapse to 'bvh8' (greedy, direction slots, 8-bit boxes, "
+                 "the leaves' triangles copied into its order) + glFinish; gpu_bvh8_sah_vs_cpu_bvh8: its SAH cost "
+                 "over the CPU's SAH-optimal 8-wide collapse")
     notes.append("meets_target: build_ms against target_ms, except with --method gpu: gpu_bvh4_ms, the GPU build "
                  "and GPU collapse of the layout GpuScene traces by default ('bvh4')")
     notes.append("gpu_scene_blas_ms: what GpuScene spends on its per-mesh BLAS builds and uploads (meshes in "
                  "parallel; SAH for meshes up to 100k triangles)")
     notes.append("bvh_bytes_per_tri: 64-byte BVH2 nodes + 48-byte BVH-ordered triangles; bvh4_*: the same BVH "
                  "collapsed to 112-byte BVH4 nodes on the CPU (bvh_wide.collapse, SAH-optimal, timed apart); bvh4q_*: the same collapse "
-                 "quantised to 64-byte nodes (bvh4q_pack_ms: packing without the collapse); gpu_bytes_per_tri adds "
+                 "quantised to 64-byte nodes (bvh4q_pack_ms: packing without the collapse); bvh8_*: the compressed "
+                 "8-wide collapse, 80-byte nodes (bvh8_collapse_ms: collapse + packing; bvh8_node_visits_vs_bvh4: "
+                 "its SAH node term over bvh4's); gpu_bytes_per_tri adds "
                  "vertices, indices, materials, instances (all scene buffers, GpuScene's default layout)")
     cols = ["scene", "triangles", "method", "build_ms", "target_ms", "meets_target", "sah_cost", "ref_sah_cost",
             "sah_vs_ref", "ref_build_ms", "gpu_build_ms", "gpu_bvh4_ms", "gpu_bvh4_nodes", "gpu_bvh4_sah_vs_cpu_bvh4",
             "gpu_first_build_ms", "gpu_readback_ms", "gpu_sah_vs_ref",
             "bvh_bytes_per_tri", "bvh4_nodes", "bvh4_bytes_per_tri", "bvh4_collapse_ms",
-            "bvh4q_bytes_per_tri", "bvh4q_pack_ms", "gpu_bytes_per_tri", "meshes", "gpu_scene_blas_ms",
+            "bvh4q_bytes_per_tri", "bvh4q_pack_ms", "bvh8_nodes", "bvh8_bytes_per_tri", "bvh8_collapse_ms",
+            "bvh8_node_visits_vs_bvh4", "gpu_bvh8_ms", "gpu_bvh8_sah_vs_cpu_bvh8", "gpu_bytes_per_tri", "meshes",
+            "gpu_scene_blas_ms",
             "load_s"]
     return {"columns": cols, "rows": rows, "notes": notes}

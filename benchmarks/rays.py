@@ -1,8 +1,8 @@
 """Ray throughput of the GLSL ray-query library: primary and diffuse-bounce rays per second at
 1920x1080, and their ratio to a brute-force ray-triangle roofline on the same GPU.
 
-`--bvh-layouts bvh2,bvh4,bvh4q` times the GPU node layouts (GpuScene bvh_layout: 64 B BVH2, 112 B
-BVH4, 64 B quantised BVH4) side by side.
+`--bvh-layouts bvh2,bvh4,bvh4q,bvh8` times the GPU node layouts (GpuScene bvh_layout: 64 B BVH2,
+112 B BVH4, 64 B quantised BVH4, 80 B compressed BVH8) side by side.
 
 Primary: one camera ray per pixel (trace_closest), from the scene's first camera or one framing
 its bounds. Diffuse: from every primary hit, a cosine-distributed direction about the geometric
@@ -231,7 +231,8 @@ def add_arguments(parser) -> None:
                         help="also count node visits, triangle tests and instance entries per ray (RQ_STATS)")
     parser.add_argument("--bvh-layouts", default="",
                         help="comma-separated BVH node layouts to compare (bvh2: 64 B BVH2, bvh4: 112 B BVH4, "
-                             "bvh4q: 64 B quantised BVH4), one GpuScene and one row per layout and variant, "
+                             "bvh4q: 64 B quantised BVH4, bvh8: 80 B compressed 8-wide), one GpuScene and one row "
+                             "per layout and variant, "
                              "timed in the same interleaved rounds (default: GpuScene's default layout)")
 
 
@@ -501,6 +502,6 @@ def run(args) -> dict:
              "diffuse rays are cast from primary hits only; rays/s counts those rays",
              "roofline: brute-force ray-triangle tests/s (same test as the traversal, no BVH)"]
     if args.stats:
-        notes.append("stats: mean internal nodes visited (BVH2 or BVH4 nodes, by bvh_layout) / triangle tests / "
+        notes.append("stats: mean internal nodes visited (BVH2, BVH4 or BVH8 nodes, by bvh_layout) / triangle tests / "
                      "BLAS entries per ray")
     return {"columns": cols, "rows": rows, "notes": notes}

@@ -241,6 +241,14 @@ def test_a_shadow_through_the_veil_keeps_one_minus_alpha_of_the_light(gpu, graph
         np.testing.assert_allclose(img[inside], want, rtol=HALF_RTOL, atol=1e-6)
 
 
+def two_veils_scene():
+    scene = shadow_scene()
+    scene.add_material(blend_material("Veil2", 0.5, effect=rv.Effect.SHADOWS, double_sided=True))
+    scene.add_object("Veil2", *quad_mesh([[-0.6, 1.3, -0.6], [0.6, 1.3, -0.6], [0.6, 1.3, 0.6], [-0.6, 1.3, 0.6]],
+                                         (0, 1, 0)), "Veil2")
+    return scene
+
+
 @pytest.mark.parametrize("graph", ["raster", "rt"])
 def test_the_hybrids_shadow_rays_take_the_veils_transmittance_in_every_frame(gpu, graph):
     """The hybrid's shadow rays multiply (1 - alpha) over the BLEND surfaces they pass instead of
@@ -249,13 +257,28 @@ def test_the_hybrids_shadow_rays_take_the_veils_transmittance_in_every_frame(gpu
     views = view_set(*SHADOW_VIEWS)
     xz = np.abs(plane_hits(views, plane_y=0.0)).max(-1)
     inside = xz < 0.45
-    scene = shadow_scene()
-    scene.add_material(blend_material("Veil2", 0.5, effect=rv.Effect.SHADOWS, double_sided=True))
-    scene.add_object("Veil2", *quad_mesh([[-0.6, 1.3, -0.6], [0.6, 1.3, -0.6], [0.6, 1.3, 0.6], [-0.6, 1.3, 0.6]],
-                                         (0, 1, 0)), "Veil2")
-    imgs = frames_of(scene, rv.graphs.hybrid(preset="raw", gbuffer=graph), views, HYBRID, frames=4)
+    imgs = frames_of(two_veils_scene(), rv.graphs.hybrid(preset="raw", gbuffer=graph), views, HYBRID, frames=4)
     want = (1 - ALPHA) * 0.5 * RHO / math.pi * E
     np.testing.assert_allclose(imgs[:, inside], want, rtol=HALF_RTOL, atol=1e-6)
+
+
+@pytest.mark.parametrize("roulette", [0.5, 1.0])
+def test_the_shadows_blend_roulette_keeps_the_mean_over_frames(gpu, roulette):
+    """RTShadows(blend_roulette): below the threshold a shadow ray goes on by Russian roulette, so a
+    frame's pixel is 0 or a share of the light, and the mean over frames is still 0.7 x 0.5 of it
+    (the decisions are stratified over frames, so the mean is held to FRAMES-draw binomial noise)."""
+    views = view_set(*SHADOW_VIEWS)
+    xz = np.abs(plane_hits(views, plane_y=0.0)).max(-1)
+    inside = xz < 0.45
+    g = rv.graphs.hybrid(preset="raw", gbuffer="rt")
+    g.update_pass("Shadows", {"blend_roulette": roulette})
+    imgs = frames_of(two_veils_scene(), g, views, HYBRID)
+    lit, p = RHO / math.pi * E, (1 - ALPHA) * 0.5
+    assert (imgs[:, inside] < 0.01 * lit).any(), "some shadow rays end by roulette"
+    noise = math.sqrt(p * (1 - p) / (FRAMES * inside.sum())) * lit / roulette
+    np.testing.assert_allclose(imgs[:, inside].mean(), p * lit, atol=4 * noise)
+    with pytest.raises(rv.errors.OptionError, match="blend_roulette"):
+        g.update_pass("Shadows", {"blend_roulette": 1.5})
 
 
 # ---- scenes without BLEND pay nothing ---------------------------------------------------------------

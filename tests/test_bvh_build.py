@@ -73,7 +73,7 @@ def test_bad_input_is_refused():
         build(lo, lo, "octree")
 
 
-@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q"])
+@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q", "bvh8"])
 def test_refit_keeps_hits_right(gl, tmp_path, bvh_layout):
     import test_ray_query as rq   # the embree comparison lives there
 
@@ -95,7 +95,7 @@ def test_refit_keeps_hits_right(gl, tmp_path, bvh_layout):
     np.testing.assert_allclose(t[hit], et[hit], rtol=1e-5, atol=1e-6)
 
 
-@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q"])
+@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q", "bvh8"])
 def test_single_triangle_mesh_traces(gl, tmp_path, bvh_layout):
     import test_ray_query as rq
 
@@ -130,7 +130,7 @@ def test_threaded_lbvh_makes_the_same_tree(gl, tmp_path, monkeypatch):
     rq.compare(gl, rq.scene_of(m.vertices, m.faces, [np.eye(4)]), tmp_path, n=2000, method="lbvh")
 
 
-@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q"])
+@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q", "bvh8"])
 def test_refit_rewrites_one_mesh_as_a_full_repack_would(monkeypatch, bvh_layout):
     """refit() writes only the mesh's slices; the buffers equal a fresh pack of the refit BLASes."""
     s = Scene("three")

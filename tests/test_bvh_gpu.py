@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from rayvr.errors import SceneError
-from rayvr.scene import GpuScene, bvh, bvh_gpu, bvh_wide
+from rayvr.scene import GpuScene, bvh, bvh8, bvh_gpu, bvh_wide
 
 
 def soup(n, seed=0, spread=0.03):
@@ -163,6 +163,33 @@ def test_gpu_bvh4_collapse_is_a_valid_bvh4(gpu, tris):
     assert (w.slots >= 0).sum(axis=1).mean() >= 2.7
 
 
+@pytest.mark.parametrize("tris", [soup(5000), sphere(), flat_grid(), duplicates(4000), soup(9, seed=5)],
+                         ids=["soup", "sphere", "flat", "duplicates", "tiny"])
+def test_gpu_bvh8_collapse_is_a_valid_bvh8(gpu, tris):
+    """The GPU's own nodes and triangle order (test_bvh8.walk: every triangle inside its decoded
+    boxes, reached once, 1..8 children), and bvh8's CPU packing of its slots and items; node
+    visits near the CPU's SAH-optimal collapse."""
+    from test_bvh8 import walk
+
+    builder = bvh_gpu.builder_for(gpu)
+    g = builder.build(tris)
+    g8 = builder.collapse_bvh8(g)
+    b = g.to_bvh()
+    w = g8.to_bvh8(b)
+    gpu_order = g8.read_triangles()[:, 0, 3].view(np.uint32).astype(np.int64)
+    np.testing.assert_array_equal(g8.read_triangles()[:, :, :3], tris[gpu_order])
+    walk(w, tris, g8.read_nodes(), gpu_order)
+    walk(w, tris)
+    optimal = bvh8.collapse(b)
+    assert optimal.sah_cost() <= w.sah_cost() * (1 + 1e-9) <= 1.08 * optimal.sah_cost()
+    if len(tris) > 100:
+        assert w.sah_cost(c_tri=0) < 0.8 * g4_cost(builder, g, b)   # fewer node visits than BVH4
+
+
+def g4_cost(builder, g, b):
+    return builder.collapse_bvh4(g).to_wide(b).sah_cost(c_tri=0)
+
+
 def test_gpu_bvh4_links_and_refit(gpu):
     """Leaf items keep the build's tri_base, node items count from 0 whatever its node_base;
     the WideBvh reads its boxes from the read-back BVH2, so a refit of that shows."""
@@ -191,25 +218,27 @@ def test_rays_through_gpu_bvh_match_embree(gl, tmp_path):
 
     for name in ("torus", "soup"):
         v, f = next((v, f) for n, v, f in meshes() if n == name)
-        for layout in ("bvh4", "bvh2"):
+        for layout in ("bvh4", "bvh2", "bvh8"):
             compare(gl, scene_of(v, f, [np.eye(4)]), tmp_path, method="gpu", n=2000, bvh_layout=layout)
     layers = np.concatenate([flat_grid(100), flat_grid(60) * np.float32(0.5) + np.float32([0, 0.4, 0])])
     for tris in (sphere(), layers):   # 20k and 26k triangles (two flat layers: boxes of zero height)
         positions = tris.reshape(-1, 3)
-        compare(gl, scene_of(positions, np.arange(len(positions)).reshape(-1, 3), [np.eye(4)]), tmp_path,
-                method="gpu", n=3000)
+        for layout in ("bvh4", "bvh8"):
+            compare(gl, scene_of(positions, np.arange(len(positions)).reshape(-1, 3), [np.eye(4)]), tmp_path,
+                    method="gpu", n=3000, bvh_layout=layout)
 
 
 def test_gpu_scene_uses_the_gpu_builder(gpu, monkeypatch):
     collapses = []
-    collapse = bvh_gpu.GpuBvhBuilder.collapse_bvh4
-    monkeypatch.setattr(bvh_gpu.GpuBvhBuilder, "collapse_bvh4",
-                        lambda self, g: collapses.append(g.triangle_count) or collapse(self, g))
-    for layout, on_gpu in (("bvh4", [600]), ("bvh4q", []), ("bvh2", [])):
+    for name in ("collapse_bvh4", "collapse_bvh8"):
+        monkeypatch.setattr(bvh_gpu.GpuBvhBuilder, name, lambda self, g, f=getattr(bvh_gpu.GpuBvhBuilder, name), n=name:
+                            collapses.append((n, g.triangle_count)) or f(self, g))
+    for layout, on_gpu in (("bvh4", [("collapse_bvh4", 600)]), ("bvh8", [("collapse_bvh8", 600)]), ("bvh4q", []),
+                           ("bvh2", [])):
         collapses.clear()
         s = GpuScene(gpu, _scene(soup(600)), bvh_method="gpu", bvh_layout=layout)
         assert s.blas[0].method == "gpu"
-        assert collapses == on_gpu, "bvh4: collapsed on the GPU; bvh4q: on the CPU (quantised there)"
+        assert collapses == on_gpu, "bvh4, bvh8: collapsed on the GPU; bvh4q: on the CPU (quantised there)"
         assert all(not b._bufs for b in bvh_gpu._builders.values()), "GpuScene frees the builder's scratch"
         s.release()
     with pytest.raises(SceneError, match="bvh_method"):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from rayvr.scene import bvh_wide
+from rayvr.scene import bvh_layouts, bvh_wide
 from rayvr.scene.bvh import build, triangle_bounds
 
 LEAF, MASK = int(bvh_wide.LEAF_BIT), int(bvh_wide.LINK_MASK)
@@ -156,4 +156,4 @@ def test_quantized_nodes_are_64_bytes_of_a_shared_collapse():
     w, q = bvh_wide.collapse(b), bvh_wide.collapse(b, quantized=True)
     np.testing.assert_array_equal(q.items, w.items)
     assert q.nbytes == w.node_count * 64 and w.nbytes == w.node_count * 112
-    assert bvh_wide.collapse_to(b, "bvh2") is b
+    assert bvh_layouts.collapse_to(b, "bvh2") is b

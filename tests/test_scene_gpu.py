@@ -259,7 +259,7 @@ def test_offset_ray_origin_prevents_self_intersection(gl, tmp_path, scale):
     assert out[:, 0, 1].sum() == 0
 
 
-@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q"])
+@pytest.mark.parametrize("bvh_layout", ["bvh2", "bvh4", "bvh4q", "bvh8"])
 def test_alpha_masked_materials_are_skipped_by_rays(gl, tmp_path, bvh_layout):
     img = np.full((2, 2, 4), 200, np.uint8)
     img[..., 3] = [[255, 0], [0, 255]]                        # texel (row, col): opaque on the diagonal
@@ -275,8 +275,8 @@ def test_alpha_masked_materials_are_skipped_by_rays(gl, tmp_path, bvh_layout):
         gs = GpuScene(get_context(), s, bvh_layout=bvh_layout)
         assert gs.defines()["SCENE_HAS_ALPHA_MASK"] == (mode == "MASK")
         assert gs.defines()["SCENE_HAS_ALPHA_BLEND"] == (mode == "BLEND")
-        assert gs.defines()["RQ_BVH_WIDTH"] == (2 if bvh_layout == "bvh2" else 4)
-        assert gs.defines()["RQ_BVH_QUANTIZED"] == (bvh_layout == "bvh4q")
+        assert gs.defines()["RQ_BVH_WIDTH"] == {"bvh2": 2, "bvh8": 8}.get(bvh_layout, 4)
+        assert gs.defines()["RQ_BVH_QUANTIZED"] == (bvh_layout in ("bvh4q", "bvh8"))
         out, _ = run_kernel(gl, tmp_path, gs, body, rays, 1)
         np.testing.assert_array_equal(out[:, 0, 0], expect)
         np.testing.assert_array_equal(out[:, 0, 1], expect)

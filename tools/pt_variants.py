@@ -7,7 +7,7 @@
 A variant is a named property set, {pass name: {property: value}}, applied to every graph a
 measure builds (graph.update_pass, so an unknown property is refused with the pass's own message);
 a pass the graph lacks is skipped, and a variant none of whose passes any measured graph has is an
-error row. A RUN is `VARIANT` (in this checkout) or `TREE:VARIANT`, where TREE is a `--tree
+error row. Its key "scene" sets attributes of every scene a measure loads instead (`bvh_layout`). A RUN is `VARIANT` (in this checkout) or `TREE:VARIANT`, where TREE is a `--tree
 NAME=DIR` or a folder `.ab/NAME` (a git worktree of another commit: tools/ab_trees.py makes one);
 `old` and `prev` alone mean `old:base` and `prev:base`. `--define NAME='{"Shadows": {"view_group": 8}}'`
 adds a variant without an edit here.
@@ -15,8 +15,9 @@ adds a variant without an edit here.
 Each RUN is a child process with the tree's src/ first on PYTHONPATH. Measures (`--measures`):
 - cornell, tauray, spheres: the path tracer on pt_peer's scenes and cameras (.scenes/: the Cornell
   box, tauray/test.glb with one sun, MetalRoughSpheresNoTextures with one sun; --size 1920x1080,
-  1 spp, 3 bounces, Russian roulette off): the PathTracer pass's GPU ms (timer queries: fastest and
-  mean of --frames frames after a 1 s warm-up) and the image's mean radiance;
+  --spp 1 (a list: a row part per count), --bounces 3, Russian roulette off): the PathTracer pass's
+  GPU ms (timer queries: fastest and mean of --frames frames after a 1 s warm-up) and the image's
+  mean radiance;
 - hybrid: the hybrid graph on tauray at 2x1440x1600, every material SHADOWS, then REFLECTIONS;
 - views: 64 views of 512x683 against one view of their pixels (tauray, the hybrid graph);
 - gi: benchmarks probe_gi's frame (tauray, SHADOWS with REFLECTIONS on one material, 2x1440x1600)
@@ -50,6 +51,8 @@ def _tiles88() -> dict:
     return {"GBuffer": {"tile": [8, 8]}, "Shadows": {"tile": [8, 8], "view_group": 8}}
 
 
+SCENE = "scene"   # a variant's scene attributes, not a pass
+
 # name -> {pass name: properties}. Pass names are the ready-made graphs' (rayvr.graphs): GBuffer,
 # Shadows, Reflections, Composite, PathTracer, Probes.
 VARIANTS: dict[str, dict] = {
@@ -76,7 +79,31 @@ VARIANTS: dict[str, dict] = {
     **{f"co_vg{n}": {"Composite": {"probe_view_group": n}} for n in (1, 2, 8)},
     "co_tile88": {"Composite": {"probe_tile": [8, 8], "probe_view_group": 1}},
     "tiles88_all": {**_tiles88(), "Composite": {"probe_tile": [8, 8], "probe_view_group": 1}},
+    # the traced BVH: compressed 8-wide nodes (rayvr.scene.bvh8) instead of the BVH4
+    "bvh8": {SCENE: {"bvh_layout": "bvh8"}},
+    # the wavefront path tracer's knobs: per-bounce queues of the paths still going, the trace kernel's
+    # persistent threads over them, one-warp workgroups (8x4 of one view), the queues sorted by direction
+    "compact": {"PathTracer": {"compact": True}},
+    "persistent": {"PathTracer": {"persistent": True}},
+    "pt_tile84": {"PathTracer": {"tile": [8, 4], "view_group": 1}},
+    "bvh8_compact": {SCENE: {"bvh_layout": "bvh8"}, "PathTracer": {"compact": True}},
+    "bvh8_persistent": {SCENE: {"bvh_layout": "bvh8"}, "PathTracer": {"persistent": True}},
+    # each bounce's queue sorted by the octant of its BSDF rays
+    "sort_dirs": {"PathTracer": {"sort_directions": True}},
+    "bvh8_sort": {SCENE: {"bvh_layout": "bvh8"}, "PathTracer": {"sort_directions": True}},
+    # RTShadows' shadow rays through alphaMode BLEND: Russian roulette below a transmittance of 0.25,
+    # or a coin per surface (1.0), against the exact product
+    "blend_rr25": {"Shadows": {"blend_roulette": 0.25}},
+    "blend_coin": {"Shadows": {"blend_roulette": 1.0}},
 }
+
+
+def apply_scene(scene, props: dict) -> None:
+    """Set the variant's scene attributes (its SCENE part) on `scene`; an unknown one is refused."""
+    for key, value in props.get(SCENE, {}).items():
+        if not hasattr(scene, key):
+            raise SystemExit(f"variant: the scene has no attribute {key!r}")
+        setattr(scene, key, value)
 
 
 def apply_variant(graph, props: dict) -> set[str]:
@@ -84,7 +111,7 @@ def apply_variant(graph, props: dict) -> set[str]:
     the passes it set. A pass refuses an unknown property or a bad value (OptionError)."""
     applied = set()
     for name, values in props.items():
-        if name in graph.passes:
+        if name != SCENE and name in graph.passes:
             graph.update_pass(name, values)
             applied.add(name)
     return applied
@@ -121,6 +148,7 @@ class Child:
         import rayvr as rv
 
         scene = rv.load_scene(str(ROOT / ".scenes" / file))
+        apply_scene(scene, self.props)
         if self.opt["opaque"]:   # trees from before stochastic transparency drew BLEND as OPAQUE
             from rayvr.scene.model import AlphaMode
             for m in scene.materials:
@@ -160,13 +188,18 @@ class Child:
             scene.lights = [Light(type=LightType.DIRECTIONAL, direction=cam["sun"], intensity=cam.get("sun_lux", 8.0))]
         pose = look_at(np.array(cam["eye"], float), np.array(cam["target"], float))
         view = mono_view(pose, Fov.symmetric(cam["yfov_deg"], W / H), (W, H), near=cam.get("near", 0.01), far=1e4)
-        g = self.graph(rv.graphs.path_traced(samples_per_pixel=1, max_bounces=3, rr_start=100))
-        with rv.Renderer(scene, g, views=view) as r:
-            self.warm_and_time(r)
-            pt = r.profile().passes["PathTracer"]
-            img = np.asarray(r.read_output("Accumulate.dst"))[..., :3]
-            return {"gpu_min_ms": round(float(pt.min_ms), 4), "gpu_mean_ms": round(float(pt.mean_ms), 4),
-                    "mean_radiance": round(float(img.mean()), 5), "nonfinite": int((~np.isfinite(img)).sum())}
+        out = {}
+        for spp in (int(n) for n in str(self.opt["spp"]).split(",")):
+            g = self.graph(rv.graphs.path_traced(samples_per_pixel=spp, max_bounces=int(self.opt["bounces"]),
+                                                 rr_start=100))
+            with rv.Renderer(scene, g, views=view) as r:
+                self.warm_and_time(r)
+                pt = r.profile().passes["PathTracer"]
+                img = np.asarray(r.read_output("Accumulate.dst"))[..., :3]
+                out[f"spp{spp}"] = {"gpu_min_ms": round(float(pt.min_ms), 4), "gpu_mean_ms": round(float(pt.mean_ms), 4),
+                                    "mean_radiance": round(float(img.mean()), 5),
+                                    "nonfinite": int((~np.isfinite(img)).sum())}
+        return out[next(iter(out))] if len(out) == 1 else out
 
     def frame(self, scene, graph, views, size=None):
         import rayvr as rv
@@ -272,7 +305,7 @@ def child_main(config: dict) -> None:
         except Exception as e:   # noqa: BLE001 (a broken run is a row, not the end of the run)
             out[key] = {"error": f"{type(e).__name__}: {str(e)[:300]}"}
     graphs_built = any(k != "rays" for k in config["measures"])
-    missing = sorted(set(child.props) - child.applied)
+    missing = sorted(set(child.props) - child.applied - {SCENE})
     if missing and graphs_built:
         out["error"] = f"no measured graph has the variant's pass(es) {', '.join(missing)}"
     print("RESULT " + json.dumps(out), flush=True)
@@ -304,6 +337,8 @@ def parse_args(argv=None):
     p.add_argument("--define", action="append", default=[], metavar="NAME=JSON",
                    help='one more variant: {"Pass": {"property": value}}')
     p.add_argument("--size", default="1920x1080", help="the path tracer measures' image")
+    p.add_argument("--spp", default="1", help="the path tracer measures' samples per pixel, e.g. 1,4,8")
+    p.add_argument("--bounces", type=int, default=3, help="the path tracer measures' max_bounces")
     p.add_argument("--frames", type=int, default=40, help="timed frames after the warm-up")
     p.add_argument("--div", type=int, default=1, help="every size divided by this (a smoke test on llvmpipe)")
     p.add_argument("--passes", action="store_true", help="hybrid, views: each pass's mean GPU ms, not only the sum")
@@ -337,7 +372,8 @@ def main(argv=None) -> int:
         raise SystemExit(f"unknown measure(s) {', '.join(unknown)}; known: {', '.join(MEASURES)}")
     trees = dict(t.split("=", 1) for t in args.tree)
     runs = [resolve_run(r, trees, variants) for r in (args.runs or list(variants))]
-    options = {"size": args.size, "frames": args.frames, "div": args.div, "passes": args.passes,
+    options = {"size": args.size, "spp": args.spp, "bounces": args.bounces, "frames": args.frames, "div": args.div,
+               "passes": args.passes,
                "opaque": args.opaque, "gi_all_reflections": args.gi_all_reflections,
                "gi_probes": [int(n) for n in args.gi_probes.split(",")] if args.gi_probes else None}
     commit = os.environ.get("RAYVR_COMMIT", "unknown")
@@ -346,10 +382,13 @@ def main(argv=None) -> int:
             config = {"measures": measures, "props": props, "options": options, "tree_root": str(root)}
             env = dict(os.environ, PYTHONPATH=f"{root / 'src'}:{os.environ.get('PYTHONPATH', '')}")
             t = time.perf_counter()
-            p = subprocess.run([sys.executable, __file__, "--child", json.dumps(config)], env=env,
-                               capture_output=True, text=True, timeout=args.timeout, check=False)
-            lines = [line for line in p.stdout.splitlines() if line.startswith("RESULT ")]
-            res = json.loads(lines[-1][7:]) if lines else {"error": p.stderr[-800:]}
+            try:   # a child past --timeout is killed, and its row says so: the next runs still go
+                p = subprocess.run([sys.executable, __file__, "--child", json.dumps(config)], env=env,
+                                   capture_output=True, text=True, timeout=args.timeout, check=False)
+                lines = [line for line in p.stdout.splitlines() if line.startswith("RESULT ")]
+                res = json.loads(lines[-1][7:]) if lines else {"error": p.stderr[-800:]}
+            except subprocess.TimeoutExpired:
+                res = {"error": f"timed out after {args.timeout} s (--timeout)"}
             row = {"variant": label, "round": rnd, "commit": commit, "wall_s": round(time.perf_counter() - t, 1), **res}
             print(json.dumps(row), flush=True)
             with args.out.open("a") as f:

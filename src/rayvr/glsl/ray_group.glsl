@@ -10,11 +10,14 @@
 
 #define RAY_GROUP_SIZE (RAY_GROUP_X * RAY_GROUP_Y * RAY_GROUP_Z)
 
-// This invocation's (x, y, view); may lie past the image or the last view: callers bound it.
-ivec3 ray_group_pixel() {
-    uint lane = gl_LocalInvocationIndex;
+// The (x, y, view) of invocation `lane` of workgroup `group`; may lie past the image or the last
+// view: callers bound it.
+ivec3 ray_group_pixel_of(uvec3 group, uint lane) {
     uint tile = lane / uint(RAY_GROUP_Z);
     uvec3 local = uvec3(tile % uint(RAY_GROUP_X), tile / uint(RAY_GROUP_X), lane % uint(RAY_GROUP_Z));
-    return ivec3(gl_WorkGroupID * uvec3(RAY_GROUP_X, RAY_GROUP_Y, RAY_GROUP_Z) + local);
+    return ivec3(group * uvec3(RAY_GROUP_X, RAY_GROUP_Y, RAY_GROUP_Z) + local);
 }
+
+// This invocation's (x, y, view).
+ivec3 ray_group_pixel() { return ray_group_pixel_of(gl_WorkGroupID, gl_LocalInvocationIndex); }
 #endif

@@ -337,11 +337,12 @@ class RenderPass:
 
         return Path(sys.modules[cls.__module__].__file__).resolve().parent / name
 
-    def compute_program(self, gl, name: str, defines: dict | None = None):
-        """The (cached) compute program of shader `name` beside the pass, with `defines`."""
+    def compute_program(self, gl, name: str, defines: dict | None = None, header: str = ""):
+        """The (cached) compute program of shader `name` beside the pass, with `defines` (and
+        `header`, raw GLSL after #version: extension directives)."""
         from ..gpu.shaders import compute_program
 
-        return compute_program(gl, self.shader_path(name), defines)
+        return compute_program(gl, self.shader_path(name), defines, header=header)
 
     def raster_program(self, gl, vertex: str, fragment: str, defines: dict | None = None):
         """The (cached) vertex + fragment program of the shaders beside the pass."""

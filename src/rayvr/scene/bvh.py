@@ -70,6 +70,10 @@ class Bvh:
             bits[~leaf, c + 3] += np.uint32(node_base)
         return nodes
 
+    def tlas_nodes(self, instances: np.ndarray) -> np.ndarray:
+        """The nodes as a TLAS whose leaf slot s holds instance instances[s] (one per leaf)."""
+        return self.relinked(lambda slot: instances[slot])
+
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) float32 box of every primitive: the root's child boxes, empty slots skipped
         (node boxes are exact min/max of the primitive boxes, so this is bit-exact)."""

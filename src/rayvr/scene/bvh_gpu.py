@@ -20,7 +20,10 @@ internal child of largest area is opened while it has fewer than 4 children (bvh
 Leaves keep the builder's (<= LEAF_SIZE slots, so one leaf item each). `build_gpu_bvh4` returns
 it as a `bvh_wide.WideBvh` over the read-back BVH2 (what GpuScene uploads and refits); the CPU's
 `bvh_wide.collapse` is SAH-optimal instead (SAH cost 1-2% lower on test meshes), but numpy and
-several times slower (benchmarks/RESULTS.md).
+several times slower (benchmarks/RESULTS.md). `collapse_bvh8()` does the same for bvh8.py's
+compressed 8-wide layout (`GpuBvh8`, bvh8_collapse.comp: up to 8 children, direction slots, 8-bit
+boxes, each node's leaf triangles copied to a range of its own); `build_gpu_bvh8` returns a
+`bvh8.Bvh8` over the read-back BVH2 from its slots and items, as build_gpu_bvh4 does.
 """
 from __future__ import annotations
 
@@ -32,7 +35,7 @@ import numpy as np
 from ..errors import SceneError
 from ..gpu.bindings import BINDINGS
 from ..gpu.shaders import compute_program
-from . import bvh_wide
+from . import bvh8, bvh_wide
 from .bvh import MAX_LEAF_SIZE, NODE_BYTES, NODE_FLOATS, Bvh
 
 SHADERS = Path(__file__).resolve().parent / "shaders"
@@ -45,7 +48,9 @@ _SLOT = {"tri_in": 0, "bounds": 1, "keys": 2, "vals": 3, "scan": 4, "sums": 5, "
          "children": 8, "ranges": 9, "internal_parent": 10, "leaf_parent": 11, "arrivals": 12,
          "leaf_box": 13, "node_box": 14, "tri_out": 15, "sizes": 16,
          # bvh4_collapse.comp
-         "bvh2_nodes": 0, "wide_source": 1, "wide_counter": 2, "wide_nodes": 3, "wide_links": 4}
+         "bvh2_nodes": 0, "wide_source": 1, "wide_counter": 2, "wide_nodes": 3, "wide_links": 4,
+         # bvh8_collapse.comp also
+         "wide_tris_in": 5, "wide_tris": 6}
 _BOUNDS_INIT = np.array([0xFFFFFFFF] * 3 + [0] * 3, np.uint32).tobytes()
 
 
@@ -62,6 +67,7 @@ class GpuBvh:
     node_count: int
     triangle_count: int
     node_base: int = 0      # added to the node links (build's node_base)
+    tri_base: int = 0       # added to the leaf links (build's tri_base)
 
     def to_bvh(self) -> Bvh:
         """Read back into a CPU `Bvh` (method 'gpu')."""
@@ -105,6 +111,36 @@ class GpuBvh4:
         return bvh_wide.WideBvh(source, links[:, 0].view(np.int32).astype(np.int64), links[:, 1].copy())
 
 
+@dataclasses.dataclass
+class GpuBvh8:
+    """A GpuBvh collapsed on the GPU to bvh8.py's layout: `nodes` (node_count x 80 B; child bases from
+    0, triangle bases from 0 in `triangles`), `triangles` (48 B per slot, the BVH8's slot order, vertex
+    0's w the original triangle index) and `links` (per node 8 source child slots, 0xFFFFFFFF when
+    empty, then 8 items). Builder-owned buffers, like GpuBvh's."""
+
+    nodes: object
+    triangles: object
+    links: object
+    node_count: int
+    triangle_count: int
+
+    def read_nodes(self) -> np.ndarray:
+        """The (node_count, 20) float32 nodes (uint fields hold their bits)."""
+        data = self.nodes.read(size=self.node_count * bvh8.NODE_BYTES)
+        return np.frombuffer(data, np.float32).reshape(-1, bvh8.NODE_FLOATS).copy()
+
+    def read_triangles(self) -> np.ndarray:
+        """The triangles in the BVH8's slot order (N, 3, 4) float32."""
+        return np.frombuffer(self.triangles.read(size=self.triangle_count * 48), np.float32).reshape(-1, 3, 4).copy()
+
+    def to_bvh8(self, source: Bvh) -> bvh8.Bvh8:
+        """A `bvh8.Bvh8` over `source` (this build's BVH2, read back with to_bvh()) with this
+        collapse's slots and node numbering (its triangle order is bvh8.py's rule: nodes in index
+        order, leaves in slot order); reads back 64 B per node."""
+        links = np.frombuffer(self.links.read(size=self.node_count * 64), np.uint32).reshape(-1, 2, bvh8.WIDTH)
+        return bvh8.Bvh8(source, links[:, 0].view(np.int32).astype(np.int64), links[:, 1].copy())
+
+
 class GpuBvhBuilder:
     """Builds LBVHs on the GPU. Compiles its kernels once and keeps scratch buffers (grown on
     demand) between builds; one builder per GL context."""
@@ -131,7 +167,8 @@ class GpuBvhBuilder:
         self.k_emit = prog("lbvh_emit.comp")
         self.k_parents = prog("lbvh_parents.comp")
         self.k_collapse = prog("bvh4_collapse.comp")
-        self._capacity = self._wide_capacity = 0
+        self.k_collapse8 = prog("bvh8_collapse.comp")
+        self._capacity = self._wide_capacity = self._wide_triangles = 0
         self._bufs: dict[str, object] = {}
         self.profile = False                       # True: glFinish after each stage, times in stage_ms
         self.stage_ms: dict[str, float] = {}
@@ -152,18 +189,21 @@ class GpuBvhBuilder:
         self._bufs = {k: self.gl.buffer(reserve=v) for k, v in sizes.items()}
         self._capacity = n
 
-    def _reserve_wide(self, node_count: int) -> None:
-        """Scratch of collapse_bvh4 for a BVH2 of node_count nodes (the BVH4 has no more)."""
-        if node_count <= self._wide_capacity:
+    def _reserve_wide(self, node_count: int, triangles: int = 0) -> None:
+        """Scratch of collapse_bvh4 and collapse_bvh8 for a BVH2 of node_count nodes (the wide
+        BVHs have no more) over `triangles` (collapse_bvh8 copies them)."""
+        if node_count <= self._wide_capacity and triangles <= self._wide_triangles:
             return
-        sizes = {"wide_source": 4 * node_count, "wide_counter": 4,
-                 "wide_nodes": bvh_wide.NODE_BYTES * node_count, "wide_links": 32 * node_count}
-        self._check_size(max(sizes.values()), f"a BVH4 of up to {node_count} nodes")
+        node_count, triangles = max(node_count, self._wide_capacity), max(triangles, self._wide_triangles, 1)
+        sizes = {"wide_source": 4 * node_count, "wide_counter": 8,
+                 "wide_nodes": max(bvh_wide.NODE_BYTES, bvh8.NODE_BYTES) * node_count, "wide_links": 64 * node_count,
+                 "wide_tris": 48 * triangles}
+        self._check_size(max(sizes.values()), f"a wide BVH of up to {node_count} nodes")
         for k, v in sizes.items():
             if k in self._bufs:
                 self._bufs[k].release()
             self._bufs[k] = self.gl.buffer(reserve=v)
-        self._wide_capacity = node_count
+        self._wide_capacity, self._wide_triangles = node_count, triangles
 
     def _check_size(self, nbytes: int, what: str) -> None:
         limit = int(self.gl.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 1 << 31))
@@ -175,7 +215,7 @@ class GpuBvhBuilder:
     def release(self) -> None:
         for b in self._bufs.values():
             b.release()
-        self._bufs, self._capacity, self._wide_capacity = {}, 0, 0
+        self._bufs, self._capacity, self._wide_capacity, self._wide_triangles = {}, 0, 0, 0
 
     def _bind(self, **named) -> None:
         for slot_name, buf_name in named.items():
@@ -257,28 +297,47 @@ class GpuBvhBuilder:
         self._run(self.k_emit, groups, n=n, node_base=node_base, tri_base=tri_base)
         self._stage("emit")
         node_count = int(np.frombuffer(b["sums"].read(size=4, offset=4 * scan_groups), np.uint32)[0])
-        return GpuBvh(b["nodes"], b["tri_out"], b["vals"], node_count, n, node_base)
+        return GpuBvh(b["nodes"], b["tri_out"], b["vals"], node_count, n, node_base, tri_base)
 
     def collapse_bvh4(self, g: GpuBvh) -> GpuBvh4:
         """g (this builder's latest build) collapsed greedily into "bvh4" nodes on the GPU, one
         dispatch per BVH4 level (see the module docstring); the level sizes are read back."""
+        self._collapse_levels(g, self.k_collapse)
+        self._stage("collapse")
+        return GpuBvh4(self._bufs["wide_nodes"], self._bufs["wide_links"], self._wide_nodes)
+
+    def collapse_bvh8(self, g: GpuBvh) -> GpuBvh8:
+        """g (this builder's latest build) collapsed greedily into bvh8.py's nodes on the GPU, one
+        dispatch per BVH8 level, its triangles copied into the BVH8's slot order."""
+        self._reserve_wide(g.node_count, g.triangle_count)
+        self._collapse_levels(g, self.k_collapse8, bvh2_tri_base=g.tri_base,
+                              wide_tris_in=g.triangles, wide_tris=self._bufs["wide_tris"])
+        self._stage("collapse")
+        b = self._bufs
+        return GpuBvh8(b["wide_nodes"], b["wide_tris"], b["wide_links"], self._wide_nodes, g.triangle_count)
+
+    def _collapse_levels(self, g: GpuBvh, prog, wide_tris_in=None, wide_tris=None, **uniforms) -> None:
+        """Run a collapse kernel level by level from the BVH2's root (one dispatch per wide level,
+        an atomic counter numbering the next level); sets _wide_nodes to the node count."""
         self._reserve_wide(g.node_count)
         b = self._bufs
-        b["wide_source"].write(np.zeros(1, np.uint32))     # BVH4 node 0: the BVH2 root
-        b["wide_counter"].write(np.ones(1, np.uint32))
+        b["wide_source"].write(np.zeros(1, np.uint32))     # wide node 0: the BVH2 root
+        b["wide_counter"].write(np.array([1, 0], np.uint32))
         g.nodes.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"] + _SLOT["bvh2_nodes"])
         self._bind(wide_source="wide_source", wide_counter="wide_counter", wide_nodes="wide_nodes",
                    wide_links="wide_links")
+        for name, buf in (("wide_tris_in", wide_tris_in), ("wide_tris", wide_tris)):
+            if buf is not None:
+                buf.bind_to_storage_buffer(BINDINGS["RAYVR_PASS_SSBO_0"] + _SLOT[name])
         begin, end = 0, 1
         while begin < end:
-            self._run(self.k_collapse, -(-(end - begin) // WG), level_begin=begin, level_end=end,
-                      bvh2_node_base=g.node_base)
+            self._run(prog, -(-(end - begin) // WG), level_begin=begin, level_end=end,
+                      bvh2_node_base=g.node_base, **uniforms)
             begin, end = end, int(np.frombuffer(b["wide_counter"].read(size=4), np.uint32)[0])
             if end > g.node_count:
-                raise SceneError(f"GpuBvhBuilder.collapse_bvh4: {end} BVH4 nodes from {g.node_count} BVH2 "
+                raise SceneError(f"GpuBvhBuilder: a collapse made {end} wide nodes from {g.node_count} BVH2 "
                                  f"nodes; the BVH2 is not a tree (report this as a bug)")
-        self._stage("collapse")
-        return GpuBvh4(b["wide_nodes"], b["wide_links"], end)
+        self._wide_nodes = end
 
     def _sort(self, n: int) -> None:
         """Stable LSD radix sort of (keys, vals) by the 30-bit codes: 4 passes of 8 bits, the
@@ -334,6 +393,17 @@ def build_gpu_bvh4(gpu, triangles: np.ndarray, leaf_size: int = 4, rotations: in
     g = builder.build(tris)
     wide = builder.collapse_bvh4(g)
     return wide.to_wide(g.to_bvh())
+
+
+def build_gpu_bvh8(gpu, triangles: np.ndarray, leaf_size: int = 4, rotations: int = 3) -> bvh8.Bvh8:
+    """GPU LBVH of (N, 3, 3) triangles collapsed to "bvh8" on the GPU, read back as a `bvh8.Bvh8`
+    whose source is the BVH2 (tiny meshes: CPU LBVH and CPU collapse)."""
+    tris = _checked(triangles)
+    if len(tris) < MIN_TRIANGLES:
+        return bvh8.collapse(_cpu_lbvh(tris, leaf_size))
+    builder = builder_for(gpu, leaf_size, rotations)
+    g = builder.build(tris)
+    return builder.collapse_bvh8(g).to_bvh8(g.to_bvh())
 
 
 def _checked(triangles) -> np.ndarray:

@@ -48,7 +48,6 @@ NODE_FLOATS = 28                 # "bvh4"
 NODE_BYTES = NODE_FLOATS * 4
 QUANTIZED_NODE_FLOATS = 16       # "bvh4q"
 QUANTIZED_NODE_BYTES = QUANTIZED_NODE_FLOATS * 4
-LAYOUTS = ("bvh2", "bvh4", "bvh4q")
 LEAF_BIT = np.uint32(0x80000000)
 LINK_MASK = np.uint32(0x0FFFFFFF)
 
@@ -116,6 +115,10 @@ class WideBvh:
         items[inner] += np.uint32(node_base)
         return nodes
 
+    def tlas_nodes(self, instances: np.ndarray) -> np.ndarray:
+        """The nodes as a TLAS whose leaf slot s holds instance instances[s] (one per leaf)."""
+        return self.relinked(lambda slot: instances[slot])
+
     def sah_cost(self, c_trav: float = 1.0, c_tri: float = 1.0) -> float:
         """Expected node visits (c_trav each) and triangle tests (c_tri each) per ray relative to
         the root's area, as `Bvh.sah_cost` (the leaves are the source's, so only c_trav terms differ)."""
@@ -139,6 +142,21 @@ class WideBvh:
 def quantize(lo: np.ndarray, hi: np.ndarray, empty: np.ndarray) -> np.ndarray:
     """(K, 16) float32 "bvh4q" nodes (item words left 0) whose decoded child boxes hold the
     float32 boxes (lo, hi) (K, 4, 3); empty slots (K, 4) get the inverted box lo 255, hi 0."""
+    origin, exponent, q_lo, q_hi = quantize_grid(lo, hi, empty)
+    planes = np.stack([q_lo, q_hi], axis=-1).transpose(0, 2, 3, 1)   # (K, axis, lo|hi, child)
+    out = np.zeros((len(lo), QUANTIZED_NODE_FLOATS), np.float32)
+    bits = out.view(np.uint32)
+    out[:, 0:3] = origin
+    bits[:, 3] = exponent_word(exponent)
+    bits[:, 4:10] = pack_bytes(planes).reshape(-1, 6)
+    return out
+
+
+def quantize_grid(lo: np.ndarray, hi: np.ndarray, empty: np.ndarray):
+    """The 8-bit grid of each node's child boxes (K, W, 3) float32, empty slots (K, W): the node's
+    origin (K, 3) float32 (its box min), per axis the exponent e of the grid step 2**e (K, 3) and
+    the children's planes q_lo, q_hi (K, W, 3) int64 in 0..255, such that origin + q * 2**e in
+    float32 (`_decode_planes`) holds every live box; empty slots get q_lo 255, q_hi 0."""
     e3 = empty[..., None]
     origin = np.where(e3, np.inf, lo).min(axis=1)                     # (K, 3) float32, the node's box
     top = np.where(e3, -np.inf, hi).max(axis=1)
@@ -154,26 +172,39 @@ def quantize(lo: np.ndarray, hi: np.ndarray, empty: np.ndarray) -> np.ndarray:
         if not (low.any() or high.any()):
             break
         q_lo, q_hi = q_lo - low, q_hi + high    # q_lo 0 is origin and q_hi 255 >= top: both stop in range
-    q_lo, q_hi = np.where(e3, 255, q_lo), np.where(e3, 0, q_hi)
-    planes = np.stack([q_lo, q_hi], axis=-1).transpose(0, 2, 3, 1)   # (K, axis, lo|hi, child)
-    words = (planes.astype(np.uint32) << (np.arange(WIDTH, dtype=np.uint32) * 8)).sum(axis=-1, dtype=np.uint32)
-    out = np.zeros((len(lo), QUANTIZED_NODE_FLOATS), np.float32)
-    bits = out.view(np.uint32)
-    out[:, 0:3] = origin
-    bits[:, 3] = ((exponent + 127).astype(np.uint32) << (np.arange(3, dtype=np.uint32) * 8)).sum(axis=1, dtype=np.uint32)
-    bits[:, 4:10] = words.reshape(-1, 6)
-    return out
+    return origin, exponent, np.where(e3, 255, q_lo), np.where(e3, 0, q_hi)
+
+
+def exponent_word(exponent: np.ndarray) -> np.ndarray:
+    """(K,) uint32: the float32 exponent fields (e + 127) of a node's 3 grid steps in bits 0..23."""
+    return ((exponent + 127).astype(np.uint32) << (np.arange(3, dtype=np.uint32) * 8)).sum(axis=1, dtype=np.uint32)
+
+
+def pack_bytes(q: np.ndarray) -> np.ndarray:
+    """Bytes (..., W) (W a multiple of 4) as (..., W / 4) uint32 words, byte k of a word in bits 8k..8k+7."""
+    words = q.astype(np.uint32).reshape(*q.shape[:-1], -1, 4) << (np.arange(4, dtype=np.uint32) * 8)
+    return words.sum(axis=-1, dtype=np.uint32)
+
+
+def unpack_bytes(words: np.ndarray) -> np.ndarray:
+    """pack_bytes undone: (..., n) uint32 words -> (..., 4n) bytes as uint32."""
+    b = (words[..., None] >> (np.arange(4, dtype=np.uint32) * 8)) & 0xFF
+    return b.reshape(*words.shape[:-1], -1)
 
 
 def decode(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi) float32 (K, 4, 3) child boxes of "bvh4q" nodes, computed as ray_query.glsl does."""
     bits = nodes.view(np.uint32)
-    origin = nodes[:, None, 0:3]
-    scale = ((bits[:, 3:4] >> (np.arange(3, dtype=np.uint32) * 8)) & 0xFF) << 23
-    scale = scale.view(np.float32)[:, None, :]
-    q = (bits[:, 4:10, None] >> (np.arange(WIDTH, dtype=np.uint32) * 8)) & 0xFF   # (K, axis * 2 + side, child)
-    q = q.reshape(-1, 3, 2, WIDTH).transpose(0, 3, 2, 1)                          # (K, child, side, axis)
-    return _decode_planes(origin, scale, q[:, :, 0]), _decode_planes(origin, scale, q[:, :, 1])
+    q = unpack_bytes(bits[:, 4:10]).reshape(-1, 3, 2, WIDTH).transpose(0, 3, 2, 1)   # (K, child, side, axis)
+    return decode_grid(nodes[:, 0:3], bits[:, 3], q[:, :, 0], q[:, :, 1])
+
+
+def decode_grid(origin: np.ndarray, exponents: np.ndarray, q_lo: np.ndarray, q_hi: np.ndarray):
+    """(lo, hi) float32 (K, W, 3) of planes q (K, W, 3) on the grids of nodes with `origin` (K, 3)
+    and exponent words (K,) (bits 0..23, see exponent_word), as the shader decodes them."""
+    scale = ((exponents[:, None] >> (np.arange(3, dtype=np.uint32) * 8)) & 0xFF) << 23
+    scale = scale.astype(np.uint32).view(np.float32)[:, None, :]
+    return _decode_planes(origin[:, None, :], scale, q_lo), _decode_planes(origin[:, None, :], scale, q_hi)
 
 
 def _decode_planes(origin, scale, q) -> np.ndarray:
@@ -202,23 +233,32 @@ def _grid_exponents(origin: np.ndarray, top: np.ndarray) -> np.ndarray:
 
 def collapse(b: Bvh, quantized: bool = False) -> WideBvh:
     """The BVH4 of a BVH2 (see the module docstring), packed as "bvh4q" if quantized."""
+    slots, items = collapse_slots(b, WIDTH)
+    return WideBvh(b, slots, items, quantized)
+
+
+def collapse_slots(b: Bvh, width: int, arrange=None) -> tuple[np.ndarray, np.ndarray]:
+    """The SAH-optimal collapse of b into nodes of up to `width` children: (slots, items), each
+    (K, width), as WideBvh holds them. Nodes are numbered one wide level at a time, the internal
+    children of a node adjacent in the order of its slots; arrange(kids) may reorder each row's
+    children (source child slots, -1 empty) before they are numbered."""
     v, link, count = b._children()
     link = link.reshape(-1).astype(np.int64)           # per child slot 2 * node + side
     count = count.reshape(-1)
     boxes = v.reshape(-1, 2, 4)
     valid = boxes[:, 0, 0] < 1e29
     internal = valid & (count == 0)
-    cost, split = _optimal_splits(b, link, internal, _half_area(boxes[:, 0, :3], boxes[:, 1, :3]))
-    wide_index = np.full(len(v), -1, np.int64)         # BVH2 node -> BVH4 node
+    cost, split = _optimal_splits(b, link, internal, _half_area(boxes[:, 0, :3], boxes[:, 1, :3]), width)
+    wide_index = np.full(len(v), -1, np.int64)         # BVH2 node -> wide node
     levels, frontier, placed = [], np.zeros(1, np.int64), 0
     while len(frontier):
         wide_index[frontier] = placed + np.arange(len(frontier))
         placed += len(frontier)
-        kids = np.full((len(frontier), WIDTH), -1, np.int64)    # child slots, each with a share of the 4
+        kids = np.full((len(frontier), width), -1, np.int64)    # child slots, each with a share of the places
         share = np.zeros_like(kids)
         kids[:, 0], kids[:, 1] = 2 * frontier, 2 * frontier + 1
-        share[:, 0] = _best_pair(cost, 2 * frontier, WIDTH)[1]
-        share[:, 1] = WIDTH - share[:, 0]
+        share[:, 0] = _best_pair(cost, 2 * frontier, width)[1]
+        share[:, 1] = width - share[:, 0]
         n_kids = np.full(len(frontier), 2)
         while True:   # open the first child whose share is better spent on its two children
             j = np.where(kids >= 0, split[np.maximum(kids, 0), share], 0)
@@ -231,6 +271,8 @@ def collapse(b: Bvh, quantized: bool = False) -> WideBvh:
             kids[rows, n_kids[rows]], share[rows, n_kids[rows]] = 2 * opened + 1, k - j
             n_kids[rows] += 1
         kids = np.where(valid[np.maximum(kids, 0)], kids, -1)   # a single-leaf root's empty slot
+        if arrange is not None:
+            kids = arrange(kids)
         levels.append(kids)
         inner = kids[kids >= 0]
         frontier = link[inner[internal[inner]]]
@@ -239,37 +281,43 @@ def collapse(b: Bvh, quantized: bool = False) -> WideBvh:
     leaf = count[s] > 0
     leaf_item = LEAF_BIT | ((count[s].astype(np.uint32) - 1) << np.uint32(28)) | link[s].astype(np.uint32)
     items = np.where(leaf, leaf_item, wide_index[np.where(leaf, 0, link[s])].astype(np.uint32))
-    items = np.where(slots >= 0, items, 0).astype(np.uint32)
-    return WideBvh(b, slots, items, quantized)
+    return slots, np.where(slots >= 0, items, 0).astype(np.uint32)
 
 
-def _optimal_splits(b: Bvh, link, internal, area):
+def _optimal_splits(b: Bvh, link, internal, area, width: int):
     """Bottom-up over the BVH2 (Ylitie et al. 2017's dynamic program, one tree level at a time):
-    cost[s, k], the least total area of BVH4 nodes for child slot s's subtree given k <= 4
+    cost[s, k], the least total area of wide nodes for child slot s's subtree given k <= width
     places in its parent, and split[s, k], the places its first child takes when s is opened
-    (0: s stays one child, a BVH4 node or a leaf). Leaves are fixed, so node area alone is the
+    (0: s stays one child, a wide node or a leaf). Leaves are fixed, so node area alone is the
     SAH cost that differs between collapses."""
-    cost = np.zeros((len(area), WIDTH + 1))
-    split = np.zeros((len(area), WIDTH + 1), np.int64)
+    cost = np.zeros((len(area), width + 1))
+    split = np.zeros((len(area), width + 1), np.int64)
     for level in reversed(b.levels()):
         s = (2 * level[:, None] + np.arange(2)).reshape(-1)
         s = s[internal[s]]
-        best = {k: _best_pair(cost, 2 * link[s], k) for k in range(2, WIDTH + 1)}
-        as_node = area[s] + best[WIDTH][0]
+        opened, j = _best_pairs(cost, 2 * link[s], width)
+        as_node = area[s] + opened[:, width]
         cost[s, 1] = as_node
-        for k, (opened, j) in best.items():
-            cost[s, k] = np.minimum(as_node, opened)
-            split[s, k] = np.where(opened < as_node, j, 0)
+        cost[s, 2:] = np.minimum(as_node[:, None], opened[:, 2:])
+        split[s, 2:] = np.where(opened[:, 2:] < as_node[:, None], j[:, 2:], 0)
     return cost, split
 
 
+def _best_pairs(cost, first, width: int):
+    """For sibling slots (first, first + 1) sharing k = 2..width places: the least cost[first, j]
+    + cost[first + 1, k - j] over j = 1..k-1 and that j, as (n, width + 1) arrays (columns 0, 1 unused)."""
+    pair = cost[first, 1:width, None] + cost[first + 1, None, 1:width]   # (n, j - 1, m - 1)
+    best = np.full((len(first), width + 1), np.inf)
+    arg = np.zeros((len(first), width + 1), np.int64)
+    for k in range(2, width + 1):
+        js = np.arange(1, k)
+        c = pair[:, js - 1, k - js - 1]
+        best[:, k], arg[:, k] = c.min(axis=1), c.argmin(axis=1) + 1
+    return best, arg
+
+
 def _best_pair(cost, first, k: int):
-    """For sibling slots (first, first + 1) sharing k places: the least cost[first, j] +
-    cost[first + 1, k - j] over j = 1..k-1, and that j."""
-    c = np.stack([cost[first, j] + cost[first + 1, k - j] for j in range(1, k)], axis=1)
-    return c.min(axis=1), c.argmin(axis=1) + 1
+    """_best_pairs for one k: the least cost and the first child's places, each (n,)."""
+    best, arg = _best_pairs(cost, first, k)
+    return best[:, k], arg[:, k]
 
-
-def collapse_to(b: Bvh, layout: str):
-    """b in GPU layout `layout` (one of LAYOUTS): b itself ("bvh2") or its collapse."""
-    return b if layout == "bvh2" else collapse(b, quantized=layout == "bvh4q")

@@ -21,7 +21,7 @@ import numpy as np
 from ..errors import SceneError
 from ..gpu.records import INSTANCE_DATA, PUNCTUAL_LIGHT
 from . import bvh as bvh_mod
-from . import bvh_wide
+from . import bvh_layouts
 
 INSTANCE_HEADER_FLOATS = 8    # uvec4 scene_info + vec4 scene_shift
 RECENTRE_FRACTION = 1.0 / 8.0
@@ -114,7 +114,8 @@ class SceneFrame:
         pad = 1e-6 * np.maximum(np.abs(lo[live]), np.abs(hi[live])).max(axis=1, keepdims=True)
         t = bvh_mod.build(lo[live] - pad, hi[live] + pad, method="sah" if len(live) < 4096 else "lbvh",
                           leaf_size=1, progress=False)
-        nodes = bvh_wide.collapse_to(t, gs.bvh_layout).relinked(lambda slot: live[t.order[slot]])
+        w = bvh_layouts.collapse_to(t, gs.bvh_layout)
+        nodes = w.tlas_nodes(live[w.order].astype(np.uint32))
         gs.upload("tlas_nodes", nodes)
 
     # ---- punctual lights ---------------------------------------------------------------------

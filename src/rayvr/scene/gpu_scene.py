@@ -6,11 +6,11 @@ GpuScene builds what a scene's lifetime needs once (meshes, BLASes, textures, ma
 emissive table); its `frame` (`gpu_frame.SceneFrame`) owns what changes per frame (instances and
 the TLAS, punctual lights, the render-space shift). `update(origin)` uploads only what changed:
 a head that moves rewrites the 32-byte shift, edits rebuild their part, materials re-upload when
-`scene.materials.version` moved. `bvh_layout` picks the node layout of both BVH levels: "bvh2"
-(bvh.py's 64 B BVH2 nodes), "bvh4" (bvh_wide.py's 112 B BVH4 nodes, collapsed from the same BVH2
-builds; the default, the fastest to trace) or "bvh4q" (the same BVH4 with 8-bit quantised child
-boxes, 64 B: 6 B/triangle less, but slower to trace on GPUs, its decode costing more than its
-bytes save); ray_query.glsl follows the RQ_BVH_WIDTH and RQ_BVH_QUANTIZED of `defines()`.
+`scene.materials.version` moved. `bvh_layout` (else `Scene.bvh_layout`, else
+bvh_layouts.DEFAULT) picks the node layout of both BVH levels (bvh_layouts.py): "bvh2", "bvh4"
+(the default), "bvh4q" (8-bit boxes: fewer bytes, but slower to trace on GPUs, its decode costing
+more than its bytes save) or "bvh8" (compressed 8-wide nodes); ray_query.glsl follows the
+RQ_BVH_WIDTH and RQ_BVH_QUANTIZED of `defines()`.
 """
 from __future__ import annotations
 
@@ -24,18 +24,14 @@ from ..gpu.records import MATERIAL_DATA, TEXTURE_ROWS, TEXTURE_SLOTS
 from ..materials import bsdf_tables
 from ..materials.material import Material
 from . import bvh as bvh_mod
-from . import bvh_wide, light_table
+from . import bvh_layouts, bvh_wide, light_table
 from .gpu_frame import SceneFrame
 from .model import DEFAULT_ENVIRONMENT, FEATURES, Scene
 
 MAX_TEXTURE_SIZE = 2048
 MAX_ENVIRONMENT_HEIGHT = 1024   # environment maps above 2048x1024 are box-filtered down to it
 GPU_BVH_MIN = 200_000         # 'auto' builds meshes this big on the GPU (hardware drivers only)
-BVH_LAYOUTS = bvh_wide.LAYOUTS
-_NODE_FLOATS = {"bvh2": bvh_mod.NODE_FLOATS, "bvh4": bvh_wide.NODE_FLOATS, "bvh4q": bvh_wide.QUANTIZED_NODE_FLOATS}
-_LAYOUT_DEFINES = {"bvh2": {"RQ_BVH_WIDTH": 2, "RQ_BVH_QUANTIZED": 0},
-                   "bvh4": {"RQ_BVH_WIDTH": 4, "RQ_BVH_QUANTIZED": 0},
-                   "bvh4q": {"RQ_BVH_WIDTH": 4, "RQ_BVH_QUANTIZED": 1}}
+BVH_LAYOUTS = bvh_layouts.LAYOUTS
 
 
 def scene_scale(scene: Scene) -> float:
@@ -78,7 +74,8 @@ class GpuScene:
     LIGHT_SELECTIONS = ("power", "spatial")
 
     def __init__(self, gpu, scene: Scene, bvh_method: str = "auto", progress: bool | None = None,
-                 bvh_layout: str = "bvh4"):
+                 bvh_layout: str | None = None):
+        bvh_layout = bvh_layout or getattr(scene, "bvh_layout", None) or bvh_layouts.DEFAULT
         if bvh_layout not in BVH_LAYOUTS:
             raise SceneError(f"GpuScene bvh_layout: {bvh_layout!r}; use one of {BVH_LAYOUTS}")
         self.bvh_layout = bvh_layout
@@ -135,7 +132,7 @@ class GpuScene:
         built = self._build_blas(method, progress)
         collapsed = [isinstance(b, bvh_wide.WideBvh) for b in built]   # on the GPU already
         self.blas: list[bvh_mod.Bvh] = [b.source if c else b for b, c in zip(built, collapsed)]
-        self._blas_gpu = [b if c or b is None else bvh_wide.collapse_to(b, self.bvh_layout)
+        self._blas_gpu = [b if c or b is None else bvh_layouts.collapse_to(b, self.bvh_layout)
                           for b, c in zip(built, collapsed)]
         first_v = self._first_v = np.cumsum([0] + [len(m.positions) for m in s.meshes])
         first_t = self._first_t = np.cumsum([0] + [m.triangle_count for m in s.meshes])
@@ -183,8 +180,9 @@ class GpuScene:
             verts[:, 3], verts[:, 7] = mesh.uvs[:, 0], mesh.uvs[:, 1]
         if b is None:
             return
-        slots[:, :, :3] = mesh.positions[mesh.indices[b.order]]
-        slots.view(np.uint32)[:, 0, 3] = b.order
+        order = self._blas_gpu[k].order   # the traced layout's slot order (bvh8 has its own)
+        slots[:, :, :3] = mesh.positions[mesh.indices[order]]
+        slots.view(np.uint32)[:, 0, 3] = order
         t_base = np.uint32(self._first_t[k])
         nodes[:] = self._blas_gpu[k].relinked(lambda slot: slot + t_base, int(self._first_n[k]))
         lo, hi = b.bounds()
@@ -195,8 +193,8 @@ class GpuScene:
         GIL), a single big mesh uses the threaded LBVH itself. method 'gpu': every mesh on the
         GPU builder (bvh_gpu); 'auto': the GPU builder for meshes of GPU_BVH_MIN triangles and
         more on a hardware driver, binned SAH / LBVH on the CPU otherwise. Each a `Bvh`, except the
-        GPU-built ones in layout "bvh4": collapsed on the GPU too, a `bvh_wide.WideBvh` (greedy;
-        the CPU-built ones get bvh_wide's SAH-optimal collapse in _build_meshes)."""
+        GPU-built ones in layouts "bvh4" and "bvh8": collapsed on the GPU too, a `bvh_wide.WideBvh`
+        or `bvh8.Bvh8` (greedy; the CPU-built ones get the SAH-optimal collapse in _build_meshes)."""
         import os
         from concurrent.futures import ThreadPoolExecutor
 
@@ -209,7 +207,7 @@ class GpuScene:
         on_gpu = [m.triangle_count > 0 and (method == "gpu" or (method == "auto" and hardware
                                                                   and m.triangle_count >= GPU_BVH_MIN))
                   for m in self.scene.meshes]
-        build = bvh_gpu.build_gpu_bvh4 if self.bvh_layout == "bvh4" else bvh_gpu.build_gpu
+        build = {"bvh4": bvh_gpu.build_gpu_bvh4, "bvh8": bvh_gpu.build_gpu_bvh8}.get(self.bvh_layout, bvh_gpu.build_gpu)
         gpu_built = {k: build(self.gpu, m.triangles())   # GL calls: this thread only
                      for k, (m, g) in enumerate(zip(self.scene.meshes, on_gpu)) if g}
         if gpu_built:
@@ -406,7 +404,7 @@ class GpuScene:
     @property
     def node_floats(self) -> int:
         """Floats per BVH node of this scene's layout."""
-        return _NODE_FLOATS[self.bvh_layout]
+        return bvh_layouts.NODE_FLOATS[self.bvh_layout]
 
     # ---- binding and drawing ----------------------------------------------------------------
     _BINDING = {"vertices": "RAYVR_VERTEX_SSBO", "indices": "RAYVR_INDEX_SSBO",
@@ -439,7 +437,7 @@ class GpuScene:
             have -= {"SCENE_HAS_ENVIRONMENT", "SCENE_HAS_ENVIRONMENT_MAP"}
         return {**{f: int(f in have) for f in FEATURES}, "SCENE_SCALE": repr(self.scale),
                 "LIGHTS_SPATIAL": int(self.spatial_lights and "SCENE_HAS_EMISSIVE_TRIANGLES" in have),
-                **_LAYOUT_DEFINES[self.bvh_layout]}
+                **bvh_layouts.DEFINES[self.bvh_layout]}
 
     @property
     def scale(self) -> float:

@@ -346,6 +346,9 @@ class Scene:
         # far fewer fireflies beside small lamps, a little more noise elsewhere; read when a
         # renderer builds its GpuScene)
         self.light_selection = "power"
+        # the BVH node layout rays traverse (scene/bvh_layouts.py LAYOUTS; None: its DEFAULT), read
+        # when a renderer builds its GpuScene
+        self.bvh_layout: str | None = None
         self.cameras: list[Camera] = []
         self.warnings: list[str] = []          # what a loader skipped (e.g. line primitives)
 

@@ -6,7 +6,8 @@
 // megakernel's steps (path.glsl: pt_vertex, pt_shadow_answer, pt_ray_answer), so both forms draw
 // the same random numbers and give the same paths. At the sample's last stage every pixel adds its
 // path's share of the mean to the outputs (the first sample of the frame stores it) and keeps no
-// state.
+// state; with PTW_COMPACT a path adds it when it ends, and a path that goes on is queued for the
+// next stage.
 #include "pt_pixel.glsl"
 #include "pt_wave.glsl"
 
@@ -128,14 +129,15 @@ void ptw_output(ivec3 p, PtPath path, uint flags, vec3 emitted) {
 }
 
 void main() {
+    uint i;
     ivec3 p;
-    if (!ptw_pixel(p)) return;
-    uint i = ptw_slot();
+    if (!ptw_path(i, p)) return;
     Rng rng;   // drawn only for a path that goes on
     PtPath path = pt_path_begin();
     PtRays r = pt_no_rays();
     uint flags = 0u;
     vec3 emitted = vec3(0.0);
+    bool fresh = pt_stage == (PT_FROM_GBUFFER != 0 ? 0 : 1);   // `emitted` is made here, not loaded
 #if PT_FROM_GBUFFER
     if (pt_stage == 0) {
 #if SCENE_HAS_ALPHA_BLEND
@@ -206,6 +208,16 @@ void main() {
             }
         }
     }
+#if PTW_COMPACT
+    if (pt_last || (flags & PTW_ALIVE) == 0u) {
+        if (!fresh && !pt_last) emitted = ptw_loadf(PTW_EMITTED, i).xyz;
+        ptw_output(p, path, flags, emitted);
+    } else {
+        ptw_store_state(i, path, r, flags, rng);
+        ptq_push(i, r.dir);
+    }
+#else
     if (pt_last) ptw_output(p, path, flags, emitted);
     else ptw_store_state(i, path, r, flags, rng);
+#endif
 }

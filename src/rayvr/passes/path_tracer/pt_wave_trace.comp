@@ -3,20 +3,118 @@
 // it is mode "full"'s stage 0 instead: it makes and traces the camera rays, so no state precedes
 // them. Only traversal (and the camera): no BSDF, light or material code, so no register of
 // theirs; the camera's code is a program of its own for the same reason.
+//   PTW_PERSISTENT 1 (with PTW_COMPACT, GL_ARB_shader_ballot): a fixed set of workgroups takes the
+//   queue's paths (Aila & Laine 2009's persistent threads): a subgroup's lanes whose rays are done
+//   take the next paths (one atomic per subgroup) whenever fewer than PTW_REFILL_BELOW of them are
+//   still tracing, so a warp does not idle behind its longest ray; the rays interleave as
+//   ray_query.glsl's steps. The same rays and answers as one invocation per path.
 #include "pt_pixel.glsl"
 #include "pt_wave.glsl"
 
-#if PIXEL_LIST_INPUT
+#if PIXEL_LIST_INPUT && !PTW_PERSISTENT
 layout(local_size_x = PIXEL_LIST_GROUP) in;
 #else
 layout(local_size_x = RAY_GROUP_SIZE) in;
 #endif
 uniform int pt_sample;
 
+// Path i's rays (pixel p): whether it has a shadow ray (so, sd, stmax) and a BSDF ray (o, d);
+// resumes its BLEND decisions where its last rays left them.
+void ptw_rays(uint i, ivec3 p, out bool shadow, out vec3 so, out vec3 sd, out float stmax, out bool closest,
+              out vec3 o, out vec3 d) {
+    uint flags = ptw_load(PTW_POS, i).w;
+#if SCENE_HAS_ALPHA_BLEND
+    rq_blend_begin(pt_rng(p, pt_sample));
+    rq_blend_ray = ptw_load(PTW_ANSWER, i).z;
+#endif
+    vec3 from = uintBitsToFloat(ptw_load(PTW_POS, i).xyz);
+    vec4 ng = ptw_loadf(PTW_NG, i);
+    shadow = ng.w >= 0.0;
+    so = offset_ray_origin(from, ng.xyz);
+    sd = ptw_loadf(PTW_NEE_DIR, i).xyz;
+    stmax = ng.w;
+    closest = (flags & PTW_SCATTERED) != 0u;
+    o = offset_ray_origin(from, (flags & PTW_TRANSMITTED) != 0u ? -ng.xyz : ng.xyz);
+    d = ptw_loadf(PTW_DIR, i).xyz;
+}
+
+// Store path i's answers: the BSDF (or camera) ray's hit, PTW_FOUND | PTW_OCCLUDED | PTW_SHADOW.
+void ptw_answer(uint i, bool found, Hit hit, uint answer) {
+    if (!found) {
+        hit.t = 0.0;
+        hit.barycentrics = vec2(0.0);
+        hit.instance = 0u;
+        hit.primitive = 0u;
+    }
+    ptw_store(PTW_HIT, i, uvec4(floatBitsToUint(hit.t), floatBitsToUint(hit.barycentrics), hit.instance));
+    uint rays = 0u;
+#if SCENE_HAS_ALPHA_BLEND
+    rays = rq_blend_ray;
+#endif
+    ptw_store(PTW_ANSWER, i, uvec4(hit.primitive, answer | (found ? PTW_FOUND : 0u), rays, 0u));
+}
+
+#if PTW_PERSISTENT
+#ifndef PTW_REFILL_BELOW
+#define PTW_REFILL_BELOW 16
+#endif
+uint lanes(bool b) { uvec2 m = unpackUint2x32(ballotARB(b)); return uint(bitCount(m.x) + bitCount(m.y)); }
+
 void main() {
+    uint total = ptq_args[ptq_in].w;
+    bool tracing = false, drained = false;
+    uint i = 0u, answer = 0u;
+    bool shadow_ray = false, then_closest = false;   // the ray in flight is the shadow ray; the BSDF ray follows
+    vec3 o = vec3(0.0), d = vec3(0.0);
+    while (true) {
+        if (!drained) {
+            bool need = !tracing;
+            uvec2 m = unpackUint2x32(ballotARB(need));
+            uint n = uint(bitCount(m.x) + bitCount(m.y));
+            if (n > 0u) {
+                uint leader = m.x != 0u ? uint(findLSB(m.x)) : 32u + uint(findLSB(m.y));
+                uint first = 0u;
+                if (gl_SubGroupInvocationARB == leader) first = atomicAdd(ptq_args[2].x, n);
+                first = readInvocationARB(first, leader);
+                uvec2 lt = unpackUint2x32(gl_SubGroupLtMaskARB);
+                uint j = first + uint(bitCount(m.x & lt.x) + bitCount(m.y & lt.y));
+                drained = first + n >= total;
+                if (need && j < total) {
+                    i = ptq_items[ptq_in * pt_wave_paths + j];
+                    vec3 so, sd;
+                    float stmax;
+                    bool closest;
+                    ptw_rays(i, ptw_slot_pixel(i), shadow_ray, so, sd, stmax, closest, o, d);
+                    answer = shadow_ray ? PTW_SHADOW : 0u;
+                    then_closest = shadow_ray && closest;
+                    if (shadow_ray) rq_begin(so, sd, stmax, true);
+                    else if (closest) rq_begin(o, d, 1e30, false);
+                    tracing = (shadow_ray || closest) && !rq_done;
+                    if (!tracing) ptw_answer(i, false, rq_hit, answer);   // no rays, or no instances
+                }
+            }
+        }
+        if (!anyInvocationARB(tracing)) break;
+        do {
+            if (tracing && !rq_step()) {
+                if (shadow_ray && rq_found) answer |= PTW_OCCLUDED;
+                if (then_closest) {   // the shadow ray is answered: now the BSDF ray
+                    shadow_ray = then_closest = false;
+                    rq_begin(o, d, 1e30, false);
+                } else {
+                    ptw_answer(i, !shadow_ray && rq_found, rq_hit, answer);
+                    tracing = false;
+                }
+            }
+        } while (lanes(tracing) >= (drained ? 1u : uint(PTW_REFILL_BELOW)));
+    }
+}
+
+#else
+void main() {
+    uint i;
     ivec3 p;
-    if (!ptw_pixel(p)) return;
-    uint i = ptw_slot();
+    if (!ptw_path(i, p)) return;
     uint answer = 0u;
     vec3 o, d;
     bool closest = true;   // a BSDF or camera ray to trace (one call site: the traversal is inlined once)
@@ -24,38 +122,15 @@ void main() {
     Rng rng = pt_rng(p, pt_sample);   // also the BLEND decisions' seed
     pt_camera_ray(p, rng, o, d);
 #else
-    {
-        uvec4 pos = ptw_load(PTW_POS, i);
-        uint flags = pos.w;
-        if ((flags & PTW_ALIVE) == 0u) return;
-#if SCENE_HAS_ALPHA_BLEND   // the path's BLEND decisions go on where its last rays left them
-        rq_blend_begin(pt_rng(p, pt_sample));
-        rq_blend_ray = ptw_load(PTW_ANSWER, i).z;
-#endif
-        vec3 from = uintBitsToFloat(pos.xyz);
-        vec4 ng = ptw_loadf(PTW_NG, i);
-        if (ng.w >= 0.0) {
-            answer |= PTW_SHADOW;
-            if (trace_occluded(offset_ray_origin(from, ng.xyz), ptw_loadf(PTW_NEE_DIR, i).xyz, ng.w))
-                answer |= PTW_OCCLUDED;
-        }
-        closest = (flags & PTW_SCATTERED) != 0u;
-        if (closest) {
-            o = offset_ray_origin(from, (flags & PTW_TRANSMITTED) != 0u ? -ng.xyz : ng.xyz);
-            d = ptw_loadf(PTW_DIR, i).xyz;
-        }
-    }
+    if ((ptw_load(PTW_POS, i).w & PTW_ALIVE) == 0u) return;
+    bool shadow;
+    vec3 so, sd;
+    float stmax;
+    ptw_rays(i, p, shadow, so, sd, stmax, closest, o, d);
+    if (shadow) answer = PTW_SHADOW | (trace_occluded(so, sd, stmax) ? PTW_OCCLUDED : 0u);
 #endif
     Hit hit;
-    hit.t = 0.0;
-    hit.barycentrics = vec2(0.0);
-    hit.instance = 0u;
-    hit.primitive = 0u;
-    if (closest && trace_closest(o, d, 1e30, hit)) answer |= PTW_FOUND;
-    ptw_store(PTW_HIT, i, uvec4(floatBitsToUint(hit.t), floatBitsToUint(hit.barycentrics), hit.instance));
-    uint rays = 0u;
-#if SCENE_HAS_ALPHA_BLEND
-    rays = rq_blend_ray;
-#endif
-    ptw_store(PTW_ANSWER, i, uvec4(hit.primitive, answer, rays, 0u));
+    bool found = closest && trace_closest(o, d, 1e30, hit);
+    ptw_answer(i, found, hit, answer);
 }
+#endif

@@ -1,9 +1,8 @@
 // One level of the greedy BVH2 -> "bvh4" collapse (rayvr/scene/bvh_gpu.py, layout of bvh_wide.py).
-// Thread w in [level_begin, level_end) turns BVH2 node wide_source[w] into BVH4 node w: it starts
-// from the node's two children and, while it has fewer than 4, opens (replaces by its two
-// children) the internal child of largest box area. The internal children left become the next
-// level's BVH4 nodes, given adjacent indices by one atomicAdd on the counter; leaves become leaf
-// items (LEAF_ITEM_BIT | count - 1 << 28 | first slot); empty slots get the 1e30 box and item 0.
+// Thread w in [level_begin, level_end) turns BVH2 node wide_source[w] into BVH4 node w
+// (wide_collapse.glsl's open_children). The internal children left become the next level's BVH4
+// nodes, given adjacent indices by one atomicAdd on the counter; leaves become leaf items
+// (LEAF_ITEM_BIT | count - 1 << 28 | first slot); empty slots get the 1e30 box and item 0.
 // Writes the 112 B node (vec4 min.x, max.x, min.y, max.y, min.z, max.z, uvec4 item) and, per
 // node, uvec4 source child slots (2 * BVH2 node + side, 0xFFFFFFFF when empty) + uvec4 items.
 layout(local_size_x = 256) in;
@@ -16,44 +15,17 @@ layout(std430, binding = RAYVR_PASS_SSBO_0 + 4) writeonly buffer WideLinks { uve
 uniform uint level_begin;
 uniform uint level_end;
 uniform uint bvh2_node_base;   // added to the BVH2's node links by its build (subtracted here)
+#define WIDE 4
+#include "wide_collapse.glsl"
 
-#define EMPTY_SLOT 0xFFFFFFFFu
 #define EMPTY_BOX 1e30
-#define LEAF_ITEM_BIT 0x80000000u
-
-float half_area(vec3 lo, vec3 hi) {
-    vec3 d = hi - lo;
-    return d.x * d.y + d.y * d.z + d.z * d.x;
-}
-
-// BVH2 child slot s (2 * node + side) into BVH4 child k
-#define LOAD_CHILD(k, s) {                                                          \
-        vec4 a_ = bvh2_nodes[2u * (s)], b_ = bvh2_nodes[2u * (s) + 1u];             \
-        slot[k] = (s); lo[k] = a_.xyz; hi[k] = b_.xyz;                              \
-        link[k] = floatBitsToUint(a_.w); count[k] = floatBitsToUint(b_.w); }
 
 void main() {
     FOR_EACH(i, level_end - level_begin) {
         uint w = level_begin + i;
         vec3 lo[4], hi[4];
         uint link[4], count[4], slot[4];
-        uint node = wide_source[w];
-        LOAD_CHILD(0u, 2u * node)
-        LOAD_CHILD(1u, 2u * node + 1u)
-        uint children = 2u;
-        while (children < 4u) {   // open the internal child of largest area
-            int best = -1;
-            float best_area = -1.0;
-            for (uint k = 0u; k < children; ++k) {
-                float area = half_area(lo[k], hi[k]);
-                if (count[k] == 0u && lo[k].x < 1e29 && area > best_area) { best = int(k); best_area = area; }
-            }
-            if (best < 0) break;
-            uint opened = link[best] - bvh2_node_base;
-            LOAD_CHILD(uint(best), 2u * opened)
-            LOAD_CHILD(children, 2u * opened + 1u)
-            children += 1u;
-        }
+        uint children = open_children(wide_source[w], lo, hi, link, count, slot);
         uint inner = 0u;
         for (uint k = 0u; k < children; ++k) inner += uint(count[k] == 0u && lo[k].x < 1e29);
         uint next = inner > 0u ? atomicAdd(wide_counter, inner) : 0u;
