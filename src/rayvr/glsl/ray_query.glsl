@@ -52,6 +52,7 @@
 // RQ_STACK_SIZE (64). RQ_BVH_WIDTH 2 or 4, RQ_BVH_QUANTIZED 0 or 1 (the uploaded layout).
 // RQ_STATS 1: count per invocation rq_stat_nodes (internal nodes visited, of RQ_BVH_WIDTH),
 // rq_stat_triangles (triangle tests) and rq_stat_instances (BLAS entries) for the kernel to store.
+// RQ_COUNT_RAYS 1: rq_rays counts the queries the invocation began (glsl/ray_counters.glsl sums them per view).
 #pragma once
 #include "scene.glsl"
 
@@ -266,6 +267,9 @@ uint rq_stat_instances = 0u;   // BLAS entries (instance transforms)
 #else
 #define RQ_COUNT(c)
 #endif
+#if defined(RQ_COUNT_RAYS) && RQ_COUNT_RAYS
+uint rq_rays = 0u;   // queries this invocation began
+#endif
 
 // Stochastic transparency (SCENE_HAS_ALPHA_BLEND): the path's seed and sample index, and the
 // number of the ray being traced along it (rq_begin counts them). A trace_transmittance query
@@ -387,6 +391,9 @@ void rq_begin(vec3 o, vec3 d, float tmax_in, bool any_hit) {
     rq_next = 0u;
 #if SCENE_HAS_ALPHA_BLEND
     ++rq_blend_ray;
+#endif
+#if defined(RQ_COUNT_RAYS) && RQ_COUNT_RAYS
+    ++rq_rays;
 #endif
 }
 

@@ -5,6 +5,7 @@
 // theirs; the camera's code is a program of its own for the same reason.
 #include "pt_pixel.glsl"
 #include "pt_wave.glsl"
+#include "ray_counters.glsl"
 
 #if PIXEL_LIST_INPUT
 layout(local_size_x = PIXEL_LIST_GROUP) in;
@@ -58,4 +59,5 @@ void main() {
     rays = rq_blend_ray;
 #endif
     ptw_store(PTW_ANSWER, i, uvec4(hit.primitive, answer, rays, 0u));
+    ray_count_commit(uint(p.z));
 }
