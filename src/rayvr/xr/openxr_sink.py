@@ -501,7 +501,8 @@ class OpenXRSink(Sink):
         if self.gaze is not None:
             direction = self.gaze.direction(self.space, frame_state.predicted_display_time, self.world_pose)
             if direction is not None:
-                views.gaze = direction_tangents(views, direction)
+                with contextlib.suppress(XrError):   # a gaze beside the views (a tracking glitch): none
+                    views.gaze = direction_tangents(views, direction)
         return FrameRequest(self.frame_count, views, frame_state.predicted_display_time / 1e9,
                             should_render=bool(frame_state.should_render) and valid,
                             sink_data={"located": list(located), "display_time": frame_state.predicted_display_time})

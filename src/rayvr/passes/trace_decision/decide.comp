@@ -53,7 +53,7 @@ vec2 gaze_tangents(uint v) {
 float eccentricity_deg(uint v, vec2 pixel) {
     vec3 a = normalize(vec3(image_tangents(v, pixel), -1.0));
     vec3 g = normalize(vec3(gaze_tangents(v), -1.0));
-    return degrees(acos(clamp(dot(a, g), -1.0, 1.0)));
+    return degrees(atan(length(cross(a, g)), dot(a, g)));   // exact near 0, unlike acos
 }
 
 float budget_at(ivec3 q) {
