@@ -156,3 +156,26 @@ def test_bad_foveation_input_is_one_clear_error(gpu):
         TraceDecision(foveal_radius_deg=120.0)
     with pytest.raises(OptionError, match="TraceDecision.*'foveation'.*'gaze'"):
         TraceDecision(foveation="eyes")
+
+
+def test_foveal_flip_judges_where_the_eye_looks():
+    """FLIP within the foveal radius sees only an error there; the eccentricity-weighted FLIP
+    counts a peripheral error less than the plain mean does."""
+    from rayvr.study.display import Display
+    from rayvr.study.metrics import all_metrics
+
+    views = rv.xr.stereo_views(rv.xr.Pose(), 0.064, rv.xr.Fov.symmetric(90, 1.0), rv.xr.Fov.symmetric(90, 1.0),
+                               (64, 64))
+    ecc = foveation.eccentricity_map(views)[:, ::-1]
+    rng = np.random.default_rng(1)
+    reference = rng.uniform(0.2, 0.8, (2, 64, 64, 3))
+    far, near = reference.copy(), reference.copy()
+    far[ecc > 30.0] *= 0.3       # an error only in the periphery
+    near[ecc < 4.0] *= 0.3       # ... only in the fovea
+    which = ("flip", "flip_fovea", "flip_ecc")
+    m_far = all_metrics(far, reference, Display(exposure=0.0), ppd=15, which=which, eccentricity=ecc)
+    m_near = all_metrics(near, reference, Display(exposure=0.0), ppd=15, which=which, eccentricity=ecc)
+    assert m_far["flip_fovea"] == 0.0 and m_far["flip"] > 0.01 and m_far["flip_ecc"] < 0.5 * m_far["flip"]
+    assert m_near["flip_fovea"] > 10 * m_near["flip"] and m_near["flip_ecc"] > m_near["flip"]
+    with pytest.raises(OptionError, match="eccentricity"):
+        all_metrics(far, reference, Display(exposure=0.0), which=which)

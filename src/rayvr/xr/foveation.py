@@ -51,6 +51,12 @@ def eccentricity_weight(eccentricity_deg, radius_deg: float = DEFAULT_RADIUS_DEG
     return budget(eccentricity_deg, radius_deg, 0.0)
 
 
+def centre_tangents(view_set) -> np.ndarray:
+    """(views, 2) tangents of the direction through each view's image centre (fixed foveation's gaze)."""
+    t = np.array([v.fov.tangents() for v in view_set], dtype=np.float64)   # left, right, down, up
+    return np.stack([(t[:, 0] + t[:, 1]) / 2, (t[:, 2] + t[:, 3]) / 2], axis=1)
+
+
 def eccentricity_map(view_set, gaze=None) -> np.ndarray:
     """Degrees between each pixel's centre ray and the gaze, (views, h, w), row 0 the bottom row
     (GL, as readbacks are unless flipped). `gaze`: (views, 2) tangents; default the view set's

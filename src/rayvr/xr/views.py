@@ -216,10 +216,9 @@ class ViewSet:
 
     def gaze_tangents(self) -> tuple[np.ndarray, bool]:
         """((views, 2) gaze tangents, tracked): the eye tracker's, or each image's centre."""
-        if self._gaze is not None:
-            return self._gaze, True
-        t = np.array([v.fov.tangents() for v in self.views])   # left, right, down, up
-        return np.stack([(t[:, 0] + t[:, 1]) / 2, (t[:, 2] + t[:, 3]) / 2], axis=1), False
+        from .foveation import centre_tangents
+
+        return (self._gaze, True) if self._gaze is not None else (centre_tangents(self), False)
 
     def __len__(self) -> int:
         return len(self.views)
