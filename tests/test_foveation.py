@@ -179,3 +179,24 @@ def test_foveal_flip_judges_where_the_eye_looks():
     assert m_near["flip_fovea"] > 10 * m_near["flip"] and m_near["flip_ecc"] > m_near["flip"]
     with pytest.raises(OptionError, match="eccentricity"):
         all_metrics(far, reference, Display(exposure=0.0), which=which)
+
+
+def test_render_command_takes_the_trace_options_and_reports_them(gpu, tmp_path, capsys):
+    from rayvr.cli.main import main
+
+    code = main(["render", "--size", "24x24", "--preset", "raw", "--effect", "*=shadows", "--reuse", "views",
+                 "--foveation", "fixed", "--foveal-radius", "6", "--periphery-share", "0.5", "--report",
+                 "--out", str(tmp_path / "f.png")])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "fixed: every pixel within 6 degrees of each view's centre" in out and "falling to 0.5" in out
+    assert "views reuse rough surfaces" in out
+    line = next(l for l in out.splitlines() if "rays traced (last frame)" in l)
+    first, second = (int(n) for n in line.split("per view")[1].split(","))
+    assert second < 0.3 * first
+    for argv, words in ((["--foveation", "eyes"], "invalid choice"),
+                        (["--periphery-share", "0.5"], "--periphery-share shapes the foveation"),
+                        (["--foveation", "fixed", "--periphery-share", "0.05"], "--periphery-share 0.05")):
+        code = main(["render", "--size", "8x8", "--out", str(tmp_path / "x.png"), *argv])
+        _, err = capsys.readouterr()
+        assert code == 2 and words in err and "Traceback" not in err
