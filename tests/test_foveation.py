@@ -11,27 +11,16 @@ import rayvr as rv
 from rayvr.errors import OptionError, XrError
 from rayvr.passes import TraceDecision
 from rayvr.renderer import Renderer
-from rayvr.scene import builtin
 from rayvr.xr import foveation
 from rayvr.xr.gaze import GazePath, gaze_tangents, saccade_duration
 
+from decision_scenes import DECISION, FILL, NONE, TRACE, decision_graph, lambert_cornell
+
 SIZE = (48, 48)
-NONE, TRACE, REUSE, FILL = 0, 1, 2, 3
-DECISION = "Decision.decision"
-
-
-def lambert_cornell():
-    scene = builtin.cornell_box()
-    for name in scene.materials.names():
-        scene.materials[name].effect = rv.Effect.SHADOWS
-    return scene
 
 
 def graph(**kw):
-    g = rv.graphs.hybrid(preset="raw", **kw)
-    if "Decision" in g.passes:
-        g.mark_output(DECISION)
-    return g
+    return decision_graph(**kw)
 
 
 def test_the_budget_formula():

@@ -340,9 +340,9 @@ class RenderPass:
 
         return Path(sys.modules[cls.__module__].__file__).resolve().parent / name
 
-    def compute_program(self, gl, name: str, defines: dict | None = None, path=None):
-        """The (cached) compute program of shader `name` beside the pass (or at `path`), with
-        `defines`; a pass that COUNTS_RAYS compiles with RQ_COUNT_RAYS."""
+    def compute_program(self, gl, name: str, defines: dict | None = None):
+        """The (cached) compute program of shader `name` beside the pass, with `defines`; a pass
+        that COUNTS_RAYS compiles with RQ_COUNT_RAYS."""
         from ..gpu.shaders import compute_program
 
         header = ""
@@ -350,7 +350,7 @@ class RenderPass:
             from .ray_counters import SHADER_HEADER
 
             defines, header = {**(defines or {}), "RQ_COUNT_RAYS": 1}, SHADER_HEADER
-        return compute_program(gl, path or self.shader_path(name), defines, header=header)
+        return compute_program(gl, self.shader_path(name), defines, header=header)
 
     def raster_program(self, gl, vertex: str, fragment: str, defines: dict | None = None):
         """The (cached) vertex + fragment program of the shaders beside the pass."""

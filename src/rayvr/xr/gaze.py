@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from ..errors import XrError
+from . import quaternion
 
 SACCADE_BASE_S = 0.021
 SACCADE_S_PER_DEG = 0.0022
@@ -96,7 +97,8 @@ def gaze_tangents(view_set, head_rotation, gaze_deg) -> np.ndarray:
 def direction_tangents(view_set, world_direction) -> np.ndarray:
     """(views, 2) tangents of a world-space gaze direction in each view's eye space."""
     d = np.asarray(world_direction, dtype=np.float64)
-    eyes = np.stack([v.pose.rotation_matrix().T @ (d / np.linalg.norm(d)) for v in view_set])
+    rotations = quaternion.to_matrix(np.array([v.pose.orientation for v in view_set]))   # (views, 3, 3)
+    eyes = np.einsum("vji,j->vi", rotations, d / np.linalg.norm(d))   # each eye's R^T d
     if (eyes[:, 2] >= -1e-6).any():
         raise XrError(f"gaze direction {tuple(d)}: points beside or behind a view; keep it within the views' "
                       f"half space")

@@ -295,7 +295,10 @@ class ViewSet:
         body["clip"] = c[:, 11:15]
         body["jitter"][:, :2] = jitter
         body["jitter"].view(np.uint32)[:, 2] = self.first_view_index + np.arange(n, dtype=np.uint32)
-        gaze, tracked = self.gaze_tangents()
-        body["gaze"][:, :2] = gaze
-        body["gaze"][:, 2] = float(tracked)
+        if self._gaze is not None:
+            body["gaze"][:, :2] = self._gaze
+            body["gaze"][:, 2] = 1.0
+        else:   # the image centres (foveation.centre_tangents, from the columns at hand)
+            body["gaze"][:, 0] = (c[:, 7] + c[:, 8]) / 2
+            body["gaze"][:, 1] = (c[:, 9] + c[:, 10]) / 2
         return header.tobytes() + body.tobytes()
