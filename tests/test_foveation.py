@@ -189,3 +189,17 @@ def test_render_command_takes_the_trace_options_and_reports_them(gpu, tmp_path, 
         code = main(["render", "--size", "8x8", "--out", str(tmp_path / "x.png"), *argv])
         _, err = capsys.readouterr()
         assert code == 2 and words in err and "Traceback" not in err
+
+
+def test_the_viewer_turns_foveation_on_as_a_graph_option(gpu):
+    pytest.importorskip("imgui_bundle", reason="the viewer extra is not installed: pip install 'rayvr[viewer]'")
+    from rayvr.viewer.app import Viewer
+    from rayvr.viewer.offscreen import OffscreenSurface
+
+    with Viewer(lambert_cornell(), "hybrid", views=2, size=(16, 16), surface=OffscreenSurface((32, 16), gpu)) as v:
+        v.set_graph_option("foveation", "fixed")
+        v.step()
+        assert "Decision" in v.renderer.compiled.order and v.renderer.profile().rays_per_view
+        v.set_graph_option("foveation", "none")
+        v.step()
+        assert "Decision" not in v.renderer.graph.passes

@@ -111,10 +111,14 @@ def _trace_decision(g: RenderGraph, reuse, foveation, decision: dict | None, whe
 
 
 def _read_decision(g: RenderGraph, readers) -> None:
-    """Decision.decision into each of `readers` (pass names) that the graph has."""
+    """Decision.decision into each of `readers` (pass names) that the graph has and whose pass
+    declares a `decision` input (another pass under one of these names may not read it)."""
+    from .passes.trace_decision import DECISION
+    from .rendergraph.render_pass import CompileData
+
     for reader in readers:
-        if reader in g.passes:
-            g.add_edge("Decision.decision", f"{reader}.decision")
+        if reader in g.passes and DECISION in g.get_pass(reader).reflect(CompileData(views=2)).pins:
+            g.add_edge("Decision.decision", f"{reader}.{DECISION}")
 
 
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
