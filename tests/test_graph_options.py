@@ -76,7 +76,7 @@ def test_builders_by_name_for_the_viewer_and_the_study():
     from rayvr.viewer.app import resolve_graph
 
     assert list(BUILDERS) == list(GRAPHS) == ["hybrid", "hybrid_taa", "path_traced"]
-    assert [o.name for o in BUILDERS["path_traced"].options] == ["denoise"]
+    assert [o.name for o in BUILDERS["path_traced"].options] == ["denoise", "reuse", "foveation"]
     assert BUILDERS["hybrid"].takes("gi") and not BUILDERS["path_traced"].takes("gi")
     assert accepts(hybrid_taa_graph, "gi") and accepts(hybrid_taa_graph, "denoise")   # through hybrid's keywords
     assert resolve_graph("path_traced").name == "PathTraced" and resolve_graph(None).name == "Hybrid"

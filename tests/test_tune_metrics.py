@@ -108,7 +108,7 @@ def test_evaluate_judges_the_displayed_image_and_the_radiance():
     test[1] *= 1.2                                   # view 1 is 20% too bright
     display = Display("linear", 0.0)
     per_view, maps = M.evaluate(test, ref, display, ppd=14.0, maps=True)
-    assert set(per_view) == set(M.METRICS) and all(v.shape == (2,) for v in per_view.values())
+    assert set(per_view) == set(M.IMAGE_METRICS) and all(v.shape == (2,) for v in per_view.values())   # no eccentricity: not the foveal ones
     assert per_view["flip"][0] == 0.0 and per_view["flip"][1] > 0.0
     assert per_view["relmse"][1] == pytest.approx(0.01 / (0.25 + M.DEFAULT_EPS), rel=1e-6)
     assert per_view["psnr"][0] == math.inf

@@ -10,7 +10,7 @@ import rayvr as rv
 from rayvr import Effect
 from rayvr.xr.cameras import default_views
 from rayvr.study import Config, Display, Motion, ReferenceSettings, StudySettings, measure
-from rayvr.study.metrics import METRICS
+from rayvr.study.metrics import IMAGE_METRICS, METRICS
 from rayvr.study.pool import MetricPool
 from rayvr.study.progress import StudyProgress
 
@@ -30,8 +30,9 @@ def _judge_all(workers):
         pending = []
         for seed in range(3):
             test, ref = _images(seed)
+            ecc = np.hypot(*np.meshgrid(np.arange(20) - 9.5, np.arange(24) - 11.5))[None].repeat(2, 0)   # degrees
             pending.append(pool.judge(test, ref, display, 14.0, 1e-2, (f"image {seed}", "reference"),
-                                      tuple(METRICS), maps=seed == 0, units=1.0))
+                                      tuple(METRICS), maps=seed == 0, units=1.0, eccentricity=ecc))
         out = [p.get() for p in pending]
     return out
 
@@ -142,7 +143,7 @@ def test_an_interrupted_study_stops_its_workers_at_once():
     t0 = time.perf_counter()
     with pytest.raises(KeyboardInterrupt):
         with MetricPool(2) as pool:
-            pool.judge(test, ref, display, 14.0, 1e-2, ("image", "reference"), tuple(METRICS), units=1.0)
+            pool.judge(test, ref, display, 14.0, 1e-2, ("image", "reference"), IMAGE_METRICS, units=1.0)
             processes = list(pool.executor._processes.values())
             raise KeyboardInterrupt
     assert time.perf_counter() - t0 < 20

@@ -575,6 +575,83 @@ def test_stdin_is_put_back_when_the_runtime_closes_fd_0(gpu, gl):
         os.close(saved)
 
 
+class EyeGazeRuntime(TrackingRuntime):
+    """Offers XR_EXT_eye_gaze_interaction (or not: `offered`) and tracks the eyes looking
+    `yaw_deg` to the right of the head's forward."""
+
+    def __init__(self, *args, offered=True, yaw_deg=20.0, **kw):
+        super().__init__(*args, **kw)
+        self.offered, self.yaw = offered, math.radians(yaw_deg)
+        self.raw_functions = SimpleNamespace(xrGetSystemProperties=self._system_properties)
+
+    def enumerate_instance_extension_properties(self):
+        names = super().enumerate_instance_extension_properties()
+        return names + ([SimpleNamespace(extension_name=b"XR_EXT_eye_gaze_interaction")] if self.offered else [])
+
+    def _system_properties(self, instance, system, props):
+        p = ctypes.cast(props, ctypes.POINTER(xr.SystemProperties)).contents
+        eye = ctypes.cast(p.next, ctypes.POINTER(xr.SystemEyeGazeInteractionPropertiesEXT)).contents
+        eye.supports_eye_gaze_interaction = 1
+        return 0
+
+    def string_to_path(self, instance, text):
+        self._log(f"path:{text}")
+        return 0x900 + len(self.calls)
+
+    def create_action_set(self, instance, info):
+        self._log("create_action_set")
+        return _handle(xr.ActionSet, 0x500)
+
+    def create_action(self, action_set, info):
+        self._log("create_action")
+        assert int(info.action_type) == int(xr.ActionType.POSE_INPUT)
+        return _handle(xr.Action, 0x600)
+
+    def suggest_interaction_profile_bindings(self, instance, bindings):
+        self._log("suggest_interaction_profile_bindings")
+
+    def attach_session_action_sets(self, session, info):
+        self._log("attach_session_action_sets")
+
+    def create_action_space(self, session, info):
+        self._log("create_action_space")
+        return _handle(xr.Space, 0x700)
+
+    def sync_actions(self, session, info):
+        self._log("sync_actions")
+
+    def locate_space(self, space, base, time):
+        assert _hid(space) == 0x700 and _hid(base) == 0x300
+        half = -self.yaw / 2   # a turn to the right is negative about +Y
+        location = xr.SpaceLocation(pose=xr.Posef(orientation=xr.Quaternionf(0.0, math.sin(half), 0.0, math.cos(half))))
+        location.location_flags = int(xr.SpaceLocationFlags.ORIENTATION_VALID_BIT) | \
+            int(xr.SpaceLocationFlags.ORIENTATION_TRACKED_BIT)
+        return location
+
+    def destroy_action_set(self, h):
+        self._log("destroy_action_set")
+
+
+@pytest.mark.parametrize("offered", [True, False])
+def test_eye_gaze_is_enabled_where_offered_and_each_frame_carries_the_gaze(gpu, gl, offered):
+    rt = EyeGazeRuntime({1: [S.SYNCHRONIZED, S.VISIBLE]}, offered=offered)
+    requests = _run(OpenXRSink(api=rt, frames=3), gpu, _eyes(gl, 16, 12)[1])
+    assert ("XR_EXT_eye_gaze_interaction" in rt.enabled) is offered
+    rendered = [r for r in requests if r.should_render]
+    assert rendered
+    if not offered:
+        assert "create_action_set" not in rt.calls and all(r.views.gaze is None for r in requests)
+        return
+    calls = rt.calls
+    assert "path:/user/eyes_ext/input/gaze_ext/pose" in calls
+    assert "path:/interaction_profiles/ext/eye_gaze_interaction" in calls
+    assert calls.index("suggest_interaction_profile_bindings") < calls.index("attach_session_action_sets")
+    assert calls.count("sync_actions") == len(requests)
+    assert calls.index("destroy_action_set") < calls.index("destroy_session")
+    # both eyes look straight ahead in the fake: the gaze's tangent is tan(20 degrees) to the right
+    assert np.allclose(rendered[0].views.gaze, [[math.tan(math.radians(20.0)), 0.0]] * 2, atol=1e-6)
+
+
 @pytest.mark.skipif(not os.environ.get("RAYVR_TEST_OPENXR"), reason="set RAYVR_TEST_OPENXR=1 with a runtime "
                     "(e.g. Monado: XR_RUNTIME_JSON=... XRT_COMPOSITOR_NULL=1 SIMULATED_ENABLE=1)")
 def test_real_runtime_round_trip(gpu, gl):

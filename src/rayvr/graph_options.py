@@ -105,7 +105,25 @@ DIRECT = GraphOption("direct", "how SHADOWS materials and above sample direct li
                                 "light_samples per pixel)", (
     Choice("restir", "ReSTIR: candidates from the light table resampled over space, time and the views"),
 ))
-OPTIONS = (GI, DENOISE, DIRECT)
+REUSE = GraphOption("reuse", "which pixels trace their own rays across views", (
+    Choice("views", "views take the shaded light of the same rough surface in a nearby source view; "
+                    "disocclusions and glossy lobes are traced"),
+))
+FOVEATION = GraphOption("foveation", "fewer rays where the eye does not look", (
+    Choice("fixed", "the ray budget falls with the angle from each view's centre"),
+    Choice("gaze", "the ray budget falls with the angle from where the eye tracker says the eye looks"),
+))
+OPTIONS = (GI, DENOISE, DIRECT)   # the options the tuner tries
+TRACE_OPTIONS = (REUSE, FOVEATION)   # the trace decision's (rayvr.passes.TraceDecision)
+
+
+def trace_choice(option: GraphOption, value, where: str) -> str | None:
+    """`value` of REUSE or FOVEATION checked: None for off (None or 'none'), else one of its values."""
+    if value is None or value == NONE:
+        return None
+    if value not in option.values:
+        raise OptionError(f"{where}({option.name}={value!r}): use None ('none') or {option.either()}")
+    return value
 
 
 class _FromPreset:

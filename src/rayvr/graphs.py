@@ -11,6 +11,8 @@
     hybrid(): the "clean" preset, gi="probes" + denoise="svgf" (graph_options.PRESETS)
     direct="restir": Shadows is ReSTIRDI (spatiotemporal reservoir resampling) instead of
     RTShadows, with the same pins
+    reuse="views" / foveation="fixed"|"gaze" (hybrid and path_traced): + Decision (TraceDecision,
+    from the G-buffer) ─> Compaction, every ray pass and SVGF: which pixels trace this frame
 
     path_traced():  PathTracer ─> Accumulate ─> ToneMap      (progressive reference renders)
     hybrid_taa():   hybrid() with TAA on and its alpha and sigma
@@ -29,7 +31,8 @@ Passes that no material needs are pruned at compile time (see the compile report
 from __future__ import annotations
 
 from .errors import OptionError
-from .graph_options import DEFAULT_PRESET, DENOISE, DIRECT, FROM_PRESET, GI, GraphBuilder, preset_options
+from .graph_options import (DEFAULT_PRESET, DENOISE, DIRECT, FOVEATION, FROM_PRESET, GI, REUSE, TRACE_OPTIONS,
+                            GraphBuilder, preset_options, trace_choice)
 from .rendergraph.graph import RenderGraph
 
 OUTPUT = "ToneMap.dst"        # display-referred rgba8, sRGB encoded
@@ -88,12 +91,45 @@ def _denoised(g: RenderGraph, denoise: str | None, color: str, lobes: tuple[str,
         g.add_edge(color, "ToneMap.src")
 
 
+def _trace_decision(g: RenderGraph, reuse, foveation, decision: dict | None, where: str,
+                    every_surface: bool = False) -> bool:
+    """Add the trace decision (pass "Decision", rayvr.passes.TraceDecision) when `reuse` or
+    `foveation` asks for it, fed by the G-buffer, with `decision` as its further properties; False
+    (and nothing added) when neither does."""
+    from . import passes as P
+    from .passes.gbuffer import channels
+
+    reuse, foveation = trace_choice(REUSE, reuse, where), trace_choice(FOVEATION, foveation, where)
+    if reuse is None and foveation is None:
+        if decision:
+            raise OptionError(f"{where}(decision=...): trace decision settings need reuse='views' or foveation="
+                              f"'fixed' or 'gaze'")
+        return False
+    props = {"reuse": reuse == "views", "foveation": foveation or "none", "every_surface": every_surface,
+             **dict(decision or {})}
+    g.add_pass(P.TraceDecision(props), "Decision")
+    channels.wire(g, "GBuffer", "Decision")
+    return True
+
+
+def _read_decision(g: RenderGraph, readers) -> None:
+    """Decision.decision into each of `readers` (pass names) that the graph has and whose pass
+    declares a `decision` input (another pass under one of these names may not read it)."""
+    from .passes.trace_decision import DECISION
+    from .rendergraph.render_pass import CompileData
+
+    for reader in readers:
+        if reader in g.passes and DECISION in g.get_pass(reader).reflect(CompileData(views=2)).pins:
+            g.add_edge("Decision.decision", f"{reader}.{DECISION}")
+
+
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
            auto_exposure: bool = False, light_samples: int = 1,
            multiview: str = "auto", path_bounces: int = 4, name: str = "Hybrid",
            gbuffer: str = "auto", denoise=FROM_PRESET, gi=FROM_PRESET, taa=FROM_PRESET,
            probes: dict | None = None, reflection_max_roughness: float | None = None,
-           direct: str | None = None, restir: dict | None = None, preset: str = DEFAULT_PRESET) -> RenderGraph:
+           direct: str | None = None, restir: dict | None = None, preset: str = DEFAULT_PRESET,
+           reuse=None, foveation=None, decision: dict | None = None) -> RenderGraph:
     """The hybrid raster + ray-traced graph: multiview G-buffer, direct light for every pixel,
     ray-traced shadows and reflections only for the pixels whose material's effect asks for them,
     path tracing (rayvr.passes.PathTracer in G-buffer mode) for PATH_TRACED materials, composite
@@ -115,6 +151,12 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     rayvr.passes.gbuffer.reflection_cutoff); None: 0.6 with probe GI, 1 (every one traced) without.
     `direct="restir"`: the "Shadows" pass is rayvr.passes.ReSTIRDI (with `restir` as its
     properties) instead of RTShadows with `light_samples`; None: RTShadows.
+    `reuse`: 'views' (rough surfaces take the shaded light of the same surface in a nearby source
+    view; disocclusions, glossy lobes and mirrors are traced per view) and `foveation`: 'fixed' or
+    'gaze' (fewer rays away from each view's centre or the eye tracker's gaze) add the trace
+    decision (rayvr.passes.TraceDecision, pass "Decision", with `decision` as its properties, e.g.
+    {"foveal_radius_deg": 5, "periphery_share": 0.25}): the ray passes trace only the pixels it
+    leaves their rays and fill the others from their sources; SVGF follows its ray budget.
     Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR), with TAA or a denoiser then
     its HDR output (`TAA.dst` or `Denoise.dst`; `hdr_output(graph)` names a graph's)."""
     from . import passes as P
@@ -133,6 +175,10 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
         raise OptionError(f"hybrid(direct={direct!r}): use None ('none') or {DIRECT.either()}")
     if restir and direct != "restir":
         raise OptionError("hybrid(restir=...): ReSTIR settings need direct='restir'")
+    if direct == "restir" and any(v not in (None, "none") for v in (reuse, foveation)):
+        # the trace decision's fill reconstructs RTShadows' skipped pixels; ReSTIRDI has none yet
+        raise OptionError("hybrid(direct='restir'): not with reuse= or foveation= yet (ReSTIRDI lights every "
+                          "pixel itself); use one or the other")
     denoise = denoiser(denoise)
     svgf = denoise == "svgf"
     g = RenderGraph(name)
@@ -185,6 +231,8 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     _denoised(g, denoise, HDR_OUTPUT, ("Composite.diffuse", "Composite.specular"))
     if taa and not svgf:
         _add_taa(g)
+    if _trace_decision(g, reuse, foveation, decision, "hybrid"):
+        _read_decision(g, ("Compaction", "Shadows", "Reflections", "PathTracer", "SVGF"))
     return g
 
 
@@ -206,19 +254,22 @@ def _add_taa(g: RenderGraph, alpha: float | None = None, sigma: float | None = N
 def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int = 3, clamp: float = 0.0,
                 max_frames: int = 0, tonemap: str = "aces",
                 exposure: float = 0.0, auto_exposure: bool = False, name: str = "PathTraced",
-                denoise: str | None = None) -> RenderGraph:
+                denoise: str | None = None, reuse=None, foveation=None, decision: dict | None = None) -> RenderGraph:
     """Every pixel path traced from the camera (PathTracer in "full" mode), averaged over frames
     by Accumulate (restarts when the views or the scene change; `max_frames` > 0 stops it), tone
     mapped. Outputs: `ToneMap.dst` (rgba8 sRGB) and `Accumulate.dst` (HDR mean, rgba32f).
     `denoise`: 'svgf' (no Accumulate: a ray-traced G-buffer, the path tracer's lobes at pixel
     centres plus the views' jitter, SVGF and TAA; HDR output `TAA.dst`) or 'oidn' (the mean
     denoised with a ray-traced G-buffer's albedo and normal; HDR output `Denoise.dst`, marked
-    after `Accumulate.dst`)."""
+    after `Accumulate.dst`). `reuse`, `foveation`, `decision`: the trace decision as in hybrid(),
+    over every pixel's primary hit (a ray-traced G-buffer registers with the camera rays; an
+    EffectCompaction lists the pixels that trace)."""
     from . import passes as P
 
     denoise = denoiser(denoise)
     g = RenderGraph(name)
-    if denoise:
+    decided = any(trace_choice(o, v, "path_traced") for o, v in ((REUSE, reuse), (FOVEATION, foveation)))
+    if denoise or decided:
         g.add_pass(P.GBufferAuto(mode="rt"), "GBuffer")   # the path tracer's own primary rays
     g.add_pass(P.PathTracer(mode="full", samples_per_pixel=samples_per_pixel, max_bounces=max_bounces,
                             rr_start=rr_start, clamp=clamp,
@@ -231,6 +282,14 @@ def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int 
     if denoise != "svgf":
         g.mark_output(PT_HDR_OUTPUT)
     _denoised(g, denoise, PT_HDR_OUTPUT, ("PathTracer.diffuse", "PathTracer.specular"))
+    if _trace_decision(g, reuse, foveation, decision, "path_traced", every_surface=True):
+        from .passes.gbuffer import channels
+
+        g.add_pass(P.EffectCompaction(path_list=True, every_surface=True), "Compaction")
+        g.add_edge("GBuffer.effect", "Compaction.effect")
+        g.add_edge("Compaction.pathPixels", "PathTracer.pixels")
+        channels.wire(g, "GBuffer", "PathTracer")   # the fill's albedos
+        _read_decision(g, ("Compaction", "PathTracer", "SVGF"))
     return g
 
 
@@ -251,10 +310,9 @@ def hybrid_taa(alpha: float = 0.1, sigma: float = 1.0, name: str = "HybridTAA", 
 
 # The ready-made graphs by name, with the options each takes (rayvr.graph_options).
 BUILDERS = {b.name: b for b in (
-    GraphBuilder("hybrid", hybrid, (GI, DENOISE, DIRECT), "per-material effects; default"),
-    GraphBuilder("hybrid_taa", hybrid_taa, (GI, DENOISE, DIRECT), "hybrid with TAA before tone mapping",
-                 command_line=False,
-                 extends=hybrid),
-    GraphBuilder("path_traced", path_traced, (DENOISE,), "every pixel, accumulated: reference renders"),
+    GraphBuilder("hybrid", hybrid, (GI, DENOISE, DIRECT, *TRACE_OPTIONS), "per-material effects; default"),
+    GraphBuilder("hybrid_taa", hybrid_taa, (GI, DENOISE, DIRECT, *TRACE_OPTIONS), "hybrid with TAA before tone mapping",
+                 command_line=False, extends=hybrid),
+    GraphBuilder("path_traced", path_traced, (DENOISE, *TRACE_OPTIONS), "every pixel, accumulated: reference renders"),
 )}
 COMMAND_LINE_GRAPHS = tuple(name for name, b in BUILDERS.items() if b.command_line)   # --graph NAME

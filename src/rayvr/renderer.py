@@ -201,7 +201,9 @@ class Renderer:
         return self.compiled.read_output(name or self.output_name, flip_y=flip_y)
 
     def profile(self):
-        """Per-pass GPU ms per frame (see rayvr.rendergraph.profile)."""
+        """Per-pass GPU ms per frame (see rayvr.rendergraph.profile), and the rays the ray passes
+        traced per view in the last frame whose GPU counters came back (`rays_per_view`, a list,
+        and `rays_total`; a frame or two old: `compiled.ray_counts()` waits for the exact last)."""
         return self.compiled.profile()
 
     def report(self):

@@ -50,8 +50,12 @@ def add_study_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--exposure", default="auto",
                    help=f"exposure in stops (-{MAX_EXPOSURE:g} to {MAX_EXPOSURE:g}), or 'auto' (from the reference, "
                         f"once)")
-    p.add_argument("--metrics", default="flip,hdrflip,psnr,ssim,relmse,relmse_trim,fireflies",
-                   help="metrics, comma-separated (default all: flip,hdrflip,psnr,ssim,relmse,relmse_trim,fireflies)")
+    p.add_argument("--foveation", choices=("none", "fixed", "gaze"), default="none",
+                   help="also each level with rays foveated (fixed: about each view's centre), judged beside the "
+                        "unfoveated one, by FLIP in the fovea and weighted by eccentricity too")
+    p.add_argument("--metrics", default="flip,hdrflip,psnr,ssim,relmse,relmse_trim,fireflies,flip_fovea,flip_ecc",
+                   help="metrics, comma-separated (default all: flip,hdrflip,psnr,ssim,relmse,relmse_trim,fireflies,"
+                        "flip_fovea,flip_ecc)")
     p.add_argument("--frames", type=frames, help=f"judged frames per configuration, 1 to {MAX_FRAMES} (default 4)")
     p.add_argument("--timing-frames", type=integer("--timing-frames", 1, MAX_FRAMES),
                    help="timed frames per configuration (default 10 llvmpipe, 30 GPU)")
@@ -181,6 +185,10 @@ class StudyPlan:
 
             check_writable(self.cache or default_cache_dir(), "--cache", folder=True)
         self.configs_file = args.configs
+        self.foveation = getattr(args, "foveation", "none")
+        if self.configs_file and self.foveation != "none":
+            raise OptionError(f"--foveation {self.foveation} adds rows to the standard set; with --configs give each "
+                              f"configuration its own \"options\": {{\"foveation\": \"{self.foveation}\"}}")
         self.reflect = args.reflect
         self.progress = not args.quiet
 
@@ -190,7 +198,7 @@ class StudyPlan:
         if self.configs_file:
             return load_configs(self.configs_file)
         return standard_configs(scene, self.reference, reflect=self.reflect, spp=self.spp,
-                                denoised_levels=self.denoised_levels, probes=self.probes)
+                                denoised_levels=self.denoised_levels, probes=self.probes, foveation=self.foveation)
 
     def notes(self) -> list[str]:
         return [self.note] if self.note else []

@@ -8,6 +8,7 @@ import sys
 
 from ..errors import OptionError
 from ..gpu.bindings import BINDINGS
+from ..graph_options import NONE
 from ..scene.spec import load_scene_spec as load_scene_arg  # noqa: F401  (the subcommands' and benchmarks' name)
 
 MAX_SIDE = 8192
@@ -110,6 +111,42 @@ def apply_lighting(scene, args) -> None:
         print(f"rayvr: warning: {scene.path or scene.name}: no light (no punctual light, emissive material or environment); "
               f"lighting it with a neutral uniform environment of radiance 1 (--environment to choose one)",
               file=sys.stderr)
+
+
+def add_trace_arguments(p) -> None:
+    """--reuse, --foveation, --foveal-radius, --periphery-share (render, view): the trace decision."""
+    from ..graph_options import FOVEATION, REUSE
+    from ..xr import foveation
+
+    for option in (REUSE, FOVEATION):
+        p.add_argument(f"--{option.name}", choices=option.cli_choices, default=NONE,
+                       help=option.cli_help())
+    p.add_argument("--foveal-radius", type=number("--foveal-radius", 0, 90, low_open=True, unit=" degrees"),
+                   metavar="DEG", help=f"with --foveation: the radius of full ray density about the gaze "
+                                       f"(default {foveation.DEFAULT_RADIUS_DEG:g}: the central "
+                                       f"{2 * foveation.DEFAULT_RADIUS_DEG:g} degrees)")
+    p.add_argument("--periphery-share", type=number("--periphery-share", foveation.MIN_PERIPHERY_SHARE, 1),
+                   metavar="S", help=f"with --foveation: the share of rays the far periphery keeps (default "
+                                     f"{foveation.DEFAULT_PERIPHERY_SHARE:g}, at least "
+                                     f"{foveation.MIN_PERIPHERY_SHARE:g})")
+
+
+def trace_options(args, grid_cols: int = 0) -> dict:
+    """The graph builders' reuse=, foveation= and decision= from --reuse, --foveation,
+    --foveal-radius, --periphery-share (and a camera grid's columns)."""
+    reuse = None if args.reuse == NONE else args.reuse
+    fov = None if args.foveation == NONE else args.foveation
+    decision = {}
+    for flag, key, value in (("--foveal-radius", "foveal_radius_deg", args.foveal_radius),
+                             ("--periphery-share", "periphery_share", args.periphery_share)):
+        if value is not None:
+            if fov is None:
+                raise OptionError(f"{flag} shapes the foveation's fall-off; add --foveation fixed or gaze "
+                                  f"(or leave {flag} out)")
+            decision[key] = value
+    if reuse and grid_cols:
+        decision["grid_cols"] = int(grid_cols)
+    return {"reuse": reuse, "foveation": fov, "decision": decision or None}
 
 
 def say_nonfinite(counts: dict[str, int]) -> None:

@@ -33,8 +33,8 @@ from ..fileio import atomic_group, check_writable, image_format, write_exr, writ
 from ..graph_options import DEFAULT_PRESET, DIRECT, NONE, OPTIONS, PRESETS
 from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
 from . import cluster as cluster_cli
-from .options import (MAX_VIEWS, add_lighting_arguments, apply_lighting, integer, load_scene_arg, number,
-                      parse_size, say_nonfinite, views_count)
+from .options import (MAX_VIEWS, add_lighting_arguments, add_trace_arguments, apply_lighting, integer, load_scene_arg,
+                      number, parse_size, say_nonfinite, trace_options, views_count)
 
 LAYOUTS = ("per-view", "side-by-side")
 PT_SPP_PER_FRAME = 8   # the most paths per pixel one path-traced frame traces
@@ -103,7 +103,9 @@ def register(sub) -> None:
                                                      "(default 8x8x8)")
     p.add_argument("--probe-rays", type=integer("--probe-rays", 16, 1024), help="with --gi probes: rays per probe "
                                                                                 "per frame, 16 to 1024 (default 128)")
-    p.add_argument("--report", action="store_true", help="print the graph's compile report")
+    add_trace_arguments(p)
+    p.add_argument("--report", action="store_true", help="print the graph's compile report (the profile, with the "
+                                                         "rays traced per view, is printed either way)")
     cluster_cli.add_arguments(p)
     p.add_argument("--camera-path", metavar="FILE",
                    help="replay a camera path JSON (rayvr view records them): one frame per pose, "
@@ -279,7 +281,7 @@ def run(args) -> int:
         views = quilt_views(scene, grid[0], grid[1], size, args.view_cone)
     else:
         views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
-    graph = build_graph(args, exposure, auto_exposure, probes)
+    graph = build_graph(args, exposure, auto_exposure, probes, grid)
     hdr = out.suffix.lower() == ".exr"
     if camera_path is not None:
         with atomic_group():   # every frame's files, or none
@@ -315,19 +317,22 @@ def path_traced_frames(args) -> tuple[int, int]:
     return args.spp // per_frame, per_frame
 
 
-def build_graph(args, exposure: float, auto_exposure: bool, probes: dict | None = None):
-    """The graph --graph names, with the path tracing, denoising and (hybrid) probe options."""
+def build_graph(args, exposure: float, auto_exposure: bool, probes: dict | None = None, grid=None):
+    """The graph --graph names, with the path tracing, denoising, trace decision and (hybrid)
+    probe options."""
     from ..graphs import hybrid, path_traced
 
+    # the reuse's grid: a quilt's cameras are one row whatever its tiles
+    trace = trace_options(args, args.views if args.quilt else (grid[0] if grid else 0))
     if args.graph == "path_traced":
         _, per_frame = path_traced_frames(args)
         return path_traced(samples_per_pixel=per_frame, max_bounces=args.bounces or 8, tonemap=args.tonemap.lower(),
-                           exposure=exposure, auto_exposure=auto_exposure, denoise=args.denoise)
+                           exposure=exposure, auto_exposure=auto_exposure, denoise=args.denoise, **trace)
     g = hybrid(max_bounces=args.max_bounces, tonemap=args.tonemap.lower(), exposure=exposure,
                auto_exposure=auto_exposure, light_samples=args.light_samples, multiview=args.multiview,
                gbuffer=args.gbuffer, path_bounces=args.bounces or 4, denoise=args.denoise,
                gi=None if args.gi == NONE else args.gi, taa=args.taa == "on", probes=probes,
-               direct=None if args.direct == NONE else args.direct)
+               direct=None if args.direct == NONE else args.direct, **trace)
     if args.spp is not None:
         g.update_pass("PathTracer", {"samples_per_pixel": args.spp})
     return g
@@ -337,6 +342,7 @@ def summarize(r, args, line: str) -> None:
     """After a render: the compile report (--report), `line`, the profile, and on stderr the
     passes that set non-finite samples to 0."""
     nonfinite = r.compiled.nonfinite_counts()   # exact, and the report's and profile's from here on
+    r.compiled.ray_counts()   # exact: the profile's rays per view are the last frame's
     if args.report:
         print(r.report())
     print(line)

@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import OptionError
-from .options import parse_size
+from .options import add_trace_arguments, parse_size, trace_options
 
 
 def register(sub) -> None:
@@ -40,6 +40,7 @@ def register(sub) -> None:
     p.add_argument("--target-seconds", type=float, default=0.0, metavar="S",
                    help="... or once S seconds have passed since then (0: never)")
     p.add_argument("--no-ui", action="store_true", help="start with the panels hidden (H toggles them)")
+    add_trace_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -67,6 +68,10 @@ def run(args) -> int:
         get_preset(args.preset)
         if not 0 < args.preset_scale <= 1:
             raise OptionError(f"--preset-scale {args.preset_scale}: use a factor in (0, 1]")
+    trace = trace_options(args)
+    if (trace["reuse"] or trace["foveation"]) and not builder_name_of(args.graph):
+        raise OptionError(f"--reuse/--foveation build the ready-made graph with a trace decision; --graph "
+                          f"{args.graph} is a saved graph: add a TraceDecision to it instead")
     require_extra()
     script = None
     if args.script:   # checked before a window opens
@@ -90,6 +95,11 @@ def run(args) -> int:
     viewer = Viewer(scene, graph, views=args.views, size=size, preset=args.preset, preset_scale=args.preset_scale,
                     window_size=window, show_ui=not args.no_ui, script=script)
     viewer.target_frames, viewer.target_seconds = args.target_frames, args.target_seconds
+    for option in ("reuse", "foveation"):
+        if trace[option]:
+            viewer.set_graph_option(option, trace[option])
+    if trace["decision"]:
+        viewer.graph.update_pass("Decision", trace["decision"])
     try:
         if args.record:
             viewer.start_recording()
@@ -101,3 +111,10 @@ def run(args) -> int:
     finally:
         viewer.close()
     return 0
+
+
+def builder_name_of(spec) -> bool:
+    """Whether --graph names a ready-made graph (checked before the viewer extra is imported)."""
+    from ..graphs import COMMAND_LINE_GRAPHS
+
+    return spec is None or spec in COMMAND_LINE_GRAPHS

@@ -17,6 +17,7 @@ uint pixel_list_pack(ivec3 p) { return uint(p.x) | (uint(p.y) << 13u) | (uint(p.
 ivec3 pixel_list_unpack(uint w) { return ivec3(w & 0x1FFFu, (w >> 13u) & 0x1FFFu, w >> 26u); }
 
 #include "ray_group.glsl"
+#include "trace_decision.glsl"
 
 #if PIXEL_LIST_INPUT   // a ray pass that reads a list (bound to the block PixelList by name)
 layout(std430) readonly buffer PixelList {
@@ -29,13 +30,16 @@ layout(std430) readonly buffer PixelList {
 #if PIXEL_LIST_INPUT || PIXELS_2D
 // The pixel a ray pass's invocation works on; false when it has none. From the list (dispatched
 // indirectly, PIXEL_LIST_GROUP threads a group), or with PIXELS_2D the invocation's own pixel of
-// the image when its effect is min_effect or above (then gbuffer.glsl must come first, and no
-// list is declared).
+// the image when its effect is min_effect or above and (TRACE_DECISION) the trace decision leaves
+// it its rays (then gbuffer.glsl must come first, and no list is declared).
 bool ray_pass_pixel(uint min_effect, ivec3 image_size, out ivec3 p) {
 #if PIXELS_2D
     p = ray_group_pixel();
     if (any(greaterThanEqual(p, image_size))) return false;
     uint effect = gbuf_effect_at(p);
+#if TRACE_DECISION
+    if (decision_reconstructed(p)) return false;
+#endif
     return effect != GBUF_NO_GEOMETRY && effect >= min_effect;
 #else
     uint i = gl_GlobalInvocationID.x;

@@ -72,6 +72,7 @@
 // coin per BLEND surface, as trace_occluded; between: exact while the product stays above it).
 // RQ_STATS 1: count per invocation rq_stat_nodes (internal nodes visited, of RQ_BVH_WIDTH),
 // rq_stat_triangles (triangle tests) and rq_stat_instances (BLAS entries) for the kernel to store.
+// RQ_COUNT_RAYS 1: rq_rays counts the queries the invocation began (glsl/ray_counters.glsl sums them per view).
 #pragma once
 #include "scene.glsl"
 
@@ -336,6 +337,9 @@ uint rq_stat_instances = 0u;   // BLAS entries (instance transforms)
 #else
 #define RQ_COUNT(c)
 #endif
+#if defined(RQ_COUNT_RAYS) && RQ_COUNT_RAYS
+uint rq_rays = 0u;   // queries this invocation began
+#endif
 
 // Stochastic transparency (SCENE_HAS_ALPHA_BLEND): the path's seed and sample index, and the
 // number of the ray being traced along it (rq_begin counts them). A trace_transmittance query
@@ -509,6 +513,9 @@ void rq_begin(vec3 o, vec3 d, float tmax_in, bool any_hit) {
 #endif
 #if SCENE_HAS_ALPHA_BLEND
     ++rq_blend_ray;
+#endif
+#if defined(RQ_COUNT_RAYS) && RQ_COUNT_RAYS
+    ++rq_rays;
 #endif
 }
 

@@ -33,6 +33,9 @@ BINDINGS = {
     "RAYVR_PASS_SSBO_4": 20,
     # atomic counter buffer binding (its own namespace): the running pass's non-finite counter
     "RAYVR_NONFINITE_COUNTER": 0,
+    # image unit of the rays-per-view counters (rendergraph.ray_counters), the last of the 8 units
+    # GL guarantees: a program that declares them binds its own images from 0 below it
+    "RAYVR_RAY_COUNTER_IMAGE": 7,
     "RAYVR_SCENE_TEXTURE_UNIT": 8,
     "RAYVR_ENVIRONMENT_TEXTURE_UNIT": 9,
     "RAYVR_MAX_VIEWS": 64,
@@ -61,4 +64,5 @@ SHARED_BLOCKS = {
     "LightTable": "RAYVR_LIGHT_TABLE_SSBO",
     "EnvironmentData": "RAYVR_ENVIRONMENT_SSBO",
 }
+SHARED_IMAGES = {"rayvr_ray_counts": "RAYVR_RAY_COUNTER_IMAGE"}
 SHARED_SAMPLERS = {"scene_textures": "RAYVR_SCENE_TEXTURE_UNIT", "scene_environment": "RAYVR_ENVIRONMENT_TEXTURE_UNIT"}

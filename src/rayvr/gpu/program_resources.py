@@ -4,8 +4,8 @@ Passes never pick sampler units, image units or SSBO binding points by hand: the
 program is bound, its reflection (moderngl's members) gives every sampler uniform a texture unit,
 every image uniform an image unit and every storage block a binding point, in name order, and
 sets them on the program once. The frame-wide resources keep their fixed points
-(`bindings.SHARED_BLOCKS`: the views and the GPU scene; the scene's texture unit), which the
-allocation skips.
+(`bindings.SHARED_BLOCKS`: the views and the GPU scene; the scene's texture unit; the ray
+counters' image unit, the last), which the allocation skips.
 
     res = program_resources(prog)
     res.texture("gbuf_posW", data["posW"])
@@ -19,7 +19,7 @@ from __future__ import annotations
 import ctypes
 
 from ..errors import ShaderError
-from .bindings import FIRST_PASS_SSBO, SCENE_TEXTURE_UNITS, SHARED_BLOCKS, SHARED_SAMPLERS
+from .bindings import FIRST_PASS_SSBO, SCENE_TEXTURE_UNITS, SHARED_BLOCKS, SHARED_IMAGES, SHARED_SAMPLERS
 
 # GL type enums of sampler and image uniforms (glGetActiveUniform), the ones rayvr's GLSL uses.
 _SAMPLER_TYPES = {
@@ -57,12 +57,14 @@ class ProgramResources:
             elif isinstance(member, moderngl.Uniform):
                 if member.gl_type in _SAMPLER_TYPES and name not in SHARED_SAMPLERS:
                     samplers.append(name)
-                elif member.gl_type in _IMAGE_TYPES:
+                elif member.gl_type in _IMAGE_TYPES and name not in SHARED_IMAGES:
                     images.append(name)
+        shared_images = sum(1 for name in SHARED_IMAGES if name in prog)
         reserved = set(SCENE_TEXTURE_UNITS)
         free_units = [u for u in range(MAX_PASS_TEXTURE_UNITS + len(reserved)) if u not in reserved]
         where = getattr(prog, "rayvr_name", "program")
-        for kind, names, limit in (("sampler", samplers, len(free_units)), ("image", images, MAX_PASS_IMAGE_UNITS),
+        for kind, names, limit in (("sampler", samplers, len(free_units)),
+                                   ("image", images, MAX_PASS_IMAGE_UNITS - shared_images),
                                    ("storage block", blocks, MAX_PASS_SSBOS)):
             if len(names) > limit:
                 raise ShaderError(f"{where}: {len(names)} {kind} resources, more than the {limit} a pass may bind; "

@@ -75,6 +75,8 @@ VIEW_DATA = Record("ViewData", (
     Field("jitter", "vec4", meaning="xy sub-pixel jitter in pixels (TAA), z the view's index in its whole frame "
                                     "(uint bits: random streams follow it, so a frame split by views draws the "
                                     "same numbers), w unused"),
+    Field("gaze", "vec4", meaning="xy the tangents (x right, y up, as fov_tan) of the eye's gaze direction in eye "
+                                  "space, z 1 when an eye tracker gave it (else 0 and xy the image centre's), w unused"),
 ), meaning="One view of a frame (rayvr.xr.views.ViewSet.pack); positions in render space.")
 VIEWS_HEADER_BYTES = 16   # uvec4 frame_info before the ViewData array
 

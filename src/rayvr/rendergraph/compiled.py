@@ -26,6 +26,7 @@ from .compiler import STAGES, Plan
 from .formats import NUMPY_DTYPES, get_format
 from .nonfinite import NonFiniteCounters
 from .profile import Profile, RollingTimes
+from .ray_counters import RayCounters
 from .render_pass import HOST_READ_BITS, Access, PinDirection, PinKind, RenderContext, RenderData, barrier_bits
 from .report import CompileReport, ResourceInfo
 
@@ -57,6 +58,8 @@ class CompiledGraph:
             self.passes[p].compile(ctx, plan.compile_data[p])
         self.barriers_before, self.final_barrier = frame_barriers(plan)
         self.nonfinite = NonFiniteCounters(self.gl, [p for p in self.order if self.passes[p].COUNTS_NONFINITE])
+        counting = any(self.passes[p].COUNTS_RAYS for p in self.order)
+        self.rays = RayCounters(self.gl, plan.views) if counting else None
         self._steps = [(self._counted(p),
                         RenderData({pin: (None if res is None else self.resources[res])
                                     for pin, res in plan.bindings[p].items()}, plan.size, plan.views),
@@ -90,16 +93,27 @@ class CompiledGraph:
         return tex
 
     def _counted(self, name: str):
-        """Pass `name`'s execute, after binding its non-finite counter when it counts."""
+        """Pass `name`'s execute, after binding its non-finite counter and the ray counters when
+        it counts them."""
         execute = self.passes[name].execute
-        if name not in self.nonfinite.slot:
+        nonfinite = name in self.nonfinite.slot
+        rays = self.rays is not None and self.passes[name].COUNTS_RAYS
+        if not (nonfinite or rays):
             return execute
-        bind = self.nonfinite.bind
+        bind, bind_rays = self.nonfinite.bind, self.rays.bind if rays else None
 
         def run(ctx, data):
-            bind(name)
+            if nonfinite:
+                bind(name)
+            if bind_rays is not None:
+                bind_rays()
             execute(ctx, data)
         return run
+
+    def ray_counts(self) -> list[int]:
+        """Rays per view the ray passes traced in the last frame, exact (waits for the GPU); []
+        when no pass traces. profile() carries the latest without waiting (a frame or two old)."""
+        return self.rays.read() if self.rays is not None else []
 
     def nonfinite_counts(self) -> dict[str, int]:
         """{pass: non-finite samples it set to 0 since compile or reset_nonfinite()}, for every
@@ -122,6 +136,9 @@ class CompiledGraph:
         for p in self.order:
             self.passes[p].release()
         self.nonfinite.release()
+        if self.rays is not None:
+            self.rays.release()
+            self.rays = None
         for obj in self.objects:
             obj.release()
         for timer in self._timers:
@@ -135,6 +152,8 @@ class CompiledGraph:
         gl = self.gl
         if self.uses_scene:
             bind_frame_resources(ctx)
+        if self.rays is not None:
+            self.rays.frame_begin()
         if self.profiling:
             for (run, data, bits), timer, times in zip(self._steps, self._timers, self._times):
                 if bits:
@@ -153,6 +172,8 @@ class CompiledGraph:
         if self.final_barrier:
             gl.memory_barrier(self.final_barrier)
         self.nonfinite.frame_end()
+        if self.rays is not None:
+            self.rays.frame_end()
         self._cpu.add((time.perf_counter() - t0) * 1e3)
         self.frames += 1
 
@@ -186,8 +207,9 @@ class CompiledGraph:
                     if ms is not None:
                         times.add(ms)
         passes = {p: s for p, t in zip(self.order, self._times) if (s := t.stats()) is not None}
+        rays = self.rays.latest() if self.rays is not None else []
         return Profile(self.timing_method, self.frames, self._window, passes, self._cpu.stats(),
-                       self.nonfinite.latest())
+                       self.nonfinite.latest(), rays, sum(rays))
 
     # -- outputs -----------------------------------------------------------------------------
     def get_output(self, ref: str):

@@ -15,37 +15,15 @@ Counts accumulate from compile (or `reset()`). Two ways to read them:
 """
 from __future__ import annotations
 
-import ctypes
-
 import numpy as np
 
 from ..gpu.bindings import BINDINGS
+from .late_readback import LateReadback, gl_proc
 
 GL_ATOMIC_COUNTER_BUFFER = 0x92C0
 GL_ATOMIC_COUNTER_BARRIER_BIT = 0x1000
 GL_BUFFER_UPDATE_BARRIER_BIT = 0x200
-GL_SYNC_GPU_COMMANDS_COMPLETE = 0x9117
-GL_SYNC_FLUSH_COMMANDS_BIT = 0x1
-SIGNALLED = (0x911A, 0x911C)   # GL_ALREADY_SIGNALED, GL_CONDITION_SATISFIED
 BINDING = BINDINGS["RAYVR_NONFINITE_COUNTER"]
-
-_gl: dict = {}
-
-
-def _proc(name: str):
-    """glBindBufferRange, glFenceSync, glClientWaitSync, glDeleteSync (moderngl wraps none)."""
-    fn = _gl.get(name)
-    if fn is None:
-        from ..gpu.rawgl import ProcLoader
-
-        p = ctypes.c_void_p
-        signature = {"glBindBufferRange": (None, [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_ssize_t,
-                                                  ctypes.c_ssize_t]),
-                     "glFenceSync": (p, [ctypes.c_uint, ctypes.c_uint]),
-                     "glClientWaitSync": (ctypes.c_uint, [p, ctypes.c_uint, ctypes.c_uint64]),
-                     "glDeleteSync": (None, [p])}[name]
-        fn = _gl[name] = ProcLoader().proc(name, *signature)
-    return fn
 
 
 class NonFiniteCounters:
@@ -56,22 +34,20 @@ class NonFiniteCounters:
         self.names = list(names)
         self.slot = {n: i for i, n in enumerate(self.names)}
         self.buffer = gl.buffer(reserve=4 * max(len(self.names), 1))
-        self.staging = gl.buffer(reserve=self.buffer.size) if self.names else None
-        self._fence = None
+        self.late = LateReadback(gl, self.buffer.size) if self.names else None
         self._latest = {n: 0 for n in self.names}
         self.reset()
 
     def bind(self, name: str) -> None:
         """Make pass `name`'s counter the one its shaders' `rayvr_nonfinite` increments."""
-        _proc("glBindBufferRange")(GL_ATOMIC_COUNTER_BUFFER, BINDING, self.buffer.glo, 4 * self.slot[name], 4)
+        gl_proc("glBindBufferRange")(GL_ATOMIC_COUNTER_BUFFER, BINDING, self.buffer.glo, 4 * self.slot[name], 4)
 
     def frame_end(self) -> None:
         """After a frame's passes: copy the counters for `latest()` unless a copy is pending."""
-        if self.staging is None or not self._poll():
+        if self.late is None or not self._poll():
             return
         self.gl.memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT)
-        self.gl.copy_buffer(self.staging, self.buffer)
-        self._fence = _proc("glFenceSync")(GL_SYNC_GPU_COMMANDS_COMPLETE, 0)
+        self.late.start(lambda staging: self.gl.copy_buffer(staging, self.buffer))
 
     def latest(self) -> dict[str, int]:
         """The counts of the last copy whose fence has signalled (no wait)."""
@@ -79,27 +55,22 @@ class NonFiniteCounters:
         return dict(self._latest)
 
     def _poll(self) -> bool:
-        """Take the pending copy's counts if its fence has signalled; True when none is pending."""
-        if self._fence is None:
+        """Take the pending copy's counts if it has landed; True when none is pending."""
+        if self.late is None or not self.late.pending:
             return True
-        if _proc("glClientWaitSync")(self._fence, GL_SYNC_FLUSH_COMMANDS_BIT, 0) not in SIGNALLED:
+        data = self.late.take()
+        if data is None:
             return False
-        counts = np.frombuffer(self.staging.read(), np.uint32)   # the copy is done: no stall
-        self._latest = {n: int(c) for n, c in zip(self.names, counts)}
-        self._drop_fence()
+        self._latest = {n: int(c) for n, c in zip(self.names, np.frombuffer(data, np.uint32))}
         return True
-
-    def _drop_fence(self) -> None:
-        if self._fence is not None:
-            _proc("glDeleteSync")(self._fence)
-            self._fence = None
 
     def reset(self) -> None:
         """Every counter back to 0 (the next pass's increments see it)."""
         self.gl.memory_barrier(GL_ATOMIC_COUNTER_BARRIER_BIT)
         self.buffer.clear()
         self.gl.memory_barrier(GL_ATOMIC_COUNTER_BARRIER_BIT)
-        self._drop_fence()   # a pending copy holds counts from before
+        if self.late is not None:
+            self.late.drop()   # a pending copy holds counts from before
         self._latest = {n: 0 for n in self.names}
 
     def read(self) -> dict[str, int]:
@@ -107,16 +78,15 @@ class NonFiniteCounters:
         if not self.names:
             return {}
         self.gl.memory_barrier(GL_ATOMIC_COUNTER_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT)
-        self._drop_fence()   # what a pending copy holds is older than this
+        self.late.drop()   # what a pending copy holds is older than this
         counts = np.frombuffer(self.buffer.read(size=4 * len(self.names)), np.uint32)
         self._latest = {n: int(c) for n, c in zip(self.names, counts)}
         return dict(self._latest)
 
     def release(self) -> None:
-        self._drop_fence()
         self.buffer.release()
-        if self.staging is not None:
-            self.staging.release()
+        if self.late is not None:
+            self.late.release()
 
 
 def nonfinite_lines(counts: dict[str, int]) -> list[str]:

@@ -37,6 +37,10 @@ class Profile:
     cpu_ms: PassStats | None        # CPU time inside execute() (includes waits with finish+wall)
     # non-finite samples each counting pass set to 0 since compile (GPU counters: rendergraph.nonfinite)
     nonfinite: dict[str, int] = dataclasses.field(default_factory=dict)
+    # rays the ray passes traced per view in the last frame whose GPU counters came back (a frame
+    # or two late: rendergraph.ray_counters), and their sum; [] and 0 when no pass traces
+    rays_per_view: list[int] = dataclasses.field(default_factory=list)
+    rays_total: int = 0
 
     @property
     def total_ms(self) -> float:
@@ -54,6 +58,9 @@ class Profile:
         lines.append(f"  {'total':<{width}}  {self.total_ms:9.3f}")
         if self.cpu_ms:
             lines.append(f"  CPU in execute(): mean {self.cpu_ms.mean_ms:.3f} ms")
+        if self.rays_per_view:
+            per_view = ", ".join(str(n) for n in self.rays_per_view[:8]) + (", ..." if len(self.rays_per_view) > 8 else "")
+            lines.append(f"  rays traced (last frame): {self.rays_total} in all; per view {per_view}")
         if self.nonfinite:
             lines.append("  non-finite samples set to 0 (all frames): "
                          + ", ".join(f"{p} {n}" for p, n in self.nonfinite.items()))

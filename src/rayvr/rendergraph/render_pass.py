@@ -257,6 +257,9 @@ class RenderPass:
     # The pass's shaders scrub non-finite radiance with glsl/nonfinite.glsl: the graph gives it a
     # GPU counter (rendergraph.nonfinite) and binds it before execute().
     COUNTS_NONFINITE = False
+    # The pass traces rays for the views' pixels: its programs count them per view
+    # (rendergraph.ray_counters; RQ_COUNT_RAYS and glsl/ray_counters.glsl), the profile's rays_per_view.
+    COUNTS_RAYS = False
 
     def __init__(self, props: dict | None = None, **kwargs):
         self._props = copy.deepcopy(self.PROPERTIES)
@@ -339,9 +342,14 @@ class RenderPass:
 
     def compute_program(self, gl, name: str, defines: dict | None = None, header: str = ""):
         """The (cached) compute program of shader `name` beside the pass, with `defines` (and
-        `header`, raw GLSL after #version: extension directives)."""
+        `header`, raw GLSL after #version: extension directives); a pass that COUNTS_RAYS compiles with
+        RQ_COUNT_RAYS."""
         from ..gpu.shaders import compute_program
 
+        if self.COUNTS_RAYS:
+            from .ray_counters import SHADER_HEADER
+
+            defines, header = {**(defines or {}), "RQ_COUNT_RAYS": 1}, header + SHADER_HEADER
         return compute_program(gl, self.shader_path(name), defines, header=header)
 
     def raster_program(self, gl, vertex: str, fragment: str, defines: dict | None = None):

@@ -259,20 +259,25 @@ def available_direct(builder=hybrid_graph) -> list[str]:
 
 def standard_configs(scene, reference: ReferenceSettings | None = None, reflect: str = "auto", spp=(1, 4, 16),
                      taa: bool = True, denoised_levels: bool = True, probes: dict | None = None,
-                     **options) -> list[Config]:
+                     foveation: str | None = None, **options) -> list[Config]:
     """Every effect level alone (all RASTER, all SHADOWS, all REFLECTIONS, all PATH_TRACED at each
     `spp`) and mixed (SHADOWS with REFLECTIONS on one material); PATH_TRACED 1 spp + TAA (judged in
     motion); each PATH_TRACED level with every available denoiser, each other level with probe GI
     where the graphs have it, with each direct-light sampler where it has ray-traced shadows
     (`all SHADOWS + restir direct`) and (`denoised_levels`) with the real-time denoiser, with and
     without probe GI. PATH_TRACED uses the reference's bounces. `probes`: the probe GI rows' ProbeGI
-    properties (e.g. {"counts": [4, 4, 4]}; default the pass's)."""
+    properties (e.g. {"counts": [4, 4, 4]}; default the pass's). `foveation` ('fixed' or 'gaze'):
+    also each level with rays (SHADOWS and above, and the mixed one) foveated, judged beside its
+    unfoveated row by FLIP in the fovea and weighted by eccentricity too (rayvr.study.metrics)."""
     bounces = (reference or ReferenceSettings()).max_bounces
     opts = {"path_bounces": bounces, **options}
     mirror = reflective_material(scene, reflect)
     levels = [("all RASTER", Effect.RASTER), ("all SHADOWS", Effect.SHADOWS), ("all REFLECTIONS", Effect.REFLECTIONS),
               (f"SHADOWS + REFLECTIONS ({mirror})", {"*": Effect.SHADOWS, mirror: Effect.REFLECTIONS})]
     configs = [Config(name, effects, options=dict(opts)) for name, effects in levels]
+    if foveation not in (None, "none"):
+        configs += [Config(f"{name} + {foveation} foveation", effects, options={**opts, "foveation": foveation})
+                    for name, effects in levels[1:]]
     for mode in available_gi():
         configs += [Config(f"{name} + {mode} GI", effects, options={**opts, **_gi(mode, probes)})
                     for name, effects in levels]

@@ -35,6 +35,7 @@ import numpy as np
 
 from ..errors import OptionError
 from ..materials.effect import Effect
+from ..xr import foveation
 from . import seeds
 from .configs import Config, effects_restored, path_traced_graph
 from .defaults import machine_defaults
@@ -56,7 +57,7 @@ PROGRESSIVE_FIRST_FRAME = seeds.TEST + seeds.RANGE // 4
 # "Where the error study's time goes"; FLIP's includes the tone mapping, 2.5 us per pixel on one
 # core; HDR-FLIP runs LDR-FLIP at each of the reference's exposures).
 METRIC_COST = {"flip": 1.0, "hdrflip": 7.5, "ssim": 0.25, "psnr": 0.01, "relmse": 0.03, "relmse_trim": 0.01,
-               "fireflies": 0.01}
+               "fireflies": 0.01, "flip_fovea": 0.01, "flip_ecc": 0.01}
 # Relative GPU cost per pixel and frame of an effect level, in paths of the reference's length.
 EFFECT_COST = {Effect.RASTER: 0.3, Effect.SHADOWS: 0.5, Effect.REFLECTIONS: 0.8}
 
@@ -273,6 +274,9 @@ class Study:
         self.ppd, self.warmup_s, self.cache_dir, self.gpu, self.progress = ppd, warmup_s, cache_dir, gpu, progress
         self.runner = runner or LocalRunner()
         self.pixels = len(view_set) * view_set.size[0] * view_set.size[1]
+        # degrees of each pixel from its view's centre, in the judged images' row order (top first):
+        # the foveal metrics' (the trajectory moves the views, not their frusta)
+        self.eccentricity = foveation.eccentricity_map(view_set, foveation.centre_tangents(view_set))[:, ::-1]
         if motion_frames is None:
             motion_frames = trajectory_views(view_set, settings.motion) if settings.motion else []
         self.motion_frames = motion_frames          # the views of every trajectory frame
@@ -429,7 +433,7 @@ class Study:
         answer; the study renders on meanwhile. `hdrflip` False: without HDR-FLIP (where
         StudySettings.hdrflip_frames leaves it out)."""
         return self.pool.judge(image, reference_image, self.display, self.ppd, self.s.eps, (name, "reference"),
-                               self._which(hdrflip), maps, units=self._units(hdrflip))
+                               self._which(hdrflip), maps, units=self._units(hdrflip), eccentricity=self.eccentricity)
 
     def judge_curve(self, image, reference_image, name: str):
         """judge_later for a progressive curve's snapshot (no HDR-FLIP when hdrflip_frames is set)."""

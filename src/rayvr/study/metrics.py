@@ -13,7 +13,10 @@ an image is an error that names the image and the first bad pixel, never a silen
     ssim(test, ref)           scikit-image's structural similarity of display-encoded images
 
 `evaluate` is the error study's set: FLIP, PSNR and SSIM of the displayed images (see
-rayvr.study.display), HDR-FLIP, relMSE, trimmed relMSE and the firefly count of the linear radiance.
+rayvr.study.display), HDR-FLIP, relMSE, trimmed relMSE and the firefly count of the linear radiance;
+given each pixel's eccentricity (degrees from the view's centre: rayvr.xr.foveation), also FLIP
+within the foveal radius and FLIP weighted by eccentricity, which judge a foveated render where
+the eye looks.
 
 The `*_map` functions return the per-pixel error (views, h, w) whose mean is the metric: the
 budget tuner sums them over each material's pixels.
@@ -27,6 +30,7 @@ import numpy as np
 
 from .. import images
 from ..errors import OptionError, RayvrError
+from ..xr import foveation
 from .display import LUMINANCE
 
 DYNAMIC_RANGES = ("auto", "ldr", "hdr")
@@ -228,7 +232,12 @@ def srgb_encode(linear) -> np.ndarray:
 
 # -- the study's metrics ----------------------------------------------------------------------
 METRICS = {"flip": "FLIP", "hdrflip": "HDR-FLIP", "psnr": "PSNR dB", "ssim": "SSIM", "relmse": "relMSE",
-           "relmse_trim": "relMSE trim 0.1%", "fireflies": "fireflies"}
+           "relmse_trim": "relMSE trim 0.1%", "fireflies": "fireflies", "flip_fovea": "FLIP fovea",
+           "flip_ecc": "FLIP ecc-weighted"}
+# The FLIP map judged by where each pixel lies from the view's centre (they need its eccentricity).
+FOVEAL_METRICS = ("flip_fovea", "flip_ecc")
+IMAGE_METRICS = tuple(m for m in METRICS if m not in FOVEAL_METRICS)   # what the images alone give
+FOVEAL_RADIUS_DEG = foveation.DEFAULT_RADIUS_DEG
 DESCRIPTIONS = {"flip": "LDR-FLIP of the displayed images at the headset's pixels per degree",
                 "hdrflip": "HDR-FLIP of the linear radiance at the same pixels per degree",
                 "psnr": "PSNR of the displayed images (peak 1)",
@@ -237,9 +246,15 @@ DESCRIPTIONS = {"flip": "LDR-FLIP of the displayed images at the headset's pixel
                 "relmse_trim": f"relMSE without the largest {100 * TRIM_FRACTION:g}% of per-pixel errors (robust "
                                f"to fireflies)",
                 "fireflies": f"pixels per view whose luminance exceeds {FIREFLY_RATIO:g}x the reference's "
-                             f"(lum(t) - lum(r) > {FIREFLY_RATIO - 1:g} sqrt(lum(r)^2 + eps))"}
+                             f"(lum(t) - lum(r) > {FIREFLY_RATIO - 1:g} sqrt(lum(r)^2 + eps))",
+                "flip_fovea": f"LDR-FLIP of the displayed images within {FOVEAL_RADIUS_DEG:g} degrees of each view's "
+                              f"centre (the central {2 * FOVEAL_RADIUS_DEG:g} degrees: where a fixed foveation keeps "
+                              f"every ray)",
+                "flip_ecc": f"LDR-FLIP weighted by eccentricity e from each view's centre: 1 within "
+                            f"{FOVEAL_RADIUS_DEG:g} degrees, ({FOVEAL_RADIUS_DEG:g} / e)^2 beyond (the fall-off the "
+                            f"foveated ray budget assumes)"}
 LOWER_IS_BETTER = {"flip": True, "hdrflip": True, "psnr": False, "ssim": False, "relmse": True,
-                   "relmse_trim": True, "fireflies": True}
+                   "relmse_trim": True, "fireflies": True, "flip_fovea": True, "flip_ecc": True}
 RELMSE_METRICS = ("relmse", "relmse_trim")   # the means of the per-pixel relMSE map
 MAP_METRICS = ("flip", "relmse")   # per-pixel maps whose mean is the metric (the tuner sums them)
 DEFAULT_EPS = 1e-2
@@ -257,9 +272,12 @@ def check_metrics(which) -> tuple[str, ...]:
 
 
 def evaluate(test, reference, display, ppd: float | None = None, eps: float = DEFAULT_EPS,
-             names=("test", "reference"), which=tuple(METRICS), maps: bool = False, shown_reference=None):
+             names=("test", "reference"), which=IMAGE_METRICS, maps: bool = False, shown_reference=None,
+             eccentricity=None):
     """The study's metrics of linear `test` against linear `reference`, each per view:
     ({metric: (views,) array}, {metric: (views, h, w) map} when `maps`).
+    `eccentricity`: degrees of each pixel from its view's centre, (views, h, w) in the images' row
+    order; the FOVEAL_METRICS need it.
 
     `display` (a fixed rayvr.study.display.Display) makes the displayed images that FLIP, PSNR
     and SSIM judge; HDR-FLIP and relMSE take the linear radiance. `ppd`: pixels per degree for
@@ -268,6 +286,11 @@ def evaluate(test, reference, display, ppd: float | None = None, eps: float = DE
     t, r = pair(test, reference, names)
     which = check_metrics(which)
     need = set(which) | (set(MAP_METRICS) if maps else set())
+    if need & set(FOVEAL_METRICS):
+        if eccentricity is None or np.shape(eccentricity) != t.shape[:3]:
+            raise OptionError(f"metrics {', '.join(FOVEAL_METRICS)}: need each pixel's eccentricity, (views, h, w) "
+                              f"as the images (rayvr.xr.foveation.eccentricity_map of their views)")
+        need.add("flip")
     if need & {"flip", "psnr", "ssim"}:
         shown = (display(t), display(r) if shown_reference is None else shown_reference)
     else:
@@ -285,6 +308,10 @@ def evaluate(test, reference, display, ppd: float | None = None, eps: float = DE
             out[m] = firefly_map(t, r, eps, names).reshape(len(t), -1).sum(axis=1)
         elif m in per_map:
             out[m] = per_map[m].reshape(len(t), -1).mean(axis=1).astype(np.float64)
+        elif m == "flip_fovea":
+            out[m] = _foveal_mean(per_map["flip"], np.asarray(eccentricity) <= FOVEAL_RADIUS_DEG)
+        elif m == "flip_ecc":
+            out[m] = _foveal_mean(per_map["flip"], foveation.eccentricity_weight(eccentricity, FOVEAL_RADIUS_DEG))
         elif m == "hdrflip":
             out[m] = flip_map(t, r, "hdr", ppd, names).reshape(len(t), -1).mean(axis=1).astype(np.float64)
         elif m == "psnr":
@@ -294,8 +321,15 @@ def evaluate(test, reference, display, ppd: float | None = None, eps: float = DE
     return out, (per_map if maps else {})
 
 
+def _foveal_mean(error_map, weight) -> np.ndarray:
+    """Per view, the mean of `error_map` weighted by `weight` (a mask or weights, (views, h, w))."""
+    w = np.broadcast_to(np.asarray(weight, dtype=np.float64), error_map.shape).reshape(len(error_map), -1)
+    e = error_map.reshape(len(error_map), -1).astype(np.float64)
+    return (e * w).sum(axis=1) / np.maximum(w.sum(axis=1), 1e-30)
+
+
 def all_metrics(test, reference, display, ppd: float | None = None, eps: float = DEFAULT_EPS,
-                names=("test", "reference"), which=tuple(METRICS)) -> dict:
+                names=("test", "reference"), which=IMAGE_METRICS, eccentricity=None) -> dict:
     """`evaluate`'s metrics as one number each (the mean over views)."""
-    per_view, _ = evaluate(test, reference, display, ppd, eps, names, which)
+    per_view, _ = evaluate(test, reference, display, ppd, eps, names, which, eccentricity=eccentricity)
     return {m: float(np.mean(v)) for m, v in per_view.items()}

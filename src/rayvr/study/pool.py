@@ -146,9 +146,9 @@ class MetricPool:
         return self.refs[key][1]
 
     def judge(self, image, reference, display, ppd, eps, names, which, maps: bool = False,
-              units: float = 0.0) -> Pending:
+              units: float = 0.0, eccentricity=None) -> Pending:
         """Judge `image` against `reference` (both linear; negatives in `image` are judged as the
-        display shows them, 0, and counted)."""
+        display shows them, 0, and counted); `eccentricity` for the foveal metrics (metrics.evaluate)."""
         image, negatives = clamp_negative(image)
         label = names[0]
         if self.executor is None:
@@ -157,11 +157,12 @@ class MetricPool:
                 key = (id(reference), display)
                 if key not in self.shown or self.shown[key][0] is not reference:
                     self.shown[key] = (reference, _shown(ref, display))
-                per_view, m = _evaluate(_rgb32(image), ref, display, ppd, eps, names, which, maps, self.shown[key][1])
+                per_view, m = _evaluate(_rgb32(image), ref, display, ppd, eps, names, which, maps, self.shown[key][1],
+                                        eccentricity)
             return Pending(self, value=(per_view, m, negatives), units=units, label=label)
         while len(self.outstanding) >= 2 * self.workers:
             self.wait(self.outstanding[0])
-        args = (_rgb32(image), reference, display, ppd, eps, tuple(names), tuple(which), maps)
+        args = (_rgb32(image), reference, display, ppd, eps, tuple(names), tuple(which), maps, eccentricity)
         future = self.executor.submit(_judge_task, args[0], self._reference_path(reference), *args[2:])
         pending = Pending(self, future, units=units, label=label)
         pending.negatives, pending.args = negatives, args
@@ -202,10 +203,11 @@ class MetricPool:
         self.workers = 0
         self.progress.concurrent("metric", 0)
         for p in list(self.outstanding):
-            image, reference, display, ppd, eps, names, which, maps = p.args
+            image, reference, display, ppd, eps, names, which, maps, eccentricity = p.args
             with self.progress.step("metric", p.units, p.label):
                 ref = _rgb32(reference)
-                per_view, m = _evaluate(image, ref, display, ppd, eps, names, which, maps, _shown(ref, display))
+                per_view, m = _evaluate(image, ref, display, ppd, eps, names, which, maps, _shown(ref, display),
+                                        eccentricity)
             p.value, p.future, p.args = (per_view, m, p.negatives), None, None
             self.outstanding.remove(p)
 
@@ -221,11 +223,11 @@ def _rgb32(a) -> np.ndarray:
     return np.ascontiguousarray(a[..., :3] if a.ndim == 4 and a.shape[-1] > 3 else a)
 
 
-def _evaluate(image, reference, display, ppd, eps, names, which, maps, shown_reference):
+def _evaluate(image, reference, display, ppd, eps, names, which, maps, shown_reference, eccentricity=None):
     from .metrics import evaluate
 
     return evaluate(image, reference, display, ppd, eps, names=names, which=which, maps=maps,
-                    shown_reference=shown_reference)
+                    shown_reference=shown_reference, eccentricity=eccentricity)
 
 
 def _shown(reference, display):
@@ -258,7 +260,7 @@ def _ready() -> int:
     return os.getpid()
 
 
-def _judge_task(image, reference_path, display, ppd, eps, names, which, maps):
+def _judge_task(image, reference_path, display, ppd, eps, names, which, maps, eccentricity=None):
     t0 = time.perf_counter()
     reference = _REFERENCES.get(reference_path)
     if reference is None:
@@ -269,5 +271,5 @@ def _judge_task(image, reference_path, display, ppd, eps, names, which, maps):
     key = (reference_path, display)
     if key not in _SHOWN:
         _SHOWN[key] = _shown(reference, display)
-    per_view, m = _evaluate(image, reference, display, ppd, eps, names, which, maps, _SHOWN[key])
+    per_view, m = _evaluate(image, reference, display, ppd, eps, names, which, maps, _SHOWN[key], eccentricity)
     return per_view, m, time.perf_counter() - t0

@@ -10,7 +10,10 @@ session with the EGL or Xlib graphics binding -> reference space (STAGE if offer
 swapchains (one array swapchain with a layer per view, else one per view) -> the frame loop:
 xrPollEvent (session lifecycle, see openxr_lifecycle.py), xrWaitFrame, xrBeginFrame,
 xrLocateViews, [render], acquire/wait/copy/release swapchain images, xrEndFrame with one
-projection layer whose views carry the located pose and fov.
+projection layer whose views carry the located pose and fov. Where the runtime offers
+XR_EXT_eye_gaze_interaction and its system supports it, the sink enables it and each frame's
+views carry the eye gaze at the frame's display time (`ViewSet.gaze`; openxr_gaze.py), which
+foveation 'gaze' follows.
 
 The frame the sink is in the middle of is tracked (`frame_phase`: waiting, waited, begun): a
 frame that was waited but not begun (Ctrl-C inside xrWaitFrame, or an error between the calls)
@@ -26,7 +29,9 @@ import os
 import time
 
 from ..errors import XrError
+from .gaze import direction_tangents
 from .openxr_convert import projection_views, version_tuple, views_from_located
+from .openxr_gaze import EyeGaze, system_supports
 from .openxr_gl import (COLOR_PREFERENCE, DEPTH_PREFERENCE, GL_TEXTURE_2D, GL_TEXTURE_2D_ARRAY, GLPlatform,
                         SwapchainCopier, choose_format)
 from .openxr_lifecycle import Action, SessionLifecycle, SessionState
@@ -70,6 +75,8 @@ class OpenXRSink(Sink):
     source_srgb: whether submitted colour is sRGB-encoded (default: yes for rgba8, no for floats).
     validation: enable the Khronos core validation layer (if installed with pyopenxr).
     frames: request exit after this many frames (None: until the runtime ends the session).
+    eye_gaze: enable XR_EXT_eye_gaze_interaction where the runtime and system offer it (`gaze`
+    is then the session's EyeGaze, else None).
     api: the pyopenxr module or a stand-in (tests); default `import xr`.
     """
 
@@ -77,7 +84,7 @@ class OpenXRSink(Sink):
                  near: float = 0.05, far: float = 1000.0, reversed_z: bool = False, depth: bool = False,
                  source_srgb: bool | None = None, array_swapchain: bool = True, validation: bool = False,
                  frames: int | None = None, recover: bool = True, recover_timeout_s: float = 5.0,
-                 exit_timeout_s: float = 3.0, api=None):
+                 exit_timeout_s: float = 3.0, eye_gaze: bool = True, api=None):
         if reference_space not in ("stage", "local"):
             raise XrError(f"OpenXRSink: reference_space '{reference_space}' is unknown; use 'stage' or 'local'")
         self.app_name, self.reference_space = app_name, reference_space
@@ -88,6 +95,8 @@ class OpenXRSink(Sink):
         self.validation, self.frames = validation, frames
         self.recover, self.recover_timeout_s, self.exit_timeout_s = recover, recover_timeout_s, exit_timeout_s
         self.xr = api
+        self.want_gaze = bool(eye_gaze)
+        self.gaze = None
         self.instance = self.system = self.session = self.space = None
         self.swapchains: list[_Swapchain] = []
         self.depth_swapchains: list[_Swapchain] = []
@@ -278,6 +287,8 @@ class OpenXRSink(Sink):
             raise XrError(f"OpenXR runtime lacks {', '.join(missing)}: {how}")
         if self.want_depth and xr.KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME in available:
             wanted.append(xr.KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME)
+        if self.want_gaze and xr.EXT_EYE_GAZE_INTERACTION_EXTENSION_NAME in available:
+            wanted.append(xr.EXT_EYE_GAZE_INTERACTION_EXTENSION_NAME)
         layers = []
         if self.validation:
             expose = getattr(getattr(xr, "api_layer", None), "expose_packaged_api_layers", None)
@@ -326,6 +337,10 @@ class OpenXRSink(Sink):
         self.space_type = kind
         self.space = xr.create_reference_space(self.session, xr.ReferenceSpaceCreateInfo(
             reference_space_type=kind, pose_in_reference_space=xr.Posef()))
+        self.gaze = None
+        if xr.EXT_EYE_GAZE_INTERACTION_EXTENSION_NAME in self.extensions and system_supports(xr, self.instance,
+                                                                                              self.system):
+            self.gaze = EyeGaze(xr, self.instance, self.session)
         formats = list(xr.enumerate_swapchain_formats(self.session))
         self.color_format = choose_format(formats, COLOR_PREFERENCE)
         usage = xr.SwapchainUsageFlags.COLOR_ATTACHMENT_BIT | xr.SwapchainUsageFlags.TRANSFER_DST_BIT
@@ -373,6 +388,9 @@ class OpenXRSink(Sink):
 
     def _destroy_session(self) -> None:
         xr = self.xr
+        if self.gaze is not None:
+            self.gaze.destroy()
+            self.gaze = None
         for sc in self.swapchains + self.depth_swapchains:
             try:
                 xr.destroy_swapchain(sc.handle)
@@ -480,6 +498,11 @@ class OpenXRSink(Sink):
         views = views_from_located(located, self._size, self.near, self.far, self.reversed_z,
                                    self.world_pose, self._previous_views)
         self._previous_views = views
+        if self.gaze is not None:
+            direction = self.gaze.direction(self.space, frame_state.predicted_display_time, self.world_pose)
+            if direction is not None:
+                with contextlib.suppress(XrError):   # a gaze beside the views (a tracking glitch): none
+                    views.gaze = direction_tangents(views, direction)
         return FrameRequest(self.frame_count, views, frame_state.predicted_display_time / 1e9,
                             should_render=bool(frame_state.should_render) and valid,
                             sink_data={"located": list(located), "display_time": frame_state.predicted_display_time})

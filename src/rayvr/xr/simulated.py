@@ -14,6 +14,7 @@ from pathlib import Path
 from ..errors import OptionError, XrError
 from .cameras import stereo_views
 from .compositor import Compositor
+from .gaze import gaze_tangents, make_gaze
 from .presets import HeadsetPreset, get_preset
 from .sink import FrameRequest, Sink, check_texture_array
 from .trajectory import make_trajectory
@@ -32,6 +33,9 @@ class SimulatedHeadset(Sink):
     record_dir: write eye PNGs and a side-by-side PNG per frame there (every `record_every`).
     video: also write a video of the side-by-side frames: True (mp4 when imageio-ffmpeg is
     installed, else gif), "mp4" or "gif". frame_time_s: a fixed render time for every frame.
+    gaze: a simulated eye tracker (rayvr.xr.gaze): "scan", "centre", fixations [(t_s, (x_deg,
+    y_deg)), ...] or a GazePath; each frame's views then carry where the eyes look at its
+    predicted display time (`ViewSet.gaze`, which foveation 'gaze' follows). None: no tracker.
     """
 
     def __init__(self, preset: str | HeadsetPreset = "index", refresh_hz: float | None = None,
@@ -39,7 +43,7 @@ class SimulatedHeadset(Sink):
                  frames: int | None = None, ipd: float | None = None, start_pose: Pose | None = None,
                  near: float = 0.05, far: float = 1000.0, reversed_z: bool = False,
                  frame_time_s: float | None = None, late_policy: str = "reproject",
-                 max_late_vsyncs: int = 1, record_every: int = 1, encode_srgb: bool = False):
+                 max_late_vsyncs: int = 1, record_every: int = 1, encode_srgb: bool = False, gaze=None):
         self.preset = preset if isinstance(preset, HeadsetPreset) else get_preset(preset)
         self.refresh_hz = float(refresh_hz or self.preset.default_refresh)
         self.ipd = self.preset.ipd if ipd is None else float(ipd)
@@ -50,6 +54,7 @@ class SimulatedHeadset(Sink):
         self._start_pose_given = start_pose is not None
         self._trajectory_spec = trajectory
         self.trajectory = make_trajectory(trajectory, self.start_pose)
+        self.gaze = make_gaze(gaze)
         self.frames = frames
         self.near, self.far, self.reversed_z = near, far, reversed_z
         self.frame_time_s = frame_time_s
@@ -94,6 +99,8 @@ class SimulatedHeadset(Sink):
         views = stereo_views(head, self.ipd, self.preset.left_fov, self.preset.right_fov, self._size,
                              self.near, self.far, self.reversed_z)
         views = ViewSet(views.views, previous=self._last_views)   # motion vectors: last frame's matrices
+        if self.gaze is not None:
+            views.gaze = gaze_tangents(views, head.rotation_matrix(), self.gaze.direction_at(timing.predicted_display_time))
         self._last_views = views
         return FrameRequest(timing.index, views, timing.predicted_display_time, head,
                             sink_data={"timing": timing, "wall_start": time.perf_counter()})

@@ -194,6 +194,31 @@ class ViewSet:
         # the index of views[0] in its whole frame (a share of a frame split by views): the
         # shaders' random streams follow the global index (views.glsl view_global_index)
         self.first_view_index = 0
+        self._gaze = None
+
+    @property
+    def gaze(self) -> np.ndarray | None:
+        """Where each eye looks, as (views, 2) tangents (x right, y up) of the gaze direction in
+        that view's eye space, from an eye tracker; None when none is known (foveation then
+        centres on each view's image: `gaze_tangents`)."""
+        return self._gaze
+
+    @gaze.setter
+    def gaze(self, tangents) -> None:
+        if tangents is None:
+            self._gaze = None
+            return
+        g = np.asarray(tangents, dtype=np.float64)
+        if g.shape != (len(self.views), 2) or not np.isfinite(g).all():
+            raise XrError(f"ViewSet.gaze: expected ({len(self.views)}, 2) finite tangents (x right, y up) of each "
+                          f"view's gaze direction, got shape {g.shape}")
+        self._gaze = g
+
+    def gaze_tangents(self) -> tuple[np.ndarray, bool]:
+        """((views, 2) gaze tangents, tracked): the eye tracker's, or each image's centre."""
+        from .foveation import centre_tangents
+
+        return (self._gaze, True) if self._gaze is not None else (centre_tangents(self), False)
 
     def __len__(self) -> int:
         return len(self.views)
@@ -270,4 +295,10 @@ class ViewSet:
         body["clip"] = c[:, 11:15]
         body["jitter"][:, :2] = jitter
         body["jitter"].view(np.uint32)[:, 2] = self.first_view_index + np.arange(n, dtype=np.uint32)
+        if self._gaze is not None:
+            body["gaze"][:, :2] = self._gaze
+            body["gaze"][:, 2] = 1.0
+        else:   # the image centres (foveation.centre_tangents, from the columns at hand)
+            body["gaze"][:, 0] = (c[:, 7] + c[:, 8]) / 2
+            body["gaze"][:, 1] = (c[:, 9] + c[:, 10]) / 2
         return header.tobytes() + body.tobytes()

@@ -1,6 +1,8 @@
 // Per-effect pixel lists: every pixel whose effect needs shadow rays goes to the shadow list,
 // every pixel that needs reflection rays to the reflection list, PATH_TRACED pixels to the path
-// list when the graph has a path tracer (glsl/pixel_list.glsl layout).
+// list when the graph has a path tracer (glsl/pixel_list.glsl layout); with COMPACT_EVERY_SURFACE
+// every pixel goes to the path list. With TRACE_DECISION the pixels the trace decision reconstructs
+// from others go to none (glsl/trace_decision.glsl).
 // One global atomic per workgroup and list; the indirect group count grows as the list fills.
 #define GBUF_READER 1
 #include "gbuffer.glsl"
@@ -38,9 +40,14 @@ void main() {
     bool geo = effect != GBUF_NO_GEOMETRY;
     // With a path tracer in the graph, PATH_TRACED pixels get only its list; else they count as
     // REFLECTIONS (the most the hybrid passes offer).
-    bool wants_path = COMPACT_PATHS != 0 && geo && effect == EFFECT_PATH_TRACED;
-    bool wants_shadow = geo && effect >= EFFECT_SHADOWS && !wants_path;
-    bool wants_reflection = COMPACT_REFLECTIONS != 0 && geo && effect >= EFFECT_REFLECTIONS && !wants_path;
+    bool traces = all(lessThan(p, size));
+#if TRACE_DECISION
+    traces = traces && !decision_reconstructed(p);
+#endif
+    bool wants_path = COMPACT_PATHS != 0 && traces && (COMPACT_EVERY_SURFACE != 0 || (geo && effect == EFFECT_PATH_TRACED));
+    bool wants_shadow = traces && geo && effect >= EFFECT_SHADOWS && !wants_path && COMPACT_EVERY_SURFACE == 0;
+    bool wants_reflection = COMPACT_REFLECTIONS != 0 && traces && geo && effect >= EFFECT_REFLECTIONS && !wants_path
+                            && COMPACT_EVERY_SURFACE == 0;
 
     uint local_shadow = wants_shadow ? atomicAdd(s_count[0], 1u) : 0u;
     uint local_reflection = wants_reflection ? atomicAdd(s_count[1], 1u) : 0u;

@@ -7,6 +7,7 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
 from ..dispatch import groups_2d
 from ..effects import effect_defines, effects_used, unused_effect_reason
+from ..trace_decision.fill import DECISION, DecisionFill
 from .pixel_list import HEADER_BYTES, pixel_list_bytes
 
 LISTS = {"shadowPixels": "ShadowList", "reflectionPixels": "ReflectionList", "pathPixels": "PathList"}   # pin -> GLSL block
@@ -17,15 +18,19 @@ class EffectCompaction(RenderPass):
     """Reads the G-buffer's effect ids and appends each pixel to the lists of the ray work it needs:
     `shadowPixels` (effect >= SHADOWS) and `reflectionPixels` (effect >= REFLECTIONS), each with
     its own indirect dispatch arguments. With `path_list` PATH_TRACED pixels go to `pathPixels`
-    only (for a PathTracer); without, they count as REFLECTIONS. All views in one dispatch."""
+    only (for a PathTracer); without, they count as REFLECTIONS. All views in one dispatch.
+    With the optional `decision` input (TraceDecision) the pixels it reconstructs are left out of
+    every list: only the pixels that trace this frame are dispatched. `every_surface` (with
+    `path_list`): every pixel, drawn or not, goes to `pathPixels` (a path tracer from the camera)."""
 
     EFFECT = "effect"
     SHADOW_PIXELS, REFLECTION_PIXELS, PATH_PIXELS = "shadowPixels", "reflectionPixels", "pathPixels"
-    PROPERTIES = {"path_list": False}
+    PROPERTIES = {"path_list": False, "every_surface": False}
 
     def reflect(self, cd):
         r = Reflection()
         r.add_input(self.EFFECT, "effect id per pixel (r32ui)").format("r32ui")
+        DecisionFill.add_input(r)
         n = pixel_list_bytes(cd.size, cd.views)
         r.add_output(self.SHADOW_PIXELS, "pixels needing shadow rays").buffer(n)
         r.add_output(self.REFLECTION_PIXELS, "pixels needing reflection rays").buffer(n)
@@ -33,7 +38,7 @@ class EffectCompaction(RenderPass):
         return r
 
     def skip_reason(self, cd):
-        if unused_effect_reason(cd, Effect.SHADOWS):
+        if unused_effect_reason(cd, Effect.SHADOWS) and not self.every_surface:
             return "every material is RASTER: no pixel needs rays"
         return None
 
@@ -42,10 +47,13 @@ class EffectCompaction(RenderPass):
 
     def compile(self, ctx, cd):
         used = effects_used(cd)
-        paths = bool(self.path_list) and (used is None or Effect.PATH_TRACED in used)
-        reflections = used is None or any(e >= Effect.REFLECTIONS and not (paths and e == Effect.PATH_TRACED)
-                                          for e in used)
-        self._defines = {"COMPACT_REFLECTIONS": int(reflections), "COMPACT_PATHS": int(paths)}
+        every = bool(self.every_surface and self.path_list)
+        paths = bool(self.path_list) and (every or used is None or Effect.PATH_TRACED in used)
+        reflections = not every and (used is None or any(
+            e >= Effect.REFLECTIONS and not (paths and e == Effect.PATH_TRACED) for e in used))
+        self._defines = {"COMPACT_REFLECTIONS": int(reflections), "COMPACT_PATHS": int(paths),
+                         "COMPACT_EVERY_SURFACE": int(every),
+                         "TRACE_DECISION": int(DecisionFill.connected(cd))}
         self._reset = program_resources(self.compute_program(ctx.gl, "compact_reset.comp"))
         self._compact = program_resources(self.compute_program(ctx.gl, "compact.comp",
                                                                {**effect_defines(), **self._defines}))
@@ -58,4 +66,6 @@ class EffectCompaction(RenderPass):
         self._reset.prog.run(1)
         ctx.barrier(Access.STORAGE)
         self._compact.texture("gbuf_effect", data[self.EFFECT])
+        if self._defines["TRACE_DECISION"]:
+            self._compact.texture("trace_decision", data[DECISION])
         self._compact.prog.run(*self._groups)

@@ -14,13 +14,15 @@ from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
 from ..dispatch import COMPUTE_GROUP, VIEW_GROUP, check_shape, groups_2d, ray_group, ray_group_defines
 from ..effects import effect_defines, effects_used, scene_defines
 from ..probe_gi import inputs as probe_inputs
+from ..trace_decision.fill import DecisionFill
 from . import channels
 
 # The ray passes' `dispatch_mode` property: "image" runs over the whole image in `tile`-sized
 # workgroups, where the pixels whose effect needs no such rays leave at once; "list" runs over the
 # compaction's pixel list (indirect dispatch); "auto" takes the image unless a material is PATH_TRACED. Same
 # pixels, same random numbers, same image. Neighbouring pixels in one warp trace alike rays; the
-# list's tiles come in random order and a warp often straddles two of them.
+# list's tiles come in random order and a warp often straddles two of them. With a trace decision
+# (TraceDecision) over several views "auto" takes the list: the pixels that trace are sparse.
 DISPATCHES = ("auto", "image", "list")
 TILE = [8, 4]   # one warp (ray_group spreads it over views)
 
@@ -41,6 +43,7 @@ class GBufferLightingPass(RenderPass):
     PIXEL_LIST: str | None = None   # input pin of the pixel list, for indirect dispatch
     SALT = RNG_SALTS["lighting"]   # its random stream (subclasses name their own)
     LOWEST_EFFECT = Effect.RASTER   # the pixels it lights: this effect and above
+    FILL_LOBE = "whole"   # what its output holds, for the trace decision's fill (trace_decision.fill)
     CHOICES = {"dispatch_mode": DISPATCHES}
 
     def validate_property(self, key, value):
@@ -58,6 +61,7 @@ class GBufferLightingPass(RenderPass):
                 pixel_list_bytes(cd.size, cd.views)).indirect()
             if self._dispatch_2d(cd):
                 pin.unused("runs over the whole image: no material is PATH_TRACED")
+            DecisionFill.add_input(r)
         r.add_output(self.OUTPUT, self.OUTPUT_DESC).format("rgba16f")
         probe_inputs.add_inputs(r, self.probes_unused(cd))
         return r
@@ -86,13 +90,16 @@ class GBufferLightingPass(RenderPass):
         return {"PROBE_GI": 1}
 
     def compile(self, ctx, cd):
+        self._fill = DecisionFill([(self.OUTPUT, "rgba16f", self.FILL_LOBE)], self.LOWEST_EFFECT)
+        if self.PIXEL_LIST:
+            self._fill.compile(ctx, cd)
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
         if self.PIXEL_LIST:   # the ray passes: the shape is theirs to set
             self._group = ray_group(cd.views, tuple(self.tile), self.view_group)
         else:
             self._group = ray_group(cd.views, tuple(TILE))
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": self.SALT, **self.shader_defines(),
-                         "PIXELS_2D": int(self._pixels_2d), **ray_group_defines(self._group)}
+                         "PIXELS_2D": int(self._pixels_2d), **ray_group_defines(self._group), **self._fill.defines()}
         if self.PIXEL_LIST and not self._pixels_2d:
             self._defines["PIXEL_LIST_INPUT"] = 1
         self._probes = probe_inputs.bound(cd)
@@ -111,6 +118,8 @@ class GBufferLightingPass(RenderPass):
         if self.dispatch_mode != "auto":
             return self.dispatch_mode == "image"
         # A PATH_TRACED pixel may be on the path tracer's list instead of this one: only the list knows.
+        if DecisionFill.connected(cd) and cd.views > 1:
+            return False
         used = effects_used(cd)
         return used is not None and Effect.PATH_TRACED not in used
 
@@ -131,11 +140,13 @@ class GBufferLightingPass(RenderPass):
         self.dispatch(self._prog, data)
         if self._probes:
             probe_inputs.unbind(res)
+        self._fill.run(ctx, data)
 
     def bind_pixels(self, res, data) -> None:
         """Bind what a program of the pass needs to find its pixels and their surfaces: the G-buffer
         channels and, when it reads one, the pixel list."""
         channels.bind_inputs(res, data, self.gbuffer_channels())
+        self._fill.bind(res, data)
         if self.PIXEL_LIST and not self._pixels_2d:
             res.buffer("PixelList", data[self.PIXEL_LIST])
 

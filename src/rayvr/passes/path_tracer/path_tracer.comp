@@ -9,6 +9,7 @@
 //     together, silently (every traversal step is one), so many long paths in one invocation
 //     would lose light; one path per invocation stays far below it.
 #include "pt_pixel.glsl"
+#include "ray_counters.glsl"
 
 #if PIXEL_LIST_INPUT
 layout(local_size_x = PIXEL_LIST_GROUP) in;
@@ -131,6 +132,9 @@ void main() {
         return;
     }
 #endif
+#if TRACE_DECISION
+    if (decision_reconstructed(p)) return;   // the decision's fill gives it its source's light
+#endif
 #endif
 #if PT_LOBES
     vec3 diffuse, specular;
@@ -152,4 +156,5 @@ void main() {
 #endif
     imageStore(dst, p, vec4(c, 1.0));
 #endif
+    ray_count_commit(uint(p.z));
 }

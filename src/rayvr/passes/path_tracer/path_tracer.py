@@ -17,6 +17,10 @@ With `lobes` the pass also writes what the first vertex's diffuse and specular l
 (`diffuse`, `specular`, rgba16f, emission excluded; where a camera ray escapes, `diffuse` is the
 background) for a denoiser that demodulates them apart (rayvr.passes.SVGF); without it those
 pins do not exist and nothing is allocated for them.
+With the optional `decision` input (TraceDecision) the pass traces only the pixels the decision
+leaves their rays (from its `pixels` list, which either mode may read, or skipping the others
+over the image) and a last dispatch fills the others from their sources (trace_decision.fill);
+in "full" mode it then reads the G-buffer for the fill's albedos.
 """
 from __future__ import annotations
 
@@ -31,6 +35,7 @@ from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
 from ..dispatch import COMPUTE_GROUP, VIEW_GROUP, check_shape, groups_2d, ray_group, ray_group_defines
 from ..effects import effect_defines, scene_defines, unused_effect_reason
 from ..gbuffer import channels
+from ..trace_decision.fill import DecisionFill
 
 MODES = ("full", "gbuffer")
 KERNELS = ("auto", "wavefront", "megakernel")
@@ -77,6 +82,7 @@ class PathTracer(RenderPass):
     PATHS = "paths"
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     QUEUE = "queue"
+    COUNTS_RAYS = True
     PROPERTIES = {"mode": "full", "samples_per_pixel": 1, "max_bounces": 4, "rr_start": 3,
                   "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol", "lobes": False, "kernel": "auto",
                   "tile": list(COMPUTE_GROUP), "view_group": VIEW_GROUP, "compact": False,
@@ -104,10 +110,12 @@ class PathTracer(RenderPass):
 
     def reflect(self, cd):
         r = Reflection()
-        if self.mode == "gbuffer":
+        decision = DecisionFill.connected(cd)
+        if self.mode == "gbuffer" or decision:
             channels.add_inputs(r)
-            r.add_input(self.PIXELS, "PATH_TRACED pixels (EffectCompaction); absent: whole screen").buffer(
-                pixel_list_bytes(cd.size, cd.views)).optional().indirect()
+        r.add_input(self.PIXELS, "the pixels to trace (EffectCompaction); absent: whole screen").buffer(
+            pixel_list_bytes(cd.size, cd.views)).optional().indirect()
+        DecisionFill.add_input(r)
         r.add_output(self.COLOR, "path-traced radiance, mean of samples_per_pixel paths").format("rgba32f")
         if self.lobes:
             r.add_output(self.DIFFUSE, "what the first vertex's diffuse lobe reflects (emission excluded; "
@@ -152,10 +160,17 @@ class PathTracer(RenderPass):
         return unused_effect_reason(cd, Effect.PATH_TRACED)
 
     def compile(self, ctx, cd):
-        listed = self.mode == "gbuffer" and self.PIXELS in cd.input_formats
+        listed = self.PIXELS in cd.input_formats
+        images = [(self.COLOR, "rgba32f", "whole")]
+        if self.lobes:
+            images += [(self.DIFFUSE, "rgba16f", "diffuse"), (self.SPECULAR, "rgba16f", "specular")]
+        self._fill = DecisionFill(images, Effect.PATH_TRACED if self.mode == "gbuffer" else 0,
+                                  color_from_lobes=bool(self.lobes))
+        self._fill.compile(ctx, cd)
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALTS["path_tracer"],
                          "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PIXEL_LIST_INPUT": int(listed),
-                         "RAYVR_SAMPLER": SAMPLERS[self.sampler], "PT_LOBES": int(bool(self.lobes))}
+                         "RAYVR_SAMPLER": SAMPLERS[self.sampler], "PT_LOBES": int(bool(self.lobes)),
+                         **self._fill.defines()}
         software = getattr(getattr(ctx, "caps", None), "is_software", False)
         self._wave = self.kernel == "wavefront" or (self.kernel == "auto" and not software)
         self._defines["PT_WAVEFRONT"] = int(self._wave)   # named in the compile report
@@ -220,6 +235,7 @@ class PathTracer(RenderPass):
         self._set_uniforms(res)
         if self.mode == "gbuffer":
             channels.bind_inputs(res, data)
+        self._fill.bind(res, data)
         adds = self._wave or bool(self._slice)   # later dispatches add to what earlier ones stored
         res.image("dst", data[self.COLOR], read=adds)
         if self.lobes:
@@ -228,6 +244,7 @@ class PathTracer(RenderPass):
         pixels = data.get(self.PIXELS) if self._listed else None
         if self._wave:
             self._execute_wavefront(ctx, data, pixels)
+            self._fill.run(ctx, data)
             return
         if pixels is not None:
             res.buffer("PixelList", pixels)
@@ -237,6 +254,7 @@ class PathTracer(RenderPass):
                 ctx.barrier(Access.IMAGE)   # the slice before stored its share
             res.set("pt_sample_first", first)
             self._run(self._prog, pixels)
+        self._fill.run(ctx, data)
 
     def _run(self, prog, pixels) -> None:
         if pixels is not None:
@@ -261,6 +279,7 @@ class PathTracer(RenderPass):
                 res.buffer("PtQueue", queue)
                 res.set("ptw_groups", self._groups)
                 res.set("ptq_in", 2)
+            self._fill.bind(res, data)
             if pixels is not None:
                 res.buffer("PixelList", pixels)
         for res in programs[1:]:   # their generators' (the camera's, BLEND decisions')

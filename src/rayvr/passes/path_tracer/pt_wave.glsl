@@ -96,6 +96,9 @@ bool ptw_pixel(out ivec3 p) {
     return true;
 #else
     p = ray_group_pixel();
+#if TRACE_DECISION   // a pixel the decision reconstructs has no path (its fill comes after)
+    if (all(lessThan(p, pt_wave_size)) && decision_reconstructed(p)) return false;
+#endif
     return all(lessThan(p, pt_wave_size));
 #endif
 }

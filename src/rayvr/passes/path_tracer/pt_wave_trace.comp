@@ -10,6 +10,7 @@
 //   ray_query.glsl's steps. The same rays and answers as one invocation per path.
 #include "pt_pixel.glsl"
 #include "pt_wave.glsl"
+#include "ray_counters.glsl"
 
 #if PIXEL_LIST_INPUT && !PTW_PERSISTENT
 layout(local_size_x = PIXEL_LIST_GROUP) in;
@@ -90,7 +91,10 @@ void main() {
                     if (shadow_ray) rq_begin(so, sd, stmax, true);
                     else if (closest) rq_begin(o, d, 1e30, false);
                     tracing = (shadow_ray || closest) && !rq_done;
-                    if (!tracing) ptw_answer(i, false, rq_hit, answer);   // no rays, or no instances
+                    if (!tracing) {   // no rays, or no instances
+                        ptw_answer(i, false, rq_hit, answer);
+                        ray_count_commit(uint(ptw_slot_pixel(i).z));
+                    }
                 }
             }
         }
@@ -103,6 +107,7 @@ void main() {
                     rq_begin(o, d, 1e30, false);
                 } else {
                     ptw_answer(i, !shadow_ray && rq_found, rq_hit, answer);
+                    ray_count_commit(uint(ptw_slot_pixel(i).z));   // this path's rays, to its view
                     tracing = false;
                 }
             }
@@ -132,5 +137,6 @@ void main() {
     Hit hit;
     bool found = closest && trace_closest(o, d, 1e30, hit);
     ptw_answer(i, found, hit, answer);
+    ray_count_commit(uint(p.z));
 }
 #endif

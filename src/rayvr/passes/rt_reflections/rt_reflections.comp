@@ -20,6 +20,7 @@
 #include "shading.glsl"
 #include "probe_records.glsl"   // and probe_gi.glsl
 #include "nonfinite.glsl"
+#include "ray_counters.glsl"
 
 #if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
 layout(local_size_x = RAY_GROUP_SIZE) in;
@@ -98,4 +99,5 @@ void main() {
     for (int b = recorded; b < MAX_BOUNCES; ++b) store_probe_record(p, b, probe_record_none());
 #endif
     imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(radiance)), 1.0));   // the target is rgba16f
+    ray_count_commit(uint(p.z));
 }

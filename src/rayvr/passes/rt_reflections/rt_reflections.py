@@ -39,7 +39,9 @@ class RTReflections(GBufferLightingPass):
     OUTPUT_DESC = "specular-weighted reflected radiance (listed pixels only)"
     PROBE_HITS, PROBE_FACTORS = "probeHits", "probeFactors"
     PIXEL_LIST = "pixels"
+    COUNTS_RAYS = True
     LOWEST_EFFECT = Effect.REFLECTIONS
+    FILL_LOBE = "specular"
     SALT = RNG_SALTS["rt_reflections"]
     # defer_probes False looks the probes up in the traversal kernel, one dispatch and no records:
     # the reference tests/test_reflection_probe_records.py compares the deferred lookups with.
@@ -112,3 +114,4 @@ class RTReflections(GBufferLightingPass):
         probe_inputs.bind(look, data, self._probe_sampler)
         self.dispatch(look.prog, data)
         probe_inputs.unbind(look)
+        self._fill.run(ctx, data)

@@ -8,6 +8,7 @@
 #include "shading.glsl"
 #include "probe_gi.glsl"
 #include "nonfinite.glsl"
+#include "ray_counters.glsl"
 
 #if PIXELS_2D   // every pixel of the image; those whose effect needs no such rays leave at once
 layout(local_size_x = RAY_GROUP_SIZE) in;
@@ -26,4 +27,5 @@ void main() {
     // REFLECTIONS and above: RTReflections traces the specular lobes and shares their light (MIS)
     vec3 c = g.emissive + shade_direct_mis(s, rng, g.effect >= EFFECT_REFLECTIONS) + probe_gi_diffuse(s);
     imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(c)), 1.0));   // the target is rgba16f
+    ray_count_commit(uint(p.z));
 }

@@ -23,6 +23,7 @@ class RTShadows(GBufferLightingPass):
     OUTPUT = "shadowed"
     OUTPUT_DESC = "emission + shadowed direct light (listed pixels only)"
     PIXEL_LIST = "pixels"
+    COUNTS_RAYS = True
     LOWEST_EFFECT = Effect.SHADOWS
     SALT = RNG_SALTS["rt_shadows"]
     PROPERTIES = {"light_samples": 1, "blend_roulette": 0.0, **ray_properties(view_group=16)}

@@ -35,6 +35,11 @@ The stages are one pass, not four, because the paper's temporal stage reads last
 that separate graph passes could only express as a cycle (Falcor's SVGFPass and Tauray's svgf
 stage are one unit for the same reason). TAA follows in the graphs (rayvr.graphs).
 
+With the optional `decision` input (TraceDecision) the reprojection reads each pixel's ray budget
+b, the share of frames its own rays are traced (foveation): the new frame weighs b times as much,
+the history may grow 1 / b times as long, and the variance is that of b x history samples, so a
+sparsely traced pixel keeps a longer history and a wider filter (svgf_reproject.comp).
+
 History resets on the first frame, on `reset()` and on scene edits that change the lighting
 (materials or lights: `GpuScene.version` moved and one of them differs). Camera motion never
 resets it (reprojection follows the head), nor do moved instances: their pixels fail the
@@ -50,6 +55,7 @@ from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from ..history import HistoryOwner, LightingHistory, still_frame
+from ..trace_decision.fill import DECISION, DecisionFill
 
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
@@ -114,6 +120,7 @@ class SVGF(HistoryOwner, RenderPass):
         r.add_input(self.DIFFUSE, "radiance the first vertex's diffuse lobe reflects, emission excluded "
                                   "(the background where nothing was hit)")
         r.add_input(self.SPECULAR, "radiance its specular lobe reflects").optional()
+        DecisionFill.add_input(r)
         r.add_output(self.COLOR, "denoised radiance (remodulated, with emission)").format("rgba16f")
         specular = self.SPECULAR in cd.input_formats
         lobes = [(self.HISTORY_DIFFUSE, "diffuse")] + [(self.HISTORY_SPECULAR, "specular")] * specular
@@ -139,10 +146,12 @@ class SVGF(HistoryOwner, RenderPass):
     def compile(self, ctx, cd):
         self._specular = self.SPECULAR in cd.input_formats
         self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular)}
+        self._density = DecisionFill.connected(cd)
+        reproject = {**self._defines, "TRACE_DECISION": int(self._density)}
         self._gl = ctx.gl
         # the modulate stage's own program only when 0 iterations ask for it (_modulate_program)
-        self._res = {stage: program_resources(self.compute_program(ctx.gl, f"svgf_{stage}.comp", self._defines))
-                     for stage in ("reproject", "variance")}
+        self._res = {"reproject": program_resources(self.compute_program(ctx.gl, "svgf_reproject.comp", reproject)),
+                     "variance": program_resources(self.compute_program(ctx.gl, "svgf_variance.comp", self._defines))}
         self._atrous = {}
         self._atrous_program()
         self._atrous_program(final=True)
@@ -162,7 +171,8 @@ class SVGF(HistoryOwner, RenderPass):
     def defines(self) -> dict:
         if not hasattr(self, "_defines"):
             return {}
-        return {**self._defines, "SVGF_KERNEL": int(self.kernel)}   # the a-trous stage's kernel
+        density = {"TRACE_DECISION": 1} if self._density else {}   # the reprojection's
+        return {**self._defines, "SVGF_KERNEL": int(self.kernel), **density}   # the a-trous stage's kernel
 
     def _histories(self, res, data) -> None:
         """Bind the colour histories as the images `history_diffuse` (and `_specular`) of `res`."""
@@ -206,6 +216,8 @@ class SVGF(HistoryOwner, RenderPass):
         res.texture("moments_prev", data[self.MOMENTS[prev]])
         res.texture("key_prev", data[self.KEY[prev]])
         res.texture("surface_prev", data[self.SURFACE[prev]])
+        if self._density:
+            res.texture("trace_decision", data[DECISION])
         res.image("out_illum", scratch[0])
         res.image("moments_out", data[self.MOMENTS[cur]])
         res.image("key_out", data[self.KEY[cur]])

@@ -4,7 +4,12 @@
 // says this surface was (bilinear over the taps that pass the disocclusion test, else the mean
 // of the 3x3 taps that do), blended with weight max(alpha, 1 / history length), and the
 // luminance moments are accumulated the same way (moments_alpha); the variance follows from them.
+// With TRACE_DECISION a pixel's ray budget b (glsl/trace_decision.glsl: the share of frames its own
+// rays are traced) stretches its history: the new frame weighs b times as much and the history may
+// grow 1 / b times as long, so a sparsely traced pixel averages about as many of its own samples
+// as a dense one; and the variance is that of b x history samples, which widens the filter there.
 #include "svgf_common.glsl"
+#include "trace_decision.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -101,9 +106,14 @@ void main() {
     // its history is an exact running mean (alpha 1 / length), so its variance, and with it the
     // a-trous filter, falls towards zero as the still view converges
     bool still = found && svgf_still && dot(gbuf_fetch_motion(p), gbuf_fetch_motion(p)) < 1e-6;
-    float history = found ? min(r.history / r.weight + 1.0, still ? svgf_still_max_history : svgf_max_history) : 1.0;
-    float alpha = found ? (still ? 1.0 / history : max(svgf_alpha, 1.0 / history)) : 1.0;
-    float moments_alpha = found ? (still ? 1.0 / history : max(svgf_moments_alpha, 1.0 / history)) : 1.0;
+    float density = 1.0;
+#if TRACE_DECISION
+    density = max(decision_density(p), 1.0 / 255.0);
+#endif
+    float history = found ? min(r.history / r.weight + 1.0, still ? svgf_still_max_history : svgf_max_history / density)
+                          : 1.0;
+    float alpha = found ? (still ? 1.0 / history : max(svgf_alpha * density, 1.0 / history)) : 1.0;
+    float moments_alpha = found ? (still ? 1.0 / history : max(svgf_moments_alpha * density, 1.0 / history)) : 1.0;
     float inv = found ? 1.0 / r.weight : 0.0;
     float ld = luminance(diffuse), ls = luminance(specular);
     vec4 moments = mix(r.moments * inv, vec4(ld, ld * ld, ls, ls * ls), moments_alpha);
@@ -111,7 +121,7 @@ void main() {
     // frames (1 / alpha's exponential window once the history is long), whose mean has
     // 1 / samples of it: the filter then backs off as the history grows, and a still view
     // converges to the temporal mean instead of staying blurred
-    float samples = still ? history : min(history, (2.0 - svgf_alpha) / svgf_alpha);
+    float samples = (still ? history : min(history, (2.0 - alpha) / alpha)) * density;
     vec2 variance = max(vec2(moments.y - moments.x * moments.x, moments.w - moments.z * moments.z), 0.0) / samples;
     imageStore(out_illum, p, svgf_illum_pack(vec4(to_half_range(mix(r.diffuse * inv, diffuse, alpha)), variance.x),
                                              vec4(to_half_range(mix(r.specular * inv, specular, alpha)), variance.y)));

@@ -1,0 +1,65 @@
+"""View reuse (hybrid(reuse='views')): stereo and a 64-view camera grid with and without reusing
+the source views' shaded light, through the hybrid graph.
+
+Per view count: GPU ms per frame (timer queries; wall time where there are none), rays the ray
+passes traced per view in the last frame (GPU counters: the first view's, and the mean of the
+others against it), and the displayed image's FLIP against a converged path-traced reference
+(also within the foveal radius and weighted by eccentricity), after `--judged-frames` still
+frames. Targets: stereo 2x1440x1600, the second eye's rays <= 0.3x the first's with FLIP within 5%
+of independent eyes; 64 views of 512x683, GPU ms <= 0.5x independent views with FLIP within 5%.
+"""
+from __future__ import annotations
+
+from rayvr.cli.options import load_scene_arg, parse_size
+
+from ._decision import add_common_arguments, cells, measure, ms, reference, settings
+
+TARGETS = {2: "rays_other/first <= 0.3, flip <= 1.05x", 64: "gpu <= 0.5x, flip <= 1.05x"}
+
+
+def add_arguments(parser) -> None:
+    add_common_arguments(parser)
+    parser.add_argument("--views", default="2,64", help="comma-separated view counts (default 2,64)")
+    parser.add_argument("--stereo-size", default="1440x1600", help="per-view size of 2 views (default 1440x1600)")
+    parser.add_argument("--grid-size", default="512x683", help="per-view size of more views (default 512x683)")
+
+
+def run(args) -> dict:
+    import rayvr as rv
+    from rayvr.xr.cameras import default_views
+
+    s = settings(args)
+    counts = [int(v) for v in args.views.split(",")]
+    if args.quick and args.views == "2,64":
+        counts = [2, 4]
+    rows = []
+    for n in counts:
+        size = parse_size(args.stereo_size if n <= 2 else args.grid_size, views=n)
+        if args.quick:
+            size = (32, 32) if n <= 2 else (16, 16)
+        scene = load_scene_arg(args.scene)
+        view_set = default_views(scene, n, size)
+        ref = reference(scene, view_set, s)
+        out = {}
+        for reuse in (None, "views"):
+            out[reuse] = measure(scene, view_set, rv.graphs.hybrid(preset=args.preset, reuse=reuse), s, ref, args.ppd)
+        base = out[None]
+        for reuse, row in out.items():
+            first, others = row["rays"][0], row["rays"][1:]
+            other_ratio = (sum(others) / len(others)) / max(first, 1)
+            flip_ratio = row["flip"] / max(base["flip"], 1e-12)
+            ok = other_ratio <= 0.3 if n == 2 else ms(row) <= 0.5 * ms(base)
+            rows.append([n, f"{size[0]}x{size[1]}", reuse or "independent", *cells(row), first,
+                         round(other_ratio, 3), round(ms(row) / ms(base), 3), round(flip_ratio, 3),
+                         ("yes" if ok and flip_ratio <= 1.05 else "NO") if reuse and n in TARGETS else ""])
+    return {
+        "columns": ["views", "view_size", "config", "wall_ms", "gpu_ms", "rays_total", "flip", "flip_fovea",
+                    "flip_ecc", "rays_first", "rays_other/first", "ms/independent", "flip/independent",
+                    "meets_target"],
+        "rows": rows,
+        "notes": [f"scene {args.scene}, hybrid preset {args.preset}; rays: GPU counters of the ray passes "
+                  f"(shadow, reflection and path rays; not the G-buffer's or the probes') in the last timed frame",
+                  f"FLIP of the displayed image after {s['judged']} still frames against a path-traced reference "
+                  f"of {s['ref_frames']} x {s['ref_spp']} spp; fovea: within 5 degrees of each view's centre",
+                  "targets: " + "; ".join(f"{n} views: {t}" for n, t in TARGETS.items())],
+    }

@@ -1,0 +1,29 @@
+// Rays traced per view (rayvr/rendergraph/ray_counters.py): a ray pass compiled with RQ_COUNT_RAYS 1
+// (its class says COUNTS_RAYS) ends each kernel with ray_count_commit(layer): the queries the
+// invocation began (ray_query.glsl rq_rays) go to the counter of its view. With the subgroup
+// extensions a subgroup adds one sum per view it holds (a loop over its distinct views: one to a
+// few), so a frame costs an image atomic per view and subgroup instead of one per pixel.
+#pragma once
+#include "ray_query.glsl"
+
+#if defined(RQ_COUNT_RAYS) && RQ_COUNT_RAYS
+layout(r32ui, binding = RAYVR_RAY_COUNTER_IMAGE) uniform uimage2D rayvr_ray_counts;
+
+void ray_count_commit(uint view) {
+    uint n = rq_rays;
+    rq_rays = 0u;
+#if defined(GL_KHR_shader_subgroup_arithmetic) && defined(GL_KHR_shader_subgroup_ballot)
+    bool pending = n > 0u;
+    while (pending) {   // the active lanes are those still pending; the lowest one's view first
+        uint first = subgroupBroadcastFirst(view);
+        uint sum = subgroupAdd(view == first ? n : 0u);
+        if (subgroupElect()) imageAtomicAdd(rayvr_ray_counts, ivec2(int(first), 0), sum);
+        pending = view != first;
+    }
+#else
+    if (n > 0u) imageAtomicAdd(rayvr_ray_counts, ivec2(int(view), 0), n);
+#endif
+}
+#else
+void ray_count_commit(uint view) {}
+#endif

@@ -1,0 +1,45 @@
+// The per-pixel trace decision (rayvr/passes/trace_decision): which pixels trace rays this frame
+// and where each of the others takes its light from. TraceDecision writes one rg32ui texel per
+// pixel and view before the ray passes:
+//   x: the kind (bits 0-1) | the ray budget at the pixel (bits 8-15, 0-255 for 0-1) | the source's
+//      view (bits 16-23)
+//   y: the source position in that view, in pixels (x | y << 16, each fixed point 13.3 bits)
+// Kinds: DECISION_NONE no ray work (RASTER, or nothing drawn), DECISION_TRACE traced for real,
+// DECISION_REUSE the shaded light of the same surface in another view, interpolated at the point's
+// position there over the traced pixels of that surface, DECISION_FILL the light of one traced
+// pixel of the same surface (the source pixel's centre), in its own view or another. Sources are
+// traced pixels, so reconstruction is one dispatch after the tracing (passes/trace_decision/fill.comp).
+// A pass that reads the decision defines TRACE_DECISION 1 and binds it to the sampler
+// `trace_decision`; then decision_reconstructed(p) says a pixel leaves its rays to others and
+// decision_density(p) is its budget (a denoiser widens its history and filter where it is low).
+#pragma once
+#ifndef TRACE_DECISION
+#define TRACE_DECISION 0
+#endif
+
+const uint DECISION_NONE = 0u;
+const uint DECISION_TRACE = 1u;
+const uint DECISION_REUSE = 2u;
+const uint DECISION_FILL = 3u;
+
+uint decision_kind(uvec2 t) { return t.x & 3u; }
+float decision_budget(uvec2 t) { return float((t.x >> 8u) & 0xFFu) / 255.0; }
+const float DECISION_POSITION_STEPS = 8.0;   // sub-pixel steps of a source position
+vec2 decision_position(uvec2 t) { return vec2(uvec2(t.y & 0xFFFFu, t.y >> 16u)) / DECISION_POSITION_STEPS; }
+uint decision_view(uvec2 t) { return (t.x >> 16u) & 0xFFu; }
+ivec3 decision_source(uvec2 t) { return ivec3(ivec2(floor(decision_position(t))), int(decision_view(t))); }
+// A texel for `kind` at `budget` whose source is at `position` (pixels) of view `view`.
+uvec2 decision_pack(uint kind, float budget, uint view, vec2 position) {
+    uint b = uint(clamp(budget, 0.0, 1.0) * 255.0 + 0.5);
+    uvec2 q = uvec2(clamp(position * DECISION_POSITION_STEPS + 0.5, vec2(0.0), vec2(65535.0)));
+    return uvec2(kind | (b << 8u) | (view << 16u), q.x | (q.y << 16u));
+}
+
+#if TRACE_DECISION
+uniform usampler2DArray trace_decision;
+
+uvec2 decision_at(ivec3 p) { return texelFetch(trace_decision, p, 0).xy; }
+// The pixel takes its light from another pixel's rays this frame (it traces none).
+bool decision_reconstructed(ivec3 p) { return decision_kind(decision_at(p)) >= DECISION_REUSE; }
+float decision_density(ivec3 p) { return decision_budget(decision_at(p)); }
+#endif

@@ -1,0 +1,119 @@
+// A ray pass's last dispatch when it reads a trace decision (fill.py): every pixel it did not trace
+// takes the light traced this frame at its source, in the same images: DECISION_REUSE bilinearly
+// over the traced pixels of its surface about its point's position in the source view (one pixel,
+// the decision's, where none of the four qualifies), DECISION_FILL from the decision's pixel. The
+// light is demodulated by each source pixel's directional albedos (glsl/bsdf.glsl bsdf_albedo,
+// seen from its view) and remodulated by the pixel's own, so texture detail and the lobes' change
+// with the view angle stay the pixel's; emission is each pixel's own.
+// Images fill0..fill<FILL_IMAGES - 1>, each of format FILL<i>_FORMAT holding lobe FILL<i>_LOBE:
+// 0 the whole light (emission + both lobes), 1 the diffuse lobe, 2 the specular lobe. With
+// FILL_COLOR_FROM_LOBES fill0 is instead the pixel's emission + its filled fill1 + fill2. Pixels of
+// effect below FILL_MIN_EFFECT are not this pass's.
+#define GBUF_READER 1
+#define TRACE_DECISION 1
+#include "views.glsl"
+#include "gbuffer.glsl"
+#include "path_vertex.glsl"
+#include "same_surface.glsl"
+#include "trace_decision.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+layout(FILL0_FORMAT) uniform image2DArray fill0;
+#if FILL_IMAGES > 1
+layout(FILL1_FORMAT) uniform image2DArray fill1;
+#endif
+#if FILL_IMAGES > 2
+layout(FILL2_FORMAT) uniform image2DArray fill2;
+#endif
+
+// Albedos below this are taken as it, so black lobes round-trip exactly.
+const float FILL_ALBEDO_EPS = 1e-3;
+// A tap of the interpolation is the point's surface within this many pixel footprints.
+const float FILL_TAP_PIXELS = 1.5;
+
+struct Albedos { vec3 diffuse; vec3 specular; vec3 emissive; };
+
+Albedos albedos_of(GSurface g, uint view) {
+    PathVertex s = path_vertex_at_gbuffer(g, view);
+    Albedos a;
+    bsdf_albedo(s.bsdf, s.n, s.v, a.diffuse, a.specular);
+    a.emissive = g.emissive;
+    return a;
+}
+
+vec3 lobe_albedo(Albedos a, int lobe) {
+    vec3 x = lobe == 0 ? a.diffuse + a.specular : (lobe == 1 ? a.diffuse : a.specular);
+    return max(x, vec3(FILL_ALBEDO_EPS));
+}
+
+// Light of `lobe` without the albedos (and the emission) of the surface it left.
+vec3 demodulate(vec3 light, int lobe, Albedos a) {
+    return max(lobe == 0 ? light - a.emissive : light, vec3(0.0)) / lobe_albedo(a, lobe);
+}
+
+vec3 remodulate(vec3 illumination, int lobe, Albedos a) {
+    vec3 r = illumination * lobe_albedo(a, lobe);
+    return lobe == 0 ? r + a.emissive : r;
+}
+
+struct Gathered { float weight; vec3 l0; vec3 l1; vec3 l2; };
+
+void gather(inout Gathered g, ivec3 q, float w) {
+    Albedos a = albedos_of(gbuf_load(q), uint(q.z));
+    g.weight += w;
+#if !FILL_COLOR_FROM_LOBES
+    g.l0 += w * demodulate(imageLoad(fill0, q).rgb, FILL0_LOBE, a);
+#endif
+#if FILL_IMAGES > 1
+    g.l1 += w * demodulate(imageLoad(fill1, q).rgb, FILL1_LOBE, a);
+#endif
+#if FILL_IMAGES > 2
+    g.l2 += w * demodulate(imageLoad(fill2, q).rgb, FILL2_LOBE, a);
+#endif
+}
+
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    ivec3 size = imageSize(fill0);
+    if (any(greaterThanEqual(p, size))) return;
+    uvec2 t = decision_at(p);
+    uint kind = decision_kind(t);
+    if (kind < DECISION_REUSE) return;
+    uint effect = gbuf_effect_at(p);
+    if (effect == GBUF_NO_GEOMETRY || effect < uint(FILL_MIN_EFFECT)) return;
+    GSurface surface = gbuf_load(p);
+    Gathered g = Gathered(0.0, vec3(0.0), vec3(0.0), vec3(0.0));
+    if (kind == DECISION_REUSE) {   // bilinear over the traced pixels of the surface about its point
+        vec2 b = decision_position(t) - 0.5;
+        ivec2 base = ivec2(floor(b));
+        vec2 f = b - vec2(base);
+        for (int k = 0; k < 4; ++k) {
+            ivec2 o = ivec2(k & 1, k >> 1);
+            float w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y);
+            ivec3 q = ivec3(base + o, int(decision_view(t)));
+            if (w > 0.0 && all(greaterThanEqual(q.xy, ivec2(0))) && all(lessThan(q.xy, size.xy))
+                && decision_kind(decision_at(q)) == DECISION_TRACE && same_surface(surface, uint(p.z), q, FILL_TAP_PIXELS))
+                gather(g, q, w);
+        }
+    }
+    if (!(g.weight > 1e-3)) {   // one pixel: the decision's (it traces and shows the surface)
+        g = Gathered(0.0, vec3(0.0), vec3(0.0), vec3(0.0));
+        gather(g, decision_source(t), 1.0);
+    }
+    Albedos to = albedos_of(surface, uint(p.z));
+    float inv = 1.0 / g.weight;
+#if FILL_IMAGES > 1
+    vec3 f1 = remodulate(g.l1 * inv, FILL1_LOBE, to);
+    imageStore(fill1, p, vec4(to_half_range(f1), 1.0));
+#endif
+#if FILL_IMAGES > 2
+    vec3 f2 = remodulate(g.l2 * inv, FILL2_LOBE, to);
+    imageStore(fill2, p, vec4(to_half_range(f2), 1.0));
+#endif
+#if FILL_COLOR_FROM_LOBES
+    vec3 f0 = to.emissive + f1 + f2;
+#else
+    vec3 f0 = remodulate(g.l0 * inv, FILL0_LOBE, to);
+#endif
+    imageStore(fill0, p, vec4(to_half_range(f0), 1.0));
+}

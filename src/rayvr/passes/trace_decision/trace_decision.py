@@ -1,0 +1,111 @@
+"""TraceDecision: once per frame, before the ray passes, which pixels trace rays and where each of
+the others takes its light from (glsl/trace_decision.glsl has the texel; decide.comp the rules)."""
+from __future__ import annotations
+
+from ...errors import OptionError
+from ...gpu.program_resources import program_resources
+from ...rendergraph.registry import register_pass
+from ...rendergraph.render_pass import Reflection, RenderPass
+from ...xr import foveation
+from ...xr.cameras import grid_for_views
+from ..dispatch import groups_2d
+from ..effects import effect_defines, scene_defines
+from ..gbuffer import channels
+from .fill import DECISION
+
+FOVEATION = ("none", *foveation.MODES)
+
+
+@register_pass
+class TraceDecision(RenderPass):
+    """Decides per pixel of every view whether it traces its rays this frame (`decision`, rg32ui:
+    glsl/trace_decision.glsl). A pixel whose effect needs rays traces when
+
+    - it is in a source view, or its surface point, projected into the nearest source views, lands
+      on a traced pixel of the same surface (effect word, normal, position within a few pixel
+      footprints) whose lobe looks alike from both (roughness >= `reuse_min_roughness`, no
+      transmission): then it REUSEs that pixel's shaded light (`reuse`; with two views the first eye
+      is the source, or the eye of the frame's parity with `alternate`; with more, every
+      `source_stride`-th column and row of a grid of `grid_cols` columns, 0: the default grid of
+      rayvr.xr.grid_for_views). A pixel that fails the test traces: disocclusions are traced, never
+      filled; and
+    - the foveation budget (`foveation` 'fixed' about each image's centre, 'gaze' about where the
+      eye tracker says the eye looks; rayvr.xr.foveation: 1 within `foveal_radius_deg`, falling to
+      `periphery_share`) gives it its turn this frame: an ordered dither the frame index rotates, so
+      a pixel at budget b traces on a share b of the frames, evenly spread; a pixel without its
+      turn FILLs from the nearest traced pixel of the same surface within 2 pixels (none: it traces).
+
+    `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
+    SHADOWS and above. The ray passes read the decision (their lists and tiles skip the
+    reconstructed pixels, and a last dispatch of each fills them: trace_decision.fill) and SVGF
+    follows the budget. With one view and foveation 'none' there is nothing to decide: the pass is
+    left out, and so is its texture."""
+
+    USES_SCENE = True
+    DECISION = DECISION
+    CHOICES = {"foveation": FOVEATION}
+    PROPERTIES = {"reuse": False, "foveation": "none", "foveal_radius_deg": foveation.DEFAULT_RADIUS_DEG,
+                  "periphery_share": foveation.DEFAULT_PERIPHERY_SHARE, "reuse_min_roughness": 0.5,
+                  "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False}
+
+    def validate_property(self, key, value):
+        value = super().validate_property(key, value)
+        if key == "foveation" and value not in FOVEATION:
+            raise OptionError(f"pass {self.name}: property 'foveation' is {value!r}; use 'none', 'fixed' (about each "
+                              f"image's centre) or 'gaze' (about where the eye tracker says the eye looks)")
+        if key == "foveal_radius_deg":
+            foveation.check_falloff(value, foveation.DEFAULT_PERIPHERY_SHARE, f"pass {self.name}: property '{key}'")
+        if key == "periphery_share":
+            foveation.check_falloff(foveation.DEFAULT_RADIUS_DEG, value, f"pass {self.name}: property '{key}'")
+        if key == "reuse_min_roughness" and not 0.0 <= value <= 1.0:
+            raise OptionError(f"pass {self.name}: property 'reuse_min_roughness' must be a perceptual roughness in "
+                              f"[0, 1], got {value!r}")
+        low = {"source_stride": 2, "grid_cols": 0}.get(key)
+        if low is not None and (int(value) != value or value < low):
+            raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= {low}, got {value!r}")
+        return int(value) if low is not None else value
+
+    def reuses(self, views: int) -> bool:
+        return bool(self.reuse) and views > 1
+
+    def reflect(self, cd):
+        r = Reflection()
+        channels.add_inputs(r)
+        r.add_output(self.DECISION, "per pixel: trace, or reuse / fill from which traced pixel; the ray budget"
+                     ).format("rg32ui")
+        return r
+
+    def skip_reason(self, cd):
+        if self.foveation == "none" and not self.reuses(cd.views):
+            return ("one view and foveation 'none': every pixel traces" if self.reuse
+                    else "neither reuse nor foveation is on: every pixel traces")
+        return None
+
+    def compile(self, ctx, cd):
+        cols = int(self.grid_cols) or grid_for_views(cd.views)[0]
+        self._defines = {"REUSE": int(self.reuses(cd.views)), "REUSE_COLS": cols,
+                         "REUSE_STRIDE": int(self.source_stride), "REUSE_ALTERNATE": int(bool(self.alternate)),
+                         "REUSE_MIN_ROUGHNESS": float(self.reuse_min_roughness),
+                         "FOVEATION": FOVEATION.index(self.foveation), "FOVEAL_RADIUS": float(self.foveal_radius_deg),
+                         "PERIPHERY_SHARE": float(self.periphery_share),
+                         "EVERY_SURFACE": int(bool(self.every_surface))}
+        self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
+            **scene_defines(ctx), **effect_defines(), **self._defines}))
+        self._groups = groups_2d(cd.size, cd.views)
+
+    def defines(self) -> dict:
+        d = dict(getattr(self, "_defines", {}))
+        if d.get("REUSE"):
+            d["reuse"] = (f"views reuse rough surfaces (roughness >= {self.reuse_min_roughness:g}) of source views: "
+                          + ("the first eye" if not self.alternate else "the eye of the frame's parity")
+                          + f" with 2 views, else every {self.source_stride}th of {d['REUSE_COLS']} columns and rows")
+        if d.get("FOVEATION"):
+            d["foveation"] = (f"{self.foveation}: every pixel within {self.foveal_radius_deg:g} degrees of "
+                              + ("each view's centre" if self.foveation == "fixed" else "the gaze (else the centre)")
+                              + f", beyond it a share falling to {self.periphery_share:g}")
+        return d
+
+    def execute(self, ctx, data):
+        channels.bind_inputs(self._res, data)
+        self._res.image("dst", data[self.DECISION])
+        self._res.prog.run(*self._groups)

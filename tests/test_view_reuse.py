@@ -1,0 +1,207 @@
+"""Shading reused across views (rayvr.passes.TraceDecision, hybrid(reuse='views')): a second eye
+or a grid's other views take the shaded light of the same rough surface in a source view, and
+trace only what the source cannot show them: disocclusions, glossy lobes, mirrors. On llvmpipe at
+32x32 per view: the reused static stereo Cornell box matches independent eyes within the noise,
+the pixels a box hides from the first eye are traced by the second, a mirror is traced in every
+view, the source eye is untouched, and rays follow the decision."""
+import numpy as np
+import pytest
+
+import rayvr as rv
+from rayvr.errors import OptionError
+from rayvr.passes import TraceDecision
+from rayvr.renderer import Renderer
+from rayvr.scene import builtin
+from rayvr.xr.cameras import stereo_views
+from rayvr.xr.views import Fov, Pose
+
+from decision_scenes import DECISION, NONE, REUSE, TRACE, decision_graph, lambert_cornell
+
+SIZE = (32, 32)
+
+
+def graph(**kw):
+    return decision_graph("GBuffer.posW", "GBuffer.effect", **kw)
+
+
+def kinds(r) -> np.ndarray:
+    return r.read_output(DECISION)[..., 0] & 3
+
+
+def mean_color(scene, frames, views=2, **kw):
+    """(mean HDR radiance over `frames` frames (views, h, w, 3), rays per view of the last frame)."""
+    with Renderer(scene, graph(**kw), views=views, size=SIZE) as r:
+        total = 0.0
+        for _ in range(frames):
+            r.render()
+            total = total + r.read_output("Composite.color")[..., :3].astype(np.float64)
+        return total / frames, r.compiled.ray_counts()
+
+
+def rel_mse(a, b, eps=1e-2):
+    return float(np.mean((a - b) ** 2 / (b * b + eps)))
+
+
+def trimmed_rel_mse(a, b, eps=1e-2, drop=0.02):
+    e = np.sort(((a - b) ** 2 / (b * b + eps)).mean(axis=-1).ravel())
+    return float(e[:int(len(e) * (1 - drop))].mean())
+
+
+def test_a_static_stereo_cornell_box_with_reuse_matches_independent_eyes_within_the_noise(gpu):
+    scene = lambert_cornell()
+    reference, _ = mean_color(scene, 256)               # independent eyes, converged
+    independent, rays_independent = mean_color(scene, 16)
+    reused, rays_reused = mean_color(scene, 16, reuse="views")
+    # the source eye is the same render, ray for ray
+    assert np.array_equal(reused[0], independent[0]) and rays_reused[0] == rays_independent[0]
+    # the second eye traces little: the column the first eye's frustum misses and a few box edges
+    assert rays_reused[1] <= 0.1 * rays_reused[0]
+    # ... and is as close to the converged image as an independent second eye (the noise of 16
+    # frames of 1 light sample, shared with the first eye instead of its own)
+    e_reused, e_independent = rel_mse(reused[1], reference[1]), rel_mse(independent[1], reference[1])
+    assert e_reused < 1.5 * e_independent + 1e-4, (e_reused, e_independent)
+
+
+def box_stereo():
+    """Wide-apart eyes over the box on its plane: the box hides a strip of plane from one eye that
+    the other sees."""
+    eye = Pose([0.0, 1.8, 1.6], [-0.3826834, 0.0, 0.0, 0.9238795])   # 45 degrees down
+    fov = Fov.symmetric(50.0, 1.0)
+    return stereo_views(eye, 0.5, fov, fov, SIZE)
+
+
+def test_pixels_a_box_hides_from_the_first_eye_are_traced_by_the_second(gpu):
+    scene = builtin.box_on_plane()
+    for name in ("Plane", "Box"):
+        scene.materials[name].effect = rv.Effect.SHADOWS
+    views = box_stereo()
+    with Renderer(scene, graph(reuse="views"), views=views) as r:
+        r.render()
+        k = kinds(r)
+        pos = r.read_output("GBuffer.posW").astype(np.float64)
+        word = r.read_output("GBuffer.effect")[..., 0]
+        rays = r.compiled.ray_counts()
+        origin = views.origin()
+    # where each second-eye pixel's point lands in the first eye (float64, independent of the GPU)
+    vp = views.matrices(origin)["view_proj"][0]
+    h, w = SIZE[1], SIZE[0]
+    clip = np.concatenate([pos[1, ..., :3], np.ones((h, w, 1))], axis=-1) @ vp.T
+    w_clip = np.where(clip[..., 3:] > 0, clip[..., 3:], 1.0)   # pixels with nothing drawn are left out below
+    px = np.floor((clip[..., :2] / w_clip * 0.5 + 0.5) * [w, h]).astype(int)
+    inside = (px[..., 0] >= 0) & (px[..., 0] < w) & (px[..., 1] >= 0) & (px[..., 1] < h)
+    qx, qy = np.clip(px[..., 0], 0, w - 1), np.clip(px[..., 1], 0, h - 1)
+    drawn = word[1] != 0xFF
+    seen_as = word[0][qy, qx]
+    gap = np.linalg.norm(pos[0][qy, qx, :3] - pos[1, ..., :3], axis=-1)
+    hidden = drawn & inside & ((seen_as != word[1]) | (gap > 0.05))   # another surface where it lands
+    shown = drawn & inside & (seen_as == word[1]) & (gap < 0.01)
+    assert hidden.sum() >= 20, "the scene must hide some plane from the first eye"
+    assert (k[1][hidden] == TRACE).all(), "a disocclusion was filled"
+    assert (k[1][shown] == REUSE).mean() > 0.97
+    assert (k[0][word[0] != 0xFF] == TRACE).all()   # the source eye traces all
+    assert rays[1] >= hidden.sum()                   # one shadow ray each at least
+
+
+def test_a_mirror_is_traced_in_every_view_and_matches_its_own_render(gpu):
+    scene = builtin.mirror_and_checker()
+    for name in ("CheckerWhite", "CheckerBlack"):
+        scene.materials[name].effect = rv.Effect.SHADOWS
+    eye = Pose([0.0, 0.0, 1.0])
+    fov = Fov.symmetric(60.0, 1.0)
+    views = stereo_views(eye, 0.064, fov, fov, SIZE)
+    out = {}
+    for reuse in (None, "views"):
+        with Renderer(scene, graph(reuse=reuse), views=views) as r:
+            r.render()
+            out[reuse] = (r.read_output("Composite.color")[..., :3], r.read_output("GBuffer.effect")[..., 0],
+                          kinds(r) if reuse else None)
+    color, word, k = out["views"]
+    mirror = (word[1] & 0xFF) == int(rv.Effect.REFLECTIONS)
+    assert mirror.sum() > 100
+    assert (k[1][mirror] == TRACE).all()
+    assert np.array_equal(color[1][mirror], out[None][0][1][mirror])   # traced as an independent eye does
+
+
+def test_a_camera_grid_reuses_from_its_sources(gpu):
+    scene = lambert_cornell()
+    with Renderer(scene, graph(reuse="views"), views=16, size=(16, 16)) as r:
+        r.render()
+        rays = r.compiled.ray_counts()
+        k = kinds(r)
+    cols = rv.xr.grid_for_views(16)[0]
+    sources = [v for v in range(16) if (v % cols) % 2 == 0 and (v // cols) % 2 == 0]
+    assert len(sources) == 4
+    for v in range(16):
+        drawn = k[v] != NONE
+        if v in sources:
+            assert (k[v][drawn] == TRACE).all()
+        else:
+            assert (k[v][drawn] == REUSE).mean() > 0.85 and rays[v] < 0.25 * rays[0]
+
+
+def test_the_path_traced_graphs_primary_hits_are_reused(gpu):
+    scene = builtin.cornell_box()
+    means, rays = {}, {}
+    for reuse, frames in ((None, 64), (None, 8), ("views", 8)):
+        g = rv.graphs.path_traced(reuse=reuse, max_bounces=2)
+        with Renderer(scene, g, views=2, size=SIZE) as r:
+            for _ in range(frames):
+                r.render()
+            means[reuse, frames] = r.read_output("Accumulate.dst")[..., :3].astype(np.float64)
+            rays[reuse] = r.compiled.ray_counts()
+    assert rays["views"][1] < 0.3 * rays["views"][0]
+    assert np.array_equal(means["views", 8][0], means[None, 8][0])     # the source eye traced as before
+    # path tracing's noise is heavy-tailed: no bias, and the errors without their largest 2%
+    reference, reused, independent = means[None, 64][1], means["views", 8][1], means[None, 8][1]
+    assert abs(reused.mean() - reference.mean()) < 0.02 * reference.mean()
+    e_reused, e_independent = trimmed_rel_mse(reused, reference), trimmed_rel_mse(independent, reference)
+    assert e_reused < 1.5 * e_independent, (e_reused, e_independent)
+
+
+def test_reuse_is_left_out_with_one_view_and_absent_when_off(gpu):
+    scene = lambert_cornell()
+    with Renderer(scene, graph(reuse="views"), views=1, size=SIZE) as r:
+        assert "Decision" in r.compiled.plan.pruned
+        assert "one view" in r.compiled.plan.pruned["Decision"]
+        assert DECISION not in r.compiled.plan.resources
+    g = rv.graphs.hybrid()
+    assert "Decision" not in g.passes
+
+
+def test_bad_trace_settings_are_one_clear_error(gpu):
+    with pytest.raises(OptionError, match="reuse='mirror'.*'views'"):
+        rv.graphs.hybrid(reuse="mirror")
+    with pytest.raises(OptionError, match="decision=.*reuse='views'"):
+        rv.graphs.hybrid(decision={"periphery_share": 0.5})
+    with pytest.raises(OptionError, match="TraceDecision.*source_stride"):
+        TraceDecision(source_stride=1)
+    with pytest.raises(OptionError, match="reuse_min_roughness"):
+        TraceDecision(reuse_min_roughness=2.0)
+
+
+def test_reuse_under_the_clean_preset_converges_as_independent_eyes_do(gpu):
+    """Probe GI, SVGF and TAA over reused light: a still stereo view's second eye ends as close to
+    the converged image as independent eyes do."""
+    scene = lambert_cornell()
+    out = {}
+    for reuse, frames in ((None, 96), (None, 12), ("views", 12)):
+        with Renderer(scene, rv.graphs.hybrid(reuse=reuse), views=2, size=SIZE) as r:
+            for _ in range(frames):
+                r.render()
+            out[reuse, frames] = r.read_output("TAA.dst")[..., :3].astype(np.float64)
+    reference = out[None, 96][1]
+    e_reused, e_independent = rel_mse(out["views", 12][1], reference), rel_mse(out[None, 12][1], reference)
+    assert e_reused < 1.5 * e_independent + 1e-4, (e_reused, e_independent)
+
+
+def test_alternating_sources_swap_the_eyes_each_frame(gpu):
+    scene = lambert_cornell()
+    with Renderer(scene, graph(reuse="views", decision={"alternate": True}), views=2, size=SIZE) as r:
+        sourced = []
+        for _ in range(2):
+            r.render()
+            k = kinds(r)
+            sourced.append([bool((k[v][k[v] != NONE] == TRACE).all()) for v in range(2)])
+            rays = r.compiled.ray_counts()
+            assert min(rays) < 0.2 * max(rays)
+    assert sourced == [[True, False], [False, True]]
