@@ -6,7 +6,7 @@
 // surface for next frame's reprojection.
 #include "restir_stage.glsl"
 #if RESTIR_VISIBILITY_REUSE
-#include "ray_query.glsl"
+#include "ray_counters.glsl"
 #endif
 
 layout(rgba32ui) writeonly uniform uimage2DArray reservoirs_out;
@@ -44,6 +44,7 @@ void main() {
             r.weight = 0.0;
         }
     }
+    ray_count_commit(uint(p.z));
 #endif
     imageStore(reservoirs_out, p, reservoir_pack(r));
 }

@@ -70,6 +70,8 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
     (pixels, 1-256), `share_views` (views after the first reuse view 0's reservoirs), and the ray
     passes' `dispatch_mode`, `tile`, `view_group`."""
 
+    COUNTS_RAYS = True   # the candidates' visibility rays and the shading's shadow rays
+
     SHADER = "restir_shade.comp"
     OUTPUT = "shadowed"
     OUTPUT_DESC = "emission + shadowed direct light (listed pixels only)"

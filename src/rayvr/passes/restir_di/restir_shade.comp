@@ -2,7 +2,7 @@
 // shadow ray (the expected transmittance through BLEND surfaces, as RTShadows), + the probes'
 // indirect diffuse light with PROBE_GI: what RTShadows writes, from the resampled sample.
 #include "restir_stage.glsl"
-#include "ray_query.glsl"
+#include "ray_counters.glsl"
 #include "probe_gi.glsl"
 #include "nonfinite.glsl"
 
@@ -27,6 +27,7 @@ void main() {
             if (visible > 0.0) direct = f * (r.weight * visible);
         }
     }
+    ray_count_commit(uint(p.z));
     vec3 c = g.emissive + direct + probe_gi_diffuse(s);
     imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(c)), 1.0));   // the target is rgba16f
 }
