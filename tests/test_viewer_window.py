@@ -105,8 +105,9 @@ def scripted(display, tmp_path_factory):
     """One scripted viewer run: its folder, its recorded camera path, the scene and its views."""
     folder = tmp_path_factory.mktemp("view")
     (folder / "script.json").write_text(json.dumps(SCRIPT))
+    rv.graphs.hybrid(preset="raw").save(folder / "raw.json")   # each frame alone: the replay's pixels exactly
     out = rayvr_cmd(["view", "--views", "1", "--size", f"{SIZE}x{SIZE}", "--window", "256x256", "--effect", "*=raster",
-                     "--script", "script.json", "--record", "path.json"], display, folder)
+                     "--graph", "raw.json", "--script", "script.json", "--record", "path.json"], display, folder)
     assert out.returncode == 0, out.stderr
     scene = rv.scenes.cornell_box()
     rig = ViewRig.from_scene(scene, 1, (SIZE, SIZE))
@@ -189,7 +190,7 @@ def test_switching_a_material_effect_changes_its_pixels(scripted):
 def test_recorded_camera_path_replays_in_rayvr_render(scripted, display):
     folder, path, scene, rig = scripted
     out = rayvr_cmd(["render", "--camera-path", "path.json", "--views", "1", "--size", f"{SIZE}x{SIZE}", "--effect",
-                     "*=raster", "--exposure", "0", "--out", "replay/r.png"], display, folder)
+                     "*=raster", "--exposure", "0", "--preset", "raw", "--out", "replay/r.png"], display, folder)
     assert out.returncode == 0, out.stderr
     assert len(list((folder / "replay").glob("r_*.png"))) == len(path) == 19
     for shot, frame in (("a.png", 2), ("forward.png", 11), ("strafed.png", 14)):
