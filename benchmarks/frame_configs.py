@@ -20,6 +20,12 @@ CONFIGS = {
     "raw + restir": {"preset": "raw", "direct": "restir"},
     "clean": {},
     "clean + restir": {"direct": "restir"},
+    # ReSTIR's stages apart: fewer candidates, no visibility reuse, no spatial or temporal reuse
+    "raw + restir 2 candidates": {"preset": "raw", "direct": "restir", "restir": {"candidates": 2}},
+    "raw + restir no visibility reuse": {"preset": "raw", "direct": "restir", "restir": {"visibility_reuse": False}},
+    "raw + restir no spatial": {"preset": "raw", "direct": "restir", "restir": {"spatial_samples": 0}},
+    "raw + restir candidates only": {"preset": "raw", "direct": "restir",
+                                     "restir": {"spatial_samples": 0, "temporal_reuse": False, "share_views": False}},
     "clean + reuse": {"reuse": "views"},
     "clean + foveation": {"foveation": "fixed"},
 }
