@@ -221,8 +221,6 @@ class Child:
         return out
 
     def views(self) -> dict:
-        import rayvr as rv
-
         scene = self.scene("tauray_test.glb")
         many = self.frame(scene, raw_hybrid(), 64, self.div(512, 683))
         one = self.frame(scene, raw_hybrid(), 1, tuple(8 * s for s in self.div(512, 683)))

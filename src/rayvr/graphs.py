@@ -236,14 +236,13 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     return g
 
 
-def _add_taa(g: RenderGraph, alpha: float | None = None, sigma: float | None = None) -> None:
+def _add_taa(g: RenderGraph) -> None:
     """TAA on the composited radiance (motion vectors from the G-buffer) in front of its reader
     (ToneMap, or Denoise with OIDN); marks TAA.dst."""
     from .passes import TAA
 
     reader = next(e.dst for e in g.edges if e.src == HDR_OUTPUT and e.dst_pass in ("ToneMap", "Denoise"))
-    props = {k: v for k, v in (("alpha", alpha), ("sigma", sigma)) if v is not None}
-    g.add_pass(TAA(props), "TAA")
+    g.add_pass(TAA(), "TAA")
     g.remove_edge(HDR_OUTPUT, reader)
     g.add_edge("Composite.color", "TAA.color")
     g.add_edge("GBuffer.motion", "TAA.motion")

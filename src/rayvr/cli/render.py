@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
-from ..graph_options import DEFAULT_PRESET, DIRECT, NONE, OPTIONS, PRESETS
+from ..graph_options import DEFAULT_PRESET, NONE, OPTIONS, PRESETS
 from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
 from . import cluster as cluster_cli
 from .options import (MAX_VIEWS, add_lighting_arguments, add_trace_arguments, apply_lighting, integer, load_scene_arg,

@@ -201,8 +201,8 @@ def back_off(first: TuneResult, choose, measure, budget_ms: float, tries: int = 
 class Knob:
     """A quality setting the tuner may raise when a choice leaves time in the budget: graph option
     `name`, its `values` from the cheapest (the graph's default) up, and `applies(result)`, whether
-    it can change this choice's image (light samples need a ray-traced light; probe density needs
-    probe GI; paths per pixel a PATH_TRACED material)."""
+    it can change this choice's image (paths per pixel need a PATH_TRACED material, probe density
+    probe GI; None: always, as light samples, which every lit pixel draws)."""
 
     name: str
     values: tuple

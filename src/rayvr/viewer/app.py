@@ -327,8 +327,8 @@ class Viewer:
 
     # -- accumulation ----------------------------------------------------------------------------------
     def accumulated(self) -> tuple[int, float]:
-        """(frames in the running mean, seconds since it restarted): the Accumulate passes' count
-        where the graph runs one, else frames since the view last changed."""
+        """(frames in the running mean, seconds since it restarted): the most of the enabled
+        Accumulate passes' counts and TAA's still frames, else frames since the view last changed."""
         from ..passes.accumulate import Accumulate
 
         from ..passes.taa import TAA
