@@ -22,6 +22,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--views", default="2,64", help="comma-separated view counts (default 2,64)")
     parser.add_argument("--stereo-size", default="1440x1600", help="per-view size of 2 views (default 1440x1600)")
     parser.add_argument("--grid-size", default="512x683", help="per-view size of more views (default 512x683)")
+    parser.add_argument("--lobe-fractions", default="",
+                        help="comma-separated reuse_lobe_fraction values, a reuse row each beside the default's "
+                             "(the Decision pass's: glossier lobes reused where wide against the eyes' parallax)")
 
 
 def run(args) -> dict:
@@ -43,6 +46,10 @@ def run(args) -> dict:
         out = {}
         for reuse in (None, "views"):
             out[reuse] = measure(scene, view_set, rv.graphs.hybrid(preset=args.preset, reuse=reuse), s, ref, args.ppd)
+        for fraction in (float(f) for f in args.lobe_fractions.split(",") if f.strip()):
+            g = rv.graphs.hybrid(preset=args.preset, reuse="views")
+            g.update_pass("Decision", {"reuse_lobe_fraction": fraction})
+            out[f"views, lobe fraction {fraction:g}"] = measure(scene, view_set, g, s, ref, args.ppd)
         base = out[None]
         for reuse, row in out.items():
             first, others = row["rays"][0], row["rays"][1:]

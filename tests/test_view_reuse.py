@@ -70,6 +70,23 @@ def box_stereo():
     return stereo_views(eye, 0.5, fov, fov, SIZE)
 
 
+def seen_by_the_first_eye(views, pos, word):
+    """(hidden, shown): the second eye's drawn pixels whose point lands, in the first eye, on another
+    surface or on the same one (float64, independent of the GPU; off the image: neither)."""
+    vp = views.matrices(views.origin())["view_proj"][0]
+    h, w = SIZE[1], SIZE[0]
+    clip = np.concatenate([pos[1, ..., :3], np.ones((h, w, 1))], axis=-1) @ vp.T
+    w_clip = np.where(clip[..., 3:] > 0, clip[..., 3:], 1.0)   # pixels with nothing drawn are left out below
+    px = np.floor((clip[..., :2] / w_clip * 0.5 + 0.5) * [w, h]).astype(int)
+    inside = (px[..., 0] >= 0) & (px[..., 0] < w) & (px[..., 1] >= 0) & (px[..., 1] < h)
+    qx, qy = np.clip(px[..., 0], 0, w - 1), np.clip(px[..., 1], 0, h - 1)
+    drawn = word[1] != 0xFF
+    seen_as = word[0][qy, qx]
+    gap = np.linalg.norm(pos[0][qy, qx, :3] - pos[1, ..., :3], axis=-1)
+    return (drawn & inside & ((seen_as != word[1]) | (gap > 0.05)),
+            drawn & inside & (seen_as == word[1]) & (gap < 0.01))
+
+
 def test_pixels_a_box_hides_from_the_first_eye_are_traced_by_the_second(gpu):
     scene = builtin.box_on_plane()
     for name in ("Plane", "Box"):
@@ -81,20 +98,7 @@ def test_pixels_a_box_hides_from_the_first_eye_are_traced_by_the_second(gpu):
         pos = r.read_output("GBuffer.posW").astype(np.float64)
         word = r.read_output("GBuffer.effect")[..., 0]
         rays = r.compiled.ray_counts()
-        origin = views.origin()
-    # where each second-eye pixel's point lands in the first eye (float64, independent of the GPU)
-    vp = views.matrices(origin)["view_proj"][0]
-    h, w = SIZE[1], SIZE[0]
-    clip = np.concatenate([pos[1, ..., :3], np.ones((h, w, 1))], axis=-1) @ vp.T
-    w_clip = np.where(clip[..., 3:] > 0, clip[..., 3:], 1.0)   # pixels with nothing drawn are left out below
-    px = np.floor((clip[..., :2] / w_clip * 0.5 + 0.5) * [w, h]).astype(int)
-    inside = (px[..., 0] >= 0) & (px[..., 0] < w) & (px[..., 1] >= 0) & (px[..., 1] < h)
-    qx, qy = np.clip(px[..., 0], 0, w - 1), np.clip(px[..., 1], 0, h - 1)
-    drawn = word[1] != 0xFF
-    seen_as = word[0][qy, qx]
-    gap = np.linalg.norm(pos[0][qy, qx, :3] - pos[1, ..., :3], axis=-1)
-    hidden = drawn & inside & ((seen_as != word[1]) | (gap > 0.05))   # another surface where it lands
-    shown = drawn & inside & (seen_as == word[1]) & (gap < 0.01)
+    hidden, shown = seen_by_the_first_eye(views, pos, word)
     assert hidden.sum() >= 20, "the scene must hide some plane from the first eye"
     assert (k[1][hidden] == TRACE).all(), "a disocclusion was filled"
     assert (k[1][shown] == REUSE).mean() > 0.97
@@ -120,6 +124,37 @@ def test_a_mirror_is_traced_in_every_view_and_matches_its_own_render(gpu):
     assert mirror.sum() > 100
     assert (k[1][mirror] == TRACE).all()
     assert np.array_equal(color[1][mirror], out[None][0][1][mirror])   # traced as an independent eye does
+
+
+def test_a_glossy_surface_is_reused_where_its_lobe_is_wide_against_the_eyes_parallax(gpu):
+    scene = builtin.box_on_plane()
+    plane = scene.materials["Plane"]
+    plane.effect, plane.metallic, plane.roughness = rv.Effect.SHADOWS, 1.0, 0.45   # below reuse_min_roughness
+    scene.materials["Box"].effect = rv.Effect.SHADOWS
+    views = box_stereo()
+    alpha = 0.45 ** 2
+    out = {}
+    for fraction in (0.0, 1.0):
+        g = graph(reuse="views")
+        g.update_pass("Decision", {"reuse_lobe_fraction": fraction})
+        with Renderer(scene, g, views=views) as r:
+            r.render()
+            out[fraction] = kinds(r)
+            pos = r.read_output("GBuffer.posW").astype(np.float64)
+            word = r.read_output("GBuffer.effect")[..., 0]
+    _, shown = seen_by_the_first_eye(views, pos, word)
+    pos = pos[1, ..., :3]
+    origin = views.origin()
+    eyes = np.array([v.pose.position for v in views.views], np.float64) - origin   # render space, as posW
+    a, b = eyes[1] - pos, eyes[0] - pos
+    parallax = np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), (a * b).sum(-1))   # float64, per pixel
+    on_plane = (word[1] != 0xFF) & (pos[..., 1] + origin[1] < 0.01)
+    reused_1 = out[1.0][1] == REUSE
+    assert (out[0.0][1][on_plane] == TRACE).all(), "roughness 0.45 < 0.5: traced by roughness alone"
+    near, far = on_plane & (parallax > 1.05 * alpha), on_plane & shown & (parallax < 0.95 * alpha)
+    assert near.sum() > 20 and far.sum() > 20, "the plane must span both sides of the threshold"
+    assert not reused_1[near].any(), "a lobe narrower than the parallax was reused"
+    assert reused_1[far].mean() > 0.9
 
 
 def test_a_camera_grid_reuses_from_its_sources(gpu):

@@ -70,7 +70,7 @@ void bsdf_set_side(inout BsdfParams b, bool inside) { b.inside = inside && !b.th
 // ---- the lobes' probabilities -------------------------------------------------------------------
 // Probabilities of the lobes at mu_v, from their weights (albedos). Every lobe that can carry
 // light keeps at least a small share, so that MIS never meets a zero pdf where f > 0.
-void bsdf_lobe_probabilities_at(BsdfParams b, float nv, vec2 ab, out float p[BSDF_LOBE_COUNT]) {
+void bsdf_lobe_probabilities_at(BsdfParams b, float nv, vec2 ab, out BsdfLobeFloats p) {
     float sum = 0.0;
 #define BSDF_STEP(i) p[i] = max(bsdf_lobe_weight(i, b, nv, ab), bsdf_lobe_scatters(i, b) ? 0.02 : 0.0); sum += p[i];
     BSDF_EACH_LOBE(BSDF_STEP)
@@ -94,7 +94,7 @@ void bsdf_set_view(inout BsdfParams b, vec3 n, vec3 v) {
 
 // The probabilities of sampling among `lobes` alone: the set's share of bsdf_set_view's,
 // renormalised (all 0 when none of them carries light).
-void bsdf_lobe_probabilities(BsdfParams b, uint lobes, out float p[BSDF_LOBE_COUNT]) {
+void bsdf_lobe_probabilities(BsdfParams b, uint lobes, out BsdfLobeFloats p) {
     if (lobes == BSDF_LOBES_ALL) {
         p = b.lobe_p;
         return;
@@ -149,7 +149,7 @@ vec3 bsdf_eval(BsdfParams b, vec3 n, vec3 v, vec3 l) { return bsdf_eval_lobes(b,
 
 // ---- sampling -----------------------------------------------------------------------------------
 // Pdf of bsdf_sample_lobes's direction l among `lobes` of probabilities p (summing to 1).
-float bsdf_pdf_of(BsdfParams b, vec3 n, vec3 v, vec3 l, float p[BSDF_LOBE_COUNT], uint lobes) {
+float bsdf_pdf_of(BsdfParams b, vec3 n, vec3 v, vec3 l, BsdfLobeFloats p, uint lobes) {
     float nv = dot(n, v), nl = dot(n, l);
     if (nv <= 0.0 || nl == 0.0) return 0.0;
     if (nl < 0.0) {
@@ -170,7 +170,7 @@ float bsdf_pdf_of(BsdfParams b, vec3 n, vec3 v, vec3 l, float p[BSDF_LOBE_COUNT]
 }
 
 float bsdf_pdf_lobes(BsdfParams b, vec3 n, vec3 v, vec3 l, uint lobes) {
-    float p[BSDF_LOBE_COUNT];
+    BsdfLobeFloats p;
     bsdf_lobe_probabilities(b, lobes, p);
     return bsdf_pdf_of(b, n, v, l, p, lobes);
 }
@@ -205,7 +205,7 @@ bool bsdf_sample_lobes(BsdfParams b, vec3 n, vec3 v, vec3 u, uint lobes, out Bsd
     s.l = n;
     float nv = dot(n, v);
     if (nv <= 0.0) return false;
-    float p[BSDF_LOBE_COUNT];
+    BsdfLobeFloats p;
     bsdf_lobe_probabilities(b, lobes, p);
     float sum = 0.0;
 #define BSDF_STEP(i) sum += p[i];

@@ -28,6 +28,9 @@ const int BSDF_LOBE_DIFFUSE = 1;    // the dielectric's Lambert base
 const int BSDF_LOBE_GLASS = 2;      // rough dielectric interface: reflection and transmission
 const int BSDF_LOBE_COUNT = 3;
 const int BSDF_LOBE_FALLBACK = BSDF_LOBE_SPECULAR;   // probability 1 when no lobe carries light
+// A float per lobe, indexed by BSDF_LOBE_*: a vector of BSDF_LOBE_COUNT components (vec4 for a fourth
+// lobe), not a float array, which the compiler may keep in local memory when it crosses functions
+#define BsdfLobeFloats vec3
 
 const uint BSDF_LOBES_ALL = (1u << BSDF_LOBE_COUNT) - 1u;
 const uint BSDF_LOBES_DIFFUSE = 1u << BSDF_LOBE_DIFFUSE;

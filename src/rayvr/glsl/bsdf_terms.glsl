@@ -36,7 +36,7 @@ struct BsdfParams {
     float glass_comp_v;
     float layer_v;
     float layer_avg;
-    float lobe_p[BSDF_LOBE_COUNT];
+    BsdfLobeFloats lobe_p;
 };
 
 float bsdf_alpha(BsdfParams b) { return max(b.roughness * b.roughness, BSDF_MIN_ALPHA); }

@@ -273,11 +273,12 @@ def views_digest(view_set) -> str:
 
 def reference_graph(settings: ReferenceSettings, bounces: int | None = None):
     """The reference's render graph: `settings.spp` paths per pixel per frame, each from a random
-    point of its pixel (PIXEL_FILTER), accumulated."""
+    point of its pixel (PIXEL_FILTER), accumulated. Its wavefront runs over queues of the paths
+    still going (`compact`: the same paths; most end long before the reference's many bounces)."""
     from ..graphs import path_traced
 
     g = path_traced(samples_per_pixel=settings.spp, max_bounces=bounces or settings.max_bounces)
-    g.update_pass("PathTracer", {"pixel_jitter": True})
+    g.update_pass("PathTracer", {"pixel_jitter": True, "compact": True})
     return g
 
 

@@ -3,8 +3,9 @@
 // rules). Defines:
 //   REUSE 1: views reuse the shaded samples of source views: REUSE_COLS views a grid row (view v
 //     at column v % REUSE_COLS, row v / REUSE_COLS), sources every REUSE_STRIDE-th row and column;
-//     two views: the first eye (REUSE_ALTERNATE: the eye of the frame's parity); surfaces with
-//     roughness >= REUSE_MIN_ROUGHNESS and no transmission only (glossier lobes change with the view)
+//     two views: the first eye (REUSE_ALTERNATE: the eye of the frame's parity); surfaces without
+//     transmission whose roughness >= REUSE_MIN_ROUGHNESS, or whose lobe is wide against the eyes'
+//     parallax (REUSE_LOBE_FRACTION: view_independent)
 //   FOVEATION 1 (fixed: the image's centre) or 2 (gaze: the eye tracker's, else the centre): a pixel
 //     traces with probability budget(e) (FOVEAL_RADIUS degrees, PERIPHERY_SHARE), an 8x8 ordered
 //     dither whose ranks the frame index rotates through, so a pixel's turns are spread over frames
@@ -84,9 +85,16 @@ bool selected(ivec3 q) { return true; }
 
 // -- reuse between views ----------------------------------------------------------------------------
 #if REUSE
-// A lobe that looks the same from every nearby view: rough enough, and no refraction.
-bool view_independent(float roughness, uint material) {
-    return roughness >= REUSE_MIN_ROUGHNESS && !(material_factors(material).transmission > 0.0);
+// A lobe that looks alike from view v's eye and source s's: no refraction, and rough enough
+// (roughness >= REUSE_MIN_ROUGHNESS), or the angle between the two eyes seen from the point `pos`
+// below REUSE_LOBE_FRACTION of the GGX lobe's width (alpha = roughness^2 radians): a far glossy
+// surface looks the same to both eyes, a near one does not.
+bool view_independent(float roughness, uint material, vec3 pos, uint v, uint s) {
+    if (material_factors(material).transmission > 0.0) return false;
+    if (roughness >= REUSE_MIN_ROUGHNESS) return true;
+    vec3 a = views[v].eye.xyz - pos, b = views[s].eye.xyz - pos;
+    float parallax = atan(length(cross(a, b)), dot(a, b));
+    return parallax < float(REUSE_LOBE_FRACTION) * roughness * roughness;
 }
 
 bool is_source(uint v) {
@@ -143,9 +151,9 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at) {
     at = vec2(p.xy) + 0.5;
 #if REUSE
     bool reuses = !is_source(v);
-    if (reuses && view_independent(g.roughness, g.material)) {
-        uint s[2];
-        int n = sources_of(v, s[0], s[1]);
+    uint s[2];
+    int n = reuses ? sources_of(v, s[0], s[1]) : 0;
+    if (reuses && view_independent(g.roughness, g.material, g.pos, v, s[0])) {
         for (int i = 0; i < n; ++i) {
             uint kind = reuse_from(g, v, s[i], at);
             if (kind != DECISION_NONE) {
@@ -164,7 +172,7 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at) {
         ivec3 q = p + ivec3(TAP[k], 0);
         if (!inside(q) || !selected(q) || !same_surface(g, v, q, FAR_PIXELS)) continue;
 #if REUSE
-        if (reuses && view_independent(gbuf_fetch_metalRough(q).y, g.material)) continue;
+        if (reuses && view_independent(gbuf_fetch_metalRough(q).y, g.material, g.pos, v, s[0])) continue;
 #endif
         at = vec2(q.xy) + 0.5;
         return DECISION_FILL;

@@ -23,8 +23,9 @@ class TraceDecision(RenderPass):
 
     - it is in a source view, or its surface point, projected into the nearest source views, lands
       on a traced pixel of the same surface (effect word, normal, position within a few pixel
-      footprints) whose lobe looks alike from both (roughness >= `reuse_min_roughness`, no
-      transmission): then it REUSEs that pixel's shaded light (`reuse`; with two views the first eye
+      footprints) whose lobe looks alike from both (no transmission, and roughness >=
+      `reuse_min_roughness` or the angle between the two eyes seen from the point below
+      `reuse_lobe_fraction` of the GGX lobe's width, roughness^2 radians; 0: roughness alone): then it REUSEs that pixel's shaded light (`reuse`; with two views the first eye
       is the source, or the eye of the frame's parity with `alternate`; with more, every
       `source_stride`-th column and row of a grid of `grid_cols` columns, 0: the default grid of
       rayvr.xr.grid_for_views). A pixel that fails the test traces: disocclusions are traced, never
@@ -46,6 +47,7 @@ class TraceDecision(RenderPass):
     CHOICES = {"foveation": FOVEATION}
     PROPERTIES = {"reuse": False, "foveation": "none", "foveal_radius_deg": foveation.DEFAULT_RADIUS_DEG,
                   "periphery_share": foveation.DEFAULT_PERIPHERY_SHARE, "reuse_min_roughness": 0.5,
+                  "reuse_lobe_fraction": 0.0,
                   "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False}
 
     def validate_property(self, key, value):
@@ -60,6 +62,9 @@ class TraceDecision(RenderPass):
         if key == "reuse_min_roughness" and not 0.0 <= value <= 1.0:
             raise OptionError(f"pass {self.name}: property 'reuse_min_roughness' must be a perceptual roughness in "
                               f"[0, 1], got {value!r}")
+        if key == "reuse_lobe_fraction" and not (isinstance(value, (int, float)) and 0.0 <= value <= 4.0):
+            raise OptionError(f"pass {self.name}: property 'reuse_lobe_fraction' must be a number in [0, 4] (the "
+                              f"eyes' parallax as a fraction of the lobe's width; 0: roughness alone), got {value!r}")
         low = {"source_stride": 2, "grid_cols": 0}.get(key)
         if low is not None and (int(value) != value or value < low):
             raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= {low}, got {value!r}")
@@ -86,6 +91,7 @@ class TraceDecision(RenderPass):
         self._defines = {"REUSE": int(self.reuses(cd.views)), "REUSE_COLS": cols,
                          "REUSE_STRIDE": int(self.source_stride), "REUSE_ALTERNATE": int(bool(self.alternate)),
                          "REUSE_MIN_ROUGHNESS": float(self.reuse_min_roughness),
+                         "REUSE_LOBE_FRACTION": float(self.reuse_lobe_fraction),
                          "FOVEATION": FOVEATION.index(self.foveation), "FOVEAL_RADIUS": float(self.foveal_radius_deg),
                          "PERIPHERY_SHARE": float(self.periphery_share),
                          "EVERY_SURFACE": int(bool(self.every_surface))}
@@ -96,7 +102,9 @@ class TraceDecision(RenderPass):
     def defines(self) -> dict:
         d = dict(getattr(self, "_defines", {}))
         if d.get("REUSE"):
-            d["reuse"] = (f"views reuse rough surfaces (roughness >= {self.reuse_min_roughness:g}) of source views: "
+            lobes = (f", or glossier ones whose lobe is over {1 / self.reuse_lobe_fraction:.3g}x the eyes' parallax"
+                     if self.reuse_lobe_fraction else "")
+            d["reuse"] = (f"views reuse rough surfaces (roughness >= {self.reuse_min_roughness:g}{lobes}) of source views: "
                           + ("the first eye" if not self.alternate else "the eye of the frame's parity")
                           + f" with 2 views, else every {self.source_stride}th of {d['REUSE_COLS']} columns and rows")
         if d.get("FOVEATION"):
