@@ -25,8 +25,9 @@ class TraceDecision(RenderPass):
       on a traced pixel of the same surface (effect word, normal, position within a few pixel
       footprints) whose lobe looks alike from both (no transmission, and roughness >=
       `reuse_min_roughness` or the angle between the two eyes seen from the point below
-      `reuse_lobe_fraction` of the GGX lobe's width, roughness^2 radians; 0: roughness alone): then it REUSEs that pixel's shaded light (`reuse`; with two views the first eye
-      is the source, or the eye of the frame's parity with `alternate`; with more, every
+      `reuse_lobe_fraction` of the GGX lobe's width, roughness^2 radians; 0: roughness alone):
+      then it REUSEs that pixel's shaded light (`reuse`; with two views the first eye is the
+      source, or the eye of the frame's parity with `alternate`; with more, every
       `source_stride`-th column and row of a grid of `grid_cols` columns, 0: the default grid of
       rayvr.xr.grid_for_views). A pixel that fails the test traces: disocclusions are traced, never
       filled; and
@@ -104,7 +105,8 @@ class TraceDecision(RenderPass):
         if d.get("REUSE"):
             lobes = (f", or glossier ones whose lobe is over {1 / self.reuse_lobe_fraction:.3g}x the eyes' parallax"
                      if self.reuse_lobe_fraction else "")
-            d["reuse"] = (f"views reuse rough surfaces (roughness >= {self.reuse_min_roughness:g}{lobes}) of source views: "
+            d["reuse"] = (f"views reuse rough surfaces (roughness >= {self.reuse_min_roughness:g}{lobes}) "
+                          "of source views: "
                           + ("the first eye" if not self.alternate else "the eye of the frame's parity")
                           + f" with 2 views, else every {self.source_stride}th of {d['REUSE_COLS']} columns and rows")
         if d.get("FOVEATION"):
