@@ -19,24 +19,30 @@ layout(local_size_x = RAY_GROUP_SIZE) in;
 #endif
 uniform int pt_sample;
 
-// Path i's rays (pixel p): whether it has a shadow ray (so, sd, stmax) and a BSDF ray (o, d);
-// resumes its BLEND decisions where its last rays left them.
-void ptw_rays(uint i, ivec3 p, out bool shadow, out vec3 so, out vec3 sd, out float stmax, out bool closest,
-              out vec3 o, out vec3 d) {
-    uint flags = ptw_load(PTW_POS, i).w;
+// Path i's BLEND decisions (pixel p) resume where its last rays left them.
+void ptw_blend_resume(uint i, ivec3 p) {
 #if SCENE_HAS_ALPHA_BLEND
     rq_blend_begin(pt_rng(p, pt_sample));
     rq_blend_ray = ptw_load(PTW_ANSWER, i).z;
 #endif
-    vec3 from = uintBitsToFloat(ptw_load(PTW_POS, i).xyz);
+}
+
+// Path i's shadow ray (so, sd, stmax): false when its vertex has none.
+bool ptw_shadow_ray(uint i, out vec3 so, out vec3 sd, out float stmax) {
     vec4 ng = ptw_loadf(PTW_NG, i);
-    shadow = ng.w >= 0.0;
-    so = offset_ray_origin(from, ng.xyz);
+    so = offset_ray_origin(uintBitsToFloat(ptw_load(PTW_POS, i).xyz), ng.xyz);
     sd = ptw_loadf(PTW_NEE_DIR, i).xyz;
     stmax = ng.w;
-    closest = (flags & PTW_SCATTERED) != 0u;
-    o = offset_ray_origin(from, (flags & PTW_TRANSMITTED) != 0u ? -ng.xyz : ng.xyz);
+    return ng.w >= 0.0;
+}
+
+// Path i's BSDF ray (o, d) from its state flags: false when it scattered none. Loaded after its
+// shadow ray is traced, so that o and d take no registers during that traversal.
+bool ptw_bsdf_ray(uint i, uint flags, out vec3 o, out vec3 d) {
+    vec3 ng = ptw_loadf(PTW_NG, i).xyz;
+    o = offset_ray_origin(uintBitsToFloat(ptw_load(PTW_POS, i).xyz), (flags & PTW_TRANSMITTED) != 0u ? -ng : ng);
     d = ptw_loadf(PTW_DIR, i).xyz;
+    return (flags & PTW_SCATTERED) != 0u;
 }
 
 // Store path i's answers: the BSDF (or camera) ray's hit, PTW_FOUND | PTW_OCCLUDED | PTW_SHADOW.
@@ -84,8 +90,9 @@ void main() {
                     i = ptq_items[ptq_in * pt_wave_paths + j];
                     vec3 so, sd;
                     float stmax;
-                    bool closest;
-                    ptw_rays(i, ptw_slot_pixel(i), shadow_ray, so, sd, stmax, closest, o, d);
+                    ptw_blend_resume(i, ptw_slot_pixel(i));
+                    shadow_ray = ptw_shadow_ray(i, so, sd, stmax);
+                    bool closest = ptw_bsdf_ray(i, ptw_load(PTW_POS, i).w, o, d);
                     answer = shadow_ray ? PTW_SHADOW : 0u;
                     then_closest = shadow_ray && closest;
                     if (shadow_ray) rq_begin(so, sd, stmax, true);
@@ -127,12 +134,15 @@ void main() {
     Rng rng = pt_rng(p, pt_sample);   // also the BLEND decisions' seed
     pt_camera_ray(p, rng, o, d);
 #else
-    if ((ptw_load(PTW_POS, i).w & PTW_ALIVE) == 0u) return;
-    bool shadow;
-    vec3 so, sd;
-    float stmax;
-    ptw_rays(i, p, shadow, so, sd, stmax, closest, o, d);
-    if (shadow) answer = PTW_SHADOW | (trace_occluded(so, sd, stmax) ? PTW_OCCLUDED : 0u);
+    uint flags = ptw_load(PTW_POS, i).w;
+    if ((flags & PTW_ALIVE) == 0u) return;
+    ptw_blend_resume(i, p);
+    {
+        vec3 so, sd;
+        float stmax;
+        if (ptw_shadow_ray(i, so, sd, stmax)) answer = PTW_SHADOW | (trace_occluded(so, sd, stmax) ? PTW_OCCLUDED : 0u);
+    }
+    closest = ptw_bsdf_ray(i, flags, o, d);
 #endif
     Hit hit;
     bool found = closest && trace_closest(o, d, 1e30, hit);
