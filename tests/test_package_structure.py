@@ -195,6 +195,7 @@ def test_a_pass_folder_registers_itself_and_a_json_graph_finds_it(tmp_path):
     code = ("import sys, rayvr as rv; g = rv.RenderGraph.load(sys.argv[1]); "
             "assert 'rayvr.passes' in sys.modules; print(type(g.get_pass('Copy')).__name__, g.plan().order)")
     out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True,
-                         env={**os.environ, "PYTHONPATH": str(ROOT.parent)})
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT.parent),
+                                                                                          os.environ.get("PYTHONPATH")]))})
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["Blit", "['Fill',", "'Copy']"]

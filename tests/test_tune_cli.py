@@ -68,7 +68,10 @@ def test_tune_sets_the_tuned_assignment_beside_the_uniform_rows(gpu, tmp_path, c
     assert "| BackWall |" in out
     doc = json.loads((report / "tune.json").read_text())
     assert doc["fits"] and doc["budget_ms"] == 1000 and doc["measured_ms"] > 0
-    assert doc["options"] in ({}, {"gi": "probes"}, {"denoise": "svgf"})   # --graph-options auto tried these
+    from rayvr.tune.budget import KNOBS
+    knobs = {k.name for k in KNOBS}   # what the budget's headroom may raise after the choice
+    chosen = {k: v for k, v in doc["options"].items() if k not in knobs}
+    assert chosen in ({}, {"gi": "probes"}, {"denoise": "svgf"})   # --graph-options auto tried these
     assert set(doc["assignment"].values()) <= {"RASTER", "SHADOWS"} and len(doc["assignment"]) == 8
     results = json.loads((report / "results.json").read_text())
     tuned = [r for r in results["rows"] if r["tuned"]]

@@ -185,7 +185,8 @@ def test_tune_effects_tries_the_graph_options_and_keeps_what_pays(gpu, scene, re
     # the box's indirect light is most of its radiance: the probes cut the error, whatever they cost
     assert both.options == {"gi": "probes"} and "graph options chosen among gi=probes" in both.notes[-1]
     plain = rv.tune.tune_effects(scene, budget_ms=1e4, option_sets=[{}], **kw)
-    assert plain.options == {} and plain.predicted_error > 2 * both.predicted_error
+    # (2.1x here with llvmpipe's 4^3 probes, 1.7x with a GPU's default 8^3 over the same two frames)
+    assert plain.options == {} and plain.predicted_error > 1.5 * both.predicted_error
     assert both.measured_error < plain.measured_error      # the verification renders with the options
     with pytest.raises(OptionError, match="option_sets: expected dicts"):
         rv.tune.tune_effects(scene, budget_ms=1e4, option_sets=["gi"], **kw)
@@ -225,42 +226,58 @@ def test_judged_frames_do_not_depend_on_a_timed_warm_up(gpu, scene, reference):
     assert rows[0].errors == rows[1].errors and rows[0].mean("relmse") > 0
 
 
+class _Clock:
+    """A wall clock that only the fake renderers below advance: the warm-up's decisions then do
+    not depend on how busy the machine running the tests is."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def perf_counter(self) -> float:
+        return self.now
+
+
 class _RampingRenderer:
     """A renderer whose frames get 10% faster each (a GPU's clocks rising) from 8 ms until they
-    reach 1 ms (frame ~20), or never when `ramp` is False after `settles` frames."""
+    reach 1 ms (frame ~20), or never when `ramp` is False after `settles` frames; `frame_s(t)`
+    instead gives a frame's seconds at clock time t."""
 
-    def __init__(self, settles: int = 10 ** 6, start_s: float = 0.008, end_s: float = 0.001):
+    def __init__(self, clock: _Clock, settles: int = 10 ** 6, start_s: float = 0.008, end_s: float = 0.001,
+                 frame_s=None):
         import types
 
-        self.frames, self.settles, self.start_s, self.end_s = 0, settles, start_s, end_s
+        self.clock, self.frames, self.settles, self.start_s, self.end_s = clock, 0, settles, start_s, end_s
+        self.frame_s = frame_s
         self.gl = types.SimpleNamespace(finish=lambda: None)
 
     def render(self):
-        import time
-
-        time.sleep(max(self.end_s, self.start_s * 0.9 ** min(self.frames, self.settles)))
+        if self.frame_s is not None:
+            self.clock.now += self.frame_s(self.clock.now)
+        else:
+            self.clock.now += max(self.end_s, self.start_s * 0.9 ** min(self.frames, self.settles))
         self.frames += 1
 
 
 def test_warm_up_renders_on_until_the_frame_time_settles(monkeypatch):
-    import time
-
     from rayvr.study import timing
 
+    clock = _Clock()
+    monkeypatch.setattr(timing, "time", clock)
     monkeypatch.setattr(timing, "SETTLE_WINDOW_S", 0.02)
     monkeypatch.setattr(timing, "MAX_SETTLE_S", 5.0)
-    ramp = _RampingRenderer()
+    ramp = _RampingRenderer(clock)
     timing.warm_up(ramp, 0.01)
     assert ramp.frames >= 20           # not before the frames stopped getting faster
-    steady = _RampingRenderer(settles=0)
+    steady = _RampingRenderer(clock, settles=0)
     timing.warm_up(steady, 0.01)
-    assert steady.frames < 15          # a steady GPU: the seconds, then two windows
+    assert steady.frames == 2 + 2 * 3   # a steady 8 ms GPU: the 0.01 s, then two windows of 0.02 s
     monkeypatch.setattr(timing, "MAX_SETTLE_S", 0.1)
-    slow = _RampingRenderer(end_s=0.0)   # ever faster: never settles
-    t0 = time.perf_counter()
-    timing.warm_up(slow, 0.01)
-    assert time.perf_counter() - t0 < 0.5     # bounded
-    none = _RampingRenderer(settles=0)
+    # windows alternately of 1 ms and 3 ms frames: never settles, so the cap ends it
+    jumpy = _RampingRenderer(clock, frame_s=lambda t: 0.001 if int(t / 0.02) % 2 else 0.003)
+    t0 = clock.now
+    timing.warm_up(jumpy, 0.01)
+    assert 0.01 + 0.1 <= clock.now - t0 < 0.01 + 0.1 + 0.05     # bounded by the seconds and the cap
+    none = _RampingRenderer(clock, settles=0)
     timing.warm_up(none, 0.0)
     assert none.frames == 0            # no warm-up asked (llvmpipe): nothing rendered
 

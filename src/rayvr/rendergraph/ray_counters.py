@@ -4,7 +4,8 @@ A pass whose shaders trace rays for the views' pixels declares `COUNTS_RAYS = Tr
 compile with `RQ_COUNT_RAYS 1`, so `glsl/ray_query.glsl` counts the queries each invocation
 begins, and each kernel ends with `ray_count_commit(view)` (`glsl/ray_counters.glsl`), which adds
 them to its view's counter, one image atomic per view a subgroup holds. The counters are one r32ui
-texture of views x 1 texels at the fixed image unit `RAYVR_RAY_COUNTER_IMAGE` (bound before each
+texture of views x SLOTS texels (a view's count is its column's sum: each workgroup adds to the
+row its index picks, so that the atomics do not all meet at one address) at the fixed image unit `RAYVR_RAY_COUNTER_IMAGE` (bound before each
 counting pass: other passes may use that unit), cleared at a frame's start. At its end they are
 copied into a staging buffer behind a fence (`late_readback.py`), so `latest()` (the profile's
 `rays_per_view`) answers the last frame whose copy has landed without waiting; `read()` waits.
@@ -24,6 +25,7 @@ GL_TEXTURE_UPDATE_BARRIER_BIT = 0x100
 GL_PIXEL_BUFFER_BARRIER_BIT = 0x80
 # The GLSL extensions the commit's subgroup sum uses where the driver has them (else one atomic
 # per invocation): `enable` leaves their macros undefined, and the code then takes the fallback.
+SLOTS = 64   # counters per view (RAY_COUNT_SLOTS)
 SHADER_HEADER = "\n".join(f"#extension GL_KHR_shader_subgroup_{e} : enable" for e in ("basic", "ballot", "arithmetic"))
 
 
@@ -33,8 +35,8 @@ class RayCounters:
     def __init__(self, gl, views: int):
         self.gl = gl
         self.views = int(views)
-        self.texture = gl.texture((self.views, 1), 1, dtype="u4")
-        self.late = LateReadback(gl, 4 * self.views)
+        self.texture = gl.texture((self.views, SLOTS), 1, dtype="u4")
+        self.late = LateReadback(gl, 4 * self.views * SLOTS)
         self._latest = [0] * self.views
 
     def frame_begin(self) -> None:
@@ -55,7 +57,11 @@ class RayCounters:
     def _poll(self) -> None:
         data = self.late.take()
         if data is not None:
-            self._latest = np.frombuffer(data, np.uint32)[:self.views].tolist()
+            self._latest = self._sums(data)
+
+    def _sums(self, data: bytes) -> list[int]:
+        rows = np.frombuffer(data, np.uint32)[:self.views * SLOTS].reshape(SLOTS, self.views)
+        return rows.sum(axis=0, dtype=np.uint64).tolist()
 
     def latest(self) -> list[int]:
         """Rays per view of the last frame whose counts have come back (no wait: a frame or two old)."""
@@ -66,7 +72,7 @@ class RayCounters:
         """Rays per view of the last frame executed (waits for the GPU)."""
         self.gl.memory_barrier(GL_TEXTURE_UPDATE_BARRIER_BIT)
         self.late.drop()
-        self._latest = np.frombuffer(self.texture.read(), np.uint32)[:self.views].tolist()
+        self._latest = self._sums(self.texture.read())
         return list(self._latest)
 
     def release(self) -> None:

@@ -347,9 +347,9 @@ class RenderPass:
         from ..gpu.shaders import compute_program
 
         if self.COUNTS_RAYS:
-            from .ray_counters import SHADER_HEADER
+            from .ray_counters import SHADER_HEADER, SLOTS
 
-            defines, header = {**(defines or {}), "RQ_COUNT_RAYS": 1}, header + SHADER_HEADER
+            defines, header = {**(defines or {}), "RQ_COUNT_RAYS": 1, "RAY_COUNT_SLOTS": SLOTS}, header + SHADER_HEADER
         return compute_program(gl, self.shader_path(name), defines, header=header)
 
     def raster_program(self, gl, vertex: str, fragment: str, defines: dict | None = None):

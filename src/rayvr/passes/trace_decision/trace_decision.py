@@ -25,7 +25,8 @@ class TraceDecision(RenderPass):
       on a traced pixel of the same surface (effect word, normal, position within a few pixel
       footprints) whose lobe looks alike from both (no transmission, and roughness >=
       `reuse_min_roughness` or the angle between the two eyes seen from the point below
-      `reuse_lobe_fraction` of the GGX lobe's width, roughness^2 radians; 0: roughness alone):
+      `reuse_lobe_fraction` of the GGX lobe's width, roughness^2 radians (0.25: a lobe 4x wider
+      than the eyes' parallax reuses); 0: roughness alone):
       then it REUSEs that pixel's shaded light (`reuse`; with two views the first eye is the
       source, or the eye of the frame's parity with `alternate`; with more, every
       `source_stride`-th column and row of a grid of `grid_cols` columns, 0: the default grid of
@@ -48,7 +49,7 @@ class TraceDecision(RenderPass):
     CHOICES = {"foveation": FOVEATION}
     PROPERTIES = {"reuse": False, "foveation": "none", "foveal_radius_deg": foveation.DEFAULT_RADIUS_DEG,
                   "periphery_share": foveation.DEFAULT_PERIPHERY_SHARE, "reuse_min_roughness": 0.5,
-                  "reuse_lobe_fraction": 0.0,
+                  "reuse_lobe_fraction": 0.25,
                   "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False}
 
     def validate_property(self, key, value):
