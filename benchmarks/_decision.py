@@ -51,7 +51,9 @@ def measure(scene, view_set, graph, s: dict, judge_ref, ppd: float | None) -> di
 
     with rv.Renderer(scene, graph, views=view_set) as r:
         wall = wall_ms_per_frame(r, s["frames"], s["warmup"])
-        gpu = r.profile().total_ms if r.gpu.caps.timer_queries else None
+        profile = r.profile()
+        gpu = profile.total_ms if r.gpu.caps.timer_queries else None
+        passes = {name: round(st.mean_ms, 3) for name, st in profile.passes.items()} if gpu is not None else {}
         rays = r.compiled.ray_counts()
         for _ in range(s["judged"]):
             r.render()
@@ -60,12 +62,18 @@ def measure(scene, view_set, graph, s: dict, judge_ref, ppd: float | None) -> di
     display = Display().fixed(judge_ref[..., :3])
     per_view, _ = evaluate(image, judge_ref[..., :3], display, ppd or get_preset("index").pixels_per_degree,
                            which=("flip", "flip_fovea", "flip_ecc"), eccentricity=ecc)
-    return {"wall_ms": wall, "gpu_ms": gpu, "rays": rays, **{m: float(np.mean(v)) for m, v in per_view.items()}}
+    return {"wall_ms": wall, "gpu_ms": gpu, "rays": rays, "passes": passes,
+            **{m: float(np.mean(v)) for m, v in per_view.items()}}
 
 
 def ms(row: dict) -> float:
     """The GPU ms where the driver times it, else the wall ms."""
     return row["gpu_ms"] if row["gpu_ms"] is not None else row["wall_ms"]
+
+
+def passes_cell(row: dict) -> str:
+    """GPU ms per pass (timer queries' means), as "Name ms" pairs; empty without timer queries."""
+    return " ".join(f"{name} {t:.3f}" for name, t in row["passes"].items())
 
 
 def cells(row: dict) -> list:

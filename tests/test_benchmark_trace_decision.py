@@ -18,6 +18,9 @@ def test_view_reuse_quick_reports_rays_and_flip_with_and_without(tmp_path, gpu):
                                                          (4, "views")]
     for r in rows:
         assert r["rays_total"] > 0 and 0.0 < r["flip"] < 1.0 and 0.0 <= r["flip_fovea"] <= 1.0
+        # GPU ms per pass where the driver times them: the reuse rows add the decision
+        assert ("Shadows " in r["passes_ms"]) == (r["gpu_ms"] != "")
+        assert ("Decision " in r["passes_ms"]) == (r["gpu_ms"] != "" and r["config"] == "views")
     reused = [r for r in rows if r["config"] == "views"]
     assert all(r["rays_other/first"] < 0.3 for r in reused)
 
