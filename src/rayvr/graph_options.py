@@ -106,8 +106,8 @@ DIRECT = GraphOption("direct", "how SHADOWS materials and above sample direct li
     Choice("restir", "ReSTIR: candidates from the light table resampled over space, time and the views"),
 ))
 REUSE = GraphOption("reuse", "which pixels trace their own rays across views", (
-    Choice("views", "views take the shaded light of the same rough surface in a nearby source view; "
-                    "disocclusions and glossy lobes are traced"),
+    Choice("views", "views take the shaded light of the same surface in a nearby source view where its "
+                    "lobe is rough or wide against the eyes' parallax; disocclusions and narrow lobes are traced"),
 ))
 FOVEATION = GraphOption("foveation", "fewer rays where the eye does not look", (
     Choice("fixed", "the ray budget falls with the angle from each view's centre"),

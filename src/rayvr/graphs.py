@@ -151,8 +151,9 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     rayvr.passes.gbuffer.reflection_cutoff); None: 0.6 with probe GI, 1 (every one traced) without.
     `direct="restir"`: the "Shadows" pass is rayvr.passes.ReSTIRDI (with `restir` as its
     properties) instead of RTShadows with `light_samples`; None: RTShadows.
-    `reuse`: 'views' (rough surfaces take the shaded light of the same surface in a nearby source
-    view; disocclusions, glossy lobes and mirrors are traced per view) and `foveation`: 'fixed' or
+    `reuse`: 'views' (rough surfaces, and glossy ones whose lobe is wide against the eyes'
+    parallax, take the shaded light of the same surface in a nearby source view; disocclusions,
+    narrower lobes and mirrors are traced per view) and `foveation`: 'fixed' or
     'gaze' (fewer rays away from each view's centre or the eye tracker's gaze) add the trace
     decision (rayvr.passes.TraceDecision, pass "Decision", with `decision` as its properties, e.g.
     {"foveal_radius_deg": 5, "periphery_share": 0.25}): the ray passes trace only the pixels it
