@@ -238,9 +238,9 @@ class _Clock:
 
 
 class _RampingRenderer:
-    """A renderer whose frames get 10% faster each (a GPU's clocks rising) from 8 ms until they
-    reach 1 ms (frame ~20), or never when `ramp` is False after `settles` frames; `frame_s(t)`
-    instead gives a frame's seconds at clock time t."""
+    """A renderer that advances `clock` by each frame's seconds: 10% faster each (a GPU's clocks
+    rising) from 8 ms until they reach 1 ms (frame ~20), steady from frame `settles` on; or, with
+    `frame_s(t)`, that function's seconds at clock time t."""
 
     def __init__(self, clock: _Clock, settles: int = 10 ** 6, start_s: float = 0.008, end_s: float = 0.001,
                  frame_s=None):

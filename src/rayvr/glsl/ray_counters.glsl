@@ -4,8 +4,8 @@
 // extensions a subgroup adds one sum per view it holds (a loop over its distinct views: one to a
 // few), so a frame costs an image atomic per view and subgroup instead of one per pixel. Each
 // view has RAY_COUNT_SLOTS counters (the image's rows), a workgroup adding to the one its index
-// picks: atomics on one address serialise, and a frame's ~10^5 of them cost ~5% of a path
-// tracer's time on a single counter; the host sums the rows.
+// picks, because atomics on one address serialise and a frame makes ~10^5 of them; the host sums
+// the rows.
 #pragma once
 #include "ray_query.glsl"
 
