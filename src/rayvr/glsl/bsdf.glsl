@@ -69,15 +69,22 @@ void bsdf_set_side(inout BsdfParams b, bool inside) { b.inside = inside && !b.th
 
 // ---- the lobes' probabilities -------------------------------------------------------------------
 // Probabilities of the lobes at mu_v, from their weights (albedos). Every lobe that can carry
-// light keeps at least a small share, so that MIS never meets a zero pdf where f > 0.
+// light keeps at least a small share, so that MIS never meets a zero pdf where f > 0. The lobes
+// are named here (components BSDF_LOBE_SPECULAR, _DIFFUSE, _GLASS), as in bsdf_pdf_of and
+// bsdf_sample_lobes: see bsdf_lobes.glsl.
 void bsdf_lobe_probabilities_at(BsdfParams b, float nv, vec2 ab, out BsdfLobeFloats p) {
-    float sum = 0.0;
-#define BSDF_STEP(i) p[i] = max(bsdf_lobe_weight(i, b, nv, ab), bsdf_lobe_scatters(i, b) ? 0.02 : 0.0); sum += p[i];
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
-#define BSDF_STEP(i) p[i] = sum > 0.0 ? p[i] / sum : (i == BSDF_LOBE_FALLBACK ? 1.0 : 0.0);
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
+    vec3 w = bsdf_weights(b);
+    vec3 e_spec = bsdf_layer_albedo(b.f0, b.f90, ab);
+    float fg = w.y > 0.0 ? max3(bsdf_glass_fresnel(b, nv)) : 0.0;
+    float base = luminance(b.base_color);
+    p = vec3(w.x * luminance(e_spec) + w.z * luminance(bsdf_layer_albedo(b.base_color, 1.0, ab)),
+             w.x * (1.0 - max3(e_spec)) * base,
+             w.y * (fg + (1.0 - fg) * base));
+    bvec3 can = bvec3(w.z > 0.0 || (w.x > 0.0 && b.f90 > 0.0), w.x > 0.0 && base > 0.0,
+                      w.y > 0.0 && (base > 0.0 || b.specular > 0.0));
+    p = max(p, mix(vec3(0.0), vec3(0.02), can));
+    float sum = p.x + p.y + p.z;
+    p = sum > 0.0 ? p / sum : vec3(1.0, 0.0, 0.0);
 }
 
 void bsdf_set_view(inout BsdfParams b, vec3 n, vec3 v) {
@@ -148,25 +155,18 @@ vec3 bsdf_eval_lobes(BsdfParams b, vec3 n, vec3 v, vec3 l, uint lobes) {
 vec3 bsdf_eval(BsdfParams b, vec3 n, vec3 v, vec3 l) { return bsdf_eval_lobes(b, n, v, l, BSDF_LOBES_ALL); }
 
 // ---- sampling -----------------------------------------------------------------------------------
-// Pdf of bsdf_sample_lobes's direction l among `lobes` of probabilities p (summing to 1).
+// Pdf of bsdf_sample_lobes's direction l among `lobes` of probabilities p (summing to 1; 0 for the
+// lobes outside the set): the GGX reflection of the specular lobe and of glass's reflecting share,
+// the diffuse lobe's cosine, glass's transmission below.
 float bsdf_pdf_of(BsdfParams b, vec3 n, vec3 v, vec3 l, BsdfLobeFloats p, uint lobes) {
     float nv = dot(n, v), nl = dot(n, l);
     if (nv <= 0.0 || nl == 0.0) return 0.0;
-    if (nl < 0.0) {
-        float pdf = 0.0;
-#define BSDF_STEP(i) if (bsdf_lobe_in(lobes, i)) pdf += bsdf_lobe_pdf_below(i, b, p[i], n, v, l);
-        BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
-        return pdf;
-    }
-    // the lobes' shares of the GGX reflection, and the rest of their pdfs
-    float share = 0.0, own = 0.0;
-#define BSDF_STEP(i) \
-    if (bsdf_lobe_in(lobes & BSDF_LOBES_GGX, i)) bsdf_lobe_add_reflection_share(i, b, p[i], v, l, share); \
-    if (bsdf_lobe_in(lobes, i)) own += bsdf_lobe_pdf_above(i, b, p[i], n, v, l);
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
-    return (lobes & BSDF_LOBES_GGX) != 0u ? share * bsdf_pdf_reflection(b, n, v, l) + own : own;
+    if (nl < 0.0) return p.z * bsdf_pdf_transmission(b, n, v, l);
+    float reflect_p = p.x;
+#if SCENE_HAS_TRANSMISSION
+    if (p.z > 0.0) reflect_p += p.z * bsdf_glass_reflect_probability_to(b, v, l);
+#endif
+    return reflect_p * bsdf_pdf_reflection(b, n, v, l) + p.y * nl / RAYVR_PI;
 }
 
 float bsdf_pdf_lobes(BsdfParams b, vec3 n, vec3 v, vec3 l, uint lobes) {
@@ -207,47 +207,36 @@ bool bsdf_sample_lobes(BsdfParams b, vec3 n, vec3 v, vec3 u, uint lobes, out Bsd
     if (nv <= 0.0) return false;
     BsdfLobeFloats p;
     bsdf_lobe_probabilities(b, lobes, p);
-    float sum = 0.0;
-#define BSDF_STEP(i) sum += p[i];
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
-    if (!(sum > 0.0)) return false;
-    // the first lobe whose interval of [0, 1) holds u.z (the last one takes what rounding leaves);
-    // `rest`: u.z less the intervals below the lobe's
-    int lobe = -1;
-    float p_lobe = 0.0, rest = u.z, cdf = 0.0;
-#define BSDF_STEP(i) \
-    if (lobe < 0) { \
-        cdf += p[i]; \
-        if (u.z < cdf || i == BSDF_LOBE_COUNT - 1) { lobe = i; p_lobe = p[i]; } else rest -= p[i]; \
-    }
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
-    float u_split = clamp(rest / max(p_lobe, 1e-30), 0.0, 1.0);
-    bool delta;
-    float q;
-    if (!bsdf_lobe_sample(lobe, b, n, v, u.xy, u_split, s.l, delta, s.transmitted, q)) return false;
+    if (!(p.x + p.y + p.z > 0.0)) return false;
+    // the lobe whose interval of [0, 1) holds u.z (index order), and u.z rescaled to glass's
+    int lobe = u.z < p.x ? BSDF_LOBE_SPECULAR : (u.z < p.x + p.y ? BSDF_LOBE_DIFFUSE : BSDF_LOBE_GLASS);
+    float u_split = lobe == BSDF_LOBE_GLASS ? clamp((u.z - p.x - p.y) / max(p.z, 1e-30), 0.0, 1.0) : 0.0;
+    bool delta = false;
+    float q = 0.0;
+    s.transmitted = false;
+    bool ok;
+    if (lobe == BSDF_LOBE_SPECULAR) ok = bsdf_specular_sample(b, n, v, u.xy, s.l, delta);
+    else if (lobe == BSDF_LOBE_DIFFUSE) ok = bsdf_diffuse_sample(n, u.xy, s.l);
+    else ok = bsdf_glass_sample(b, n, v, u.xy, u_split, s.l, delta, s.transmitted, q);
+    if (!ok) return false;
     if (delta) {
         s.delta = true;
-        if (s.transmitted) {
-            s.weight = bsdf_lobe_delta_transmittance(lobe, b, nv) / (p_lobe * (1.0 - q));
-        } else {
-            // a smooth surface's mirror direction is drawn by every lobe that reflects it
-            vec3 r = vec3(0.0);
-            float mirror = 0.0;
-#define BSDF_STEP(i) \
-    if (bsdf_lobe_in(lobes, i)) { \
-        bsdf_lobe_add_delta_reflectance(i, b, nv, r); \
-        bsdf_lobe_add_mirror_share(i, b, p[i], nv, mirror); \
-    }
-            BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
-            s.weight = r / mirror;
-        }
+        // a smooth surface's mirror direction is drawn by the specular lobe and glass's reflection
+        // (their delta reflectance over the probability of drawing it), its straight or refracted
+        // one by glass's transmission alone
+        vec3 w = bsdf_weights(b);
+        s.weight = s.transmitted ? bsdf_glass_delta_transmittance(b, nv) / (p.z * (1.0 - q))
+                                 : (w.x * fresnel_schlick(b.f0, b.f90, nv) + w.z * fresnel_schlick(b.base_color, nv)
+                                    + w.y * bsdf_glass_fresnel(b, nv)) / (p.x + p.z * bsdf_glass_reflect_probability(b, nv));
         return max3(s.weight) > 0.0;
     }
     s.pdf = bsdf_pdf_of(b, n, v, s.l, p, lobes);
-    vec3 f = bsdf_eval_side(b, n, v, s.l, lobes, !s.transmitted);
+    vec3 f;
+    if (s.transmitted)
+        f = bsdf_glass_eval_below(b, n, v, s.l);
+    else
+        f = bsdf_eval_ggx(b, n, v, s.l, lobes)
+          + (bsdf_lobe_in(lobes, BSDF_LOBE_DIFFUSE) ? bsdf_diffuse_eval_above(b, n, v, s.l) : vec3(0.0));
     if (!(s.pdf > 0.0)) return false;
     s.weight = f / s.pdf;
     return true;

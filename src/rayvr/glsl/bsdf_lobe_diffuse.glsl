@@ -6,15 +6,6 @@
 #pragma once
 #include "bsdf_terms.glsl"
 
-float bsdf_diffuse_weight(BsdfParams b, float nv, vec2 ab) {
-    vec3 w = bsdf_weights(b);
-    vec3 e_spec = bsdf_layer_albedo(b.f0, b.f90, ab);
-    float base = luminance(b.base_color);
-    return w.x * (1.0 - max3(e_spec)) * base;
-}
-
-bool bsdf_diffuse_scatters(BsdfParams b) { return bsdf_weights(b).x > 0.0 && luminance(b.base_color) > 0.0; }
-
 bool bsdf_diffuse_sample(vec3 n, vec2 u, inout vec3 l) {
     l = basis_from_normal(n) * sample_cosine_hemisphere(u);
     return true;
@@ -28,9 +19,6 @@ vec3 bsdf_diffuse_eval_above(BsdfParams b, vec3 n, vec3 v, vec3 l) {
     float el = b.f90 > 0.0 ? bsdf_dielectric_layer(b, bsdf_table_ab(nl, b.roughness)) : 0.0;
     return w.x * b.base_color * ((1.0 - b.layer_v) * (1.0 - el) / max(1.0 - b.layer_avg, 1e-4) / RAYVR_PI * nl);
 }
-
-// Its probability p times its pdf, for l above the surface.
-float bsdf_diffuse_pdf_above(float p, vec3 n, vec3 l) { return p * dot(n, l) / RAYVR_PI; }
 
 void bsdf_diffuse_add_albedo(BsdfParams b, inout vec3 albedo) {
     albedo += bsdf_weights(b).x * b.base_color * (1.0 - max3(bsdf_layer_albedo(b.f0, b.f90, b.ab_v)));

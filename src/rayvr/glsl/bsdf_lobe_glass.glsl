@@ -20,17 +20,6 @@ vec3 bsdf_glass_fresnel(BsdfParams b, float c) {
     return b.specular * min(b.specular_color * fresnel_dielectric(c, bsdf_eta(b)), vec3(1.0));
 }
 
-float bsdf_glass_weight(BsdfParams b, float nv, vec2 ab) {
-    vec3 w = bsdf_weights(b);
-    float fg = w.y > 0.0 ? max3(bsdf_glass_fresnel(b, nv)) : 0.0;
-    float base = luminance(b.base_color);
-    return w.y * (fg + (1.0 - fg) * base);
-}
-
-bool bsdf_glass_scatters(BsdfParams b) {
-    return bsdf_weights(b).y > 0.0 && (luminance(b.base_color) > 0.0 || b.specular > 0.0);
-}
-
 void bsdf_glass_set_view(inout BsdfParams b) {
     b.glass_comp_v = b.ess_v;
 #if SCENE_HAS_TRANSMISSION
@@ -175,24 +164,6 @@ void bsdf_glass_add_fresnel(BsdfParams b, float vh, inout vec3 fresnel) {
     vec3 w = bsdf_weights(b);
     if (w.y > 0.0)   // compensated over its reflected and transmitted energy together
         fresnel += w.y * bsdf_glass_fresnel(b, vh) / b.glass_comp_v;
-}
-
-// Its probability p times that of reflecting towards l above (rather than transmitting).
-void bsdf_glass_add_reflection_share(BsdfParams b, float p, vec3 v, vec3 l, inout float share) {
-#if SCENE_HAS_TRANSMISSION
-    if (p > 0.0) share += p * bsdf_glass_reflect_probability_to(b, v, l);
-#endif
-}
-
-// Its probability p times the pdf of its transmission, for l below the surface.
-float bsdf_glass_pdf_below(BsdfParams b, float p, vec3 n, vec3 v, vec3 l) { return p * bsdf_pdf_transmission(b, n, v, l); }
-
-void bsdf_glass_add_delta_reflectance(BsdfParams b, float nv, inout vec3 r) {
-    r += bsdf_weights(b).y * bsdf_glass_fresnel(b, nv);
-}
-
-void bsdf_glass_add_mirror_share(BsdfParams b, float p, float nv, inout float share) {
-    share += p * bsdf_glass_reflect_probability(b, nv);
 }
 
 void bsdf_glass_add_albedo(BsdfParams b, inout vec3 albedo) {

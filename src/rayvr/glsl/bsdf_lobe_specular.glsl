@@ -5,17 +5,6 @@
 #pragma once
 #include "bsdf_terms.glsl"
 
-float bsdf_specular_weight(BsdfParams b, float nv, vec2 ab) {
-    vec3 w = bsdf_weights(b);
-    vec3 e_spec = bsdf_layer_albedo(b.f0, b.f90, ab);
-    return w.x * luminance(e_spec) + w.z * luminance(bsdf_layer_albedo(b.base_color, 1.0, ab));
-}
-
-bool bsdf_specular_scatters(BsdfParams b) {
-    vec3 w = bsdf_weights(b);
-    return w.z > 0.0 || (w.x > 0.0 && b.f90 > 0.0);
-}
-
 // A reflection about a visible normal from u (about n when delta).
 bool bsdf_specular_sample(BsdfParams b, vec3 n, vec3 v, vec2 u, inout vec3 l, inout bool delta) {
     delta = bsdf_is_delta(b);
@@ -28,16 +17,6 @@ void bsdf_specular_add_fresnel(BsdfParams b, float vh, inout vec3 fresnel) {
     fresnel += w.x * fresnel_schlick(b.f0, b.f90, vh) * (1.0 + b.f0 * (1.0 / b.ess_v - 1.0))
              + w.z * fresnel_schlick(b.base_color, vh) * (1.0 + b.base_color * (1.0 / b.ess_v - 1.0));
 }
-
-// Every sample of the lobe is a GGX reflection.
-void bsdf_specular_add_reflection_share(float p, inout float share) { share += p; }
-
-void bsdf_specular_add_delta_reflectance(BsdfParams b, float nv, inout vec3 r) {
-    vec3 w = bsdf_weights(b);
-    r += w.x * fresnel_schlick(b.f0, b.f90, nv) + w.z * fresnel_schlick(b.base_color, nv);
-}
-
-void bsdf_specular_add_mirror_share(float p, inout float share) { share += p; }
 
 void bsdf_specular_add_albedo(BsdfParams b, inout vec3 albedo) {
     vec3 w = bsdf_weights(b);
