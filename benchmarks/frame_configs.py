@@ -26,6 +26,10 @@ CONFIGS = {
     "raw + restir no spatial": {"preset": "raw", "direct": "restir", "restir": {"spatial_samples": 0}},
     "raw + restir candidates only": {"preset": "raw", "direct": "restir",
                                      "restir": {"spatial_samples": 0, "temporal_reuse": False, "share_views": False}},
+    # the resampling target without the BSDF (p_hat = Le G cos), alone and with the cheaper settings
+    "raw + restir cosine target": {"preset": "raw", "direct": "restir", "restir": {"target": "cosine"}},
+    "raw + restir lean": {"preset": "raw", "direct": "restir",
+                          "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False}},
     "clean + reuse": {"reuse": "views"},
     "clean + foveation": {"foveation": "fixed"},
 }

@@ -36,11 +36,24 @@ uvec2 reservoir_light_id(Reservoir r) { return uvec2(r.light, r.point); }
 
 // ---- the target -----------------------------------------------------------------------------------
 // p_hat at vertex s of light sample ls (from light_id_eval: its weight is Le G in its light's
-// measure): the luminance of f cos Le G, with the MIS-weighted specular lobes where a reflection
-// pass shares them (`specular_traced`, as shade_direct_mis), so the pixel's sum stays right. 0
-// where it is not finite.
+// measure). RESTIR_TARGET_BSDF: the luminance of f cos Le G, with the MIS-weighted specular lobes
+// where a reflection pass shares them (`specular_traced`, as shade_direct_mis), so the pixel's sum
+// stays right. Otherwise the luminance of Le G cos at the geometric normal: no BSDF evaluation
+// (the stages evaluate p_hat at every candidate and neighbour), positive wherever f cos Le G is
+// (light_bsdf needs the light above the geometric surface), so still unbiased, at more noise
+// where the BSDF is far from Lambert. restir_contribution of a sample from sample_light_id (its
+// weight Le G / pdf) is p_hat / pdf: a candidate's resampling weight.
+float restir_contribution(PathVertex s, bool specular_traced, LightSample ls) {
+#if RESTIR_TARGET_BSDF
+    return luminance(light_bsdf(s, ls, specular_traced) * ls.weight);
+#else
+    return ls.valid ? luminance(ls.weight) * max(dot(ls.direction, s.ng), 0.0) : 0.0;
+#endif
+}
+
+// p_hat, 0 where it is not finite.
 float restir_target(PathVertex s, bool specular_traced, LightSample ls) {
-    float t = luminance(light_bsdf(s, ls, specular_traced) * ls.weight);
+    float t = restir_contribution(s, specular_traced, ls);
     return t > 0.0 && t <= 3.0e38 ? t : 0.0;
 }
 

@@ -29,7 +29,7 @@ void main() {
         uvec2 id;
         LightSample ls = sample_light_id(s.pos, rng_next3(rng), id);
         // p_hat / source pdf, in any one measure: the sample's unshadowed contribution
-        stream_add(pick, id, luminance(light_bsdf(s, ls, specular_traced) * ls.weight), 0.0);
+        stream_add(pick, id, restir_contribution(s, specular_traced, ls), 0.0);
     }
     LightSample chosen = light_id_eval(pick.id, s.pos);
     pick.target = restir_target(s, specular_traced, chosen);

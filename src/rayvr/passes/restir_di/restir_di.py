@@ -5,7 +5,8 @@ lighting"), a drop-in for RTShadows (the same pins and pixels: `rv.graphs.hybrid
 Four stages, one compute shader each, over the pixels whose effect is SHADOWS or above (the shadow
 list, or the whole image in one-warp tiles, as RTShadows: `dispatch_mode`):
     candidates  `candidates` light samples from the light table, one kept by resampled importance
-                sampling with the target p_hat (the luminance of its unshadowed contribution);
+                sampling with the target p_hat (the luminance of its unshadowed contribution, or with
+                `target="cosine"` of Le G cos: no BSDF evaluation);
                 with `visibility_reuse` a shadow ray to it, and an occluded one is dropped
     temporal    (`temporal_reuse`) combined with last frame's temporal reservoir where the motion
                 vector points (the disocclusion test of glsl/reprojection.glsl), its confidence
@@ -64,7 +65,9 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
     """Emission + ray-traced direct light by ReSTIR for SHADOWS pixels and above: RTShadows' pins,
     its image at lower noise (see the module docstring).
 
-    Properties: `candidates` (light samples per pixel a frame, 1-64), `visibility_reuse` (a shadow
+    Properties: `candidates` (light samples per pixel a frame, 1-64), `target` (the resampling target
+    p_hat: "bsdf", the unshadowed contribution f cos Le G; "cosine", Le G cos without the BSDF, cheaper
+    and unbiased, noisier on glossy surfaces), `visibility_reuse` (a shadow
     ray to each pixel's pick before it is shared), `temporal_reuse`, `max_history_m` (the history's
     confidence cap, in frames of candidates), `spatial_samples` (neighbours, 0-16), `spatial_radius`
     (pixels, 1-256), `share_views` (views after the first reuse view 0's reservoirs), and the ray
@@ -81,7 +84,8 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
     CANDIDATES, REUSED = "reservoirs0", "reservoirs1"
     HISTORY = ("history0", "history1")
     SURFACE = ("surface0", "surface1")
-    PROPERTIES = {"candidates": 8, "visibility_reuse": True, "temporal_reuse": True, "max_history_m": 20,
+    TARGETS = ("bsdf", "cosine")   # p_hat: f cos Le G, or Le G cos (no BSDF: cheaper, noisier on glossy surfaces)
+    PROPERTIES = {"candidates": 8, "target": "bsdf", "visibility_reuse": True, "temporal_reuse": True, "max_history_m": 20,
                   "spatial_samples": 4, "spatial_radius": 30.0, "share_views": True,
                   **ray_properties(view_group=16)}
 
@@ -100,6 +104,9 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
                 raise OptionError(f"pass {self.name}: property '{key}' must be an integer from {low} to {high} "
                                   f"({what}), got {value!r}")
             return int(value)
+        if key == "target" and value not in self.TARGETS:
+            raise OptionError(f"pass {self.name}: property 'target' must be one of {', '.join(self.TARGETS)} "
+                              f"(the resampling target p_hat), got {value!r}")
         if key == "spatial_radius" and not 1.0 <= value <= MAX_SPATIAL_RADIUS:
             raise OptionError(f"pass {self.name}: property 'spatial_radius' must be from 1 to {MAX_SPATIAL_RADIUS:g} "
                               f"pixels, got {value!r}")
@@ -133,7 +140,8 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
         return r
 
     def shader_defines(self) -> dict:
-        return {"RESTIR_CANDIDATES": int(self.candidates), "RESTIR_VISIBILITY_REUSE": bool(self.visibility_reuse),
+        return {"RESTIR_CANDIDATES": int(self.candidates), "RESTIR_TARGET_BSDF": self.target == "bsdf",
+                "RESTIR_VISIBILITY_REUSE": bool(self.visibility_reuse),
                 "RESTIR_TEMPORAL": bool(self.temporal_reuse),
                 "RESTIR_MAX_HISTORY": float(self.max_history_m * self.candidates),
                 "RESTIR_SPATIAL_SAMPLES": int(self.spatial_samples),
