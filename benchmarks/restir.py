@@ -46,7 +46,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--views", type=int, default=2)
     parser.add_argument("--light-samples", default="1,2,4,8,16",
                         help="RTShadows' light_samples rows, comma-separated (default 1,2,4,8,16)")
-    parser.add_argument("--restir", default="{}", help="ReSTIRDI properties as JSON (default: the pass's)")
+    parser.add_argument("--restir", default="{}", help="ReSTIRDI properties as a JSON object, or a list of them for "
+                                                       "a row each (default: the pass's)")
     parser.add_argument("--preset", default="index", help="headset whose pixels per degree FLIP uses")
     parser.add_argument("--seed", type=int, default=1, help="the added lights' random seed")
     for name, (full, quick) in FIGURES.items():
@@ -171,7 +172,14 @@ def run(args) -> dict:
         raise OptionError(f"--parts {args.parts}: give many, scene or both (comma-separated)")
     size = parse_size(_figure(args, "size"))
     samples = [int(s) for s in str(args.light_samples).split(",")]
-    restir = json.loads(args.restir)
+    try:
+        restir = json.loads(args.restir)
+    except json.JSONDecodeError as exc:
+        raise OptionError(f"--restir: not JSON ({exc.msg}); give an object such as '{{\"candidates\": 4}}' "
+                          f"or a list of them") from None
+    restir_sets = restir if isinstance(restir, list) else [restir]
+    if not restir_sets or not all(isinstance(r, dict) for r in restir_sets):
+        raise OptionError("--restir: give a JSON object of ReSTIRDI properties or a non-empty list of them")
     frames, warmup, error_frames = (_figure(args, k) for k in ("frames", "warmup", "error_frames"))
     ppd = get_preset(args.preset).pixels_per_degree
     rows, notes = [], []
@@ -199,31 +207,42 @@ def run(args) -> dict:
             method = m["method"]
             rows.append([part, label, f"RTShadows light_samples={n}", shape, round(m["shadows_ms"], 3),
                          round(m["frame_ms"], 3), m["relmse_trim"], m["relmse"], m["flip"], ""])
-        m = measure(scene, views, _graph(restir), ref, display, ppd, frames, warmup, error_frames)
-        if m["nonfinite"]:
-            notes.append(f"{part}: ReSTIR set {m['nonfinite']} non-finite samples to 0")
-        rows.append([part, label, f"ReSTIRDI {json.dumps(restir) if restir else '(defaults)'}", shape,
-                     round(m["shadows_ms"], 3), round(m["frame_ms"], 3), m["relmse_trim"], m["relmse"], m["flip"], ""])
-        if part == "many":
-            for row in (*plain, m):   # each error less the reference's own, which adds to it
-                row["relmse_own"] = max(row["relmse_trim"] - ref_noise, 1e-9)
-            if ref_noise > 0.5 * min(row["relmse_trim"] for row in (*plain, m)):
-                notes.append("many: the reference's own relMSE is over half a row's: raise --reference-samples or "
-                             "--reference-frames before reading the ratio")
-            want, how = at_equal_ms(plain, m["shadows_ms"], "relmse_own")
-            ratio = m["relmse_own"] / want
-            rows.append([part, label, "ReSTIR / RTShadows relMSE at equal Shadows ms", shape, round(m["shadows_ms"], 3),
-                         "", round(ratio, 4), "", "", how])
-            notes.append(f"many: relMSE ratio at equal Shadows ms (less the reference's) {ratio:.3f} (target <= "
-                         f"{TARGET_RELMSE_RATIO}: "
-                         f"{'met' if ratio <= TARGET_RELMSE_RATIO else 'not met'})")
-        else:
-            flip_ratio, ms_ratio = m["flip"] / plain[0]["flip"], m["frame_ms"] / plain[0]["frame_ms"]
-            rows.append([part, label, "ReSTIR / plain SHADOWS: FLIP, frame ms", shape, "", round(ms_ratio, 4), "", "",
-                         round(flip_ratio, 4), ""])
-            met = flip_ratio <= TARGET_FLIP_RATIO and ms_ratio <= TARGET_MS_RATIO
-            notes.append(f"scene: FLIP ratio {flip_ratio:.3f} (target <= {TARGET_FLIP_RATIO}) at frame ms ratio "
-                         f"{ms_ratio:.3f} (target <= {TARGET_MS_RATIO}): {'met' if met else 'not met'}")
+        for props in restir_sets:
+            rows.extend(_restir_rows(part, label, shape, props, plain, ref_noise, notes,
+                                     measure(scene, views, _graph(props), ref, display, ppd, frames, warmup,
+                                             error_frames)))
     notes.append(f"timing: {method}; errors: {error_frames} single frames after {warmup}, FLIP at {ppd:.1f} ppd "
                  f"({args.preset})")
     return {"columns": COLUMNS, "rows": rows, "notes": notes}
+
+
+def _restir_rows(part, label, shape, restir: dict, plain: list[dict], ref_noise: float, notes: list, m: dict) -> list:
+    """The table rows of one ReSTIRDI property set's measurement `m` against the RTShadows rows
+    `plain` of the same part, its target's ratio row and note."""
+    import json
+
+    name = f"ReSTIRDI {json.dumps(restir) if restir else '(defaults)'}"
+    if m["nonfinite"]:
+        notes.append(f"{part}: {name} set {m['nonfinite']} non-finite samples to 0")
+    rows = [[part, label, name, shape, round(m["shadows_ms"], 3), round(m["frame_ms"], 3), m["relmse_trim"],
+             m["relmse"], m["flip"], ""]]
+    if part == "many":
+        for row in (*plain, m):   # each error less the reference's own, which adds to it
+            row["relmse_own"] = max(row["relmse_trim"] - ref_noise, 1e-9)
+        if ref_noise > 0.5 * min(row["relmse_trim"] for row in (*plain, m)):
+            notes.append("many: the reference's own relMSE is over half a row's: raise --reference-samples or "
+                         "--reference-frames before reading the ratio")
+        want, how = at_equal_ms(plain, m["shadows_ms"], "relmse_own")
+        ratio = m["relmse_own"] / want
+        rows.append([part, label, "ReSTIR / RTShadows relMSE at equal Shadows ms", shape, round(m["shadows_ms"], 3),
+                     "", round(ratio, 4), "", "", how])
+        notes.append(f"many, {name}: relMSE ratio at equal Shadows ms (less the reference's) {ratio:.3f} (target <= "
+                     f"{TARGET_RELMSE_RATIO}: {'met' if ratio <= TARGET_RELMSE_RATIO else 'not met'})")
+    else:
+        flip_ratio, ms_ratio = m["flip"] / plain[0]["flip"], m["frame_ms"] / plain[0]["frame_ms"]
+        rows.append([part, label, "ReSTIR / plain SHADOWS: FLIP, frame ms", shape, "", round(ms_ratio, 4), "", "",
+                     round(flip_ratio, 4), ""])
+        met = flip_ratio <= TARGET_FLIP_RATIO and ms_ratio <= TARGET_MS_RATIO
+        notes.append(f"scene, {name}: FLIP ratio {flip_ratio:.3f} (target <= {TARGET_FLIP_RATIO}) at frame ms ratio "
+                     f"{ms_ratio:.3f} (target <= {TARGET_MS_RATIO}): {'met' if met else 'not met'}")
+    return rows

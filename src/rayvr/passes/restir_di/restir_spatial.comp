@@ -7,28 +7,37 @@
 // v > 0 also takes view 0's reservoir where this surface point lies in view 0 (its view_proj; the
 // same test), so the views of a frame share their samples; each view keeps its own target, MIS
 // weights and shadow rays, so no light passes between them.
-// The neighbours are drawn twice from one generator: first to count those that pass (the
-// canonical's share of each pair depends on the count), then to resample them; no array is kept.
+// The neighbours are drawn twice from one generator: first to test them (the canonical's share of
+// each pair depends on how many pass), keeping a bit for each that passes, then to resample those;
+// no array is kept, and each neighbour's surface is read once.
 #include "restir_stage.glsl"
 
 layout(rgba32ui) readonly uniform uimage2DArray reservoirs_in;
 layout(rgba32ui) writeonly uniform uimage2DArray reservoirs_out;
 
-// Neighbour k (< RESTIR_SPATIAL_SAMPLES: within the radius; RESTIR_SPATIAL_SAMPLES: view 0's pixel
-// of this point) of pixel p at render-space `pos`, its linear depth `depth`, normal n and effect
-// word; false when there is none or its surface is not this one.
-bool restir_neighbour(ivec3 p, vec3 pos, float depth, vec3 n, uint word, int k, vec2 u, ivec3 size, out ivec3 q) {
-    float q_depth_want = depth;
+// The pixel q of neighbour k (< RESTIR_SPATIAL_SAMPLES: drawn from u within the radius;
+// RESTIR_SPATIAL_SAMPLES: view 0's pixel of this point) of pixel p at render-space `pos`, and the
+// linear depth its surface must have (this pixel's `depth`, or the point's in view 0); false when
+// there is none.
+bool restir_neighbour_pixel(ivec3 p, vec3 pos, int k, vec2 u, ivec3 size, out ivec3 q, inout float q_depth_want) {
     if (k < RESTIR_SPATIAL_SAMPLES) {
         float radius = RESTIR_SPATIAL_RADIUS * sqrt(u.x), angle = 2.0 * RAYVR_PI * u.y;
         q = p + ivec3(ivec2(round(radius * vec2(cos(angle), sin(angle)))), 0);
-        if (q.xy == p.xy) return false;
-    } else {
-        vec4 clip = views[0].view_proj * vec4(pos, 1.0);
-        if (!(clip.w > 0.0)) return false;
-        q = ivec3(ivec2(floor((clip.xy / clip.w * 0.5 + 0.5) * vec2(size.xy))), 0);
-        q_depth_want = -(views[0].view * vec4(pos, 1.0)).z;
+        return q.xy != p.xy;
     }
+    vec4 clip = views[0].view_proj * vec4(pos, 1.0);
+    q = ivec3(0);
+    if (!(clip.w > 0.0)) return false;
+    q = ivec3(ivec2(floor((clip.xy / clip.w * 0.5 + 0.5) * vec2(size.xy))), 0);
+    q_depth_want = -(views[0].view * vec4(pos, 1.0)).z;
+    return true;
+}
+
+// Whether neighbour k of pixel p (restir_neighbour_pixel; p's linear depth `depth`, normal n and
+// effect word) shows p's surface and holds a sample; q its pixel.
+bool restir_neighbour(ivec3 p, vec3 pos, float depth, vec3 n, uint word, int k, vec2 u, ivec3 size, out ivec3 q) {
+    float q_depth_want = depth;
+    if (!restir_neighbour_pixel(p, pos, k, u, size, q, q_depth_want)) return false;
     if (!pixel_inside(q.xy, size.xy)) return false;
     if (!(reservoir_unpack(imageLoad(reservoirs_in, q)).weight > 0.0)) return false;
     return restir_neighbour_matches(q_depth_want, n, word, gbuf_fetch_posW(q).w, normalize(gbuf_fetch_normW(q).xyz),
@@ -52,9 +61,14 @@ void main() {
     Rng start = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT_RESTIR_SPATIAL);
     Rng rng = start;
     int found = 0;
+    uint passed = 0u;   // bit k: neighbour k shows this surface and holds a sample
     ivec3 q;
-    for (int k = 0; k <= last; ++k)
-        if (restir_neighbour(p, g.pos, depth, g.n, word, k, rng_next2(rng), size, q)) ++found;
+    for (int k = 0; k <= last; ++k) {
+        if (restir_neighbour(p, g.pos, depth, g.n, word, k, rng_next2(rng), size, q)) {
+            ++found;
+            passed |= 1u << uint(k);
+        }
+    }
 
     uvec2 c_id = reservoir_light_id(c);
     float c_at_c = c.weight > 0.0 ? restir_target_of(s, specular_traced, c_id) : 0.0;
@@ -64,7 +78,10 @@ void main() {
     ReservoirStream pick = stream_begin(rng_next(rng));
     rng = start;
     for (int k = 0; k <= last; ++k) {
-        if (!restir_neighbour(p, g.pos, depth, g.n, word, k, rng_next2(rng), size, q)) continue;
+        vec2 u = rng_next2(rng);
+        float q_depth;
+        if ((passed & (1u << uint(k))) == 0u) continue;
+        restir_neighbour_pixel(p, g.pos, k, u, size, q, q_depth);
         PathVertex s_q = path_vertex_at_gbuffer(gbuf_load(q), uint(q.z));
         Reservoir r = reservoir_unpack(imageLoad(reservoirs_in, q));
         confidence += r.confidence;
