@@ -429,6 +429,8 @@ def test_a_lighting_edit_shows_at_once(gpu):
 # ---- properties, options, the compile report ------------------------------------------------------------
 def test_properties_round_trip_and_bad_values_name_pass_and_key():
     p = ReSTIRDI(candidates=4, target="cosine", spatial_samples=2, spatial_radius=12, share_views=False)
+    # the viewer's property panel offers the pass's choices (its own and the ray passes')
+    assert ReSTIRDI.CHOICES["target"] == ("bsdf", "cosine") and "dispatch_mode" in ReSTIRDI.CHOICES
     props = p.get_properties()
     assert props["spatial_radius"] == 12.0 and isinstance(props["spatial_radius"], float)
     assert ReSTIRDI(json.loads(json.dumps(props))).get_properties() == props

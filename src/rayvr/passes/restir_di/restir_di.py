@@ -85,6 +85,7 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
     HISTORY = ("history0", "history1")
     SURFACE = ("surface0", "surface1")
     TARGETS = ("bsdf", "cosine")   # p_hat: f cos Le G, or Le G cos (no BSDF: cheaper, noisier on glossy surfaces)
+    CHOICES = {**GBufferLightingPass.CHOICES, "target": TARGETS}   # the viewer's property panel offers these
     PROPERTIES = {"candidates": 8, "target": "bsdf", "visibility_reuse": True, "temporal_reuse": True, "max_history_m": 20,
                   "spatial_samples": 4, "spatial_radius": 30.0, "share_views": True,
                   **ray_properties(view_group=16)}

@@ -16,10 +16,12 @@ layout(rgba32ui) readonly uniform uimage2DArray reservoirs_in;
 layout(rgba32ui) writeonly uniform uimage2DArray reservoirs_out;
 
 // The pixel q of neighbour k (< RESTIR_SPATIAL_SAMPLES: drawn from u within the radius;
-// RESTIR_SPATIAL_SAMPLES: view 0's pixel of this point) of pixel p at render-space `pos`, and the
-// linear depth its surface must have (this pixel's `depth`, or the point's in view 0); false when
-// there is none.
-bool restir_neighbour_pixel(ivec3 p, vec3 pos, int k, vec2 u, ivec3 size, out ivec3 q, inout float q_depth_want) {
+// RESTIR_SPATIAL_SAMPLES: view 0's pixel of this point) of pixel p at render-space `pos` and linear
+// depth `depth`, and the linear depth q_depth its surface must have there (`depth`, or the point's
+// in view 0); false when there is none.
+bool restir_neighbour_pixel(ivec3 p, vec3 pos, float depth, int k, vec2 u, ivec3 size, out ivec3 q,
+                            out float q_depth) {
+    q_depth = depth;
     if (k < RESTIR_SPATIAL_SAMPLES) {
         float radius = RESTIR_SPATIAL_RADIUS * sqrt(u.x), angle = 2.0 * RAYVR_PI * u.y;
         q = p + ivec3(ivec2(round(radius * vec2(cos(angle), sin(angle)))), 0);
@@ -29,15 +31,15 @@ bool restir_neighbour_pixel(ivec3 p, vec3 pos, int k, vec2 u, ivec3 size, out iv
     q = ivec3(0);
     if (!(clip.w > 0.0)) return false;
     q = ivec3(ivec2(floor((clip.xy / clip.w * 0.5 + 0.5) * vec2(size.xy))), 0);
-    q_depth_want = -(views[0].view * vec4(pos, 1.0)).z;
+    q_depth = -(views[0].view * vec4(pos, 1.0)).z;
     return true;
 }
 
 // Whether neighbour k of pixel p (restir_neighbour_pixel; p's linear depth `depth`, normal n and
 // effect word) shows p's surface and holds a sample; q its pixel.
 bool restir_neighbour(ivec3 p, vec3 pos, float depth, vec3 n, uint word, int k, vec2 u, ivec3 size, out ivec3 q) {
-    float q_depth_want = depth;
-    if (!restir_neighbour_pixel(p, pos, k, u, size, q, q_depth_want)) return false;
+    float q_depth_want;
+    if (!restir_neighbour_pixel(p, pos, depth, k, u, size, q, q_depth_want)) return false;
     if (!pixel_inside(q.xy, size.xy)) return false;
     if (!(reservoir_unpack(imageLoad(reservoirs_in, q)).weight > 0.0)) return false;
     return restir_neighbour_matches(q_depth_want, n, word, gbuf_fetch_posW(q).w, normalize(gbuf_fetch_normW(q).xyz),
@@ -81,7 +83,7 @@ void main() {
         vec2 u = rng_next2(rng);
         float q_depth;
         if ((passed & (1u << uint(k))) == 0u) continue;
-        restir_neighbour_pixel(p, g.pos, k, u, size, q, q_depth);
+        restir_neighbour_pixel(p, g.pos, depth, k, u, size, q, q_depth);
         PathVertex s_q = path_vertex_at_gbuffer(gbuf_load(q), uint(q.z));
         Reservoir r = reservoir_unpack(imageLoad(reservoirs_in, q));
         confidence += r.confidence;
