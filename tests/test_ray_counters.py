@@ -7,30 +7,33 @@ import pytest
 import rayvr as rv
 from rayvr.renderer import Renderer
 from rayvr.scene import builtin
-from rayvr.xr.cameras import stereo_views
+from rayvr.xr.cameras import camera_grid, stereo_views
 from rayvr.xr.views import Fov, Pose
 
 SIZE = (24, 20)
 
 
-def plane_views():
-    """Two eyes above the lit plane, looking straight down at it: every pixel sees the plane."""
+def plane_views(n: int = 2):
+    """Eyes above the lit plane, looking straight down at it, so every pixel sees the plane: a
+    stereo pair, or a row of n cameras (the ray passes' workgroups then mix views)."""
     down = Pose([0.0, 3.0, 0.0], [-np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)])
     fov = Fov.symmetric(40.0, SIZE[0] / SIZE[1])
-    return stereo_views(down, 0.2, fov, fov, SIZE)
+    if n == 2:
+        return stereo_views(down, 0.2, fov, fov, SIZE)
+    return camera_grid(n, 1, 0.05, fov, SIZE, center_pose=down)
 
 
-@pytest.mark.parametrize("light_samples", [1, 3])
-def test_shadow_rays_per_view_are_one_per_light_sample_and_pixel(gpu, light_samples):
+@pytest.mark.parametrize("light_samples, views", [(1, 2), (3, 2), (1, 5)])
+def test_shadow_rays_per_view_are_one_per_light_sample_and_pixel(gpu, light_samples, views):
     scene = builtin.plane_with_point_light()
     scene.materials["Plane"].effect = rv.Effect.SHADOWS
     g = rv.graphs.hybrid(preset="raw", light_samples=light_samples)
     g.mark_output("GBuffer.effect")
-    with Renderer(scene, g, views=plane_views()) as r:
+    with Renderer(scene, g, views=plane_views(views)) as r:
         r.render()
         counts = r.compiled.ray_counts()
         effect = r.read_output("GBuffer.effect")[..., 0] & 0xFF
-    lit = (effect == int(rv.Effect.SHADOWS)).reshape(2, -1).sum(axis=1)
+    lit = (effect == int(rv.Effect.SHADOWS)).reshape(views, -1).sum(axis=1)
     assert lit.min() > 0.9 * SIZE[0] * SIZE[1]
     assert counts == [light_samples * int(n) for n in lit]
 

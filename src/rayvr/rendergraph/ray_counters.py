@@ -3,7 +3,7 @@
 A pass whose shaders trace rays for the views' pixels declares `COUNTS_RAYS = True`: its programs
 compile with `RQ_COUNT_RAYS 1`, so `glsl/ray_query.glsl` counts the queries each invocation
 begins, and each kernel ends with `ray_count_commit(view)` (`glsl/ray_counters.glsl`), which adds
-them to its view's counter, one image atomic per view a subgroup holds. The counters are one r32ui
+them to its view's counter, one image atomic per subgroup of one view. The counters are one r32ui
 texture of views x SLOTS texels (a view's count is its column's sum: each workgroup adds to the
 row its index picks, so that the atomics do not all meet at one address) at the fixed image unit `RAYVR_RAY_COUNTER_IMAGE` (bound before each
 counting pass: other passes may use that unit), cleared at a frame's start. At its end they are
@@ -26,7 +26,7 @@ GL_PIXEL_BUFFER_BARRIER_BIT = 0x80
 # The GLSL extensions the commit's subgroup sum uses where the driver has them (else one atomic
 # per invocation): `enable` leaves their macros undefined, and the code then takes the fallback.
 SLOTS = 64   # counters per view (RAY_COUNT_SLOTS)
-SHADER_HEADER = "\n".join(f"#extension GL_KHR_shader_subgroup_{e} : enable" for e in ("basic", "ballot", "arithmetic"))
+SHADER_HEADER = "\n".join(f"#extension GL_KHR_shader_subgroup_{e} : enable" for e in ("basic", "vote", "arithmetic"))
 
 
 class RayCounters:
