@@ -30,6 +30,23 @@ CONFIGS = {
     "raw + restir cosine target": {"preset": "raw", "direct": "restir", "restir": {"target": "cosine"}},
     "raw + restir lean": {"preset": "raw", "direct": "restir",
                           "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False}},
+    # lean's stages apart: candidates alone, + temporal reuse (fused), + spatial reuse
+    "raw + restir lean candidates": {"preset": "raw", "direct": "restir",
+                                     "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False,
+                                                "temporal_reuse": False, "spatial_samples": 0, "share_views": False}},
+    "raw + restir lean temporal": {"preset": "raw", "direct": "restir",
+                                   "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False,
+                                              "spatial_samples": 0, "share_views": False}},
+    "raw + restir lean spatial": {"preset": "raw", "direct": "restir",
+                                  "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False,
+                                             "temporal_reuse": False}},
+    # visibility hints instead of the candidates' visibility ray: the cheapest set, and lean with them
+    "raw + restir hints": {"preset": "raw", "direct": "restir",
+                           "restir": {"target": "cosine", "candidates": 2, "visibility_reuse": False,
+                                      "spatial_samples": 0, "share_views": False, "occluded_weight": 0.05}},
+    "raw + restir lean hints": {"preset": "raw", "direct": "restir",
+                                "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False,
+                                           "occluded_weight": 0.05}},
     "clean + reuse": {"reuse": "views"},
     "clean + foveation": {"foveation": "fixed"},
 }

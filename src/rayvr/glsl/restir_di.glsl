@@ -36,29 +36,48 @@ uvec2 reservoir_light_id(Reservoir r) { return uvec2(r.light, r.point); }
 
 // ---- the target -----------------------------------------------------------------------------------
 // p_hat at vertex s of light sample ls (from light_id_eval: its weight is Le G in its light's
-// measure). RESTIR_TARGET_BSDF: the luminance of f cos Le G, with the MIS-weighted specular lobes
-// where a reflection pass shares them (`specular_traced`, as shade_direct_mis), so the pixel's sum
-// stays right. Otherwise the luminance of Le G cos at the geometric normal: no BSDF evaluation
-// (the stages evaluate p_hat at every candidate and neighbour), positive wherever f cos Le G is
-// (light_bsdf needs the light above the geometric surface), so still unbiased, at more noise
-// where the BSDF is far from Lambert. restir_contribution of a sample from sample_light_id (its
-// weight Le G / pdf) is p_hat / pdf: a candidate's resampling weight.
-float restir_contribution(PathVertex s, bool specular_traced, LightSample ls) {
+// measure), times `hint` (restir_hint). RESTIR_TARGET_BSDF: the luminance of f cos Le G, with the
+// MIS-weighted specular lobes where a reflection pass shares them (`specular_traced`, as
+// shade_direct_mis), so the pixel's sum stays right. Otherwise the luminance of Le G cos at the
+// geometric normal: no BSDF evaluation (the stages evaluate p_hat at every candidate and
+// neighbour), positive wherever f cos Le G is (light_bsdf needs the light above the geometric
+// surface), so still unbiased, at more noise where the BSDF is far from Lambert.
+// restir_contribution of a sample from sample_light_id (its weight Le G / pdf) is p_hat / pdf: a
+// candidate's resampling weight.
+float restir_contribution(PathVertex s, bool specular_traced, LightSample ls, float hint) {
 #if RESTIR_TARGET_BSDF
-    return luminance(light_bsdf(s, ls, specular_traced) * ls.weight);
+    return hint * luminance(light_bsdf(s, ls, specular_traced) * ls.weight);
 #else
-    return ls.valid ? luminance(ls.weight) * max(dot(ls.direction, s.ng), 0.0) : 0.0;
+    return ls.valid ? hint * luminance(ls.weight) * max(dot(ls.direction, s.ng), 0.0) : 0.0;
 #endif
 }
 
+// Visibility hints (RESTIR_HINTS): a pixel keeps a bit per light (its identity hashed to one of 32)
+// that its last shading ray set where it found that light occluded and cleared where it reached
+// it; p_hat of a light whose bit is set is scaled by RESTIR_OCCLUDED_WEIGHT (in (0, 1)), so
+// candidates and reuse favour the lights the pixel sees. Any positive factor leaves the estimate
+// unbiased (the target only shapes the sampling; every stage's MIS weights use these same targets,
+// and a hinted light keeps p_hat > 0 wherever its light reaches). The environment takes no hint
+// (one identity for every direction).
+uint restir_hint_bit(uvec2 id) { return 1u << ((id.x * 0x9E3779B1u) >> 27u); }
+
+float restir_hint(uint hints, uvec2 id) {
+#if RESTIR_HINTS
+    if (id.x != LIGHT_ID_NONE && light_id_kind(id) != LIGHT_KIND_ENVIRONMENT && (hints & restir_hint_bit(id)) != 0u)
+        return RESTIR_OCCLUDED_WEIGHT;
+#endif
+    return 1.0;
+}
+
 // p_hat, 0 where it is not finite.
-float restir_target(PathVertex s, bool specular_traced, LightSample ls) {
-    float t = restir_contribution(s, specular_traced, ls);
+float restir_target(PathVertex s, bool specular_traced, LightSample ls, float hint) {
+    float t = restir_contribution(s, specular_traced, ls, hint);
     return t > 0.0 && t <= 3.0e38 ? t : 0.0;
 }
 
-float restir_target_of(PathVertex s, bool specular_traced, uvec2 id) {
-    return restir_target(s, specular_traced, light_id_eval(id, s.pos));
+// p_hat at s, whose pixel has visibility hints `hints`, of the light sample that `id` names.
+float restir_target_of(PathVertex s, bool specular_traced, uint hints, uvec2 id) {
+    return restir_target(s, specular_traced, light_id_eval(id, s.pos), restir_hint(hints, id));
 }
 
 // ---- resampling -----------------------------------------------------------------------------------

@@ -10,14 +10,19 @@ list, or the whole image in one-warp tiles, as RTShadows: `dispatch_mode`):
                 with `visibility_reuse` a shadow ray to it, and an occluded one is dropped
     temporal    (`temporal_reuse`) combined with last frame's temporal reservoir where the motion
                 vector points (the disocclusion test of glsl/reprojection.glsl), its confidence
-                capped at `max_history_m` x `candidates`: next frame's history
+                capped at `max_history_m` x `candidates`: next frame's history. Without
+                visibility reuse it runs in the candidates' kernel (no traversal there to share
+                registers with), saving a pass over the G-buffer and the reservoirs
     spatial     (`spatial_samples` > 0, or `share_views` in a frame of several views) combined with
                 the reservoirs of up to `spatial_samples` pixels within `spatial_radius` pixels that
                 show the same surface and hold a sample, and in views after the first with view 0's
                 reservoir where the pixel's surface point lies in view 0: the views share samples
     shade       emission + the final sample's contribution with its own shadow ray (expected
                 transmittance through BLEND surfaces) + the probes' indirect diffuse light when
-                the probe inputs are bound: RTShadows' output
+                the probe inputs are bound: RTShadows' output. With `occluded_weight` < 1 its
+                verdict updates the pixel's visibility hints: a bit per light (hashed) that scales
+                next frame's target of a light found occluded by that weight, so candidates and
+                reuse favour what the pixel sees, unbiased (glsl/restir_di.glsl)
 Reservoirs are 16 bytes (gpu/records.py RESERVOIR: the sample's light identity, its weight W and
 confidence M); each pixel's temporal reservoir is next frame's history (`history0/1`, used in
 turn, with the surfaces they were made at, `surface0/1`). The stages combine reservoirs by
@@ -68,7 +73,9 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
     Properties: `candidates` (light samples per pixel a frame, 1-64), `target` (the resampling target
     p_hat: "bsdf", the unshadowed contribution f cos Le G; "cosine", Le G cos without the BSDF, cheaper
     and unbiased, noisier on glossy surfaces), `visibility_reuse` (a shadow
-    ray to each pixel's pick before it is shared), `temporal_reuse`, `max_history_m` (the history's
+    ray to each pixel's pick before it is shared), `occluded_weight` (in (0, 1]: the target's
+    factor for a light the pixel's last shading ray found occluded; 1, no hints), `temporal_reuse`,
+    `max_history_m` (the history's
     confidence cap, in frames of candidates), `spatial_samples` (neighbours, 0-16), `spatial_radius`
     (pixels, 1-256), `share_views` (views after the first reuse view 0's reservoirs), and the ray
     passes' `dispatch_mode`, `tile`, `view_group`."""
@@ -84,9 +91,11 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
     CANDIDATES, REUSED = "reservoirs0", "reservoirs1"
     HISTORY = ("history0", "history1")
     SURFACE = ("surface0", "surface1")
+    HINTS = "hints"
     TARGETS = ("bsdf", "cosine")   # p_hat: f cos Le G, or Le G cos (no BSDF: cheaper, noisier on glossy surfaces)
     CHOICES = {**GBufferLightingPass.CHOICES, "target": TARGETS}   # the viewer's property panel offers these
-    PROPERTIES = {"candidates": 8, "target": "bsdf", "visibility_reuse": True, "temporal_reuse": True, "max_history_m": 20,
+    PROPERTIES = {"candidates": 8, "target": "bsdf", "visibility_reuse": True, "occluded_weight": 1.0,
+                  "temporal_reuse": True, "max_history_m": 20,
                   "spatial_samples": 4, "spatial_radius": 30.0, "share_views": True,
                   **ray_properties(view_group=16)}
 
@@ -108,6 +117,9 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
         if key == "target" and value not in self.TARGETS:
             raise OptionError(f"pass {self.name}: property 'target' must be one of {', '.join(self.TARGETS)} "
                               f"(the resampling target p_hat), got {value!r}")
+        if key == "occluded_weight" and not (isinstance(value, (int, float)) and 0.0 < value <= 1.0):
+            raise OptionError(f"pass {self.name}: property 'occluded_weight' must be a number in (0, 1] (the target's "
+                              f"factor for a light last found occluded; 1: no visibility hints), got {value!r}")
         if key == "spatial_radius" and not 1.0 <= value <= MAX_SPATIAL_RADIUS:
             raise OptionError(f"pass {self.name}: property 'spatial_radius' must be from 1 to {MAX_SPATIAL_RADIUS:g} "
                               f"pixels, got {value!r}")
@@ -120,15 +132,26 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
         """The lighting channels, and with temporal reuse the motion vectors."""
         return channels.LIGHTING + ("motion",) * bool(self.temporal_reuse)
 
+    def fuses_temporal(self) -> bool:
+        """Whether the candidates' kernel does the temporal reuse: where it traces no visibility ray
+        (a kernel with a traversal runs at the traversal's occupancy)."""
+        return bool(self.temporal_reuse) and not self.visibility_reuse
+
+    def keeps_hints(self) -> bool:
+        """Whether the pixels keep visibility hints (`occluded_weight` < 1)."""
+        return float(self.occluded_weight) < 1.0
+
     def stages(self, views: int) -> tuple[str, ...]:
-        """The reservoir stages a frame of `views` views runs, in order (the shading follows)."""
+        """The reservoir programs a frame of `views` views runs, in order (the shading follows)."""
         spatial = self.spatial_samples > 0 or (self.share_views and views > 1)
-        return tuple(s for s, on in zip(self.STAGES, (True, self.temporal_reuse, spatial)) if on)
+        temporal = self.temporal_reuse and not self.fuses_temporal()
+        return tuple(s for s, on in zip(self.STAGES, (True, temporal, spatial)) if on)
 
     def reflect(self, cd):
         r = super().reflect(cd)
         stages = self.stages(cd.views)
-        r.add_output(self.CANDIDATES, "each pixel's candidate reservoir (scratch)").format(RESERVOIR_FORMAT)
+        if not self.fuses_temporal():
+            r.add_output(self.CANDIDATES, "each pixel's candidate reservoir (scratch)").format(RESERVOIR_FORMAT)
         if "spatial" in stages:
             r.add_output(self.REUSED, "the spatial stage's reservoirs: the final ones (scratch)").format(RESERVOIR_FORMAT)
         if self.temporal_reuse:
@@ -138,12 +161,16 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
             for name in self.SURFACE:
                 r.add_internal(name, "the surface each history reservoir was made at: depth, normal, effect word, "
                                      "view direction (used in turn)").format(RESERVOIR_FORMAT)
+        if self.keeps_hints():
+            r.add_internal(self.HINTS, "each pixel's visibility hints: a bit per light (hashed) its last shadow "
+                                       "ray found occluded").format("r32ui")
         return r
 
     def shader_defines(self) -> dict:
         return {"RESTIR_CANDIDATES": int(self.candidates), "RESTIR_TARGET_BSDF": self.target == "bsdf",
                 "RESTIR_VISIBILITY_REUSE": bool(self.visibility_reuse),
-                "RESTIR_TEMPORAL": bool(self.temporal_reuse),
+                "RESTIR_TEMPORAL": bool(self.temporal_reuse), "RESTIR_FUSED_TEMPORAL": self.fuses_temporal(),
+                "RESTIR_HINTS": self.keeps_hints(), "RESTIR_OCCLUDED_WEIGHT": float(self.occluded_weight),
                 "RESTIR_MAX_HISTORY": float(self.max_history_m * self.candidates),
                 "RESTIR_SPATIAL_SAMPLES": int(self.spatial_samples),
                 "RESTIR_SPATIAL_RADIUS": float(self.spatial_radius), "RESTIR_SHARE_VIEWS": bool(self.share_views)}
@@ -157,16 +184,17 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
         self._history.restart()
 
     def _targets(self, cur: int) -> dict:
-        """Each stage's output pin, and the final reservoirs' (key "shade"): the temporal stage
-        writes the history, which the spatial stage reads."""
-        out = {"candidates": self.CANDIDATES, "temporal": self.HISTORY[cur], "spatial": self.REUSED}
+        """Each stage's output pin, and the final reservoirs' (key "shade"): the temporal stage (or
+        the candidates' with it fused) writes the history, which the spatial stage reads."""
+        out = {"candidates": self.HISTORY[cur] if self.fuses_temporal() else self.CANDIDATES,
+               "temporal": self.HISTORY[cur], "spatial": self.REUSED}
         out["shade"] = out[self._stages[-1]]
         return out
 
     def execute(self, ctx, data):
         prev, cur = self._history.begin_frame(ctx)
-        if self.temporal_reuse and not self._history.valid:   # no surface of an old frame may match
-            for name in self.SURFACE:
+        if not self._history.valid:   # no surface of an old frame may match; no old verdict stands
+            for name in self.SURFACE * bool(self.temporal_reuse) + (self.HINTS,) * self.keeps_hints():
                 zero_texture(data[name])
         targets = self._targets(cur)
         source = None
@@ -176,9 +204,11 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
             if source is not None:
                 res.image("reservoirs_in", data[source], read=True, write=False)
             res.image("reservoirs_out", data[targets[stage]])
+            if self.keeps_hints():
+                res.image("restir_hints", data[self.HINTS], read=True, write=False)
             if stage == "candidates" and self.temporal_reuse:
                 res.image("surface_out", data[self.SURFACE[cur]])
-            elif stage == "temporal":
+            if stage == "temporal" or (stage == "candidates" and self.fuses_temporal()):
                 res.image("history_in", data[self.HISTORY[prev]], read=True, write=False)
                 res.image("surface_in", data[self.SURFACE[prev]], read=True, write=False)
                 res.set("restir_history_valid", self._history.valid)
@@ -186,5 +216,7 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
             ctx.barrier(Access.IMAGE)
             source = targets[stage]
         self._res.image("reservoirs_in", data[targets["shade"]], read=True, write=False)
+        if self.keeps_hints():
+            self._res.image("restir_hints", data[self.HINTS])
         super().execute(ctx, data)
         self._history.end_frame()

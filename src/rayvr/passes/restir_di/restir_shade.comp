@@ -1,6 +1,8 @@
 // ReSTIR DI stage 4, shading: emission + the final reservoir's sample, f cos Le G x W, with its own
 // shadow ray (the expected transmittance through BLEND surfaces, as RTShadows), + the probes'
 // indirect diffuse light with PROBE_GI: what RTShadows writes, from the resampled sample.
+// With RESTIR_HINTS the ray's verdict sets (occluded) or clears (reached) the light's bit of the
+// pixel's visibility hints, for next frame's targets (restir_di.glsl).
 #include "restir_stage.glsl"
 #include "ray_counters.glsl"
 #include "probe_gi.glsl"
@@ -25,6 +27,11 @@ void main() {
             shadow_ray(s.pos, origin, ls, dir, tmax);
             float visible = trace_transmittance(origin, dir, tmax);
             if (visible > 0.0) direct = f * (r.weight * visible);
+#if RESTIR_HINTS
+            uint hints = restir_hints_at(p), bit = restir_hint_bit(reservoir_light_id(r));
+            uint updated = visible > 0.0 ? hints & ~bit : hints | bit;
+            if (updated != hints) imageStore(restir_hints, p, uvec4(updated));
+#endif
         }
     }
     ray_count_commit(uint(p.z));

@@ -73,7 +73,8 @@ void main() {
     }
 
     uvec2 c_id = reservoir_light_id(c);
-    float c_at_c = c.weight > 0.0 ? restir_target_of(s, specular_traced, c_id) : 0.0;
+    uint hints = restir_hints_at(p);
+    float c_at_c = c.weight > 0.0 ? restir_target_of(s, specular_traced, hints, c_id) : 0.0;
     float c_share = c.confidence / float(max(found, 1));   // M_c / k: the canonical's part of each pair
     float c_mis = found == 0 ? c.confidence : 0.0;
     float confidence = c.confidence;
@@ -86,13 +87,14 @@ void main() {
         restir_neighbour_pixel(p, g.pos, depth, k, u, size, q, q_depth);
         PathVertex s_q = path_vertex_at_gbuffer(gbuf_load(q), uint(q.z));
         Reservoir r = reservoir_unpack(imageLoad(reservoirs_in, q));
+        uint q_hints = restir_hints_at(q);
         confidence += r.confidence;
         if (c_at_c > 0.0)
-            c_mis += pair_weight(c_share, c_at_c, r.confidence, restir_target_of(s_q, specular_traced, c_id));
+            c_mis += pair_weight(c_share, c_at_c, r.confidence, restir_target_of(s_q, specular_traced, q_hints, c_id));
         if (!(r.weight > 0.0)) continue;
         uvec2 id = reservoir_light_id(r);
-        float c_at_r = restir_target_of(s, specular_traced, id);
-        float r_at_r = restir_target_of(s_q, specular_traced, id);
+        float c_at_r = restir_target_of(s, specular_traced, hints, id);
+        float r_at_r = restir_target_of(s_q, specular_traced, q_hints, id);
         stream_add(pick, id, pair_weight(r.confidence, r_at_r, c_share, c_at_r) * c_at_r * r.weight, c_at_r);
     }
     stream_add(pick, c_id, c_mis * c_at_c * c.weight, c_at_c);

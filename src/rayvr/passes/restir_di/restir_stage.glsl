@@ -24,3 +24,10 @@ bool restir_pixel(ivec3 size, out ivec3 p, out GSurface g, out PathVertex s) {
 
 // REFLECTIONS and above: RTReflections traces the specular lobes and shares their light (MIS).
 bool restir_specular_traced(GSurface g) { return g.effect >= EFFECT_REFLECTIONS; }
+
+#if RESTIR_HINTS
+layout(r32ui) uniform uimage2DArray restir_hints;   // each pixel's visibility hints (restir_di.glsl)
+uint restir_hints_at(ivec3 p) { return imageLoad(restir_hints, p).x; }
+#else
+uint restir_hints_at(ivec3 p) { return 0u; }
+#endif

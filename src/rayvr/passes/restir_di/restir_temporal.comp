@@ -1,16 +1,10 @@
-// ReSTIR DI stage 2, temporal reuse: this frame's reservoir and last frame's temporal one where the
-// G-buffer's motion vector says this surface was (the nearest pixel, when the disocclusion test of
-// glsl/reprojection.glsl passes), its confidence capped at RESTIR_MAX_HISTORY, combined by
-// generalized RIS with pairwise MIS (restir_di.glsl). Last frame's target is evaluated at this
-// frame's surface seen from where last frame's eye was (the direction the history recorded): a
-// static view evaluates it exactly, and under head motion the view-dependent lobes move with it.
+// ReSTIR DI stage 2, temporal reuse (restir_temporal.glsl), after a candidates stage that traced
+// visibility rays.
 #include "restir_stage.glsl"
+#include "restir_temporal.glsl"
 
 layout(rgba32ui) readonly uniform uimage2DArray reservoirs_in;   // this frame's candidates
-layout(rgba32ui) readonly uniform uimage2DArray history_in;      // last frame's reservoirs of this stage
-layout(rgba32ui) readonly uniform uimage2DArray surface_in;      // and the surfaces they were made at
 layout(rgba32ui) writeonly uniform uimage2DArray reservoirs_out;
-uniform bool restir_history_valid;   // false on the first frame, after reset() and lighting edits
 
 void main() {
     ivec3 p;
@@ -19,34 +13,7 @@ void main() {
     ivec3 size = imageSize(reservoirs_out);
     if (!restir_pixel(size, p, g, s)) return;
     Reservoir c = reservoir_unpack(imageLoad(reservoirs_in, p));
-    Reservoir result = c;
-    vec2 then_pixel = reprojected_pixel(p);
-    ivec3 q = ivec3(ivec2(floor(then_pixel)), p.z);
-    if (restir_history_valid && pixel_inside(q.xy, size.xy)) {
-        ReservoirSurface then = reservoir_surface_unpack(imageLoad(surface_in, q));
-        float depth = gbuf_fetch_posW(p).w;
-        float then_depth = reprojected_depth(uint(p.z), g.pos);
-        float tolerance = reprojection_tolerance(then_depth, gbuf_depth_gradient(p, depth, size.xy));
-        if (then.depth > 0.0 && reprojection_matches(then.depth, oct_unpack_snorm16(then.normal), then.word,
-                                                     then_depth, g.n, gbuf_fetch_effect(p), tolerance)) {
-            Reservoir h = reservoir_unpack(imageLoad(history_in, q));
-            h.confidence = min(h.confidence, float(RESTIR_MAX_HISTORY));
-            bool specular_traced = restir_specular_traced(g);
-            PathVertex s_then = path_vertex_at_gbuffer_seen(g, uint(p.z), oct_unpack_snorm16(then.view_dir));
-            LightSample lc = light_id_eval(reservoir_light_id(c), s.pos);
-            LightSample lh = light_id_eval(reservoir_light_id(h), s.pos);
-            float c_at_c = restir_target(s, specular_traced, lc), c_at_h = restir_target(s, specular_traced, lh);
-            float then_at_c = restir_target(s_then, specular_traced, lc);
-            float then_at_h = restir_target(s_then, specular_traced, lh);
-            Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT_RESTIR_TEMPORAL);
-            ReservoirStream pick = stream_begin(rng_next(rng));
-            stream_add(pick, reservoir_light_id(c),
-                       pair_weight(c.confidence, c_at_c, h.confidence, then_at_c) * c_at_c * c.weight, c_at_c);
-            stream_add(pick, reservoir_light_id(h),
-                       pair_weight(h.confidence, then_at_h, c.confidence, c_at_h) * c_at_h * h.weight, c_at_h);
-            float m = c.confidence + h.confidence;
-            result = stream_reservoir(pick, m, m);
-        }
-    }
-    imageStore(reservoirs_out, p, reservoir_pack(result));
+    uint hints = restir_hints_at(p);
+    float c_at_c = c.weight > 0.0 ? restir_target_of(s, restir_specular_traced(g), hints, reservoir_light_id(c)) : 0.0;
+    imageStore(reservoirs_out, p, reservoir_pack(restir_temporal_reuse(p, size, g, s, hints, c, c_at_c)));
 }
