@@ -181,3 +181,24 @@ def test_camel_case_aliases_are_the_same_methods():
     g.unmarkOutput("B.result")
     g.removeEdge("A.out", "B.color")
     assert g.outputs == [] and g.edges == []
+
+
+class Picky(RenderPass):
+    PROPERTIES = {"mode": "fast", "filter": "box"}
+    CHOICES = {"mode": {"fast": "fewer samples", "exact": ""}, "filter": ("box", "tent")}
+
+    def reflect(self, cd):
+        return Reflection()
+
+
+def test_a_property_with_choices_takes_only_them_and_the_error_lists_them():
+    assert Picky(mode="exact", filter="tent").get_properties() == {"mode": "exact", "filter": "tent"}
+    with pytest.raises(OptionError) as err:
+        Picky(mode="slow")
+    assert str(err.value) == "pass Picky: property 'mode' is 'slow'; use 'fast' (fewer samples) or 'exact'"
+    with pytest.raises(OptionError, match=r"^pass Picky: property 'filter' is 3; use 'box' or 'tent'$"):
+        Picky(filter=3)
+    p = Picky()
+    with pytest.raises(OptionError):   # set_properties checks too, and leaves the old value
+        p.set_properties({"filter": "gauss"})
+    assert p.filter == "box"

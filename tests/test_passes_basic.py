@@ -118,7 +118,7 @@ def test_image_loader_exr_float_exact(gpu, tmp_path):
 def test_basic_pass_errors_name_pass_property_and_fix(gpu, tmp_path):
     with pytest.raises(OptionError, match=r"pass Clear: property 'color' must be \[r, g, b\]"):
         Clear(color=[1, 2])
-    with pytest.raises(OptionError, match=r"property 'filter' must be one of linear, nearest"):
+    with pytest.raises(OptionError, match=r"property 'filter' is 'cubic'; use 'linear' or 'nearest'"):
         Blit(filter="cubic")
     with pytest.raises(OptionError, match=r"unknown format 'rgba17f' \(did you mean 'rgba16f'\?\)"):
         Clear(format="rgba17f")

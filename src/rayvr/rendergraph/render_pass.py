@@ -260,6 +260,10 @@ class RenderPass:
     # The pass traces rays for the views' pixels: its programs count them per view
     # (rendergraph.ray_counters; RQ_COUNT_RAYS and glsl/ray_counters.glsl), the profile's rays_per_view.
     COUNTS_RAYS = False
+    # Properties that take one of a few names: key -> the names, or {name: what it means}.
+    # validate_property refuses any other value (one message for every pass), and the viewer's
+    # property panel offers them.
+    CHOICES: dict = {}
 
     def __init__(self, props: dict | None = None, **kwargs):
         self._props = copy.deepcopy(self.PROPERTIES)
@@ -287,8 +291,18 @@ class RenderPass:
                 raise OptionError(f"pass {self.name}: property '{key}' must be a number, got {value!r}")
             return type(default)(value) if isinstance(default, float) else value
         if isinstance(value, enum.Enum):
-            return value.name.lower()
+            value = value.name.lower()
+        if key in self.CHOICES:
+            self._check_choice(key, value)
         return value
+
+    def _check_choice(self, key: str, value) -> None:
+        choices = self.CHOICES[key]
+        if isinstance(value, str) and value in choices:
+            return
+        named = [f"'{c}'" + (f" ({choices[c]})" if isinstance(choices, dict) and choices[c] else "") for c in choices]
+        listed = named[0] if len(named) == 1 else ", ".join(named[:-1]) + " or " + named[-1]
+        raise OptionError(f"pass {self.name}: property '{key}' is {value!r}; use {listed}")
 
     def get_properties(self) -> dict:
         """Properties as plain JSON-able values; `type(p)(p.get_properties())` rebuilds the pass."""

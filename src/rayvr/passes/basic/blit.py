@@ -21,12 +21,11 @@ class Blit(RenderPass):
 
     SRC, DST = "src", "dst"
     PROPERTIES = {"format": "", "scale": 1.0, "filter": "linear"}
+    CHOICES = {"filter": tuple(FILTERS)}
 
     def validate_property(self, key, value):
         if key == "format" and value != "":
             return storable_format(self.name, key, value)
-        if key == "filter" and value not in FILTERS:
-            raise OptionError(f"pass {self.name}: property 'filter' must be one of {', '.join(FILTERS)}, got {value!r}")
         value = super().validate_property(key, value)
         if key == "scale" and value <= 0:
             raise OptionError(f"pass {self.name}: property 'scale' must be > 0, got {value!r}")

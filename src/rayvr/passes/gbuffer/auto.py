@@ -6,12 +6,11 @@ datacenter compute GPUs); llvmpipe and desktop GPUs rasterise. `mode` forces eit
 """
 from __future__ import annotations
 
-from ...errors import OptionError
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, RenderPass
 from ..dispatch import check_shape
 from . import reflection_cutoff
-from .raster import GBufferRaster, check_multiview, gbuffer_reflection
+from .raster import MULTIVIEW_MODES, GBufferRaster, gbuffer_reflection
 from .rt import GBufferRT
 
 MODES = ("auto", "raster", "rt")
@@ -36,16 +35,15 @@ class GBufferAuto(RenderPass):
 
     PROPERTIES = {"mode": "auto", "multiview": "auto", "cull_back_faces": False, reflection_cutoff.PROPERTY: 1.0,
                   "tile": GBufferRT.PROPERTIES["tile"], "view_group": GBufferRT.PROPERTIES["view_group"]}
+    CHOICES = {"mode": MODES, "multiview": MULTIVIEW_MODES}
     USES_SCENE = True
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
-        if key == "mode" and value not in MODES:
-            raise OptionError(f"pass {self.name}: property 'mode' is {value!r}; use auto, raster or rt")
         if key == reflection_cutoff.PROPERTY:
             return reflection_cutoff.validate(self.name, value)
         value = check_shape(self.name, key, value)
-        return check_multiview(self.name, value) if key == "multiview" else value
+        return value
 
     def reflect(self, cd):
         chosen, _ = choose_gbuffer(self.mode, cd.caps, self.cull_back_faces)

@@ -5,7 +5,6 @@ compaction's pixel list (indirect dispatch) or the whole image in small tiles (p
 PROBE_GI in: the shader adds the probes' indirect diffuse light (glsl/probe_gi.glsl)."""
 from __future__ import annotations
 
-from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
@@ -23,7 +22,8 @@ from . import channels
 # pixels, same random numbers, same image. Neighbouring pixels in one warp trace alike rays; the
 # list's tiles come in random order and a warp often straddles two of them. With a trace decision
 # (TraceDecision) over several views "auto" takes the list: the pixels that trace are sparse.
-DISPATCHES = ("auto", "image", "list")
+DISPATCHES = {"auto": "the whole image unless a material is PATH_TRACED", "image": "",
+              "list": "the compaction's pixels"}
 TILE = [8, 4]   # one warp (ray_group spreads it over views)
 
 
@@ -48,9 +48,6 @@ class GBufferLightingPass(RenderPass):
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
-        if key == "dispatch_mode" and value not in DISPATCHES:
-            raise OptionError(f"pass {self.name}: property 'dispatch_mode' is {value!r}; use 'auto' (the whole "
-                              f"image unless a material is PATH_TRACED), 'image' or 'list' (the compaction's pixels)")
         return check_shape(self.name, key, value)
 
     def reflect(self, cd):

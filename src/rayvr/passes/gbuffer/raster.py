@@ -5,7 +5,7 @@ rendering, each instance drawn once per view with gl_Layer set in the vertex sha
 """
 from __future__ import annotations
 
-from ...errors import GpuError, OptionError, ShaderError
+from ...errors import GpuError, ShaderError
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
 from ..effects import effect_defines, scene_defines
@@ -13,13 +13,6 @@ from . import channels, reflection_cutoff
 from .layered_target import LayeredTarget, max_multiview_views
 
 MULTIVIEW_MODES = ("auto", "on", "off")
-
-
-def check_multiview(pass_name: str, value):
-    """`value` if it is a multiview mode, else OptionError naming the pass (GBufferRaster, GBufferAuto)."""
-    if value not in MULTIVIEW_MODES:
-        raise OptionError(f"pass {pass_name}: property 'multiview' is {value!r}; use auto, on or off")
-    return value
 
 
 def gbuffer_reflection(access: Access = Access.IMAGE) -> Reflection:
@@ -37,13 +30,14 @@ class GBufferRaster(RenderPass):
     """Rasterises the scene for all views in one draw call (see the module docstring)."""
 
     PROPERTIES = {"multiview": "auto", "cull_back_faces": False, reflection_cutoff.PROPERTY: 1.0}
+    CHOICES = {"multiview": MULTIVIEW_MODES}
     USES_SCENE = True
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
         if key == reflection_cutoff.PROPERTY:
             return reflection_cutoff.validate(self.name, value)
-        return check_multiview(self.name, value) if key == "multiview" else value
+        return value
 
     def reflect(self, cd):
         return gbuffer_reflection(Access.FRAMEBUFFER)

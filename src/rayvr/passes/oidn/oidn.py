@@ -54,12 +54,6 @@ class OIDNDenoise(RenderPass):
     CHOICES = {"quality": QUALITIES}
     USES_SCENE = True
 
-    def validate_property(self, key, value):
-        value = super().validate_property(key, value)
-        if key == "quality" and value not in QUALITIES:
-            raise OptionError(f"pass {self.name}: property 'quality' is {value!r}; use one of {', '.join(QUALITIES)}")
-        return value
-
     def reflect(self, cd):
         r = Reflection()
         channels.add_inputs(r)

@@ -88,18 +88,13 @@ class PathTracer(RenderPass):
                   "tile": list(COMPUTE_GROUP), "view_group": VIEW_GROUP, "compact": False,
                   "persistent": False, "sort_directions": False}
     USES_SCENE = True
+    CHOICES = {"mode": MODES, "sampler": {"sobol": "Owen-scrambled Sobol, the default", "pcg": ""},
+               "kernel": {"auto": "the wavefront on GPUs, the megakernel on software renderers",
+                          "wavefront": "each vertex's rays in a dispatch of their own",
+                          "megakernel": "a path's rays in one invocation"}}
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
-        if key == "sampler" and value not in SAMPLERS:
-            raise OptionError(f"pass {self.name}: property 'sampler' is {value!r}; use 'sobol' (Owen-scrambled "
-                              f"Sobol, the default) or 'pcg'")
-        if key == "kernel" and value not in KERNELS:
-            raise OptionError(f"pass {self.name}: property 'kernel' is {value!r}; use 'auto' (the wavefront on "
-                              f"GPUs, the megakernel on software renderers), 'wavefront' (each vertex's rays in a "
-                              f"dispatch of their own) or 'megakernel' (a path's rays in one invocation)")
-        if key == "mode" and value not in MODES:
-            raise OptionError(f"pass {self.name}: property 'mode' is {value!r}; use 'full' or 'gbuffer'")
         if key == "samples_per_pixel" and (int(value) != value or value < 1):
             raise OptionError(f"pass {self.name}: property 'samples_per_pixel' must be an integer >= 1, got {value!r}")
         if key in ("max_bounces", "rr_start") and (int(value) != value or value < 0):

@@ -92,8 +92,8 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
     HISTORY = ("history0", "history1")
     SURFACE = ("surface0", "surface1")
     HINTS = "hints"
-    TARGETS = ("bsdf", "cosine")   # p_hat: f cos Le G, or Le G cos (no BSDF: cheaper, noisier on glossy surfaces)
-    CHOICES = {**GBufferLightingPass.CHOICES, "target": TARGETS}   # the viewer's property panel offers these
+    TARGETS = {"bsdf": "p_hat = f cos Le G", "cosine": "Le G cos, no BSDF: cheaper, noisier on glossy surfaces"}
+    CHOICES = {**GBufferLightingPass.CHOICES, "target": TARGETS}
     PROPERTIES = {"candidates": 8, "target": "bsdf", "visibility_reuse": True, "occluded_weight": 1.0,
                   "temporal_reuse": True, "max_history_m": 20,
                   "spatial_samples": 4, "spatial_radius": 30.0, "share_views": True,
@@ -114,9 +114,6 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
                 raise OptionError(f"pass {self.name}: property '{key}' must be an integer from {low} to {high} "
                                   f"({what}), got {value!r}")
             return int(value)
-        if key == "target" and value not in self.TARGETS:
-            raise OptionError(f"pass {self.name}: property 'target' must be one of {', '.join(self.TARGETS)} "
-                              f"(the resampling target p_hat), got {value!r}")
         if key == "occluded_weight" and not (isinstance(value, (int, float)) and 0.0 < value <= 1.0):
             raise OptionError(f"pass {self.name}: property 'occluded_weight' must be a number in (0, 1] (the target's "
                               f"factor for a light last found occluded; 1: no visibility hints), got {value!r}")

@@ -37,6 +37,7 @@ class TAA(RenderPass):
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"alpha": 0.1, "sigma": 1.0, "clamp": True, "converge": True, "format": "rgba16f"}
     FORMATS = ("rgba16f", "rgba32f")
+    CHOICES = {"format": FORMATS}
 
     def __init__(self, props: dict | None = None, **kwargs):
         super().__init__(props, **kwargs)
@@ -51,8 +52,6 @@ class TAA(RenderPass):
                               f"got {value!r}")
         if key == "sigma" and value <= 0.0:
             raise OptionError(f"pass {self.name}: property 'sigma' must be > 0, got {value!r}")
-        if key == "format" and value not in self.FORMATS:
-            raise OptionError(f"pass {self.name}: property 'format' is {value!r}; use one of {', '.join(self.FORMATS)}")
         return value
 
     def reset(self) -> None:

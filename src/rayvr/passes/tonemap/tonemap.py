@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import struct
 
-from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
@@ -25,15 +24,12 @@ class ToneMapper(RenderPass):
     PROPERTIES = {"operator": "aces", "exposure": 0.0, "auto_exposure": False, "key": 0.18,
                   "adaptation": 1.0, "srgb": True}
 
+    CHOICES = {"operator": tuple(OPERATORS)}
+
     def validate_property(self, key, value):
-        value = super().validate_property(key, value)
-        if key == "operator":
-            name = str(value).lower()
-            if name not in OPERATORS:
-                raise OptionError(f"pass {self.name}: property 'operator' is {value!r}; "
-                                  f"use one of {', '.join(OPERATORS)}")
-            return name
-        return value
+        if key == "operator" and isinstance(value, str):
+            value = value.lower()
+        return super().validate_property(key, value)
 
     def reflect(self, cd):
         r = Reflection()

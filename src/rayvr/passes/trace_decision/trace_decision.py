@@ -46,7 +46,8 @@ class TraceDecision(RenderPass):
 
     USES_SCENE = True
     DECISION = DECISION
-    CHOICES = {"foveation": FOVEATION}
+    CHOICES = {"foveation": dict(zip(FOVEATION, ("", "about each image's centre",
+                                                 "about where the eye tracker says the eye looks")))}
     PROPERTIES = {"reuse": False, "foveation": "none", "foveal_radius_deg": foveation.DEFAULT_RADIUS_DEG,
                   "periphery_share": foveation.DEFAULT_PERIPHERY_SHARE, "reuse_min_roughness": 0.5,
                   "reuse_lobe_fraction": 0.25,
@@ -54,9 +55,6 @@ class TraceDecision(RenderPass):
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
-        if key == "foveation" and value not in FOVEATION:
-            raise OptionError(f"pass {self.name}: property 'foveation' is {value!r}; use 'none', 'fixed' (about each "
-                              f"image's centre) or 'gaze' (about where the eye tracker says the eye looks)")
         if key == "foveal_radius_deg":
             foveation.check_falloff(value, foveation.DEFAULT_PERIPHERY_SHARE, f"pass {self.name}: property '{key}'")
         if key == "periphery_share":
