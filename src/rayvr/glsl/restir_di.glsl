@@ -36,20 +36,33 @@ uvec2 reservoir_light_id(Reservoir r) { return uvec2(r.light, r.point); }
 
 // ---- the target -----------------------------------------------------------------------------------
 // p_hat at vertex s of light sample ls (from light_id_eval: its weight is Le G in its light's
-// measure), times `hint` (restir_hint). RESTIR_TARGET_BSDF: the luminance of f cos Le G, with the
-// MIS-weighted specular lobes where a reflection pass shares them (`specular_traced`, as
-// shade_direct_mis), so the pixel's sum stays right. Otherwise the luminance of Le G cos at the
+// measure), times `hint` (restir_hint). RESTIR_TARGET 1 (bsdf): the luminance of f cos Le G, with
+// the MIS-weighted specular lobes where a reflection pass shares them (`specular_traced`, as
+// shade_direct_mis), so the pixel's sum stays right. 0 (cosine): the luminance of Le G cos at the
 // geometric normal: no BSDF evaluation (the stages evaluate p_hat at every candidate and
 // neighbour), positive wherever f cos Le G is (light_bsdf needs the light above the geometric
-// surface), so still unbiased, at more noise where the BSDF is far from Lambert.
+// surface), so still unbiased, at more noise where the BSDF is far from Lambert. 2 (auto): the
+// bsdf target where the specular lobes carry over RESTIR_GLOSSY_SHARE of the light the surface
+// reflects (bsdf_set_view's lobe probabilities), the cosine elsewhere; each pixel's target is a
+// function of its own surface, which is all the MIS weights need.
 // restir_contribution of a sample from sample_light_id (its weight Le G / pdf) is p_hat / pdf: a
 // candidate's resampling weight.
-float restir_contribution(PathVertex s, bool specular_traced, LightSample ls, float hint) {
-#if RESTIR_TARGET_BSDF
-    return hint * luminance(light_bsdf(s, ls, specular_traced) * ls.weight);
-#else
-    return ls.valid ? hint * luminance(ls.weight) * max(dot(ls.direction, s.ng), 0.0) : 0.0;
+#ifndef RESTIR_TARGET
+#define RESTIR_TARGET 1
 #endif
+const float RESTIR_GLOSSY_SHARE = 0.25;
+
+bool restir_target_uses_bsdf(PathVertex s) {
+#if RESTIR_TARGET == 2
+    return s.bsdf.lobe_p[BSDF_LOBE_SPECULAR] + s.bsdf.lobe_p[BSDF_LOBE_GLASS] > RESTIR_GLOSSY_SHARE;
+#else
+    return RESTIR_TARGET == 1;
+#endif
+}
+
+float restir_contribution(PathVertex s, bool specular_traced, LightSample ls, float hint) {
+    if (restir_target_uses_bsdf(s)) return hint * luminance(light_bsdf(s, ls, specular_traced) * ls.weight);
+    return ls.valid ? hint * luminance(ls.weight) * max(dot(ls.direction, s.ng), 0.0) : 0.0;
 }
 
 // Visibility hints (RESTIR_HINTS): a pixel keeps a bit per light (its identity hashed to one of 32)

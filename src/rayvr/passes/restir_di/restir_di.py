@@ -72,7 +72,8 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
 
     Properties: `candidates` (light samples per pixel a frame, 1-64), `target` (the resampling target
     p_hat: "bsdf", the unshadowed contribution f cos Le G; "cosine", Le G cos without the BSDF, cheaper
-    and unbiased, noisier on glossy surfaces), `visibility_reuse` (a shadow
+    and unbiased, noisier on glossy surfaces; "auto", per pixel the first where its specular lobes
+    carry over a quarter of the light, else the second), `visibility_reuse` (a shadow
     ray to each pixel's pick before it is shared), `occluded_weight` (in (0, 1]: the target's
     factor for a light the pixel's last shading ray found occluded; 1, no hints), `temporal_reuse`,
     `max_history_m` (the history's
@@ -92,7 +93,8 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
     HISTORY = ("history0", "history1")
     SURFACE = ("surface0", "surface1")
     HINTS = "hints"
-    TARGETS = {"bsdf": "p_hat = f cos Le G", "cosine": "Le G cos, no BSDF: cheaper, noisier on glossy surfaces"}
+    TARGETS = {"bsdf": "p_hat = f cos Le G", "cosine": "Le G cos, no BSDF: cheaper, noisier on glossy surfaces",
+               "auto": "the BSDF's where the specular lobes carry over a quarter of the light, else the cosine"}
     CHOICES = {**GBufferLightingPass.CHOICES, "target": TARGETS}
     PROPERTIES = {"candidates": 8, "target": "bsdf", "visibility_reuse": True, "occluded_weight": 1.0,
                   "temporal_reuse": True, "max_history_m": 20,
@@ -164,7 +166,7 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
         return r
 
     def shader_defines(self) -> dict:
-        return {"RESTIR_CANDIDATES": int(self.candidates), "RESTIR_TARGET_BSDF": self.target == "bsdf",
+        return {"RESTIR_CANDIDATES": int(self.candidates), "RESTIR_TARGET": ("cosine", "bsdf", "auto").index(self.target),
                 "RESTIR_VISIBILITY_REUSE": bool(self.visibility_reuse),
                 "RESTIR_TEMPORAL": bool(self.temporal_reuse), "RESTIR_FUSED_TEMPORAL": self.fuses_temporal(),
                 "RESTIR_HINTS": self.keeps_hints(), "RESTIR_OCCLUDED_WEIGHT": float(self.occluded_weight),
