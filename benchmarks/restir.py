@@ -161,10 +161,9 @@ def at_equal_ms(rows: list[dict], ms: float, key: str) -> tuple[float, str]:
 def run(args) -> dict:
     import json
 
-    from rayvr.cli.options import load_scene_arg, parse_size
+    from rayvr.cli.options import parse_size
     from rayvr.errors import OptionError
-    from rayvr.study.display import Display
-    from rayvr.xr.cameras import default_views
+    from rayvr.study.progress import StudyProgress
     from rayvr.xr.presets import get_preset
 
     parts = [p.strip() for p in args.parts.split(",") if p.strip()]
@@ -185,35 +184,62 @@ def run(args) -> dict:
     rows, notes = [], []
     shape = f"{args.views}x{size[0]}x{size[1]}"
     method = "?"
+    # a progress bar whose ETA learns seconds per rendered pixel-frame from the steps done (a frame's
+    # readback and judging cost about what its light samples do)
+    pixels = args.views * size[0] * size[1]
+    ref_units = pixels * _figure(args, "reference_frames")
+    row_units = pixels * (warmup + error_frames + frames)
+    progress = StudyProgress(desc="restir")
     for part in parts:
-        scene = load_scene_arg(args.scene)
-        if part == "many":
-            add_many_lights(scene, _figure(args, "lights"), _figure(args, "emitters"), args.seed)
-            label = f"{scene.name} + {_figure(args, 'lights')} lights, {_figure(args, 'emitters')} emitters"
-        else:
-            import rayvr as rv
-
-            for m in scene.materials:
-                m.effect = rv.Effect.SHADOWS
-            label = scene.name
-        views = default_views(scene, args.views, size)
-        ref, ref_noise = reference(scene, views, _figure(args, "reference_frames"), _figure(args, "reference_samples"))
-        notes.append(f"{part}: reference relMSE (its halves' / 4) {ref_noise:.3g}")
-        display = Display().fixed(ref)
-        plain = []
-        for n in samples if part == "many" else samples[:1]:
-            m = measure(scene, views, _graph(None, n), ref, display, ppd, frames, warmup, error_frames)
-            plain.append(m)
-            method = m["method"]
-            rows.append([part, label, f"RTShadows light_samples={n}", shape, round(m["shadows_ms"], 3),
-                         round(m["frame_ms"], 3), m["relmse_trim"], m["relmse"], m["flip"], ""])
-        for props in restir_sets:
-            rows.extend(_restir_rows(part, label, shape, props, plain, ref_noise, notes,
-                                     measure(scene, views, _graph(props), ref, display, ppd, frames, warmup,
-                                             error_frames)))
+        rows_planned = (len(samples) if part == "many" else 1) + len(restir_sets)
+        progress.plan("render", ref_units + rows_planned * row_units)
+    with progress:
+        for part in parts:
+            method = _part(args, part, size, samples, restir_sets, ppd, shape, rows, notes, progress,
+                           (ref_units, row_units)) or method
     notes.append(f"timing: {method}; errors: {error_frames} single frames after {warmup}, FLIP at {ppd:.1f} ppd "
                  f"({args.preset})")
     return {"columns": COLUMNS, "rows": rows, "notes": notes}
+
+
+def _part(args, part, size, samples, restir_sets, ppd, shape, rows, notes, progress, units) -> str:
+    """One part's rows (many or scene) into `rows` and `notes`; its timing method."""
+    from rayvr.cli.options import load_scene_arg
+    from rayvr.study.display import Display
+    from rayvr.xr.cameras import default_views
+
+    frames, warmup, error_frames = (_figure(args, k) for k in ("frames", "warmup", "error_frames"))
+    ref_units, row_units = units
+    method = None
+    scene = load_scene_arg(args.scene)
+    if part == "many":
+        add_many_lights(scene, _figure(args, "lights"), _figure(args, "emitters"), args.seed)
+        label = f"{scene.name} + {_figure(args, 'lights')} lights, {_figure(args, 'emitters')} emitters"
+    else:
+        import rayvr as rv
+
+        for m in scene.materials:
+            m.effect = rv.Effect.SHADOWS
+        label = scene.name
+    views = default_views(scene, args.views, size)
+    with progress.step("render", ref_units, f"{part}: reference"):
+        ref, ref_noise = reference(scene, views, _figure(args, "reference_frames"),
+                                   _figure(args, "reference_samples"))
+    notes.append(f"{part}: reference relMSE (its halves' / 4) {ref_noise:.3g}")
+    display = Display().fixed(ref)
+    plain = []
+    for n in samples if part == "many" else samples[:1]:
+        with progress.step("render", row_units, f"{part}: RTShadows x{n}"):
+            m = measure(scene, views, _graph(None, n), ref, display, ppd, frames, warmup, error_frames)
+        plain.append(m)
+        method = m["method"]
+        rows.append([part, label, f"RTShadows light_samples={n}", shape, round(m["shadows_ms"], 3),
+                     round(m["frame_ms"], 3), m["relmse_trim"], m["relmse"], m["flip"], ""])
+    for i, props in enumerate(restir_sets):
+        with progress.step("render", row_units, f"{part}: ReSTIR set {i + 1}/{len(restir_sets)}"):
+            m = measure(scene, views, _graph(props), ref, display, ppd, frames, warmup, error_frames)
+        rows.extend(_restir_rows(part, label, shape, props, plain, ref_noise, notes, m))
+    return method
 
 
 def _restir_rows(part, label, shape, restir: dict, plain: list[dict], ref_noise: float, notes: list, m: dict) -> list:

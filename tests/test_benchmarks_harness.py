@@ -70,3 +70,20 @@ def test_rays_diffuse_layouts_trace_the_same_rays(tmp_path, gpu):
     for layout in ("queue", "persistent"):
         for col in ("primary_hit_frac", "diffuse_hit_frac", "diffuse_nodes", "diffuse_tris", "diffuse_instances"):
             assert rows[layout][col] == rows["pixels"][col], (layout, col)
+
+
+def test_restir_quick_rows_and_its_bad_sets(tmp_path, gpu, capsys):
+    """`benchmarks restir` on the Cornell box: RTShadows' row, a row and a ratio row per ReSTIR
+    set, finite errors, its progress on stderr; a set that is not JSON is one line and exit 2."""
+    args = ["restir", "--quick", "--scene", "cornell_box", "--parts", "scene", "--out", str(tmp_path)]
+    assert harness.main([*args, "--restir", '[{"candidates": 2}, {"target": "auto"}]']) == 0
+    doc = json.loads((tmp_path / "restir.json").read_text())
+    configs = [dict(zip(doc["columns"], r))["config"] for r in doc["rows"]]
+    assert configs == ["RTShadows light_samples=1", 'ReSTIRDI {"candidates": 2}', "ReSTIR / plain SHADOWS: FLIP, frame ms",
+                       'ReSTIRDI {"target": "auto"}', "ReSTIR / plain SHADOWS: FLIP, frame ms"]
+    for row in (dict(zip(doc["columns"], r)) for r in doc["rows"][:2]):
+        assert 0 < row["FLIP"] < 1 and 0 <= row["relMSE"] < 10
+    assert "restir:" in capsys.readouterr().err   # the progress bar
+    assert harness.main([*args, "--restir", "{candidates: 2}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("python -m benchmarks restir: error: --restir: not JSON")
