@@ -42,6 +42,14 @@ def test_exr_is_linear_hdr(gpu, tmp_path, capsys):
     assert rgb.shape == (12, 16, 3) and rgb.dtype == np.float32 and np.isfinite(rgb).all() and rgb.max() > 0
 
 
+def test_set_changes_a_pass_property(gpu, tmp_path, capsys):
+    code, out, err = run(capsys, "--size", "8x8", "--preset", "raw", "--frames", "1", "--report",
+                         "--set", "Shadows.light_samples=3", "--set", "ToneMap.operator=linear",
+                         "--out", str(tmp_path / "s.png"))
+    assert code == 0, err
+    assert "LIGHT_SAMPLES=3" in out.replace(" ", "") or "'LIGHT_SAMPLES': 3" in out
+
+
 def test_light_field_grid_and_quilt(gpu, tmp_path, capsys):
     code, out, err = run(capsys, "--views", "4", "--grid", "2x2", "--size", "8x8", "--out", str(tmp_path / "v.png"),
                          "--quilt", str(tmp_path / "q.png"))
@@ -59,6 +67,10 @@ def test_light_field_grid_and_quilt(gpu, tmp_path, capsys):
     (["--exposure", "bright"], ["--exposure bright", "auto"]),
     (["no_such_scene"], ["no_such_scene", "built-ins"]),
     (["--views", "3", "--grid", "2x2"], ["--grid 2x2", "--views is 3"]),
+    (["--set", "Shadows=2"], ["--set Shadows=2", "PASS.KEY=VALUE"]),
+    (["--set", "Shadow.light_samples=2"], ["--set Shadow.light_samples=2", "did you mean 'Shadows'"]),
+    (["--set", "Shadows.light_sample=2"], ["update_pass('Shadows')", "unknown property 'light_sample'", "'light_samples'"]),
+    (["--set", "ToneMap.operator=sepia"], ["--set ToneMap.operator=sepia", "use 'aces', 'reinhard' or 'linear'"]),
 ])
 def test_bad_options_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, argv, words):
     code, out, err = run(capsys, *argv, "--size" if "--size" not in argv else "--frames", "8x8" if "--size" not in argv else "1",

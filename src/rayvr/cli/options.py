@@ -149,6 +149,35 @@ def trace_options(args, grid_cols: int = 0) -> dict:
     return {"reuse": reuse, "foveation": fov, "decision": decision or None}
 
 
+def add_pass_property_argument(p) -> None:
+    """--set PASS.KEY=VALUE: any property of a pass of the graph (repeatable)."""
+    p.add_argument("--set", action="append", default=[], dest="pass_properties", metavar="PASS.KEY=VALUE",
+                   help="set a property of one of the graph's passes (--report lists the passes); VALUE is JSON "
+                        "(4, 0.05, true, [8, 4]) or else a word; repeatable, e.g. --set Shadows.light_samples=2")
+
+
+def apply_pass_properties(graph, settings: list[str]) -> None:
+    """Each `PASS.KEY=VALUE` of `settings` as graph.update_pass(PASS, {KEY: VALUE}); a bad one is
+    the error of the pass (or graph) behind it, naming the option."""
+    import json
+
+    from ..errors import GraphError
+
+    for text in settings:
+        target, equals, raw = text.partition("=")
+        name, dot, key = target.rpartition(".")
+        if not (equals and dot and name and key):
+            raise OptionError(f"--set {text}: give PASS.KEY=VALUE, e.g. --set Shadows.light_samples=2")
+        try:
+            value = json.loads(raw)
+        except json.JSONDecodeError:
+            value = raw
+        try:
+            graph.update_pass(name, {key: value})
+        except (OptionError, GraphError) as exc:
+            raise type(exc)(f"--set {text}: {exc}") from None
+
+
 def say_nonfinite(counts: dict[str, int]) -> None:
     """One line on stderr per pass that set non-finite samples to 0 in this render."""
     from ..rendergraph.nonfinite import nonfinite_lines

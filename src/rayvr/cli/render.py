@@ -33,7 +33,8 @@ from ..fileio import atomic_group, check_writable, image_format, write_exr, writ
 from ..graph_options import DEFAULT_PRESET, NONE, OPTIONS, PRESETS
 from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
 from . import cluster as cluster_cli
-from .options import (MAX_VIEWS, add_lighting_arguments, add_trace_arguments, apply_lighting, integer, load_scene_arg,
+from .options import (MAX_VIEWS, add_lighting_arguments, add_pass_property_argument, add_trace_arguments,
+                      apply_lighting, apply_pass_properties, integer, load_scene_arg,
                       number, parse_size, say_nonfinite, trace_options, views_count)
 
 LAYOUTS = ("per-view", "side-by-side")
@@ -104,6 +105,7 @@ def register(sub) -> None:
     p.add_argument("--probe-rays", type=integer("--probe-rays", 16, 1024), help="with --gi probes: rays per probe "
                                                                                 "per frame, 16 to 1024 (default 128)")
     add_trace_arguments(p)
+    add_pass_property_argument(p)
     p.add_argument("--report", action="store_true", help="print the graph's compile report (the profile, with the "
                                                          "rays traced per view, is printed either way)")
     cluster_cli.add_arguments(p)
@@ -282,6 +284,7 @@ def run(args) -> int:
     else:
         views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
     graph = build_graph(args, exposure, auto_exposure, probes, grid)
+    apply_pass_properties(graph, args.pass_properties)
     hdr = out.suffix.lower() == ".exr"
     if camera_path is not None:
         with atomic_group():   # every frame's files, or none
