@@ -62,6 +62,7 @@ from ..history import HistoryOwner, LightingHistory
 MAX_CANDIDATES = 64
 MAX_SPATIAL_SAMPLES = 16
 MAX_SPATIAL_RADIUS = 256.0
+TARGET_DEFINES = {"cosine": 0, "bsdf": 1, "auto": 2}   # glsl/restir_di.glsl RESTIR_TARGET
 RESERVOIR_FORMAT = "rgba32ui"   # gpu/records.py RESERVOIR, RESERVOIR_SURFACE: one texel each
 
 
@@ -166,7 +167,7 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
         return r
 
     def shader_defines(self) -> dict:
-        return {"RESTIR_CANDIDATES": int(self.candidates), "RESTIR_TARGET": ("cosine", "bsdf", "auto").index(self.target),
+        return {"RESTIR_CANDIDATES": int(self.candidates), "RESTIR_TARGET": TARGET_DEFINES[self.target],
                 "RESTIR_VISIBILITY_REUSE": bool(self.visibility_reuse),
                 "RESTIR_TEMPORAL": bool(self.temporal_reuse), "RESTIR_FUSED_TEMPORAL": self.fuses_temporal(),
                 "RESTIR_HINTS": self.keeps_hints(), "RESTIR_OCCLUDED_WEIGHT": float(self.occluded_weight),
