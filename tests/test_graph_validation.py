@@ -152,7 +152,7 @@ def test_editing_errors():
     assert "not a marked output" in error_of(lambda: g.unmark_output("A.out"))
     assert "is not a RenderPass" in error_of(lambda: g.add_pass(object(), "Z"))
     assert "write 'Pass.pin'" in error_of(lambda: g.add_edge("A..out", "B.extra"))
-    with pytest.raises(OptionError, match=r"update_pass\('A'\): pass Src: unknown property 'fromat' \(did you mean 'format'\?\)"):
+    with pytest.raises(OptionError, match=r"update_pass\('A'\): pass A: unknown property 'fromat' \(did you mean 'format'\?\)"):
         g.update_pass("A", {"fromat": "rgba16f"})
 
 

@@ -69,7 +69,7 @@ def test_light_field_grid_and_quilt(gpu, tmp_path, capsys):
     (["--views", "3", "--grid", "2x2"], ["--grid 2x2", "--views is 3"]),
     (["--set", "Shadows=2"], ["--set Shadows=2", "PASS.KEY=VALUE"]),
     (["--set", "Shadow.light_samples=2"], ["--set Shadow.light_samples=2", "did you mean 'Shadows'"]),
-    (["--set", "Shadows.light_sample=2"], ["update_pass('Shadows')", "unknown property 'light_sample'", "'light_samples'"]),
+    (["--set", "Shadows.light_sample=2"], ["update_pass('Shadows'): pass Shadows: unknown property 'light_sample'", "'light_samples'"]),
     (["--set", "ToneMap.operator=sepia"], ["--set ToneMap.operator=sepia", "use 'aces', 'reinhard' or 'linear'"]),
 ])
 def test_bad_options_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, argv, words):

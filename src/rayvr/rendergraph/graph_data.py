@@ -90,11 +90,12 @@ class GraphData:
         """Replace pass `name` by a new instance of its class with `props` over its current
         properties; edges and marked outputs stay. Returns the new pass."""
         old = self._require_pass(name, "update_pass")
+        new = type(old)(old.get_properties())
+        new.name = name   # before the new values, so that their errors name this pass
         try:
-            new = type(old)({**old.get_properties(), **(props or {})})
+            new.set_properties(props or {})
         except OptionError as exc:
             raise OptionError(f"update_pass('{name}'): {exc}") from exc
-        new.name = name
         self._passes[name] = new
         return new
 
