@@ -24,6 +24,7 @@ where the times mean little).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -158,19 +159,32 @@ def at_equal_ms(rows: list[dict], ms: float, key: str) -> tuple[float, str]:
     return float("nan"), "?"
 
 
-def run(args) -> dict:
+@dataclass
+class Plan:
+    """One run's settings, from its options: what each part measures and how."""
+    size: tuple
+    samples: list          # RTShadows' light_samples rows (the scene part takes the first)
+    restir_sets: list      # ReSTIRDI property sets, a row each
+    ppd: float             # FLIP's pixels per degree
+    frames: int
+    warmup: int
+    error_frames: int
+    ref_units: int         # the progress bar's units: rendered pixel-frames
+    row_units: int
+
+
+def plan(args) -> Plan:
+    """The run's Plan; an OptionError naming the option for a bad one."""
     import json
 
     from rayvr.cli.options import parse_size
     from rayvr.errors import OptionError
-    from rayvr.study.progress import StudyProgress
     from rayvr.xr.presets import get_preset
 
     parts = [p.strip() for p in args.parts.split(",") if p.strip()]
     if not parts or set(parts) - {"many", "scene"}:
         raise OptionError(f"--parts {args.parts}: give many, scene or both (comma-separated)")
     size = parse_size(_figure(args, "size"))
-    samples = [int(s) for s in str(args.light_samples).split(",")]
     try:
         restir = json.loads(args.restir)
     except json.JSONDecodeError as exc:
@@ -180,64 +194,69 @@ def run(args) -> dict:
     if not restir_sets or not all(isinstance(r, dict) for r in restir_sets):
         raise OptionError("--restir: give a JSON object of ReSTIRDI properties or a non-empty list of them")
     frames, warmup, error_frames = (_figure(args, k) for k in ("frames", "warmup", "error_frames"))
-    ppd = get_preset(args.preset).pixels_per_degree
-    rows, notes = [], []
-    shape = f"{args.views}x{size[0]}x{size[1]}"
-    method = "?"
-    # a progress bar whose ETA learns seconds per rendered pixel-frame from the steps done (a frame's
+    # the progress bar's ETA learns seconds per rendered pixel-frame from the steps done (a frame's
     # readback and judging cost about what its light samples do)
     pixels = args.views * size[0] * size[1]
-    ref_units = pixels * _figure(args, "reference_frames")
-    row_units = pixels * (warmup + error_frames + frames)
+    return Plan(size, [int(s) for s in str(args.light_samples).split(",")], restir_sets,
+                get_preset(args.preset).pixels_per_degree, frames, warmup, error_frames,
+                pixels * _figure(args, "reference_frames"), pixels * (warmup + error_frames + frames))
+
+
+def run(args) -> dict:
+    from rayvr.study.progress import StudyProgress
+
+    parts = [p.strip() for p in args.parts.split(",") if p.strip()]
+    settings = plan(args)
+    rows, notes, method = [], [], "?"
     progress = StudyProgress(desc="restir")
     for part in parts:
-        rows_planned = (len(samples) if part == "many" else 1) + len(restir_sets)
-        progress.plan("render", ref_units + rows_planned * row_units)
+        measured = (len(settings.samples) if part == "many" else 1) + len(settings.restir_sets)
+        progress.plan("render", settings.ref_units + measured * settings.row_units)
     with progress:
         for part in parts:
-            method = _part(args, part, size, samples, restir_sets, ppd, shape, rows, notes, progress,
-                           (ref_units, row_units)) or method
-    notes.append(f"timing: {method}; errors: {error_frames} single frames after {warmup}, FLIP at {ppd:.1f} ppd "
-                 f"({args.preset})")
+            method = _part(args, part, settings, progress, rows, notes) or method
+    notes.append(f"timing: {method}; errors: {settings.error_frames} single frames after {settings.warmup}, FLIP at "
+                 f"{settings.ppd:.1f} ppd ({args.preset})")
     return {"columns": COLUMNS, "rows": rows, "notes": notes}
 
 
-def _part(args, part, size, samples, restir_sets, ppd, shape, rows, notes, progress, units) -> str:
+def _part(args, part: str, settings: Plan, progress, rows: list, notes: list) -> str | None:
     """One part's rows (many or scene) into `rows` and `notes`; its timing method."""
+    import rayvr as rv
     from rayvr.cli.options import load_scene_arg
     from rayvr.study.display import Display
     from rayvr.xr.cameras import default_views
 
-    frames, warmup, error_frames = (_figure(args, k) for k in ("frames", "warmup", "error_frames"))
-    ref_units, row_units = units
-    method = None
+    s = settings
     scene = load_scene_arg(args.scene)
     if part == "many":
         add_many_lights(scene, _figure(args, "lights"), _figure(args, "emitters"), args.seed)
         label = f"{scene.name} + {_figure(args, 'lights')} lights, {_figure(args, 'emitters')} emitters"
     else:
-        import rayvr as rv
-
         for m in scene.materials:
             m.effect = rv.Effect.SHADOWS
         label = scene.name
-    views = default_views(scene, args.views, size)
-    with progress.step("render", ref_units, f"{part}: reference"):
+    shape = f"{args.views}x{s.size[0]}x{s.size[1]}"
+    views = default_views(scene, args.views, s.size)
+    with progress.step("render", s.ref_units, f"{part}: reference"):
         ref, ref_noise = reference(scene, views, _figure(args, "reference_frames"),
                                    _figure(args, "reference_samples"))
     notes.append(f"{part}: reference relMSE (its halves' / 4) {ref_noise:.3g}")
     display = Display().fixed(ref)
-    plain = []
-    for n in samples if part == "many" else samples[:1]:
-        with progress.step("render", row_units, f"{part}: RTShadows x{n}"):
-            m = measure(scene, views, _graph(None, n), ref, display, ppd, frames, warmup, error_frames)
+
+    def measured(graph, label_: str) -> dict:
+        with progress.step("render", s.row_units, f"{part}: {label_}"):
+            return measure(scene, views, graph, ref, display, s.ppd, s.frames, s.warmup, s.error_frames)
+
+    plain, method = [], None
+    for n in s.samples if part == "many" else s.samples[:1]:
+        m = measured(_graph(None, n), f"RTShadows x{n}")
         plain.append(m)
         method = m["method"]
         rows.append([part, label, f"RTShadows light_samples={n}", shape, round(m["shadows_ms"], 3),
                      round(m["frame_ms"], 3), m["relmse_trim"], m["relmse"], m["flip"], ""])
-    for i, props in enumerate(restir_sets):
-        with progress.step("render", row_units, f"{part}: ReSTIR set {i + 1}/{len(restir_sets)}"):
-            m = measure(scene, views, _graph(props), ref, display, ppd, frames, warmup, error_frames)
+    for i, props in enumerate(s.restir_sets):
+        m = measured(_graph(props), f"ReSTIR set {i + 1}/{len(s.restir_sets)}")
         rows.extend(_restir_rows(part, label, shape, props, plain, ref_noise, notes, m))
     return method
 
