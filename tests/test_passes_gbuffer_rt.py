@@ -209,7 +209,7 @@ def test_hybrid_gbuffer_option_renders_the_same_image(gpu):
 
 
 def test_unknown_gbuffer_mode_is_refused(gpu):
-    with pytest.raises(rv.OptionError, match="'mode'.*auto, raster or rt"):
+    with pytest.raises(rv.OptionError, match="'mode' is 'fast'; use 'auto', 'raster' or 'rt'"):
         rv.graphs.hybrid(preset="raw", gbuffer="fast")
 
 

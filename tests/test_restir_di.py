@@ -496,7 +496,7 @@ def test_a_lighting_edit_shows_at_once(gpu):
 def test_properties_round_trip_and_bad_values_name_pass_and_key():
     p = ReSTIRDI(candidates=4, target="cosine", spatial_samples=2, spatial_radius=12, share_views=False)
     # the viewer's property panel offers the pass's choices (its own and the ray passes')
-    assert tuple(ReSTIRDI.CHOICES["target"]) == ("bsdf", "cosine") and "dispatch_mode" in ReSTIRDI.CHOICES
+    assert tuple(ReSTIRDI.CHOICES["target"]) == ("bsdf", "cosine", "auto") and "dispatch_mode" in ReSTIRDI.CHOICES
     props = p.get_properties()
     assert props["spatial_radius"] == 12.0 and isinstance(props["spatial_radius"], float)
     assert ReSTIRDI(json.loads(json.dumps(props))).get_properties() == props
@@ -511,7 +511,7 @@ def test_properties_round_trip_and_bad_values_name_pass_and_key():
            ("spatial_samples", 17, r"'spatial_samples' must be an integer from 0 to 16"),
            ("max_history_m", 0, r"'max_history_m' must be an integer from 1"),
            ("spatial_radius", 0.5, r"'spatial_radius' must be from 1 to 256 pixels"),
-           ("target", "brdf", r"'target' is 'brdf'; use 'bsdf' \(p_hat = f cos Le G\) or 'cosine'"),
+           ("target", "brdf", r"'target' is 'brdf'; use 'bsdf' \(p_hat = f cos Le G\), 'cosine' \(.*\) or 'auto'"),
            ("visibility_reuse", 1, r"'visibility_reuse' must be true or false"),
            ("occluded_weight", 0.0, r"'occluded_weight' must be a number in \(0, 1\]"),
            ("occluded_weight", 1.5, r"'occluded_weight' must be a number in \(0, 1\]"),
