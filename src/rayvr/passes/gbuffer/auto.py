@@ -42,8 +42,7 @@ class GBufferAuto(RenderPass):
         value = super().validate_property(key, value)
         if key == reflection_cutoff.PROPERTY:
             return reflection_cutoff.validate(self.name, value)
-        value = check_shape(self.name, key, value)
-        return value
+        return check_shape(self.name, key, value)
 
     def reflect(self, cd):
         chosen, _ = choose_gbuffer(self.mode, cd.caps, self.cull_back_faces)

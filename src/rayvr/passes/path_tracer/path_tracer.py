@@ -38,7 +38,9 @@ from ..gbuffer import channels
 from ..trace_decision.fill import DecisionFill
 
 MODES = ("full", "gbuffer")
-KERNELS = ("auto", "wavefront", "megakernel")
+KERNELS = {"auto": "the wavefront on GPUs, the megakernel on software renderers",
+           "wavefront": "each vertex's rays in a dispatch of their own",
+           "megakernel": "a path's rays in one invocation"}
 SAMPLERS = {"sobol": 1, "pcg": 0}   # glsl/sampling.glsl RAYVR_SAMPLER
 PIXEL_LIST_GROUP = 64   # glsl/pixel_list.glsl: the local size of a dispatch over a pixel list
 QUEUE_ARGS_BYTES = 16   # pt_wave.glsl PtQueue: a queue's indirect dispatch (and count)
@@ -89,9 +91,7 @@ class PathTracer(RenderPass):
                   "persistent": False, "sort_directions": False}
     USES_SCENE = True
     CHOICES = {"mode": MODES, "sampler": {"sobol": "Owen-scrambled Sobol, the default", "pcg": ""},
-               "kernel": {"auto": "the wavefront on GPUs, the megakernel on software renderers",
-                          "wavefront": "each vertex's rays in a dispatch of their own",
-                          "megakernel": "a path's rays in one invocation"}}
+               "kernel": KERNELS}
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
