@@ -162,6 +162,7 @@ def at_equal_ms(rows: list[dict], ms: float, key: str) -> tuple[float, str]:
 @dataclass
 class Plan:
     """One run's settings, from its options: what each part measures and how."""
+    parts: list            # "many" and/or "scene"
     size: tuple
     samples: list          # RTShadows' light_samples rows (the scene part takes the first)
     restir_sets: list      # ReSTIRDI property sets, a row each
@@ -197,7 +198,7 @@ def plan(args) -> Plan:
     # the progress bar's ETA learns seconds per rendered pixel-frame from the steps done (a frame's
     # readback and judging cost about what its light samples do)
     pixels = args.views * size[0] * size[1]
-    return Plan(size, [int(s) for s in str(args.light_samples).split(",")], restir_sets,
+    return Plan(parts, size, [int(s) for s in str(args.light_samples).split(",")], restir_sets,
                 get_preset(args.preset).pixels_per_degree, frames, warmup, error_frames,
                 pixels * _figure(args, "reference_frames"), pixels * (warmup + error_frames + frames))
 
@@ -205,15 +206,14 @@ def plan(args) -> Plan:
 def run(args) -> dict:
     from rayvr.study.progress import StudyProgress
 
-    parts = [p.strip() for p in args.parts.split(",") if p.strip()]
     settings = plan(args)
     rows, notes, method = [], [], "?"
     progress = StudyProgress(desc="restir")
-    for part in parts:
+    for part in settings.parts:
         measured = (len(settings.samples) if part == "many" else 1) + len(settings.restir_sets)
         progress.plan("render", settings.ref_units + measured * settings.row_units)
     with progress:
-        for part in parts:
+        for part in settings.parts:
             method = _part(args, part, settings, progress, rows, notes) or method
     notes.append(f"timing: {method}; errors: {settings.error_frames} single frames after {settings.warmup}, FLIP at "
                  f"{settings.ppd:.1f} ppd ({args.preset})")
