@@ -5,6 +5,7 @@ import pytest
 
 from rayvr.errors import GraphError, OptionError
 from rayvr.rendergraph import Reflection, RenderGraph, RenderPass
+from rayvr.rendergraph.render_pass import Choice
 
 
 class Src(RenderPass):
@@ -184,15 +185,16 @@ def test_camel_case_aliases_are_the_same_methods():
 
 
 class Picky(RenderPass):
-    PROPERTIES = {"mode": "fast", "filter": "box"}
-    CHOICES = {"mode": {"fast": "fewer samples", "exact": ""}, "filter": ("box", "tent")}
+    PROPERTIES = {"mode": "fast", "filter": "box", "kernel": "wide"}
+    CHOICES = {"mode": {"fast": "fewer samples", "exact": ""}, "filter": ("box", "tent"),
+               "kernel": {"narrow": Choice("3 taps", 7), "wide": Choice("", 2)}}
 
     def reflect(self, cd):
         return Reflection()
 
 
 def test_a_property_with_choices_takes_only_them_and_the_error_lists_them():
-    assert Picky(mode="exact", filter="tent").get_properties() == {"mode": "exact", "filter": "tent"}
+    assert Picky(mode="exact", filter="tent").get_properties() == {"mode": "exact", "filter": "tent", "kernel": "wide"}
     with pytest.raises(OptionError) as err:
         Picky(mode="slow")
     assert str(err.value) == "pass Picky: property 'mode' is 'slow'; use 'fast' (fewer samples) or 'exact'"
@@ -202,3 +204,9 @@ def test_a_property_with_choices_takes_only_them_and_the_error_lists_them():
     with pytest.raises(OptionError):   # set_properties checks too, and leaves the old value
         p.set_properties({"filter": "gauss"})
     assert p.filter == "box"
+    # a Choice carries the number the shaders see: the message shows its meaning, choice_define its number
+    with pytest.raises(OptionError, match=r"^pass Picky: property 'kernel' is 'flat'; use 'narrow' \(3 taps\) or 'wide'$"):
+        p.set_properties({"kernel": "flat"})
+    assert p.choice_define("kernel") == 2
+    p.set_properties({"kernel": "narrow"})
+    assert p.choice_define("kernel") == 7

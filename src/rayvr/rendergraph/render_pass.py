@@ -18,10 +18,22 @@ from __future__ import annotations
 import copy
 import dataclasses
 import enum
-from typing import Any
+from typing import Any, NamedTuple
 
 from ..errors import OptionError, did_you_mean
 from .formats import get_format
+
+
+class Choice(NamedTuple):
+    """One name of a choice property (RenderPass.CHOICES) that its shaders see as a number."""
+
+    meaning: str   # shown in refusals and the viewer ("" for none)
+    define: int    # the value of the shader define that the pass sets from it
+
+
+def choice_meaning(entry) -> str:
+    """What a CHOICES entry's value says about its name: a Choice's meaning, or the text itself."""
+    return entry.meaning if isinstance(entry, Choice) else str(entry)
 
 
 class PinKind(str, enum.Enum):
@@ -260,7 +272,8 @@ class RenderPass:
     # The pass traces rays for the views' pixels: its programs count them per view
     # (rendergraph.ray_counters; RQ_COUNT_RAYS and glsl/ray_counters.glsl), the profile's rays_per_view.
     COUNTS_RAYS = False
-    # Properties that take one of a few names: key -> the names, or {name: what it means}.
+    # Properties that take one of a few names: key -> the names, or {name: what it means}, or
+    # {name: Choice(meaning, define)} where the shaders see the name as a number (choice_define).
     # validate_property refuses any other value (one message for every pass), and the viewer's
     # property panel offers them.
     CHOICES: dict = {}
@@ -300,9 +313,14 @@ class RenderPass:
         choices = self.CHOICES[key]
         if isinstance(value, str) and value in choices:
             return
-        named = [f"'{c}'" + (f" ({choices[c]})" if isinstance(choices, dict) and choices[c] else "") for c in choices]
+        meanings = {c: choice_meaning(choices[c]) if isinstance(choices, dict) else "" for c in choices}
+        named = [f"'{c}'" + (f" ({meanings[c]})" if meanings[c] else "") for c in choices]
         listed = named[0] if len(named) == 1 else ", ".join(named[:-1]) + " or " + named[-1]
         raise OptionError(f"pass {self.name}: property '{key}' is {value!r}; use {listed}")
+
+    def choice_define(self, key: str) -> int:
+        """The shader define value of choice property `key`'s current name (its Choice)."""
+        return self.CHOICES[key][self._props[key]].define
 
     def get_properties(self) -> dict:
         """Properties as plain JSON-able values; `type(p)(p.get_properties())` rebuilds the pass."""

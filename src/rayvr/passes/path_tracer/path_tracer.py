@@ -30,7 +30,7 @@ from ...gpu.records import PATH_WAVE_FIELD_BYTES, path_wave_fields
 from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
-from ...rendergraph.render_pass import Access, Reflection, RenderPass
+from ...rendergraph.render_pass import Access, Choice, Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
 from ..dispatch import COMPUTE_GROUP, VIEW_GROUP, check_shape, groups_2d, ray_group, ray_group_defines
 from ..effects import effect_defines, scene_defines, unused_effect_reason
@@ -41,7 +41,6 @@ MODES = ("full", "gbuffer")
 KERNELS = {"auto": "the wavefront on GPUs, the megakernel on software renderers",
            "wavefront": "each vertex's rays in a dispatch of their own",
            "megakernel": "a path's rays in one invocation"}
-SAMPLERS = {"sobol": 1, "pcg": 0}   # glsl/sampling.glsl RAYVR_SAMPLER
 PIXEL_LIST_GROUP = 64   # glsl/pixel_list.glsl: the local size of a dispatch over a pixel list
 QUEUE_ARGS_BYTES = 16   # pt_wave.glsl PtQueue: a queue's indirect dispatch (and count)
 QUEUE_HEADER_BYTES = 3 * QUEUE_ARGS_BYTES + 3 * 8 * 4   # PtQueue ahead of its slots: 3 uvec4, 3 x PTW_BINS counters
@@ -90,7 +89,7 @@ class PathTracer(RenderPass):
                   "tile": list(COMPUTE_GROUP), "view_group": VIEW_GROUP, "compact": False,
                   "persistent": False, "sort_directions": False}
     USES_SCENE = True
-    CHOICES = {"mode": MODES, "sampler": {"sobol": "Owen-scrambled Sobol, the default", "pcg": ""},
+    CHOICES = {"mode": MODES, "sampler": {"sobol": Choice("Owen-scrambled Sobol, the default", 1), "pcg": Choice("", 0)},   # RAYVR_SAMPLER
                "kernel": KERNELS}
 
     def validate_property(self, key, value):
@@ -164,7 +163,7 @@ class PathTracer(RenderPass):
         self._fill.compile(ctx, cd)
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": RNG_SALTS["path_tracer"],
                          "PT_FROM_GBUFFER": int(self.mode == "gbuffer"), "PIXEL_LIST_INPUT": int(listed),
-                         "RAYVR_SAMPLER": SAMPLERS[self.sampler], "PT_LOBES": int(bool(self.lobes)),
+                         "RAYVR_SAMPLER": self.choice_define("sampler"), "PT_LOBES": int(bool(self.lobes)),
                          **self._fill.defines()}
         software = getattr(getattr(ctx, "caps", None), "is_software", False)
         self._wave = self.kernel == "wavefront" or (self.kernel == "auto" and not software)

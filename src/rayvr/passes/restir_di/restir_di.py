@@ -53,7 +53,7 @@ from ...gpu.program_resources import program_resources
 from ...gpu.textures import zero_texture
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
-from ...rendergraph.render_pass import Access
+from ...rendergraph.render_pass import Access, Choice
 from ..effects import unused_effect_reason
 from ..gbuffer import channels
 from ..gbuffer.lighting_pass import GBufferLightingPass, ray_properties
@@ -62,7 +62,6 @@ from ..history import HistoryOwner, LightingHistory
 MAX_CANDIDATES = 64
 MAX_SPATIAL_SAMPLES = 16
 MAX_SPATIAL_RADIUS = 256.0
-TARGET_DEFINES = {"cosine": 0, "bsdf": 1, "auto": 2}   # glsl/restir_di.glsl RESTIR_TARGET
 RESERVOIR_FORMAT = "rgba32ui"   # gpu/records.py RESERVOIR, RESERVOIR_SURFACE: one texel each
 
 
@@ -94,8 +93,10 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
     HISTORY = ("history0", "history1")
     SURFACE = ("surface0", "surface1")
     HINTS = "hints"
-    TARGETS = {"bsdf": "p_hat = f cos Le G", "cosine": "Le G cos, no BSDF: cheaper, noisier on glossy surfaces",
-               "auto": "the BSDF's where the specular lobes carry over a quarter of the light, else the cosine"}
+    TARGETS = {"bsdf": Choice("p_hat = f cos Le G", 1),   # glsl/restir_di.glsl RESTIR_TARGET
+               "cosine": Choice("Le G cos, no BSDF: cheaper, noisier on glossy surfaces", 0),
+               "auto": Choice("the BSDF's where the specular lobes carry over a quarter of the light, else the "
+                              "cosine", 2)}
     CHOICES = {**GBufferLightingPass.CHOICES, "target": TARGETS}
     PROPERTIES = {"candidates": 8, "target": "bsdf", "visibility_reuse": True, "occluded_weight": 1.0,
                   "temporal_reuse": True, "max_history_m": 20,
@@ -167,7 +168,7 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
         return r
 
     def shader_defines(self) -> dict:
-        return {"RESTIR_CANDIDATES": int(self.candidates), "RESTIR_TARGET": TARGET_DEFINES[self.target],
+        return {"RESTIR_CANDIDATES": int(self.candidates), "RESTIR_TARGET": self.choice_define("target"),
                 "RESTIR_VISIBILITY_REUSE": bool(self.visibility_reuse),
                 "RESTIR_TEMPORAL": bool(self.temporal_reuse), "RESTIR_FUSED_TEMPORAL": self.fuses_temporal(),
                 "RESTIR_HINTS": self.keeps_hints(), "RESTIR_OCCLUDED_WEIGHT": float(self.occluded_weight),
