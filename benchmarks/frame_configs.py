@@ -11,42 +11,18 @@ from pathlib import Path
 
 from rayvr.study.timing import timed_frames
 
+from ._restir_sets import RESTIR_SETS
 from ._timing import warm_up
 
 DEFAULT_SCENE = str(Path(__file__).resolve().parents[2] / "shared" / "scenes" / "tauray" / "test.glb")
-# row name -> rv.graphs.hybrid keywords
+# row name -> rv.graphs.hybrid keywords; "raw + restir NAME" for each of _restir_sets' sets
 CONFIGS = {
     "raw": {"preset": "raw"},
     "raw + restir": {"preset": "raw", "direct": "restir"},
     "clean": {},
     "clean + restir": {"direct": "restir"},
-    # ReSTIR's stages apart: fewer candidates, no visibility reuse, no spatial or temporal reuse
-    "raw + restir 2 candidates": {"preset": "raw", "direct": "restir", "restir": {"candidates": 2}},
-    "raw + restir no visibility reuse": {"preset": "raw", "direct": "restir", "restir": {"visibility_reuse": False}},
-    "raw + restir no spatial": {"preset": "raw", "direct": "restir", "restir": {"spatial_samples": 0}},
-    "raw + restir candidates only": {"preset": "raw", "direct": "restir",
-                                     "restir": {"spatial_samples": 0, "temporal_reuse": False, "share_views": False}},
-    # the resampling target without the BSDF (p_hat = Le G cos), alone and with the cheaper settings
-    "raw + restir cosine target": {"preset": "raw", "direct": "restir", "restir": {"target": "cosine"}},
-    "raw + restir lean": {"preset": "raw", "direct": "restir",
-                          "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False}},
-    # lean's stages apart: candidates alone, + temporal reuse (fused), + spatial reuse
-    "raw + restir lean candidates": {"preset": "raw", "direct": "restir",
-                                     "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False,
-                                                "temporal_reuse": False, "spatial_samples": 0, "share_views": False}},
-    "raw + restir lean temporal": {"preset": "raw", "direct": "restir",
-                                   "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False,
-                                              "spatial_samples": 0, "share_views": False}},
-    "raw + restir lean spatial": {"preset": "raw", "direct": "restir",
-                                  "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False,
-                                             "temporal_reuse": False}},
-    # visibility hints instead of the candidates' visibility ray: the cheapest set, and lean with them
-    "raw + restir hints": {"preset": "raw", "direct": "restir",
-                           "restir": {"target": "cosine", "candidates": 2, "visibility_reuse": False,
-                                      "spatial_samples": 0, "share_views": False, "occluded_weight": 0.05}},
-    "raw + restir lean hints": {"preset": "raw", "direct": "restir",
-                                "restir": {"target": "cosine", "candidates": 4, "visibility_reuse": False,
-                                           "occluded_weight": 0.05}},
+    **{f"raw + restir {name}": {"preset": "raw", "direct": "restir", "restir": props}
+       for name, props in RESTIR_SETS.items() if props},
     "clean + reuse": {"reuse": "views"},
     "clean + foveation": {"foveation": "fixed"},
 }

@@ -29,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._restir_sets import RESTIR_SETS
+
 DEFAULT_SCENE = str(Path(__file__).resolve().parents[2] / "shared" / "scenes" / "tauray" / "test.glb")
 TARGET_RELMSE_RATIO = 0.25   # many: ReSTIR / RTShadows relMSE at equal Shadows ms
 TARGET_FLIP_RATIO = 0.5      # scene: ReSTIR / plain SHADOWS FLIP
@@ -47,8 +49,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--views", type=int, default=2)
     parser.add_argument("--light-samples", default="1,2,4,8,16",
                         help="RTShadows' light_samples rows, comma-separated (default 1,2,4,8,16)")
-    parser.add_argument("--restir", default="{}", help="ReSTIRDI properties as a JSON object, or a list of them for "
-                                                       "a row each (default: the pass's)")
+    parser.add_argument("--restir", default="defaults",
+                        help="ReSTIRDI property sets, a row each: names from benchmarks/_restir_sets.py "
+                             f"(comma-separated: {', '.join(RESTIR_SETS)}), or a JSON object of properties or a "
+                             "list of them (default: the pass's own)")
     parser.add_argument("--preset", default="index", help="headset whose pixels per degree FLIP uses")
     parser.add_argument("--seed", type=int, default=1, help="the added lights' random seed")
     for name, (full, quick) in FIGURES.items():
@@ -165,7 +169,7 @@ class Plan:
     parts: list            # "many" and/or "scene"
     size: tuple
     samples: list          # RTShadows' light_samples rows (the scene part takes the first)
-    restir_sets: list      # ReSTIRDI property sets, a row each
+    restir_sets: list      # (name, ReSTIRDI properties), a row each
     ppd: float             # FLIP's pixels per degree
     frames: int
     warmup: int
@@ -176,8 +180,6 @@ class Plan:
 
 def plan(args) -> Plan:
     """The run's Plan; an OptionError naming the option for a bad one."""
-    import json
-
     from rayvr.cli.options import parse_size
     from rayvr.errors import OptionError
     from rayvr.xr.presets import get_preset
@@ -186,14 +188,7 @@ def plan(args) -> Plan:
     if not parts or set(parts) - {"many", "scene"}:
         raise OptionError(f"--parts {args.parts}: give many, scene or both (comma-separated)")
     size = parse_size(_figure(args, "size"))
-    try:
-        restir = json.loads(args.restir)
-    except json.JSONDecodeError as exc:
-        raise OptionError(f"--restir: not JSON ({exc.msg}); give an object such as '{{\"candidates\": 4}}' "
-                          f"or a list of them") from None
-    restir_sets = restir if isinstance(restir, list) else [restir]
-    if not restir_sets or not all(isinstance(r, dict) for r in restir_sets):
-        raise OptionError("--restir: give a JSON object of ReSTIRDI properties or a non-empty list of them")
+    restir_sets = _restir_sets(args.restir)
     frames, warmup, error_frames = (_figure(args, k) for k in ("frames", "warmup", "error_frames"))
     # the progress bar's ETA learns seconds per rendered pixel-frame from the steps done (a frame's
     # readback and judging cost about what its light samples do)
@@ -201,6 +196,32 @@ def plan(args) -> Plan:
     return Plan(parts, size, [int(s) for s in str(args.light_samples).split(",")], restir_sets,
                 get_preset(args.preset).pixels_per_degree, frames, warmup, error_frames,
                 pixels * _figure(args, "reference_frames"), pixels * (warmup + error_frames + frames))
+
+
+def _restir_sets(text: str) -> list[tuple[str, dict]]:
+    """--restir's (name, properties) rows: set names, or JSON (named by its text); OptionError if bad."""
+    import json
+
+    from rayvr.errors import OptionError, did_you_mean
+
+    if not text.lstrip().startswith(("{", "[")):
+        names = [n.strip() for n in text.split(",") if n.strip()]
+        for n in names:
+            if n not in RESTIR_SETS:
+                raise OptionError(f"--restir: no set {n!r}{did_you_mean(n, RESTIR_SETS)}; the sets: "
+                                  f"{', '.join(RESTIR_SETS)} (or give JSON properties)")
+        if not names:
+            raise OptionError(f"--restir: give set names ({', '.join(RESTIR_SETS)}) or JSON properties")
+        return [(n, RESTIR_SETS[n]) for n in names]
+    try:
+        restir = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise OptionError(f"--restir: not JSON ({exc.msg}); give an object such as '{{\"candidates\": 4}}' "
+                          f"or a list of them, or set names") from None
+    sets = restir if isinstance(restir, list) else [restir]
+    if not sets or not all(isinstance(r, dict) for r in sets):
+        raise OptionError("--restir: give a JSON object of ReSTIRDI properties or a non-empty list of them")
+    return [(json.dumps(r) if r else "defaults", r) for r in sets]
 
 
 def run(args) -> dict:
@@ -255,18 +276,16 @@ def _part(args, part: str, settings: Plan, progress, rows: list, notes: list) ->
         method = m["method"]
         rows.append([part, label, f"RTShadows light_samples={n}", shape, round(m["shadows_ms"], 3),
                      round(m["frame_ms"], 3), m["relmse_trim"], m["relmse"], m["flip"], ""])
-    for i, props in enumerate(s.restir_sets):
-        m = measured(_graph(props), f"ReSTIR set {i + 1}/{len(s.restir_sets)}")
-        rows.extend(_restir_rows(part, label, shape, props, plain, ref_noise, notes, m))
+    for set_name, props in s.restir_sets:
+        m = measured(_graph(props), f"ReSTIR {set_name}")
+        rows.extend(_restir_rows(part, label, shape, set_name, plain, ref_noise, notes, m))
     return method
 
 
-def _restir_rows(part, label, shape, restir: dict, plain: list[dict], ref_noise: float, notes: list, m: dict) -> list:
+def _restir_rows(part, label, shape, set_name: str, plain: list[dict], ref_noise: float, notes: list, m: dict) -> list:
     """The table rows of one ReSTIRDI property set's measurement `m` against the RTShadows rows
     `plain` of the same part, its target's ratio row and note."""
-    import json
-
-    name = f"ReSTIRDI {json.dumps(restir) if restir else '(defaults)'}"
+    name = f"ReSTIRDI {set_name}"
     if m["nonfinite"]:
         notes.append(f"{part}: {name} set {m['nonfinite']} non-finite samples to 0")
     rows = [[part, label, name, shape, round(m["shadows_ms"], 3), round(m["frame_ms"], 3), m["relmse_trim"],

@@ -74,16 +74,22 @@ def test_rays_diffuse_layouts_trace_the_same_rays(tmp_path, gpu):
 
 def test_restir_quick_rows_and_its_bad_sets(tmp_path, gpu, capsys):
     """`benchmarks restir` on the Cornell box: RTShadows' row, a row and a ratio row per ReSTIR
-    set, finite errors, its progress on stderr; a set that is not JSON is one line and exit 2."""
+    set (named, or JSON properties), finite errors, its progress on stderr; a set that is not JSON or
+    not a name is one line and exit 2."""
     args = ["restir", "--quick", "--scene", "cornell_box", "--parts", "scene", "--out", str(tmp_path)]
-    assert harness.main([*args, "--restir", '[{"candidates": 2}, {"target": "auto"}]']) == 0
+    assert harness.main([*args, "--restir", "2 candidates, auto hints"]) == 0
     doc = json.loads((tmp_path / "restir.json").read_text())
     configs = [dict(zip(doc["columns"], r))["config"] for r in doc["rows"]]
-    assert configs == ["RTShadows light_samples=1", 'ReSTIRDI {"candidates": 2}', "ReSTIR / plain SHADOWS: FLIP, frame ms",
-                       'ReSTIRDI {"target": "auto"}', "ReSTIR / plain SHADOWS: FLIP, frame ms"]
+    assert configs == ["RTShadows light_samples=1", "ReSTIRDI 2 candidates", "ReSTIR / plain SHADOWS: FLIP, frame ms",
+                       "ReSTIRDI auto hints", "ReSTIR / plain SHADOWS: FLIP, frame ms"]
     for row in (dict(zip(doc["columns"], r)) for r in doc["rows"][:2]):
         assert 0 < row["FLIP"] < 1 and 0 <= row["relMSE"] < 10
     assert "restir:" in capsys.readouterr().err   # the progress bar
-    assert harness.main([*args, "--restir", "{candidates: 2}"]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("python -m benchmarks restir: error: --restir: not JSON")
+    assert harness.main([*args, "--restir", '{"target": "cosine"}']) == 0
+    doc = json.loads((tmp_path / "restir.json").read_text())
+    assert [dict(zip(doc["columns"], r))["config"] for r in doc["rows"]][1] == 'ReSTIRDI {"target": "cosine"}'
+    capsys.readouterr()
+    for bad, says in (("{candidates: 2}", "--restir: not JSON"), ("lean, slim", "--restir: no set 'slim'")):
+        assert harness.main([*args, "--restir", bad]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"python -m benchmarks restir: error: {says}"), err
