@@ -384,7 +384,8 @@ bool rq_alpha_passes(uint m, uint tri, uint instance, float t, vec2 b) {
 // Returns whether light still passes.
 bool rq_blend_dims(uint m, uint tri, uint instance, float t, vec2 b) {
     rq_transmittance *= 1.0 - clamp(material_alpha(m, triangle_uv(tri, b)), 0.0, 1.0);
-    if (rq_transmittance < RQ_BLEND_ROULETTE) {
+    // RQ_BLEND_ROULETTE is a literal: at 0 the compiler drops the branch (and its registers)
+    if (RQ_BLEND_ROULETTE > 0.0 && rq_transmittance < RQ_BLEND_ROULETTE) {
         uint key = alpha_blend_key(instance, m, t, rq_blend_ray) ^ RQ_ROULETTE_SALT;   // not the coin's draw
         if (alpha_blend_u(rq_blend_seed, rq_blend_index, key) * RQ_BLEND_ROULETTE >= rq_transmittance) return false;
         rq_transmittance = RQ_BLEND_ROULETTE;
