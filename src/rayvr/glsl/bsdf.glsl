@@ -57,9 +57,8 @@ BsdfParams bsdf_params(MaterialParams m) {
     b.glass_comp_v = 1.0;
     b.layer_v = 0.0;
     b.layer_avg = 0.0;
-#define BSDF_STEP(i) b.lobe_p[i] = i == BSDF_LOBE_FALLBACK ? 1.0 : 0.0;
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
+    b.lobe_p = BsdfLobeFloats(0.0);
+    b.lobe_p[BSDF_LOBE_FALLBACK] = 1.0;
     return b;
 }
 
@@ -93,9 +92,7 @@ void bsdf_set_view(inout BsdfParams b, vec3 n, vec3 v) {
     b.ess_v = bsdf_ess(b.ab_v);
     b.layer_v = bsdf_dielectric_layer(b, b.ab_v);
     b.layer_avg = b.f90 > 0.0 ? bsdf_layer_average(max3(b.f0), b.f90, bsdf_table_averages(b.roughness)) : 0.0;
-#define BSDF_STEP(i) bsdf_lobe_set_view(i, b);
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
+    bsdf_glass_set_view(b);
     bsdf_lobe_probabilities_at(b, b.nv, b.ab_v, b.lobe_p);
 }
 
@@ -106,13 +103,10 @@ void bsdf_lobe_probabilities(BsdfParams b, uint lobes, out BsdfLobeFloats p) {
         p = b.lobe_p;
         return;
     }
-    float sum = 0.0;
-#define BSDF_STEP(i) if (bsdf_lobe_in(lobes, i)) sum += b.lobe_p[i];
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
-#define BSDF_STEP(i) p[i] = sum > 0.0 && bsdf_lobe_in(lobes, i) ? b.lobe_p[i] / sum : 0.0;
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
+    p = b.lobe_p * vec3(bsdf_lobe_in(lobes, BSDF_LOBE_SPECULAR), bsdf_lobe_in(lobes, BSDF_LOBE_DIFFUSE),
+                        bsdf_lobe_in(lobes, BSDF_LOBE_GLASS));
+    float sum = p.x + p.y + p.z;
+    p = sum > 0.0 ? p / sum : vec3(0.0);
 }
 
 // ---- evaluation ---------------------------------------------------------------------------------
@@ -126,26 +120,17 @@ vec3 bsdf_eval_ggx(BsdfParams b, vec3 n, vec3 v, vec3 l, uint lobes) {
     float g2 = 1.0 / (1.0 + smith_lambda(nv, sin2_between(n, v), alpha) + smith_lambda(nl, sin2_between(n, l), alpha));
     float fss = ggx_d(max(dot(n, h), 0.0), sin2_between(n, h), alpha) * g2 / (4.0 * nv * nl);
     vec3 fresnel = vec3(0.0);
-#define BSDF_STEP(i) if (bsdf_lobe_in(lobes & BSDF_LOBES_GGX, i)) bsdf_lobe_add_fresnel(i, b, vh, fresnel);
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
+    if (bsdf_lobe_in(lobes, BSDF_LOBE_SPECULAR)) bsdf_specular_add_fresnel(b, vh, fresnel);
+    if (bsdf_lobe_in(lobes, BSDF_LOBE_GLASS)) bsdf_glass_add_fresnel(b, vh, fresnel);
     return fresnel * fss * nl;
 }
 
 // f |n.l| of `lobes` for l on the side `above` says (the caller's: l's, or a sample's).
 vec3 bsdf_eval_side(BsdfParams b, vec3 n, vec3 v, vec3 l, uint lobes, bool above) {
-    if (above) {
-        vec3 f = bsdf_eval_ggx(b, n, v, l, lobes);
-#define BSDF_STEP(i) if (bsdf_lobe_in(lobes, i)) f += bsdf_lobe_eval_above(i, b, n, v, l);
-        BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
-        return f;
-    }
-    vec3 f = vec3(0.0);
-#define BSDF_STEP(i) if (bsdf_lobe_in(lobes, i)) f += bsdf_lobe_eval_below(i, b, n, v, l);
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
-    return f;
+    if (above)
+        return bsdf_eval_ggx(b, n, v, l, lobes)
+             + (bsdf_lobe_in(lobes, BSDF_LOBE_DIFFUSE) ? bsdf_diffuse_eval_above(b, n, v, l) : vec3(0.0));
+    return bsdf_lobe_in(lobes, BSDF_LOBE_GLASS) ? bsdf_glass_eval_below(b, n, v, l) : vec3(0.0);
 }
 
 vec3 bsdf_eval_lobes(BsdfParams b, vec3 n, vec3 v, vec3 l, uint lobes) {
@@ -258,9 +243,7 @@ bool bsdf_sample_specular(BsdfParams b, vec3 n, vec3 v, vec3 u, out BsdfSample s
 void bsdf_albedo(BsdfParams b, vec3 n, vec3 v, out vec3 diffuse, out vec3 specular) {
     diffuse = vec3(0.0);
     specular = vec3(0.0);
-#define BSDF_STEP(i) \
-    if (bsdf_lobe_in(BSDF_LOBES_SPECULAR, i)) bsdf_lobe_add_albedo(i, b, specular); \
-    else bsdf_lobe_add_albedo(i, b, diffuse);
-    BSDF_EACH_LOBE(BSDF_STEP)
-#undef BSDF_STEP
+    bsdf_specular_add_albedo(b, specular);
+    bsdf_diffuse_add_albedo(b, diffuse);
+    bsdf_glass_add_albedo(b, specular);
 }

@@ -1,12 +1,11 @@
 // The BSDF's lobes: one file each (after Falcor's lobes), chosen by sets of flags (after Mitsuba 3's
 // BSDFFlags and BSDFContext). A lobe has an index (its sampling probability BsdfParams.lobe_p[i]),
 // a bit 1 << index in the lobe sets that bsdf.glsl's functions take, and a file
-// `bsdf_lobe_<name>.glsl` with its functions. Evaluation, the albedos and set_view go through the
-// dispatchers below; the path tracer's hot functions in bsdf.glsl (the lobe probabilities, the
-// pdf and the sampler) name each lobe explicitly instead, because their generic forms over
-// BSDF_EACH_LOBE compiled 8-12% slower (docs/adding-a-lobe.md). Adding a lobe (sheen, clearcoat):
-// its file, and here its index, its bit in the sets it belongs to, its include, its place in
-// BSDF_EACH_LOBE and its cases; in bsdf.glsl its weight, its pdf term and its sampling branch.
+// `bsdf_lobe_<name>.glsl` with its terms. bsdf.glsl's composites (set_view, the lobe
+// probabilities, eval, pdf, the sampler, the albedos) call each lobe's terms by name, tested
+// against the set's bits: written over a lobe table with a dispatcher per term they compiled
+// 6-14% slower (docs/adding-a-lobe.md). Adding a lobe (sheen, clearcoat): its file, and here its
+// index, its bit in the sets it belongs to and its include; in bsdf.glsl its call in each composite.
 //
 // A lobe <x> provides what it has of (a missing case contributes nothing):
 //   bool  bsdf_<x>_sample(...)            a direction from u.xy (and u_split in [0,1)); false: none
@@ -37,47 +36,7 @@ const uint BSDF_LOBES_GGX = (1u << BSDF_LOBE_SPECULAR) | (1u << BSDF_LOBE_GLASS)
 
 bool bsdf_lobe_in(uint lobes, int lobe) { return (lobes & (1u << lobe)) != 0u; }
 
-// STEP(lobe) for every lobe in index order: the composites are straight-line code over the lobes
-// (a loop left rolled would keep the dispatch at run time and change how sums are rounded).
-#define BSDF_EACH_LOBE(STEP) STEP(BSDF_LOBE_SPECULAR) STEP(BSDF_LOBE_DIFFUSE) STEP(BSDF_LOBE_GLASS)
-
 #include "bsdf_terms.glsl"
 #include "bsdf_lobe_specular.glsl"
 #include "bsdf_lobe_diffuse.glsl"
 #include "bsdf_lobe_glass.glsl"
-
-// ---- the dispatchers: a case per lobe that has the function -----------------------------------
-void bsdf_lobe_set_view(int lobe, inout BsdfParams b) {
-    switch (lobe) {
-    case BSDF_LOBE_GLASS: bsdf_glass_set_view(b); break;
-    }
-}
-
-void bsdf_lobe_add_fresnel(int lobe, BsdfParams b, float vh, inout vec3 fresnel) {
-    switch (lobe) {
-    case BSDF_LOBE_SPECULAR: bsdf_specular_add_fresnel(b, vh, fresnel); break;
-    case BSDF_LOBE_GLASS: bsdf_glass_add_fresnel(b, vh, fresnel); break;
-    }
-}
-
-vec3 bsdf_lobe_eval_above(int lobe, BsdfParams b, vec3 n, vec3 v, vec3 l) {
-    switch (lobe) {
-    case BSDF_LOBE_DIFFUSE: return bsdf_diffuse_eval_above(b, n, v, l);
-    }
-    return vec3(0.0);
-}
-
-vec3 bsdf_lobe_eval_below(int lobe, BsdfParams b, vec3 n, vec3 v, vec3 l) {
-    switch (lobe) {
-    case BSDF_LOBE_GLASS: return bsdf_glass_eval_below(b, n, v, l);
-    }
-    return vec3(0.0);
-}
-
-void bsdf_lobe_add_albedo(int lobe, BsdfParams b, inout vec3 albedo) {
-    switch (lobe) {
-    case BSDF_LOBE_SPECULAR: bsdf_specular_add_albedo(b, albedo); break;
-    case BSDF_LOBE_DIFFUSE: bsdf_diffuse_add_albedo(b, albedo); break;
-    case BSDF_LOBE_GLASS: bsdf_glass_add_albedo(b, albedo); break;
-    }
-}

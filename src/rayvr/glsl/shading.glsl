@@ -19,9 +19,10 @@
 vec3 light_bsdf(PathVertex s, LightSample ls, bool specular_traced) {
     if (!ls.valid || dot(ls.direction, s.ng) <= 0.0) return vec3(0.0);
     if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0)
-        return bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_DIFFUSE)
+        // l is above: the side known here keeps glass's transmission out of this branch's code
+        return bsdf_eval_side(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_DIFFUSE, true)
              + power_heuristic(ls.pdf, bsdf_pdf_specular(s.bsdf, s.n, s.v, ls.direction))
-             * bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_SPECULAR);
+             * bsdf_eval_side(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_SPECULAR, true);
     return bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
 }
 
