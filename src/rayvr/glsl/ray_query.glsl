@@ -395,7 +395,43 @@ bool rq_blend_dims(uint m, uint tri, uint instance, float t, vec2 b) {
 }
 #endif
 
-// Test the triangle of BVH slot s; a hit nearer than tmax that counts (alpha) updates hit/tmax.
+// Intersect the triangles of one leaf (BVH slots [first, first + count)); updates hit/tmax.
+// rq_slot's test written out in the loop: calling it cost the hybrid's shadow pass 1% and its
+// reflections 1.4% (NVIDIA, benchmarks/RESULTS.md 2026-12-06, fifth run).
+bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, inout Hit hit, bool any_hit) {
+    bool found = false;
+    for (uint s = first; s < first + count; ++s) {
+        RQ_COUNT(rq_stat_triangles);
+        vec4 v0 = rq_triangles[3u * s], v1 = rq_triangles[3u * s + 1u], v2 = rq_triangles[3u * s + 2u];
+        float t;
+        vec2 b;
+        if (!rq_triangle(r, v0.xyz, v1.xyz, v2.xyz, tmax, t, b)) continue;
+        uint prim = floatBitsToUint(v0.w);
+#if SCENE_HAS_ALPHA_MASK || SCENE_HAS_ALPHA_BLEND
+        uint tri = scene_triangle(instance, prim);
+        uint m = scene_triangle_materials[tri];
+        if (scene_materials[m].flags.y != ALPHA_MODE_OPAQUE) {
+#if SCENE_HAS_ALPHA_BLEND
+            if (rq_fractional && scene_materials[m].flags.y == ALPHA_MODE_BLEND) {
+                if (rq_blend_dims(m, tri, instance, t, b)) continue;   // dimmed, not blocked
+            } else
+#endif
+            if (!rq_alpha_passes(m, tri, instance, t, b)) continue;
+        }
+#endif
+        tmax = t;
+        hit.t = t;
+        hit.barycentrics = b;
+        hit.instance = instance;
+        hit.primitive = prim;
+        found = true;
+        if (any_hit) break;
+    }
+    return found;
+}
+
+#if RQ_BVH_WIDTH == 8
+// Test the triangle of BVH slot s (the test rq_leaf writes out); a hit nearer than tmax that counts (alpha) updates hit/tmax.
 bool rq_slot(RqRay r, uint instance, uint s, inout float tmax, inout Hit hit) {
     RQ_COUNT(rq_stat_triangles);
     vec4 v0 = rq_triangles[3u * s], v1 = rq_triangles[3u * s + 1u], v2 = rq_triangles[3u * s + 2u];
@@ -423,18 +459,6 @@ bool rq_slot(RqRay r, uint instance, uint s, inout float tmax, inout Hit hit) {
     return true;
 }
 
-// Intersect the triangles of one leaf (BVH slots [first, first + count)); updates hit/tmax.
-bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, inout Hit hit, bool any_hit) {
-    bool found = false;
-    for (uint s = first; s < first + count; ++s) {
-        if (!rq_slot(r, instance, s, tmax, hit)) continue;
-        found = true;
-        if (any_hit) break;
-    }
-    return found;
-}
-
-#if RQ_BVH_WIDTH == 8
 // Intersect the triangles of BVH slots first + k for the set bits k of mask (a bvh8 leaf group).
 bool rq_leaf_mask(RqRay r, uint instance, uint first, uint mask, inout float tmax, inout Hit hit, bool any_hit) {
     bool found = false;

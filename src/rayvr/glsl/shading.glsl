@@ -19,10 +19,9 @@
 vec3 light_bsdf(PathVertex s, LightSample ls, bool specular_traced) {
     if (!ls.valid || dot(ls.direction, s.ng) <= 0.0) return vec3(0.0);
     if (specular_traced && ls.pdf > 0.0 && dot(s.n, ls.direction) > 0.0)
-        // l is above: the side known here keeps glass's transmission out of this branch's code
-        return bsdf_eval_side(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_DIFFUSE, true)
+        return bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_DIFFUSE)
              + power_heuristic(ls.pdf, bsdf_pdf_specular(s.bsdf, s.n, s.v, ls.direction))
-             * bsdf_eval_side(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_SPECULAR, true);
+             * bsdf_eval_lobes(s.bsdf, s.n, s.v, ls.direction, BSDF_LOBES_SPECULAR);
     return bsdf_eval(s.bsdf, s.n, s.v, ls.direction);
 }
 
