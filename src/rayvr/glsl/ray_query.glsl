@@ -397,7 +397,7 @@ bool rq_blend_dims(uint m, uint tri, uint instance, float t, vec2 b) {
 
 // Intersect the triangles of one leaf (BVH slots [first, first + count)); updates hit/tmax.
 // rq_slot's test written out in the loop: calling it cost the hybrid's shadow pass 1% and its
-// reflections 1.4% (NVIDIA, benchmarks/RESULTS.md 2026-12-06, fifth run).
+// reflections 1.4% (benchmarks/RESULTS.md 2026-12-06, fifth run).
 bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, inout Hit hit, bool any_hit) {
     bool found = false;
     for (uint s = first; s < first + count; ++s) {
