@@ -27,7 +27,7 @@ from .formats import get_format
 class Choice(NamedTuple):
     """One name of a choice property (RenderPass.CHOICES) that its shaders see as a number."""
 
-    meaning: str   # shown in refusals and the viewer ("" for none)
+    meaning: str   # shown in the refusal of another value ("" for none)
     define: int    # the value of the shader define that the pass sets from it
 
 
