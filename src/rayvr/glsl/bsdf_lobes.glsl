@@ -7,7 +7,7 @@
 // 6-14% slower (docs/adding-a-lobe.md). Adding a lobe (sheen, clearcoat): its file, and here its
 // index, its bit in the sets it belongs to and its include; in bsdf.glsl its call in each composite.
 //
-// A lobe <x> provides what it has of (a missing case contributes nothing):
+// A lobe <x> provides what it has of (bsdf.glsl's composites call the ones it has):
 //   bool  bsdf_<x>_sample(...)            a direction from u.xy (and u_split in [0,1)); false: none
 //   void  bsdf_<x>_set_view(inout b)      what it caches at n.v
 //   a lobe in BSDF_LOBES_GGX reflects through the GGX term the set shares (bsdf_eval_ggx):

@@ -395,9 +395,10 @@ bool rq_blend_dims(uint m, uint tri, uint instance, float t, vec2 b) {
 }
 #endif
 
-// Intersect the triangles of one leaf (BVH slots [first, first + count)); updates hit/tmax.
-// rq_slot's test written out in the loop: calling it cost the hybrid's shadow pass 1% and its
-// reflections 1.4% (benchmarks/RESULTS.md 2026-12-06, fifth run).
+// Intersect the triangles of one leaf (BVH slots [first, first + count)); a hit nearer than tmax
+// that counts (alpha) updates hit/tmax. The slot test is written out in the loop: a function per
+// slot cost the hybrid's shadow pass 1% and its reflections 1.4% (benchmarks/RESULTS.md
+// 2026-12-06, fifth run).
 bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, inout Hit hit, bool any_hit) {
     bool found = false;
     for (uint s = first; s < first + count; ++s) {
@@ -431,43 +432,15 @@ bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, i
 }
 
 #if RQ_BVH_WIDTH == 8
-// Test the triangle of BVH slot s (the test rq_leaf writes out); a hit nearer than tmax that counts (alpha) updates hit/tmax.
-bool rq_slot(RqRay r, uint instance, uint s, inout float tmax, inout Hit hit) {
-    RQ_COUNT(rq_stat_triangles);
-    vec4 v0 = rq_triangles[3u * s], v1 = rq_triangles[3u * s + 1u], v2 = rq_triangles[3u * s + 2u];
-    float t;
-    vec2 b;
-    if (!rq_triangle(r, v0.xyz, v1.xyz, v2.xyz, tmax, t, b)) return false;
-    uint prim = floatBitsToUint(v0.w);
-#if SCENE_HAS_ALPHA_MASK || SCENE_HAS_ALPHA_BLEND
-    uint tri = scene_triangle(instance, prim);
-    uint m = scene_triangle_materials[tri];
-    if (scene_materials[m].flags.y != ALPHA_MODE_OPAQUE) {
-#if SCENE_HAS_ALPHA_BLEND
-        if (rq_fractional && scene_materials[m].flags.y == ALPHA_MODE_BLEND) {
-            if (rq_blend_dims(m, tri, instance, t, b)) return false;   // dimmed, not blocked
-        } else
-#endif
-        if (!rq_alpha_passes(m, tri, instance, t, b)) return false;
-    }
-#endif
-    tmax = t;
-    hit.t = t;
-    hit.barycentrics = b;
-    hit.instance = instance;
-    hit.primitive = prim;
-    return true;
-}
-
 // Intersect the triangles of BVH slots first + k for the set bits k of mask (a bvh8 leaf group).
 bool rq_leaf_mask(RqRay r, uint instance, uint first, uint mask, inout float tmax, inout Hit hit, bool any_hit) {
     bool found = false;
-    while (mask != 0u) {
+    while (mask != 0u) {   // each run of consecutive set bits as one leaf, slots in ascending order
         uint k = uint(findLSB(mask));
-        mask &= mask - 1u;
-        if (!rq_slot(r, instance, first + k, tmax, hit)) continue;
-        found = true;
-        if (any_hit) break;
+        uint count = uint(findLSB(~(mask >> k)));
+        mask &= ~(((1u << count) - 1u) << k);
+        found = rq_leaf(r, instance, first + k, count, tmax, hit, any_hit) || found;
+        if (found && any_hit) break;
     }
     return found;
 }

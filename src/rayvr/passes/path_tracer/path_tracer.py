@@ -89,8 +89,9 @@ class PathTracer(RenderPass):
                   "tile": list(COMPUTE_GROUP), "view_group": VIEW_GROUP, "compact": False,
                   "persistent": False, "sort_directions": False}
     USES_SCENE = True
-    CHOICES = {"mode": MODES, "sampler": {"sobol": Choice("Owen-scrambled Sobol, the default", 1), "pcg": Choice("", 0)},   # RAYVR_SAMPLER
-               "kernel": KERNELS}
+    CHOICES = {"mode": MODES, "kernel": KERNELS,
+               "sampler": {"sobol": Choice("Owen-scrambled Sobol, the default", 1),   # RAYVR_SAMPLER
+                           "pcg": Choice("", 0)}}
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
