@@ -174,6 +174,31 @@ def test_alpha_one_is_opaque_and_alpha_zero_invisible_in_every_frame(gpu, graph,
     np.testing.assert_allclose(imgs[:, outside], BEHIND, rtol=HALF_RTOL)
 
 
+def test_an_alpha_mode_set_after_the_upload_reaches_the_rays(gpu):
+    """The BVH's triangle slots carry their material's alpha mode, so that an opaque hit reads no
+    material: a mode changed after the upload is what the next frame's rays see. The veil starts
+    OPAQUE (FRONT in every frame; a BLEND quad out of view keeps the scene's BLEND code) and,
+    made BLEND, gives the blend."""
+    views = view_set(*VEIL_VIEWS)
+    inside, _ = veil_masks(views)
+    scene = veil_scene()
+    scene.materials["Veil"].alpha_mode = "OPAQUE"
+    scene.add_material(blend_material("Aside", ALPHA))
+    scene.add_object("Aside", *quad_mesh([[20, 0, 0], [21, 0, 0], [21, 1, 0], [20, 1, 0]], (0, 0, 1)), "Aside")
+    with Renderer(scene, path_traced(), views=views) as r:
+        for _ in range(2):
+            r.render()
+            img = r.read_output(PT).astype(np.float64)[0, ..., :3]
+            np.testing.assert_allclose(img[inside], FRONT, rtol=1e-5, err_msg="an OPAQUE veil")
+        scene.materials["Veil"].alpha_mode = "BLEND"
+        for _ in range(FRAMES):
+            r.render()
+        v = r.read_output(PT).astype(np.float64)[0, ..., 0][inside]
+    # these frames do not start the stratified sequence: only the image mean is held (4 binomial s.e.)
+    want, se = ALPHA * FRONT + (1 - ALPHA) * BEHIND, math.sqrt(ALPHA * (1 - ALPHA) / (FRAMES * v.size)) * (FRONT - BEHIND)
+    assert abs(v.mean() - want) <= 4 * se, f"the veil made BLEND: mean {v.mean():.4f}, want {want:.4f} +- {4 * se:.4f}"
+
+
 @pytest.mark.parametrize("effect", [rv.Effect.RASTER, rv.Effect.SHADOWS])
 def test_light_sampled_from_a_blend_emitter_is_alpha_times_its_light(gpu, effect):
     """A double-sided emissive veil lighting a grey wall: light sampling weighs a BLEND emitter by

@@ -39,7 +39,7 @@
 //     triangles at triangle base + (meta & 31), meta >> 5 of them. 5 vec4 loads, two rq_qbox4 per
 //     node; its TLAS's triangle base indexes a uint table of instance ids in the TLAS buffer.
 // A TLAS leaf (count 1) links an instance (bvh8: through the table). Triangle slots are three vec4 (object-space vertices;
-// w of the first: the mesh-local triangle index).
+// w of the first: the mesh-local triangle index, of the second: its material's alpha mode as uint bits).
 //
 // Traversal: ONE loop over both levels (a TLAS leaf moves the ray into the instance's object
 // space and the loop continues in its BLAS; popping back to the entry depth moves it back), near
@@ -110,7 +110,7 @@
 
 layout(std430, binding = RAYVR_BLAS_NODE_SSBO) readonly buffer RqBlasNodes { vec4 rq_blas_nodes[]; };
 layout(std430, binding = RAYVR_TLAS_NODE_SSBO) readonly buffer RqTlasNodes { vec4 rq_tlas_nodes[]; };
-// three vec4 per BVH slot: vertices in object space; w of the first: mesh-local triangle index
+// three vec4 per BVH slot: vertices in object space; w of the first: mesh-local triangle index, of the second: alpha mode
 layout(std430, binding = RAYVR_TRIANGLE_SSBO) readonly buffer RqTriangles { vec4 rq_triangles[]; };
 
 #ifndef SCENE_SCALE
@@ -409,11 +409,12 @@ bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, i
         if (!rq_triangle(r, v0.xyz, v1.xyz, v2.xyz, tmax, t, b)) continue;
         uint prim = floatBitsToUint(v0.w);
 #if SCENE_HAS_ALPHA_MASK || SCENE_HAS_ALPHA_BLEND
-        uint tri = scene_triangle(instance, prim);
-        uint m = scene_triangle_materials[tri];
-        if (scene_materials[m].flags.y != ALPHA_MODE_OPAQUE) {
+        uint alpha_mode = floatBitsToUint(v1.w);   // the slot's copy of its material's: opaque hits load nothing more
+        if (alpha_mode != ALPHA_MODE_OPAQUE) {
+            uint tri = scene_triangle(instance, prim);
+            uint m = scene_triangle_materials[tri];
 #if SCENE_HAS_ALPHA_BLEND
-            if (rq_fractional && scene_materials[m].flags.y == ALPHA_MODE_BLEND) {
+            if (rq_fractional && alpha_mode == ALPHA_MODE_BLEND) {
                 if (rq_blend_dims(m, tri, instance, t, b)) continue;   // dimmed, not blocked
             } else
 #endif

@@ -91,6 +91,7 @@ class GpuScene:
         self.buffers: dict[str, object] = {}
         self.version = 0   # grows when update() uploads changed instances, lights or materials
         self._scale = None
+        self._slot_alpha_modes = self._alpha_modes()   # what the triangle slots hold (see _pack_mesh)
         self._build_meshes(bvh_method, progress)
         self._build_textures()
         self._material_version = None
@@ -183,6 +184,7 @@ class GpuScene:
         order = self._blas_gpu[k].order   # the traced layout's slot order (bvh8 has its own)
         slots[:, :, :3] = mesh.positions[mesh.indices[order]]
         slots.view(np.uint32)[:, 0, 3] = order
+        slots.view(np.uint32)[:, 1, 3] = self._slot_alpha_modes[mesh.material_ids[order]]
         t_base = np.uint32(self._first_t[k])
         nodes[:] = self._blas_gpu[k].relinked(lambda slot: slot + t_base, int(self._first_n[k]))
         lo, hi = b.bounds()
@@ -265,6 +267,22 @@ class GpuScene:
     def _upload_materials(self) -> None:
         self._buffer("materials", pack_materials(self.scene.materials, self.texture_layers))
         self._material_version = self.scene.materials.version
+        modes, held = self._alpha_modes(), self._slot_alpha_modes
+        n = max(len(modes), len(held))
+        changed = np.flatnonzero(np.pad(modes, (0, n - len(modes))) != np.pad(held, (0, n - len(held))))
+        if len(changed):   # the triangle slots keep their material's alpha mode: rewrite the meshes that use these
+            self._slot_alpha_modes = modes
+            for k, mesh in enumerate(self.scene.meshes):
+                if self.blas[k] is not None and np.isin(mesh.material_ids, changed).any():
+                    self._rewrite_mesh(k, ("triangles",))
+
+    def _alpha_modes(self) -> np.ndarray:
+        """Each material id's alpha mode (AlphaMode), for every id a mesh names (unknown ids: opaque)."""
+        s = self.scene
+        top = max([len(s.materials)] + [int(m.material_ids.max()) + 1 for m in s.meshes if m.triangle_count])
+        modes = np.zeros(top, np.uint32)
+        modes[:len(s.materials)] = [int(m.alpha_mode) for m in s.materials]
+        return modes
 
     def _build_emissive_triangles(self) -> np.ndarray:
         """The emissive triangles of every instance (world-space areas in float64) and their powers;
@@ -492,16 +510,21 @@ class GpuScene:
         b = self.blas[mesh]
         if b is not None:
             b.refit(*bvh_mod.triangle_bounds(m.triangles()))
-        v_base, t_base, n_base = (int(f[mesh]) for f in (self._first_v, self._first_t, self._first_n))
-        verts = np.zeros((len(pos), 8), np.float32)
+        self._rewrite_mesh(mesh, ("vertices", "triangles", "blas_nodes"))
+        self.frame.invalidate()
+
+    def _rewrite_mesh(self, k: int, names) -> None:
+        """Pack mesh k again and write its slices of the named shared buffers."""
+        m, b = self.scene.meshes[k], self.blas[k]
+        v_base, t_base, n_base = (int(f[k]) for f in (self._first_v, self._first_t, self._first_n))
+        verts = np.zeros((len(m.positions), 8), np.float32)
         slots = np.zeros((m.triangle_count, 3, 4), np.float32)
-        nodes = np.empty((0 if b is None else self._blas_gpu[mesh].node_count, self.node_floats), np.float32)
-        self._pack_mesh(mesh, verts, slots, nodes)
+        nodes = np.empty((0 if b is None else self._blas_gpu[k].node_count, self.node_floats), np.float32)
+        self._pack_mesh(k, verts, slots, nodes)
         for name, data, offset in (("vertices", verts, v_base * 32), ("triangles", slots, t_base * 48),
                                    ("blas_nodes", nodes, n_base * nodes.itemsize * self.node_floats)):
-            if len(data):
+            if name in names and len(data):
                 self.buffers[name].write(data, offset=offset)
-        self.frame.invalidate()
 
     # ---- report -----------------------------------------------------------------------------
     @property
