@@ -524,7 +524,7 @@ uint rq_enter_instance(uint instance) {
     rq_instance = instance;
     rq_r = rq_object_ray(rq_o, rq_d, rq_instance);
     rq_blas_base = rq_sp;
-    return scene_meshes[scene_instances[rq_instance].info.x].info.x;
+    return scene_instances[rq_instance].info.y;
 }
 
 // Back to the TLAS once the stack is down to its depth at the BLAS entry.

@@ -60,13 +60,8 @@ struct VertexData {
     vec4 normal_v;     // object-space normal, uv.y
 };
 
-struct MeshData {
-    uvec4 info;        // x: BLAS root node, y: first BVH triangle slot, z: first scene triangle, w: triangle count
-};
-
 layout(std430, binding = RAYVR_VERTEX_SSBO) readonly buffer SceneVertices { VertexData scene_vertices[]; };
 layout(std430, binding = RAYVR_INDEX_SSBO) readonly buffer SceneIndices { uint scene_indices[]; };
-layout(std430, binding = RAYVR_MESH_SSBO) readonly buffer SceneMeshes { MeshData scene_meshes[]; };
 layout(std430, binding = RAYVR_INSTANCE_SSBO) readonly buffer SceneInstances {
     uvec4 scene_info;      // x: instance count, y: material count
     vec4 scene_shift;      // xyz: anchor - origin, render space = anchor space + shift
@@ -110,7 +105,7 @@ vec3 safe_normalize(vec3 v, vec3 fallback) {
 }
 
 uint scene_triangle(uint instance, uint primitive) {
-    return scene_meshes[scene_instances[instance].info.x].info.z + primitive;
+    return scene_instances[instance].info.z + primitive;
 }
 
 // ---- materials ------------------------------------------------------------------------------

@@ -20,7 +20,7 @@ BINDINGS = {
     "RAYVR_PUNCTUAL_LIGHT_SSBO": 8,
     "RAYVR_EMISSIVE_TRIANGLE_SSBO": 9,
     "RAYVR_TRIANGLE_SSBO": 10,
-    "RAYVR_MESH_SSBO": 11,
+    # 11: free (was a per-mesh table; InstanceData carries its BLAS root and first triangle)
     "RAYVR_TRIANGLE_MATERIAL_SSBO": 12,
     "RAYVR_TANGENT_SSBO": 13,
     "RAYVR_BSDF_TABLE_SSBO": 14,
@@ -57,7 +57,6 @@ SHARED_BLOCKS = {
     "PunctualLights": "RAYVR_PUNCTUAL_LIGHT_SSBO",
     "EmissiveTriangles": "RAYVR_EMISSIVE_TRIANGLE_SSBO",
     "RqTriangles": "RAYVR_TRIANGLE_SSBO",
-    "SceneMeshes": "RAYVR_MESH_SSBO",
     "SceneTriangleMaterials": "RAYVR_TRIANGLE_MATERIAL_SSBO",
     "SceneTangents": "RAYVR_TANGENT_SSBO",
     "BsdfTables": "RAYVR_BSDF_TABLE_SSBO",

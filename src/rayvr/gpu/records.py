@@ -43,7 +43,7 @@ MATERIAL_DATA = Record("MaterialData", (
 INSTANCE_DATA = Record("InstanceData", (
     Field("to_render", "vec4", 3, meaning="rows of the 3x4 object -> render space matrix"),
     Field("to_object", "vec4", 3, meaning="rows of its inverse"),
-    Field("info", "uvec4", meaning="x: mesh"),
+    Field("info", "uvec4", meaning="x: mesh, y: its BLAS root node, z: its first scene triangle"),
 ), meaning="One instance (rayvr.scene.gpu_frame).")
 
 # ---- lights ---------------------------------------------------------------------------------------

@@ -93,6 +93,8 @@ class SceneFrame:
         rows["to_render"][:n] = m[:, :3]
         rows["to_object"][:n] = np.linalg.inv(m)[:, :3]
         rows["info"][:n, 0] = mesh_ids
+        rows["info"][:n, 1] = gs.blas_roots[mesh_ids]         # read by the traversal's instance entry
+        rows["info"][:n, 2] = gs.first_triangles[mesh_ids]    # for scene_triangle()
         w = np.einsum("nij,nkj->nki", m[:, :3], gs.mesh_corners[mesh_ids])   # each mesh box's corners
         live = np.flatnonzero(gs.mesh_live[mesh_ids])
         self._live_count = n if len(live) else 0     # 0: no geometry, traversal returns at once

@@ -164,8 +164,8 @@ class GpuScene:
         self._buffer("triangle_materials", tri_mats if any_mesh else np.zeros(1, np.uint32))
         self._buffer("triangles", slots if any_bvh else np.zeros((1, 3, 4), np.float32))
         self._buffer("blas_nodes", nodes if any_bvh else np.zeros((1, self.node_floats), np.float32))
-        self._buffer("meshes", np.stack([first_n[:-1], first_t[:-1], first_t[:-1], np.diff(first_t)],
-                                        axis=1).astype(np.uint32).reshape(-1, 4))
+        self.blas_roots = first_n[:-1].astype(np.uint32)        # per mesh, for the instances' records
+        self.first_triangles = first_t[:-1].astype(np.uint32)
         if normal_maps:
             self._buffer("tangents", tangents)
         self.mesh_index_offsets = 3 * first_t
@@ -430,7 +430,7 @@ class GpuScene:
                 "instances": "RAYVR_INSTANCE_SSBO", "materials": "RAYVR_MATERIAL_SSBO",
                 "punctual_lights": "RAYVR_PUNCTUAL_LIGHT_SSBO",
                 "emissive_triangles": "RAYVR_EMISSIVE_TRIANGLE_SSBO", "triangles": "RAYVR_TRIANGLE_SSBO",
-                "meshes": "RAYVR_MESH_SSBO", "triangle_materials": "RAYVR_TRIANGLE_MATERIAL_SSBO",
+                "triangle_materials": "RAYVR_TRIANGLE_MATERIAL_SSBO",
                 "tangents": "RAYVR_TANGENT_SSBO", "bsdf_tables": "RAYVR_BSDF_TABLE_SSBO",
                 "light_table": "RAYVR_LIGHT_TABLE_SSBO", "environment": "RAYVR_ENVIRONMENT_SSBO"}
 
