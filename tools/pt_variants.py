@@ -228,9 +228,14 @@ class Child:
             return {"views64": many, "one_view": one, "ratio": round(many["total"] / one["total"], 4)}
         return {"views64_ms": many, "one_view_ms": one, "ratio": round(many / one, 4)}
 
+    def _import_benchmarks(self) -> None:
+        """Put the tree's benchmarks/ on sys.path, or this checkout's for a `--src` tree (src/ alone)."""
+        own = (Path(self.tree_root) / "benchmarks").is_dir()
+        sys.path.insert(0, str(self.tree_root if own else ROOT))
+
     def _probe_gi(self):
         """The tree's benchmarks probe_gi graph and material setup, and its default_views."""
-        sys.path.insert(0, self.tree_root)
+        self._import_benchmarks()
         from benchmarks.probe_gi import _effects, _graph
         try:
             from rayvr.xr.cameras import default_views
@@ -273,9 +278,9 @@ class Child:
         return out
 
     def rays(self) -> dict:
-        """The tree's own `benchmarks rays` at 1920x1080 (its default BVH layout); no graph, so
-        no variant applies."""
-        sys.path.insert(0, self.tree_root)
+        """The tree's own `benchmarks rays` at 1920x1080 (its default BVH layout; a `--src` tree
+        has none, so this checkout's); no graph, so no variant applies."""
+        self._import_benchmarks()
         from benchmarks import rays
 
         parser = argparse.ArgumentParser()
