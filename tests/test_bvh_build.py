@@ -143,7 +143,7 @@ def test_refit_rewrites_one_mesh_as_a_full_repack_would(monkeypatch, bvh_layout)
     gs.refit(1, moved)
     monkeypatch.setattr(GpuScene, "_build_blas", lambda self, method, progress: gs.blas)
     fresh = GpuScene(get_context(), s, bvh_layout=bvh_layout)
-    for name in ("vertices", "triangles", "blas_nodes", "meshes", "indices"):
+    for name in ("vertices", "triangles", "blas_nodes", "instances", "indices"):
         assert gs.buffers[name].read() == fresh.buffers[name].read(), name
     np.testing.assert_array_equal(gs.mesh_corners, fresh.mesh_corners)
     gs.release(), fresh.release()
