@@ -1,5 +1,5 @@
 #!/bin/bash
-# device call 5: ReSTIR DI's visibility-hint sets on tauray (issue 31), 2x1440x1600, raw preset, every material SHADOWS:
+# device call 5 (not run: the session's device time ran out): ReSTIR DI's visibility-hint sets on tauray (issue 31), 2x1440x1600, raw preset, every material SHADOWS:
 # Shadows ms and FLIP / relMSE of 2 frames after 24 against RTShadows' 96-frame reference, as the fourth run's call 5
 export RAYVR_COMMIT=${RAYVR_COMMIT:-467e658}
 OUT=${OUT:-/tmp/out}; mkdir -p $OUT
