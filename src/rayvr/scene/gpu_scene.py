@@ -91,6 +91,8 @@ class GpuScene:
         self.buffers: dict[str, object] = {}
         self.version = 0   # grows when update() uploads changed instances, lights or materials
         self._scale = None
+        # each mesh's material ids, once (meshes keep their materials): the slots' alpha modes follow them
+        self._mesh_material_ids = [np.unique(m.material_ids) for m in scene.meshes]
         self._slot_alpha_modes = self._alpha_modes()   # what the triangle slots hold (see _pack_mesh)
         self._build_meshes(bvh_method, progress)
         self._build_textures()
@@ -272,16 +274,16 @@ class GpuScene:
         changed = np.flatnonzero(np.pad(modes, (0, n - len(modes))) != np.pad(held, (0, n - len(held))))
         if len(changed):   # the triangle slots keep their material's alpha mode: rewrite the meshes that use these
             self._slot_alpha_modes = modes
-            for k, mesh in enumerate(self.scene.meshes):
-                if self.blas[k] is not None and np.isin(mesh.material_ids, changed).any():
+            for k, ids in enumerate(self._mesh_material_ids):
+                if self.blas[k] is not None and np.isin(ids, changed).any():
                     self._rewrite_mesh(k, ("triangles",))
 
     def _alpha_modes(self) -> np.ndarray:
         """Each material id's alpha mode (AlphaMode), for every id a mesh names (unknown ids: opaque)."""
-        s = self.scene
-        top = max([len(s.materials)] + [int(m.material_ids.max()) + 1 for m in s.meshes if m.triangle_count])
+        mats = self.scene.materials
+        top = max([len(mats)] + [int(ids[-1]) + 1 for ids in self._mesh_material_ids if len(ids)])
         modes = np.zeros(top, np.uint32)
-        modes[:len(s.materials)] = [int(m.alpha_mode) for m in s.materials]
+        modes[:len(mats)] = [int(m.alpha_mode) for m in mats]
         return modes
 
     def _build_emissive_triangles(self) -> np.ndarray:
