@@ -6,7 +6,8 @@
 
 Primary: one camera ray per pixel (trace_closest), from the scene's first camera or one framing
 its bounds. Diffuse: from every primary hit, a cosine-distributed direction about the geometric
-normal, origin moved by offset_ray_origin (trace_closest; incoherent rays), dispatched over every
+normal, origin moved by offset_ray_origin (trace_closest; incoherent rays; skipping the hit's own
+instance where its triangle has the whole mesh behind it, as the path tracer does), dispatched over every
 pixel (`--diffuse-layout pixels`, as a 1-spp path tracer's bounce), over the compacted queue of hit
 pixels (`queue`, as a wavefront renderer holds its rays), or over that queue by persistent threads
 that refill idle lanes (`persistent`, with ray_query.glsl's rq_begin/rq_step). Roofline: every ray
@@ -81,7 +82,7 @@ void main() {
     if (trace_closest(cam_pos, d, 1e29, h)) {
         SurfacePoint s = surface_at(h, d);
         surfaces[2u * i] = vec4(offset_ray_origin(s.position, s.geometric_normal), 1.0);
-        surfaces[2u * i + 1u] = vec4(s.geometric_normal, 0.0);
+        surfaces[2u * i + 1u] = vec4(s.geometric_normal, uintBitsToFloat(s.exit_instance));
     } else {
         surfaces[2u * i] = vec4(0.0);
     }
@@ -140,7 +141,8 @@ void main() {
                     uint i = queue[q];
                     out_i = i + k * uint(size.x * size.y);
                     vec4 p = surfaces[2u * i];
-                    rq_begin(p.xyz, diffuse_dir(i, k, surfaces[2u * i + 1u].xyz), 1e29, false);
+                    vec4 n = surfaces[2u * i + 1u];
+                    rq_begin(p.xyz, diffuse_dir(i, k, n.xyz), 1e29, false, floatBitsToUint(n.w));
 #if RQ_STATS
                     rq_stat_nodes = 0u; rq_stat_triangles = 0u; rq_stat_instances = 0u;
 #endif
@@ -176,7 +178,8 @@ void main() {
     vec4 p = surfaces[2u * i];
     if (p.w == 0.0) { result[out_i] = -2.0; WRITE_STATS(out_i); return; }
     Hit h;
-    bool hit = trace_closest(p.xyz, diffuse_dir(i, k, surfaces[2u * i + 1u].xyz), 1e29, h);
+    vec4 n = surfaces[2u * i + 1u];
+    bool hit = trace_closest(p.xyz, diffuse_dir(i, k, n.xyz), 1e29, floatBitsToUint(n.w), h);
     result[out_i] = hit ? h.t : -1.0;
     WRITE_STATS(out_i);
 }

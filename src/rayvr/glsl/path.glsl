@@ -48,6 +48,7 @@ struct PtRays {
     float nee_dist;
     vec3 pos;            // the vertex; ray origins are offset from it along ng
     vec3 ng;
+    uint exit_instance;  // what the shadow ray and a reflected BSDF ray skip (PathVertex.exit_instance)
     vec3 dir;            // the BSDF sample
     float pdf;
     bool scattered;
@@ -66,6 +67,7 @@ PtRays pt_no_rays() {
     r.nee_dist = -1.0;
     r.pos = vec3(0.0);
     r.ng = vec3(0.0);
+    r.exit_instance = SCENE_NO_INSTANCE;
     r.dir = vec3(0.0);
     r.pdf = 0.0;
     r.scattered = false;
@@ -83,6 +85,7 @@ PtRays pt_vertex(inout PtPath path, PathVertex s, int bounce, inout Rng rng, con
     PtRays r = pt_no_rays();
     r.pos = s.pos;
     r.ng = s.ng;
+    r.exit_instance = s.exit_instance;
     r.cone_width = s.cone_width;
     r.cone_spread = s.cone_spread;
 #if SCENE_HAS_LIGHTS
@@ -186,11 +189,13 @@ void pt_trace_parts(PathVertex s, inout Rng rng, const bool split, out vec3 diff
     PtPath path = pt_path_begin();
     for (int bounce = 0; bounce < pt_max_bounces; ++bounce) {
         PtRays r = pt_vertex(path, s, bounce, rng, split);
-        bool occluded = r.nee_dist >= 0.0 && trace_occluded(offset_ray_origin(r.pos, r.ng), r.nee_dir, r.nee_dist);
+        bool occluded = r.nee_dist >= 0.0 && trace_occluded(offset_ray_origin(r.pos, r.ng), r.nee_dir, r.nee_dist,
+                                                                r.exit_instance);
         pt_shadow_answer(path, r, occluded, bounce, split);
         if (!r.scattered) break;
         Hit hit;
-        bool found = trace_closest(offset_ray_origin(r.pos, r.transmitted ? -r.ng : r.ng), r.dir, 1e30, hit);
+        bool found = trace_closest(offset_ray_origin(r.pos, r.transmitted ? -r.ng : r.ng), r.dir, 1e30,
+                                   r.transmitted ? SCENE_NO_INSTANCE : r.exit_instance, hit);
         if (!pt_ray_answer(path, r, found, hit, bounce, s)) break;
     }
     pt_path_parts(path, split, diffuse, specular);

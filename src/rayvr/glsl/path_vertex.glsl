@@ -14,6 +14,7 @@ struct PathVertex {
     vec3 attenuation;    // absorption per metre inside the material's volume (transmission)
     float cone_width;    // the path's ray cone at pos (texture level of detail)
     float cone_spread;   // and its spread angle
+    uint exit_instance;  // what rays leaving on ng's side may skip (SurfacePoint.exit_instance)
 };
 
 // Shading-normal adaptation (Keller et al. 2017, "The Iray Light Transport Simulation and
@@ -56,6 +57,7 @@ PathVertex path_vertex_at_hit(Hit hit, vec3 dir, float cone_width, float cone_sp
     s.attenuation = mp.attenuation;
     s.cone_width = cone_width;
     s.cone_spread = cone_spread;
+    s.exit_instance = sp.exit_instance;
     return s;
 }
 
@@ -90,6 +92,7 @@ PathVertex path_vertex_at_gbuffer_seen(GSurface g, uint view, vec3 v) {
     s.attenuation = m.attenuation;
     s.cone_spread = view_pixel_spread(view);
     s.cone_width = distance(views[view].eye.xyz, g.pos) * s.cone_spread;
+    s.exit_instance = SCENE_NO_INSTANCE;   // the G-buffer keeps no instance
     return s;
 }
 

@@ -9,6 +9,11 @@
 //       decides each BLEND surface by a coin). No random decision unless RQ_BLEND_ROULETTE > 0:
 //       then a product below it goes on by Russian roulette (rq_blend_dims), equal in expectation
 //   vec3 offset_ray_origin(vec3 p, vec3 ng)                       self-intersection-free origin
+//   Each query also takes a `uint skip` before its last argument (trace_closest(o, d, tmax,
+//   skip, hit)): an instance the ray cannot meet, which the traversal does not enter. A ray that
+//   leaves a surface on its geometric normal's side passes SurfacePoint.exit_instance (set where
+//   the whole mesh lies behind the hit triangle, rayvr.scene.convex_faces): a bounce or shadow
+//   ray off a convex mesh then skips that mesh's BLAS. SCENE_NO_INSTANCE: skip nothing.
 //
 // Render space; d need not be normalised (t is in units of d) but |d| should be ~1 and
 // tmax <= 1e29. `Hit` is declared in scene.glsl. Both faces are hit; alpha-masked materials
@@ -72,6 +77,8 @@
 // coin per BLEND surface, as trace_occluded; between: exact while the product stays above it).
 // RQ_STATS 1: count per invocation rq_stat_nodes (internal nodes visited, of RQ_BVH_WIDTH),
 // rq_stat_triangles (triangle tests) and rq_stat_instances (BLAS entries) for the kernel to store.
+// RQ_CONVEX_SKIP 1 (GpuScene.defines(): the scene has such triangles): the traversal honours
+// `skip`; 0 compiles it out.
 // RQ_COUNT_RAYS 1: rq_rays counts the queries the invocation began (glsl/ray_counters.glsl sums them per view).
 #pragma once
 #include "scene.glsl"
@@ -93,6 +100,9 @@
 #endif
 #ifndef RQ_BLEND_ROULETTE
 #define RQ_BLEND_ROULETTE 0.0   // trace_transmittance: below this product of (1 - alpha), Russian roulette (0: exact)
+#endif
+#ifndef RQ_CONVEX_SKIP
+#define RQ_CONVEX_SKIP 0
 #endif
 #ifndef RQ_BVH_WIDTH
 #define RQ_BVH_WIDTH 4       // the node layout GpuScene uploaded: 2 (BVH2), 4 (BVH4) or 8 (BVH8); GpuScene.defines() sets it
@@ -412,7 +422,7 @@ bool rq_leaf(RqRay r, uint instance, uint first, uint count, inout float tmax, i
         uint alpha_mode = floatBitsToUint(v1.w);   // the slot's copy of its material's: opaque hits load nothing more
         if (alpha_mode != ALPHA_MODE_OPAQUE) {
             uint tri = scene_triangle(instance, prim);
-            uint m = scene_triangle_materials[tri];
+            uint m = triangle_material(tri);
 #if SCENE_HAS_ALPHA_BLEND
             if (rq_fractional && alpha_mode == ALPHA_MODE_BLEND) {
                 if (rq_blend_dims(m, tri, instance, t, b)) continue;   // dimmed, not blocked
@@ -458,7 +468,7 @@ RqRay rq_object_ray(vec3 o_render, vec3 d_render, uint instance) {
 // A traversal work item: an internal node index, or (RQ_LEAF_BIT) a leaf: first slot in bits
 // 0..27, count - 1 in bits 28..30 (leaves hold 1..8 triangles; a TLAS leaf is one instance).
 #define RQ_LEAF_BIT 0x80000000u
-#define RQ_NO_INSTANCE 0xFFFFFFFFu
+#define RQ_NO_INSTANCE SCENE_NO_INSTANCE
 
 uint rq_item(uint link, uint count) {
     return count == 0u ? link : (RQ_LEAF_BIT | ((count - 1u) << 28) | link);
@@ -471,6 +481,9 @@ float rq_tmax;             // the nearest hit so far, or the ray's end
 bool rq_any_hit;
 RqRay rq_r;                // the ray in the current level's space: rebuilt, not kept, on leaving a BLAS (fewer registers)
 uint rq_instance;          // RQ_NO_INSTANCE in the TLAS
+#if RQ_CONVEX_SKIP
+uint rq_skip;              // the instance this ray does not enter
+#endif
 int rq_blas_base;          // stack depth when the current BLAS was entered
 int rq_sp;
 #if RQ_BVH_WIDTH == 8
@@ -487,9 +500,12 @@ bool rq_done;
 bool rq_found;
 Hit rq_hit;
 
-// Start tracing (o, d) over (0, tmax_in). Unless rq_done (a scene without instances), call
-// rq_step() until it returns false.
-void rq_begin(vec3 o, vec3 d, float tmax_in, bool any_hit) {
+// Start tracing (o, d) over (0, tmax_in), not entering instance `skip`. Unless rq_done (a scene
+// without instances), call rq_step() until it returns false.
+void rq_begin(vec3 o, vec3 d, float tmax_in, bool any_hit, uint skip) {
+#if RQ_CONVEX_SKIP
+    rq_skip = skip;
+#endif
     rq_hit.t = tmax_in;
     rq_hit.barycentrics = vec2(0.0);
     rq_hit.instance = RQ_NO_INSTANCE;
@@ -515,6 +531,17 @@ void rq_begin(vec3 o, vec3 d, float tmax_in, bool any_hit) {
 #endif
 #if defined(RQ_COUNT_RAYS) && RQ_COUNT_RAYS
     ++rq_rays;
+#endif
+}
+
+void rq_begin(vec3 o, vec3 d, float tmax_in, bool any_hit) { rq_begin(o, d, tmax_in, any_hit, RQ_NO_INSTANCE); }
+
+// Whether the ray passes by instance i without entering it.
+bool rq_skips(uint i) {
+#if RQ_CONVEX_SKIP
+    return i == rq_skip;
+#else
+    return false;
 #endif
 }
 
@@ -566,9 +593,11 @@ bool rq_step() {
         if (rq_instance == RQ_NO_INSTANCE) {   // a TLAS leaf group: enter its first instance's BLAS
             uint u = rq_leaves.x + uint(findLSB(rq_leaves.y));
             rq_leaves.y &= rq_leaves.y - 1u;
+            uint entered = floatBitsToUint(rq_tlas_nodes[u >> 2][u & 3u]);
+            if (rq_skips(entered)) return true;   // the group's other instances, or its way out below
             if (rq_group.y >= 0x100u && rq_sp < RQ_STACK_ENTRIES) rq_stack[rq_sp++] = rq_group;
             if (rq_leaves.y != 0u && rq_sp < RQ_STACK_ENTRIES) rq_stack[rq_sp++] = uvec2(rq_leaves.x, rq_leaves.y | RQ_LEAF_GROUP);
-            rq_group = uvec2(rq_enter_instance(floatBitsToUint(rq_tlas_nodes[u >> 2][u & 3u])), 0x100u);
+            rq_group = uvec2(rq_enter_instance(entered), 0x100u);
             rq_leaves.y = 0u;
             return true;
         }
@@ -674,8 +703,10 @@ bool rq_step() {
         }
 #endif
     } else if (rq_instance == RQ_NO_INSTANCE) {   // a TLAS leaf: enter the instance's BLAS
-        rq_next = rq_enter_instance(rq_next & 0x0FFFFFFFu);
-        return true;
+        if (!rq_skips(rq_next & 0x0FFFFFFFu)) {
+            rq_next = rq_enter_instance(rq_next & 0x0FFFFFFFu);
+            return true;
+        }
     } else {
         rq_found = rq_leaf(rq_r, rq_instance, rq_next & 0x0FFFFFFFu, ((rq_next >> 28) & 7u) + 1u, rq_tmax, rq_hit, rq_any_hit)
                    || rq_found;
@@ -694,8 +725,8 @@ bool rq_step() {
 }
 #endif
 
-bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
-    rq_begin(o, d, tmax_in, any_hit);
+bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, uint skip, out Hit hit) {
+    rq_begin(o, d, tmax_in, any_hit, skip);
     if (!rq_done) {
         while (rq_step()) {}
     }
@@ -703,21 +734,24 @@ bool rq_trace(vec3 o, vec3 d, float tmax_in, bool any_hit, out Hit hit) {
     return rq_found;
 }
 
-bool trace_closest(vec3 o, vec3 d, float tmax, out Hit hit) { return rq_trace(o, d, tmax, false, hit); }
+bool trace_closest(vec3 o, vec3 d, float tmax, uint skip, out Hit hit) { return rq_trace(o, d, tmax, false, skip, hit); }
+bool trace_closest(vec3 o, vec3 d, float tmax, out Hit hit) { return rq_trace(o, d, tmax, false, RQ_NO_INSTANCE, hit); }
 
-bool trace_occluded(vec3 o, vec3 d, float tmax) {
+bool trace_occluded(vec3 o, vec3 d, float tmax, uint skip) {
     Hit h;
-    return rq_trace(o, d, tmax, true, h);
+    return rq_trace(o, d, tmax, true, skip, h);
 }
+bool trace_occluded(vec3 o, vec3 d, float tmax) { return trace_occluded(o, d, tmax, RQ_NO_INSTANCE); }
 
-float trace_transmittance(vec3 o, vec3 d, float tmax) {
+float trace_transmittance(vec3 o, vec3 d, float tmax, uint skip) {
 #if SCENE_HAS_ALPHA_BLEND
     rq_fractional = true;
     rq_transmittance = 1.0;
-    bool blocked = trace_occluded(o, d, tmax);
+    bool blocked = trace_occluded(o, d, tmax, skip);
     rq_fractional = false;
     return blocked ? 0.0 : rq_transmittance;
 #else
-    return trace_occluded(o, d, tmax) ? 0.0 : 1.0;
+    return trace_occluded(o, d, tmax, skip) ? 0.0 : 1.0;
 #endif
 }
+float trace_transmittance(vec3 o, vec3 d, float tmax) { return trace_transmittance(o, d, tmax, RQ_NO_INSTANCE); }

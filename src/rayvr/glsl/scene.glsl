@@ -69,8 +69,14 @@ layout(std430, binding = RAYVR_INSTANCE_SSBO) readonly buffer SceneInstances {
 };
 layout(std430, binding = RAYVR_MATERIAL_SSBO) readonly buffer SceneMaterials { MaterialData scene_materials[]; };
 layout(std430, binding = RAYVR_TRIANGLE_MATERIAL_SSBO) readonly buffer SceneTriangleMaterials {
-    uint scene_triangle_materials[];   // per scene triangle
+    uint scene_triangle_materials[];   // per scene triangle: material id | TRIANGLE_CONVEX_BIT
 };
+// The whole mesh lies behind this triangle (rayvr.scene.convex_faces): a ray leaving it through
+// its front cannot meet the mesh again.
+#define TRIANGLE_CONVEX_BIT 0x80000000u
+#define SCENE_NO_INSTANCE 0xFFFFFFFFu
+
+uint triangle_material(uint tri) { return scene_triangle_materials[tri] & ~TRIANGLE_CONVEX_BIT; }
 #if SCENE_HAS_NORMAL_MAPS
 layout(std430, binding = RAYVR_TANGENT_SSBO) readonly buffer SceneTangents { vec4 scene_tangents[]; };
 #endif
@@ -312,7 +318,7 @@ RasterVertex scene_raster_vertex(uint instance, int vertex_id) {
     r.face_normal = instance_face_normal(instance, scene_vertices[scene_indices[3u * r.triangle]].position_u.xyz,
                                          scene_vertices[scene_indices[3u * r.triangle + 1u]].position_u.xyz,
                                          scene_vertices[scene_indices[3u * r.triangle + 2u]].position_u.xyz);
-    r.material = scene_triangle_materials[r.triangle];
+    r.material = triangle_material(r.triangle);
     return r;
 }
 
@@ -336,6 +342,9 @@ struct SurfacePoint {
     bool front_face;         // the ray hit the side the winding makes the front
     uint triangle;           // scene triangle
     float uv_lod;            // log2 of the ray cone's footprint in uv units (UV_LOD_FINEST: none)
+    // the hit's instance where this is a front face with its whole mesh behind it, so that rays
+    // leaving on geometric_normal's side may skip the instance (ray_query.glsl), else SCENE_NO_INSTANCE
+    uint exit_instance;
 };
 
 vec3 apply_normal_map(SurfacePoint s, uint tri, vec3 w, uint instance) {
@@ -379,7 +388,9 @@ SurfacePoint surface_at_cone(Hit h, vec3 dir, float cone_width) {
     if (dot(s.normal, s.geometric_normal) < 0.0) s.normal = -s.normal;
     s.uv = w.x * vec2(a.position_u.w, a.normal_v.w) + w.y * vec2(b.position_u.w, b.normal_v.w)
          + w.z * vec2(c.position_u.w, c.normal_v.w);
-    s.material = scene_triangle_materials[tri];
+    uint word = scene_triangle_materials[tri];
+    s.material = word & ~TRIANGLE_CONVEX_BIT;
+    s.exit_instance = s.front_face && (word & TRIANGLE_CONVEX_BIT) != 0u ? h.instance : SCENE_NO_INSTANCE;
     s.triangle = tri;
     s.uv_lod = UV_LOD_FINEST;
 #if SCENE_HAS_TEXTURES

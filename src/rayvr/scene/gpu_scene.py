@@ -25,10 +25,12 @@ from ..materials import bsdf_tables
 from ..materials.material import Material
 from . import bvh as bvh_mod
 from . import bvh_layouts, bvh_wide, light_table
+from .convex_faces import convex_faces
 from .gpu_frame import SceneFrame
 from .model import DEFAULT_ENVIRONMENT, FEATURES, Scene
 
 MAX_TEXTURE_SIZE = 2048
+TRIANGLE_CONVEX_BIT = 0x80000000   # glsl/scene.glsl: the whole mesh lies behind this triangle
 MAX_ENVIRONMENT_HEIGHT = 1024   # environment maps above 2048x1024 are box-filtered down to it
 GPU_BVH_MIN = 200_000         # 'auto' builds meshes this big on the GPU (hardware drivers only)
 BVH_LAYOUTS = bvh_layouts.LAYOUTS
@@ -149,6 +151,7 @@ class GpuScene:
         tangents = np.tile(np.array([1, 0, 0, 1], np.float32), (first_v[-1], 1)) if normal_maps else None
         idx = np.empty((t_total, 3), np.uint32)
         tri_mats = np.empty(t_total, np.uint32)
+        self.convex_faces = self._convex_faces()
         slots = np.zeros((t_total, 3, 4), np.float32)   # a BVH slot per triangle (empty meshes have none)
         nodes = np.empty((first_n[-1], self.node_floats), np.float32)
         self.mesh_corners = np.zeros((max(len(s.meshes), 1), 8, 4))
@@ -158,7 +161,7 @@ class GpuScene:
             if normal_maps and mesh.tangents is not None:
                 tangents[v] = mesh.tangents
             idx[t] = mesh.indices + np.uint32(first_v[k])
-            tri_mats[t] = mesh.material_ids
+            tri_mats[t] = self._triangle_words(k)
         self.mesh_live = np.array([b is not None for b in self.blas] or [False])
         any_mesh, any_bvh = bool(s.meshes), len(nodes) > 0
         self._buffer("vertices", verts if any_mesh else np.zeros((1, 8), np.float32))
@@ -172,6 +175,26 @@ class GpuScene:
             self._buffer("tangents", tangents)
         self.mesh_index_offsets = 3 * first_t
         self.timings["blas_build_ms"] = (time.perf_counter() - t0) * 1e3
+
+    def _convex_faces(self) -> list[np.ndarray]:
+        """Per mesh, its triangles with the whole mesh behind them (convex_faces), each distinct
+        mesh once (instanced copies of one shape are often separate glTF meshes)."""
+        t0 = time.perf_counter()
+        seen: dict[tuple, np.ndarray] = {}
+        out = []
+        for m in self.scene.meshes:
+            key = (m.positions.shape, m.indices.shape, hash(m.positions.tobytes()), hash(m.indices.tobytes()))
+            if key not in seen:
+                seen[key] = convex_faces(m.positions, m.indices)
+            out.append(seen[key])
+        self.timings["convex_faces_ms"] = (time.perf_counter() - t0) * 1e3
+        return out
+
+    def _triangle_words(self, k: int) -> np.ndarray:
+        """Mesh k's per-triangle words of the triangle_materials buffer: the material id, and
+        TRIANGLE_CONVEX_BIT where the whole mesh lies behind the triangle (glsl/scene.glsl)."""
+        words = self.scene.meshes[k].material_ids.astype(np.uint32)
+        return words | np.where(self.convex_faces[k], np.uint32(TRIANGLE_CONVEX_BIT), np.uint32(0))
 
     def _pack_mesh(self, k: int, verts: np.ndarray, slots: np.ndarray, nodes: np.ndarray) -> None:
         """Write mesh k's vertex rows, BVH slots and BLAS nodes (links offset to its place in the
@@ -457,6 +480,7 @@ class GpuScene:
             have -= {"SCENE_HAS_ENVIRONMENT", "SCENE_HAS_ENVIRONMENT_MAP"}
         return {**{f: int(f in have) for f in FEATURES}, "SCENE_SCALE": repr(self.scale),
                 "LIGHTS_SPATIAL": int(self.spatial_lights and "SCENE_HAS_EMISSIVE_TRIANGLES" in have),
+                "RQ_CONVEX_SKIP": int(any(c.any() for c in self.convex_faces)),
                 **bvh_layouts.DEFINES[self.bvh_layout]}
 
     @property
@@ -512,6 +536,9 @@ class GpuScene:
         b = self.blas[mesh]
         if b is not None:
             b.refit(*bvh_mod.triangle_bounds(m.triangles()))
+        if self.convex_faces[mesh].any():   # a deforming mesh need not stay convex: no skipping
+            self.convex_faces[mesh] = np.zeros(m.triangle_count, bool)
+            self.buffers["triangle_materials"].write(self._triangle_words(mesh), offset=int(self._first_t[mesh]) * 4)
         self._rewrite_mesh(mesh, ("vertices", "triangles", "blas_nodes"))
         self.frame.invalidate()
 
@@ -562,6 +589,7 @@ class GpuScene:
             "blas_node_bytes_per_triangle": sum(b.nbytes for b in self._blas_gpu if b is not None)
                                             / max(self.triangle_count, 1),
             "emissive_triangles": self.emissive_count,
+            "convex_triangles": int(sum(int(c.sum()) for c in self.convex_faces)),
             "lights": {"table_entries": self.lights.count, "environment": self.environment.name if self.environment
                        else "none", "environment_probability": self.lights.probability_of(light_table.KIND_ENVIRONMENT)},
             "punctual_light_kinds": sorted({("point", "spot", "directional")[L.type] for L in self.scene.lights}),

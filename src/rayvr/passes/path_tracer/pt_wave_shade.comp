@@ -54,7 +54,7 @@ void ptw_store_state(uint i, PtPath path, PtRays r, uint flags, Rng rng) {
     ptw_storefu(PTW_NEE, i, r.nee, rng_word(rng));
     ptw_storef(PTW_DIR, i, r.dir, r.cone_spread);
     ptw_storef(PTW_NG, i, r.ng, r.nee_dist);
-    ptw_storef(PTW_NEE_DIR, i, r.nee_dir, 0.0);
+    ptw_storefu(PTW_NEE_DIR, i, r.nee_dir, r.exit_instance);
 #if PTW_HAS_MEDIUM
     ptw_storef(PTW_MEDIUM, i, path.medium, 0.0);
 #endif

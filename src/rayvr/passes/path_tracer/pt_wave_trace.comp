@@ -27,13 +27,20 @@ void ptw_blend_resume(uint i, ivec3 p) {
 #endif
 }
 
-// Path i's shadow ray (so, sd, stmax): false when its vertex has none.
-bool ptw_shadow_ray(uint i, out vec3 so, out vec3 sd, out float stmax) {
+// Path i's shadow ray (so, sd, stmax, the instance it skips): false when its vertex has none.
+bool ptw_shadow_ray(uint i, out vec3 so, out vec3 sd, out float stmax, out uint skip) {
     vec4 ng = ptw_loadf(PTW_NG, i);
     so = offset_ray_origin(uintBitsToFloat(ptw_load(PTW_POS, i).xyz), ng.xyz);
-    sd = ptw_loadf(PTW_NEE_DIR, i).xyz;
+    uvec4 nee_dir = ptw_load(PTW_NEE_DIR, i);
+    sd = uintBitsToFloat(nee_dir.xyz);
+    skip = nee_dir.w;
     stmax = ng.w;
     return ng.w >= 0.0;
+}
+
+// The instance path i's BSDF ray skips: its vertex's exit instance unless the ray is transmitted.
+uint ptw_bsdf_skip(uint i, uint flags) {
+    return (flags & PTW_TRANSMITTED) != 0u ? SCENE_NO_INSTANCE : ptw_load(PTW_NEE_DIR, i).w;
 }
 
 // Path i's BSDF ray (o, d) from its state flags: false when it scattered none. Loaded after its
@@ -73,6 +80,7 @@ void main() {
     uint i = 0u, answer = 0u;
     bool shadow_ray = false, then_closest = false;   // the ray in flight is the shadow ray; the BSDF ray follows
     vec3 o = vec3(0.0), d = vec3(0.0);
+    uint skip = SCENE_NO_INSTANCE, bsdf_skip = SCENE_NO_INSTANCE;
     while (true) {
         if (!drained) {
             bool need = !tracing;
@@ -91,12 +99,14 @@ void main() {
                     vec3 so, sd;
                     float stmax;
                     ptw_blend_resume(i, ptw_slot_pixel(i));
-                    shadow_ray = ptw_shadow_ray(i, so, sd, stmax);
-                    bool closest = ptw_bsdf_ray(i, ptw_load(PTW_POS, i).w, o, d);
+                    shadow_ray = ptw_shadow_ray(i, so, sd, stmax, skip);
+                    uint flags = ptw_load(PTW_POS, i).w;
+                    bool closest = ptw_bsdf_ray(i, flags, o, d);
+                    bsdf_skip = ptw_bsdf_skip(i, flags);
                     answer = shadow_ray ? PTW_SHADOW : 0u;
                     then_closest = shadow_ray && closest;
-                    if (shadow_ray) rq_begin(so, sd, stmax, true);
-                    else if (closest) rq_begin(o, d, 1e30, false);
+                    if (shadow_ray) rq_begin(so, sd, stmax, true, skip);
+                    else if (closest) rq_begin(o, d, 1e30, false, bsdf_skip);
                     tracing = (shadow_ray || closest) && !rq_done;
                     if (!tracing) {   // no rays, or no instances
                         ptw_answer(i, false, rq_hit, answer);
@@ -111,7 +121,7 @@ void main() {
                 if (shadow_ray && rq_found) answer |= PTW_OCCLUDED;
                 if (then_closest) {   // the shadow ray is answered: now the BSDF ray
                     shadow_ray = then_closest = false;
-                    rq_begin(o, d, 1e30, false);
+                    rq_begin(o, d, 1e30, false, bsdf_skip);
                 } else {
                     ptw_answer(i, !shadow_ray && rq_found, rq_hit, answer);
                     ray_count_commit(uint(ptw_slot_pixel(i).z));   // this path's rays, to its view
@@ -129,6 +139,7 @@ void main() {
     if (!ptw_path(i, p)) return;
     uint answer = 0u;
     vec3 o, d;
+    uint skip = SCENE_NO_INSTANCE;   // a camera ray skips nothing
     bool closest = true;   // a BSDF or camera ray to trace (one call site: the traversal is inlined once)
 #if PTW_CAMERA_RAYS
     Rng rng = pt_rng(p, pt_sample);   // also the BLEND decisions' seed
@@ -140,12 +151,15 @@ void main() {
     {
         vec3 so, sd;
         float stmax;
-        if (ptw_shadow_ray(i, so, sd, stmax)) answer = PTW_SHADOW | (trace_occluded(so, sd, stmax) ? PTW_OCCLUDED : 0u);
+        uint shadow_skip;
+        if (ptw_shadow_ray(i, so, sd, stmax, shadow_skip))
+            answer = PTW_SHADOW | (trace_occluded(so, sd, stmax, shadow_skip) ? PTW_OCCLUDED : 0u);
     }
     closest = ptw_bsdf_ray(i, flags, o, d);
+    skip = ptw_bsdf_skip(i, flags);
 #endif
     Hit hit;
-    bool found = closest && trace_closest(o, d, 1e30, hit);
+    bool found = closest && trace_closest(o, d, 1e30, skip, hit);
     ptw_answer(i, found, hit, answer);
     ray_count_commit(uint(p.z));
 }
