@@ -19,6 +19,10 @@ uint gbuf_effect_of(uint word) { return word & 0xFFu; }
 uint gbuf_material_of(uint word) { return word >> 8u; }
 uint gbuf_pack_effect(uint effect, uint material) { return (material << 8u) | (effect & 0xFFu); }
 
+// normW.w: the surface's SurfacePoint.exit_instance + 1 (0: none; exact below 2^24 instances).
+float gbuf_pack_exit(uint exit_instance) { return exit_instance < 0xFFFFFFu ? float(exit_instance + 1u) : 0.0; }
+uint gbuf_exit_of(float w) { return w >= 1.0 ? uint(w) - 1u : 0xFFFFFFFFu; }
+
 #ifdef GBUF_WRITER
 // The effect a surface of material m is shaded with: its material's, but with REFLECTION_MAX_ROUGHNESS
 // (rayvr/passes/gbuffer/reflection_cutoff.py) a REFLECTIONS surface rougher than that and not
@@ -33,14 +37,15 @@ uint gbuf_effect_for(MaterialParams m) {
 
 // The texel of the surface at render-space `pos` seen from view v: normals already facing the
 // viewer, `front_face` whether the viewer sees the side the winding makes the front, material m
-// (index `material`). The back of a single-sided emitter emits nothing (as a ray hit's in the
+// (index `material`), `exit_instance` what rays leaving on ng's side may skip (SurfacePoint's). The back of a single-sided emitter emits nothing (as a ray hit's in the
 // path tracer); faceNormalW.w is 1 where the back is seen, so readers know a volume's inside.
 // Motion comes from the unjittered view_proj and prev_view_proj, so it carries no TAA jitter.
 // Needs views.glsl and scene.glsl.
-GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, bool front_face, MaterialParams m, uint material) {
+GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, bool front_face, MaterialParams m, uint material,
+                         uint exit_instance) {
     GBufferTexel t;
     t.posW = vec4(pos, -(views[v].view * vec4(pos, 1.0)).z);
-    t.normW = vec4(n, 0.0);
+    t.normW = vec4(n, gbuf_pack_exit(exit_instance));
     t.faceNormalW = vec4(ng, front_face ? 0.0 : 1.0);
     t.baseColor = vec4(m.base_color, m.alpha);
     // float16 rounds roughness either way: keep the side of the delta threshold (a near mirror
@@ -87,6 +92,7 @@ struct GSurface {
     vec3 emissive;
     uint effect;
     uint material;
+    uint exit_instance;   // SurfacePoint.exit_instance (0xFFFFFFFF: none)
 };
 
 #ifdef GBUF_READER
@@ -95,7 +101,9 @@ uint gbuf_effect_at(ivec3 p) { return gbuf_effect_of(gbuf_fetch_effect(p)); }
 GSurface gbuf_load(ivec3 p) {
     GSurface s;
     s.pos = gbuf_fetch_posW(p).xyz;
-    s.n = normalize(gbuf_fetch_normW(p).xyz);
+    vec4 n = gbuf_fetch_normW(p);
+    s.n = normalize(n.xyz);
+    s.exit_instance = gbuf_exit_of(n.w);
     vec4 ng = gbuf_fetch_faceNormalW(p);
     s.ng = normalize(ng.xyz);
     s.front_face = ng.w < 0.5;

@@ -39,6 +39,9 @@ vec3 adapt_shading_normal(vec3 n, vec3 ng, vec3 v) {
     return normalize(v + raised);   // the half vector: v mirrors to `raised` about it
 }
 
+// What a ray leaving s along dir may skip: s's exit instance if dir leaves on ng's side.
+uint path_vertex_skip(PathVertex s, vec3 dir) { return dot(dir, s.ng) > 0.0 ? s.exit_instance : SCENE_NO_INSTANCE; }
+
 // The vertex where `hit` of a ray along `dir` lies; `cone_width` is the ray cone's width at the
 // hit. `sp` and `mp` return the surface and its material (emission, flags) for the caller.
 PathVertex path_vertex_at_hit(Hit hit, vec3 dir, float cone_width, float cone_spread,
@@ -92,7 +95,7 @@ PathVertex path_vertex_at_gbuffer_seen(GSurface g, uint view, vec3 v) {
     s.attenuation = m.attenuation;
     s.cone_spread = view_pixel_spread(view);
     s.cone_width = distance(views[view].eye.xyz, g.pos) * s.cone_spread;
-    s.exit_instance = SCENE_NO_INSTANCE;   // the G-buffer keeps no instance
+    s.exit_instance = g.exit_instance;
     return s;
 }
 

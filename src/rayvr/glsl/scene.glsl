@@ -300,6 +300,7 @@ struct RasterVertex {
     vec3 face_normal;   // the triangle's instance_face_normal (the front side; unnormalised)
     uint material;
     uint triangle;   // scene triangle
+    bool convex;     // its whole mesh lies behind it (TRIANGLE_CONVEX_BIT)
 };
 
 RasterVertex scene_raster_vertex(uint instance, int vertex_id) {
@@ -318,7 +319,9 @@ RasterVertex scene_raster_vertex(uint instance, int vertex_id) {
     r.face_normal = instance_face_normal(instance, scene_vertices[scene_indices[3u * r.triangle]].position_u.xyz,
                                          scene_vertices[scene_indices[3u * r.triangle + 1u]].position_u.xyz,
                                          scene_vertices[scene_indices[3u * r.triangle + 2u]].position_u.xyz);
-    r.material = triangle_material(r.triangle);
+    uint word = scene_triangle_materials[r.triangle];
+    r.material = word & ~TRIANGLE_CONVEX_BIT;
+    r.convex = (word & TRIANGLE_CONVEX_BIT) != 0u;
     return r;
 }
 

@@ -60,7 +60,7 @@ vec3 shade_direct_mis(PathVertex s, inout Rng rng, bool specular_traced) {
         vec3 dir;
         float tmax;
         shadow_ray(s.pos, origin, ls, dir, tmax);
-        float visible = trace_transmittance(origin, dir, tmax);
+        float visible = trace_transmittance(origin, dir, tmax, path_vertex_skip(s, dir));
         if (visible <= 0.0) continue;
         c *= visible;
 #endif

@@ -132,6 +132,7 @@ class GpuScene:
     def _build_meshes(self, method: str, progress) -> None:
         """Build the BLASes and pack every mesh into the shared vertex, index, triangle-slot and
         BLAS-node buffers: each buffer allocated once at its total size, each mesh its slice."""
+        self.convex_faces = self._convex_faces()   # timed apart from the BLAS builds
         t0 = time.perf_counter()
         s = self.scene
         built = self._build_blas(method, progress)
@@ -151,7 +152,6 @@ class GpuScene:
         tangents = np.tile(np.array([1, 0, 0, 1], np.float32), (first_v[-1], 1)) if normal_maps else None
         idx = np.empty((t_total, 3), np.uint32)
         tri_mats = np.empty(t_total, np.uint32)
-        self.convex_faces = self._convex_faces()
         slots = np.zeros((t_total, 3, 4), np.float32)   # a BVH slot per triangle (empty meshes have none)
         nodes = np.empty((first_n[-1], self.node_floats), np.float32)
         self.mesh_corners = np.zeros((max(len(s.meshes), 1), 8, 4))

@@ -46,7 +46,8 @@ NO_GEOMETRY = 0xFF   # the effect word where nothing was drawn (gbuffer.glsl GBU
 CHANNELS = (
     Channel("posW", "rgba32f", (0.0, 0.0, 0.0, 0.0),
             "render-space position; w = linear eye depth (0: no geometry)"),
-    Channel("normW", "rgba32f", (0.0, 0.0, 0.0, 0.0), "shading normal (render space, facing the viewer)"),
+    Channel("normW", "rgba32f", (0.0, 0.0, 0.0, 0.0), "shading normal (render space, facing the viewer); "
+            "w = 1 + the instance rays leaving on the geometric normal's side may skip (0: none)"),
     Channel("faceNormalW", "rgba16f", (0.0, 0.0, 0.0, 0.0), "geometric normal (render space, facing the viewer); w = 1 where the back face is seen"),
     # float16, not rgba8: 8 bits quantise dark colours coarsely (linear: albedo 0.01 stored as
     # 3/255, 18% off; sRGB-encoded still 3% off), and the path tracer reads the material in float

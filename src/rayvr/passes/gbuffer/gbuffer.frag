@@ -13,6 +13,7 @@ in vec2 v_uv;
 in vec4 v_tangent;
 flat in vec3 v_face_normal;
 flat in uint v_material;
+flat in uint v_convex_instance;
 flat in uint v_view;
 #if SCENE_HAS_ALPHA_BLEND
 flat in uint v_instance;
@@ -53,5 +54,6 @@ void main() {
         n = safe_normalize(tn.x * t + tn.y * b + tn.z * n, n);
     }
 #endif
-    gbuf_output(gbuf_encode(v_view, v_pos, n, ng, front_face, m, v_material));   // one output per channel
+    uint exit_instance = front_face ? v_convex_instance : SCENE_NO_INSTANCE;   // as SurfacePoint's
+    gbuf_output(gbuf_encode(v_view, v_pos, n, ng, front_face, m, v_material, exit_instance));   // one output per channel
 }

@@ -24,6 +24,7 @@ out vec2 v_uv;
 out vec4 v_tangent;
 flat out vec3 v_face_normal;
 flat out uint v_material;
+flat out uint v_convex_instance;   // the instance where the triangle has its whole mesh behind it
 flat out uint v_view;
 #if SCENE_HAS_ALPHA_BLEND
 flat out uint v_instance;
@@ -38,6 +39,7 @@ void main() {
     v_tangent = r.tangent;
     v_face_normal = r.face_normal;
     v_material = r.material;
+    v_convex_instance = r.convex ? rayvr_instance : SCENE_NO_INSTANCE;
     v_view = view;
 #if SCENE_HAS_ALPHA_BLEND
     v_instance = rayvr_instance;

@@ -25,7 +25,7 @@ GBufferTexel primary_surface(uint v, ivec2 pixel) {
     // surface_at_cone turns the shading normal to the (viewer-facing) face normal's side, as the raster path does
     SurfacePoint s = surface_at_cone(hit, d, (t_near + hit.t) * view_pixel_spread(v));
     return gbuf_encode(v, s.position, s.normal, s.geometric_normal, s.front_face,
-                       material_params_at(s.material, s.uv, s.uv_lod), s.material);
+                       material_params_at(s.material, s.uv, s.uv_lod), s.material, s.exit_instance);
 }
 
 void main() {

@@ -45,7 +45,7 @@ void main() {
         vec3 origin = offset_ray_origin(s.pos, s.ng), dir;
         float tmax;
         shadow_ray(s.pos, origin, chosen, dir, tmax);
-        if (!(trace_transmittance(origin, dir, tmax) > 0.0)) {
+        if (!(trace_transmittance(origin, dir, tmax, path_vertex_skip(s, dir)) > 0.0)) {
             r.light = LIGHT_ID_NONE;
             r.weight = 0.0;
         }

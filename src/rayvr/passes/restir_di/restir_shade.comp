@@ -25,7 +25,7 @@ void main() {
             vec3 origin = offset_ray_origin(s.pos, s.ng), dir;
             float tmax;
             shadow_ray(s.pos, origin, ls, dir, tmax);
-            float visible = trace_transmittance(origin, dir, tmax);
+            float visible = trace_transmittance(origin, dir, tmax, path_vertex_skip(s, dir));
             if (visible > 0.0) direct = f * (r.weight * visible);
 #if RESTIR_HINTS
             uint hints = restir_hints_at(p), bit = restir_hint_bit(reservoir_light_id(r));

@@ -67,7 +67,8 @@ void main() {
         // none), else its power-heuristic share with the light sample of the vertex it left
         // (shade_direct_mis there weighs the other share)
         bool whole = bs.delta || bs.transmitted;
-        if (!trace_closest(offset_ray_origin(s.pos, bs.transmitted ? -s.ng : s.ng), bs.l, 1e30, hit)) {
+        if (!trace_closest(offset_ray_origin(s.pos, bs.transmitted ? -s.ng : s.ng), bs.l, 1e30,
+                           path_vertex_skip(s, bs.l), hit)) {
             float w = whole ? 1.0 : power_heuristic(bs.pdf, environment_light_pdf(bs.l));
             radiance += throughput * environment_radiance(bs.l) * w;
             break;
