@@ -14,6 +14,7 @@ RQ_BVH_WIDTH and RQ_BVH_QUANTIZED of `defines()`.
 """
 from __future__ import annotations
 
+import hashlib
 import time
 
 import numpy as np
@@ -183,7 +184,8 @@ class GpuScene:
         seen: dict[tuple, np.ndarray] = {}
         out = []
         for m in self.scene.meshes:
-            key = (m.positions.shape, m.indices.shape, hash(m.positions.tobytes()), hash(m.indices.tobytes()))
+            key = (m.positions.shape, m.indices.shape,
+                   hashlib.blake2b(m.positions.tobytes() + m.indices.tobytes(), digest_size=16).digest())
             if key not in seen:
                 seen[key] = convex_faces(m.positions, m.indices)
             out.append(seen[key])
