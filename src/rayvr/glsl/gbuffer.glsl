@@ -37,8 +37,9 @@ uint gbuf_effect_for(MaterialParams m) {
 
 // The texel of the surface at render-space `pos` seen from view v: normals already facing the
 // viewer, `front_face` whether the viewer sees the side the winding makes the front, material m
-// (index `material`), `exit_instance` what rays leaving on ng's side may skip (SurfacePoint's). The back of a single-sided emitter emits nothing (as a ray hit's in the
-// path tracer); faceNormalW.w is 1 where the back is seen, so readers know a volume's inside.
+// (index `material`), `exit_instance` what rays leaving on ng's side may skip (SurfacePoint's).
+// The back of a single-sided emitter emits nothing (as a ray hit's in the path tracer);
+// faceNormalW.w is 1 where the back is seen, so readers know a volume's inside.
 // Motion comes from the unjittered view_proj and prev_view_proj, so it carries no TAA jitter.
 // Needs views.glsl and scene.glsl.
 GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, bool front_face, MaterialParams m, uint material,

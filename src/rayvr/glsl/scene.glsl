@@ -76,7 +76,14 @@ layout(std430, binding = RAYVR_TRIANGLE_MATERIAL_SSBO) readonly buffer SceneTria
 #define TRIANGLE_CONVEX_BIT 0x80000000u
 #define SCENE_NO_INSTANCE 0xFFFFFFFFu
 
-uint triangle_material(uint tri) { return scene_triangle_materials[tri] & ~TRIANGLE_CONVEX_BIT; }
+uint triangle_word_material(uint word) { return word & ~TRIANGLE_CONVEX_BIT; }
+bool triangle_word_convex(uint word) { return (word & TRIANGLE_CONVEX_BIT) != 0u; }
+uint triangle_material(uint tri) { return triangle_word_material(scene_triangle_materials[tri]); }
+
+// SurfacePoint.exit_instance of a surface seen on a triangle of `convex_instance` (its instance
+// where the triangle is convex, else SCENE_NO_INSTANCE): only a front face, since rays leave on
+// the side seen and only the front has the mesh behind it.
+uint exit_instance_seen(uint convex_instance, bool front_face) { return front_face ? convex_instance : SCENE_NO_INSTANCE; }
 #if SCENE_HAS_NORMAL_MAPS
 layout(std430, binding = RAYVR_TANGENT_SSBO) readonly buffer SceneTangents { vec4 scene_tangents[]; };
 #endif
@@ -320,8 +327,8 @@ RasterVertex scene_raster_vertex(uint instance, int vertex_id) {
                                          scene_vertices[scene_indices[3u * r.triangle + 1u]].position_u.xyz,
                                          scene_vertices[scene_indices[3u * r.triangle + 2u]].position_u.xyz);
     uint word = scene_triangle_materials[r.triangle];
-    r.material = word & ~TRIANGLE_CONVEX_BIT;
-    r.convex = (word & TRIANGLE_CONVEX_BIT) != 0u;
+    r.material = triangle_word_material(word);
+    r.convex = triangle_word_convex(word);
     return r;
 }
 
@@ -392,8 +399,8 @@ SurfacePoint surface_at_cone(Hit h, vec3 dir, float cone_width) {
     s.uv = w.x * vec2(a.position_u.w, a.normal_v.w) + w.y * vec2(b.position_u.w, b.normal_v.w)
          + w.z * vec2(c.position_u.w, c.normal_v.w);
     uint word = scene_triangle_materials[tri];
-    s.material = word & ~TRIANGLE_CONVEX_BIT;
-    s.exit_instance = s.front_face && (word & TRIANGLE_CONVEX_BIT) != 0u ? h.instance : SCENE_NO_INSTANCE;
+    s.material = triangle_word_material(word);
+    s.exit_instance = exit_instance_seen(triangle_word_convex(word) ? h.instance : SCENE_NO_INSTANCE, s.front_face);
     s.triangle = tri;
     s.uv_lod = UV_LOD_FINEST;
 #if SCENE_HAS_TEXTURES

@@ -184,8 +184,9 @@ class GpuScene:
         seen: dict[tuple, np.ndarray] = {}
         out = []
         for m in self.scene.meshes:
-            key = (m.positions.shape, m.indices.shape,
-                   hashlib.blake2b(m.positions.tobytes() + m.indices.tobytes(), digest_size=16).digest())
+            digest = hashlib.blake2b(m.positions, digest_size=16)   # the arrays' own buffers: no copies
+            digest.update(m.indices)
+            key = (m.positions.shape, m.indices.shape, digest.digest())
             if key not in seen:
                 seen[key] = convex_faces(m.positions, m.indices)
             out.append(seen[key])
@@ -538,10 +539,11 @@ class GpuScene:
         b = self.blas[mesh]
         if b is not None:
             b.refit(*bvh_mod.triangle_bounds(m.triangles()))
+        names = ("vertices", "triangles", "blas_nodes")
         if self.convex_faces[mesh].any():   # a deforming mesh need not stay convex: no skipping
             self.convex_faces[mesh] = np.zeros(m.triangle_count, bool)
-            self.buffers["triangle_materials"].write(self._triangle_words(mesh), offset=int(self._first_t[mesh]) * 4)
-        self._rewrite_mesh(mesh, ("vertices", "triangles", "blas_nodes"))
+            names += ("triangle_materials",)
+        self._rewrite_mesh(mesh, names)
         self.frame.invalidate()
 
     def _rewrite_mesh(self, k: int, names) -> None:
@@ -553,7 +555,8 @@ class GpuScene:
         nodes = np.empty((0 if b is None else self._blas_gpu[k].node_count, self.node_floats), np.float32)
         self._pack_mesh(k, verts, slots, nodes)
         for name, data, offset in (("vertices", verts, v_base * 32), ("triangles", slots, t_base * 48),
-                                   ("blas_nodes", nodes, n_base * nodes.itemsize * self.node_floats)):
+                                   ("blas_nodes", nodes, n_base * nodes.itemsize * self.node_floats),
+                                   ("triangle_materials", self._triangle_words(k), t_base * 4)):
             if name in names and len(data):
                 self.buffers[name].write(data, offset=offset)
 

@@ -54,6 +54,6 @@ void main() {
         n = safe_normalize(tn.x * t + tn.y * b + tn.z * n, n);
     }
 #endif
-    uint exit_instance = front_face ? v_convex_instance : SCENE_NO_INSTANCE;   // as SurfacePoint's
-    gbuf_output(gbuf_encode(v_view, v_pos, n, ng, front_face, m, v_material, exit_instance));   // one output per channel
+    gbuf_output(gbuf_encode(v_view, v_pos, n, ng, front_face, m, v_material,
+                            exit_instance_seen(v_convex_instance, front_face)));   // one output per channel
 }
