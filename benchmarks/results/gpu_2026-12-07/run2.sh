@@ -1,7 +1,7 @@
 #!/bin/bash
 # device call 2: issue 33's side-by-side, this tree against Mitsuba 3 (../shared/tools/pt_peer.py, mitsuba_peer.py;
 # 1920x1080, max_bounces 3 = max_depth 4, RR off): Cornell against Mitsuba diffuse, tauray and the spheres against principled
-source benchmarks/results/gpu_2026-12-07/preamble.sh
+source tools/gpu-preamble.sh; nvidia-smi --query-gpu=name,driver_version,clocks.sm,temperature.gpu --format=csv > $OUT/gpu.txt
 mkdir -p /tmp/mi && tar -xJf .peer/mitsuba-slim.tar.xz -C /tmp/mi
 date
 declare -A F=([cornell]=.scenes/cornell/cornell_box.gltf [tauray]=.scenes/tauray_test.glb [spheres]=.scenes/MetalRoughSpheresNoTextures.glb)
