@@ -216,17 +216,56 @@ def test_bad_trace_settings_are_one_clear_error(gpu):
 
 def test_reuse_under_the_clean_preset_converges_as_independent_eyes_do(gpu):
     """Probe GI, SVGF and TAA over reused light: a still stereo view's second eye ends as close to
-    the converged image as independent eyes do."""
+    the converged image as independent eyes do, and so do both eyes when they alternate as the
+    source."""
     scene = lambert_cornell()
     out = {}
-    for reuse, frames in ((None, 96), (None, 12), ("views", 12)):
-        with Renderer(scene, rv.graphs.hybrid(reuse=reuse), views=2, size=SIZE) as r:
+    for reuse, frames, alternate in ((None, 96, False), (None, 12, False), ("views", 12, False), ("views", 12, True)):
+        g = rv.graphs.hybrid(reuse=reuse, decision={"alternate": True} if alternate else None)
+        with Renderer(scene, g, views=2, size=SIZE) as r:
             for _ in range(frames):
                 r.render()
-            out[reuse, frames] = r.read_output("TAA.dst")[..., :3].astype(np.float64)
-    reference = out[None, 96][1]
-    e_reused, e_independent = rel_mse(out["views", 12][1], reference), rel_mse(out[None, 12][1], reference)
+            out[reuse, frames, alternate] = r.read_output("TAA.dst")[..., :3].astype(np.float64)
+    reference = out[None, 96, False]
+    e_independent = rel_mse(out[None, 12, False][1], reference[1])
+    e_reused = rel_mse(out["views", 12, False][1], reference[1])
     assert e_reused < 1.5 * e_independent + 1e-4, (e_reused, e_independent)
+    # eyes that take turns as the source carry their denoiser's history through the frames they borrow
+    e_alternate = max(rel_mse(out["views", 12, True][v], reference[v]) for v in range(2))
+    assert e_alternate < 1.5 * e_independent + 1e-4, (e_alternate, e_independent)
+
+
+def test_reused_light_is_denoised_once_in_the_source_eye(gpu):
+    """SVGF filters the source eye; the second eye's reused pixels take its filtered light at their
+    point (bilinear over the first eye's pixels there), remodulated by their own albedo: on a
+    wall of one colour, the first eye's denoised colour there. Filtering each eye's own noisy light
+    left them 1-13% apart."""
+    g = rv.graphs.hybrid(reuse="views")
+    for pin in ("SVGF.color", DECISION, "GBuffer.effect", "GBuffer.faceNormalW"):
+        g.mark_output(pin)
+    with Renderer(lambert_cornell(), g, views=2, size=SIZE) as r:
+        for _ in range(2):
+            r.render()
+        color = r.read_output("SVGF.color")[..., :3].astype(np.float64)
+        t = r.read_output(DECISION)
+        word = r.read_output("GBuffer.effect")[..., 0]
+        ng = r.read_output("GBuffer.faceNormalW")[..., :3].astype(np.float64)
+    k = t[..., 0] & 3
+    px, py = (t[1, ..., 1] & 0xFFFF) / 8.0 - 0.5, (t[1, ..., 1] >> 16) / 8.0 - 0.5   # taps at pixel centres
+    errors = []
+    for y, x in zip(*np.nonzero(k[1] == REUSE)):
+        x0, y0 = int(np.floor(px[y, x])), int(np.floor(py[y, x]))
+        fx, fy = px[y, x] - x0, py[y, x] - y0
+        taps = [((y0, x0), (1 - fx) * (1 - fy)), ((y0, x0 + 1), fx * (1 - fy)), ((y0 + 1, x0), (1 - fx) * fy),
+                ((y0 + 1, x0 + 1), fx * fy)]
+        if not (0 <= x0 < SIZE[0] - 1 and 0 <= y0 < SIZE[1] - 1):
+            continue
+        if any(k[0][q] != TRACE or word[0][q] != word[1][y, x] or ng[0][q] @ ng[1][y, x] < 0.999 for q, _ in taps):
+            continue   # the wall's edge: the taps that show its surface alone
+        expected = sum(w * color[0][q] for q, w in taps)
+        errors.append(np.abs(color[1][y, x] - expected).max() / expected.max())
+    assert len(errors) > 300
+    assert max(errors) < 2e-3, np.percentile(errors, [50, 90, 100])
 
 
 def test_alternating_sources_swap_the_eyes_each_frame(gpu):

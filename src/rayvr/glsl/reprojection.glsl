@@ -18,8 +18,6 @@
 const float REPROJECT_NORMAL_COS = 0.9;
 const float REPROJECT_DEPTH_TOLERANCE = 0.02;
 
-bool pixel_inside(ivec2 q, ivec2 size) { return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, size)); }
-
 vec2 reprojected_pixel(ivec3 p) { return vec2(p.xy) + 0.5 - gbuf_fetch_motion(p); }
 
 float reprojected_depth(uint v, vec3 pos) { return (views[v].prev_view_proj * vec4(pos, 1.0)).w; }

@@ -11,7 +11,8 @@
 // traced pixels, so reconstruction is one dispatch after the tracing (passes/trace_decision/fill.comp).
 // A pass that reads the decision defines TRACE_DECISION 1 and binds it to the sampler
 // `trace_decision`; then decision_reconstructed(p) says a pixel leaves its rays to others and
-// decision_density(p) is its budget (a denoiser widens its history and filter where it is low).
+// decision_density(p) is its budget (a denoiser widens its history and filter where it is low);
+// decision_borrowed(p, t) says its light is another view's.
 #pragma once
 #ifndef TRACE_DECISION
 #define TRACE_DECISION 0
@@ -42,4 +43,10 @@ uvec2 decision_at(ivec3 p) { return texelFetch(trace_decision, p, 0).xy; }
 // The pixel takes its light from another pixel's rays this frame (it traces none).
 bool decision_reconstructed(ivec3 p) { return decision_kind(decision_at(p)) >= DECISION_REUSE; }
 float decision_density(ivec3 p) { return decision_budget(decision_at(p)); }
+// Pixel p's light this frame is another view's (texel t): a denoiser gives it that view's filtered
+// light instead of filtering its own (passes/svgf/svgf_spread.comp).
+bool decision_borrowed(ivec3 p, uvec2 t) {
+    uint kind = decision_kind(t);
+    return kind == DECISION_REUSE || (kind == DECISION_FILL && int(decision_view(t)) != p.z);
+}
 #endif

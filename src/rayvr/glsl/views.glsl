@@ -28,6 +28,9 @@ vec3 view_ray_dir_eye(uint v, vec2 uv) {
 // primary rays' cones (scene.glsl surface_at_cone).
 float view_pixel_spread(uint v) { return (views[v].fov_tan.w - views[v].fov_tan.z) / views[v].clip.w; }
 
+// Pixel q lies within an image of `size` pixels.
+bool pixel_inside(ivec2 q, ivec2 size) { return all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, size)); }
+
 // Render-space primary ray of view v through the point `pixel` in pixels (pixel (x, y)'s centre is
 // (x + 0.5, y + 0.5); callers add their sub-pixel offset or jitter).
 void view_primary_ray(uint v, vec2 pixel, out vec3 origin, out vec3 dir) {

@@ -38,7 +38,11 @@ stage are one unit for the same reason). TAA follows in the graphs (rayvr.graphs
 With the optional `decision` input (TraceDecision) the reprojection reads each pixel's ray budget
 b, the share of frames its own rays are traced (foveation): the new frame weighs b times as much,
 the history may grow 1 / b times as long, and the variance is that of b x history samples, so a
-sparsely traced pixel keeps a longer history and a wider filter (svgf_reproject.comp).
+sparsely traced pixel keeps a longer history and a wider filter (svgf_reproject.comp). With
+several views, a pixel whose light the decision takes from another view (a view reusing a source
+view's shading) is not filtered at all: a last dispatch (svgf_spread.comp) gives it the source's
+filtered illumination, remodulated by its own albedos, and the source's history, so the
+denoising of reused light is done once, in the source view.
 
 History resets on the first frame, on `reset()` and on scene edits that change the lighting
 (materials or lights: `GpuScene.version` moved and one of them differs). Camera motion never
@@ -147,11 +151,18 @@ class SVGF(HistoryOwner, RenderPass):
         self._specular = self.SPECULAR in cd.input_formats
         self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular)}
         self._density = DecisionFill.connected(cd)
+        # with several views a decision may hand pixels another view's light: they take its filtered light
+        self._shared = self._density and cd.views > 1
+        if self._shared:
+            self._defines["SVGF_SHARED"] = 1
         reproject = {**self._defines, "TRACE_DECISION": int(self._density)}
         self._gl = ctx.gl
         # the modulate stage's own program only when 0 iterations ask for it (_modulate_program)
         self._res = {"reproject": program_resources(self.compute_program(ctx.gl, "svgf_reproject.comp", reproject)),
                      "variance": program_resources(self.compute_program(ctx.gl, "svgf_variance.comp", self._defines))}
+        if self._shared:
+            self._res["spread"] = program_resources(self.compute_program(
+                ctx.gl, "svgf_spread.comp", {**self._defines, "TRACE_DECISION": 1}))
         self._atrous = {}
         self._atrous_program()
         self._atrous_program(final=True)
@@ -254,7 +265,7 @@ class SVGF(HistoryOwner, RenderPass):
             res.texture("src_illum", scratch[src])
             if final:
                 self._bind_modulate(res, data)
-            else:
+            if not final or self._shared:
                 res.image("dst_illum", scratch[1 - src])
             res.set("svgf_step", 1 << i)
             res.set("svgf_write_history", i == tap)
@@ -268,4 +279,23 @@ class SVGF(HistoryOwner, RenderPass):
             self._bind_modulate(res, data)
             res.texture("src_illum", scratch[src])
             res.prog.run(*self._groups)
+        if self._shared:
+            self._spread(ctx, data, scratch[src], cur)
         self._history.end_frame()
+
+    def _spread(self, ctx, data, illum, cur) -> None:
+        """The pixels whose light is another view's take its filtered light `illum` and history
+        (svgf_spread.comp)."""
+        ctx.barrier(Access.SAMPLED, Access.IMAGE)
+        res = self._res["spread"]
+        channels.bind_inputs(res, data, GBUFFER)
+        res.texture("trace_decision", data[DECISION])
+        res.texture("src_illum", illum)
+        res.image("dst", data[self.COLOR])
+        res.image("history_diffuse", data[self.HISTORY_DIFFUSE], read=True, write=True)
+        if self._specular:
+            res.image("history_specular", data[self.HISTORY_SPECULAR], read=True, write=True)
+        res.image("moments_cur", data[self.MOMENTS[cur]], read=True, write=True)
+        res.image("key_cur", data[self.KEY[cur]])
+        res.image("surface_cur", data[self.SURFACE[cur]], read=True, write=True)
+        res.prog.run(*self._groups)

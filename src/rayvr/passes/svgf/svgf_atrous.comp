@@ -7,7 +7,8 @@
 // Taps come in mirrored pairs (offsets o and -o), which share the depth weight's denominator.
 // With SVGF_FINAL (the last iteration) the filtered illumination is not stored: it is remodulated
 // into the output colour `dst` here (svgf_color; the background as it came where nothing was
-// drawn), which spares a pass that would read it back (the modulate stage serves 0 iterations).
+// drawn), which spares a pass that would read it back (the modulate stage serves 0 iterations);
+// with SVGF_SHARED it is stored too (`dst_illum`), for svgf_spread.comp to give other views.
 #define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
 
@@ -21,8 +22,11 @@ uniform SVGF_ILLUM_SAMPLER src_illum;
 uniform sampler2DArray svgf_diffuse_in;
 layout(rgba16f) writeonly uniform image2DArray dst;
 #define OUT_SIZE imageSize(dst)
-#else
+#endif
+#if !SVGF_FINAL || SVGF_SHARED
 layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE dst_illum;
+#endif
+#if !SVGF_FINAL
 #define OUT_SIZE imageSize(dst_illum)
 #endif
 layout(rgba16f) writeonly uniform image2DArray history_diffuse;
@@ -151,7 +155,8 @@ void main() {
     }
 #if SVGF_FINAL
     imageStore(dst, p, vec4(to_half_range(svgf_color(p, d.rgb, s.rgb)), 1.0));
-#else
+#endif
+#if !SVGF_FINAL || SVGF_SHARED
     imageStore(dst_illum, p, svgf_illum_pack(d, s));
 #endif
     if (svgf_write_history) imageStore(history_diffuse, p, vec4(d.rgb, 0.0));

@@ -6,6 +6,9 @@
 // BSDF's directional albedos, and the edge-stopping weights of the variance estimate and the
 // a-trous filter (Schied et al. 2017, section 4).
 #pragma once
+#ifndef SVGF_SHARED
+#define SVGF_SHARED 0   // 1: views borrow other views' filtered light (svgf_spread.comp); needs TRACE_DECISION
+#endif
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
@@ -73,6 +76,11 @@ vec4 svgf_illum_diffuse(SvgfIllum t) { return t; }
 vec4 svgf_illum_specular(SvgfIllum t) { return vec4(0.0); }
 vec2 svgf_illum_variance(SvgfIllum t) { return vec2(t.a, 0.0); }
 #endif
+
+// The surface of pixel p with geometry (G-buffer surface g, effect word `word`), `history` frames old.
+SvgfSurface svgf_surface_at(ivec3 p, GSurface g, uint word, float history) {
+    return SvgfSurface(max(gbuf_fetch_posW(p).w, 1e-30), g.n, word, history);   // depth > 0: the key says geometry
+}
 
 bool svgf_has_geometry(uint word) { return gbuf_effect_of(word) != GBUF_NO_GEOMETRY; }
 

@@ -8,6 +8,9 @@
 // rays are traced) stretches its history: the new frame weighs b times as much and the history may
 // grow 1 / b times as long, so a sparsely traced pixel averages about as many of its own samples
 // as a dense one; and the variance is that of b x history samples, which widens the filter there.
+// With SVGF_SHARED a pixel whose light is another view's (decision_borrowed) is left to
+// svgf_spread.comp: here it is written as having no surface, so the variance and a-trous stages
+// neither filter it nor take it as a tap.
 #include "svgf_common.glsl"
 #include "trace_decision.glsl"
 
@@ -61,7 +64,11 @@ void main() {
     ivec3 size = imageSize(out_illum);
     if (any(greaterThanEqual(p, size))) return;
     uint word = gbuf_fetch_effect(p);
-    if (!svgf_has_geometry(word)) {
+    bool borrowed = false;
+#if SVGF_SHARED
+    borrowed = decision_borrowed(p, decision_at(p));
+#endif
+    if (!svgf_has_geometry(word) || borrowed) {
         imageStore(out_illum, p, svgf_illum_pack(vec4(0.0), vec4(0.0)));
         imageStore(moments_out, p, vec4(0.0));
         SvgfSurface none = svgf_no_geometry();
@@ -126,11 +133,7 @@ void main() {
     imageStore(out_illum, p, svgf_illum_pack(vec4(to_half_range(mix(r.diffuse * inv, diffuse, alpha)), variance.x),
                                              vec4(to_half_range(mix(r.specular * inv, specular, alpha)), variance.y)));
     imageStore(moments_out, p, moments);
-    SvgfSurface s;
-    s.depth = max(depth, 1e-30);   // > 0: the key says geometry
-    s.n = g.n;
-    s.word = word;
-    s.history = history;
+    SvgfSurface s = svgf_surface_at(p, g, word, history);
     imageStore(key_out, p, uvec4(svgf_pack_key(s), 0u, 0u));
     imageStore(surface_out, p, uvec4(svgf_pack_tag(s), 0u, 0u));
 }

@@ -1,7 +1,5 @@
 // A ray pass's last dispatch when it reads a trace decision (fill.py): every pixel it did not trace
-// takes the light traced this frame at its source, in the same images: DECISION_REUSE bilinearly
-// over the traced pixels of its surface about its point's position in the source view (one pixel,
-// the decision's, where none of the four qualifies), DECISION_FILL from the decision's pixel. The
+// takes the light traced this frame at its source (glsl/decision_taps.glsl), in the same images. The
 // light is demodulated by each source pixel's directional albedos (glsl/bsdf.glsl bsdf_albedo,
 // seen from its view) and remodulated by the pixel's own, so texture detail and the lobes' change
 // with the view angle stay the pixel's; emission is each pixel's own.
@@ -14,8 +12,7 @@
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "path_vertex.glsl"
-#include "same_surface.glsl"
-#include "trace_decision.glsl"
+#include "decision_taps.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 layout(FILL0_FORMAT) uniform image2DArray fill0;
@@ -28,8 +25,6 @@ layout(FILL2_FORMAT) uniform image2DArray fill2;
 
 // Albedos below this are taken as it, so black lobes round-trip exactly.
 const float FILL_ALBEDO_EPS = 1e-3;
-// A tap of the interpolation is the point's surface within this many pixel footprints.
-const float FILL_TAP_PIXELS = 1.5;
 
 struct Albedos { vec3 diffuse; vec3 specular; vec3 emissive; };
 
@@ -82,23 +77,10 @@ void main() {
     uint effect = gbuf_effect_at(p);
     if (effect == GBUF_NO_GEOMETRY || effect < uint(FILL_MIN_EFFECT)) return;
     GSurface surface = gbuf_load(p);
+    DecisionTaps taps = decision_taps(p, t, surface);
     Gathered g = Gathered(0.0, vec3(0.0), vec3(0.0), vec3(0.0));
-    if (kind == DECISION_REUSE) {   // bilinear over the traced pixels of the surface about its point
-        vec2 b = decision_position(t) - 0.5;
-        ivec2 base = ivec2(floor(b));
-        vec2 f = b - vec2(base);
-        for (int k = 0; k < 4; ++k) {
-            ivec2 o = ivec2(k & 1, k >> 1);
-            float w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y);
-            ivec3 q = ivec3(base + o, int(decision_view(t)));
-            if (w > 0.0 && all(greaterThanEqual(q.xy, ivec2(0))) && all(lessThan(q.xy, size.xy))
-                && decision_kind(decision_at(q)) == DECISION_TRACE && same_surface(surface, uint(p.z), q, FILL_TAP_PIXELS))
-                gather(g, q, w);
-        }
-    }
-    if (!(g.weight > 1e-3)) {   // one pixel: the decision's (it traces and shows the surface)
-        g = Gathered(0.0, vec3(0.0), vec3(0.0), vec3(0.0));
-        gather(g, decision_source(t), 1.0);
+    for (int k = 0; k < 4; ++k) {
+        if (taps.w[k] > 0.0) gather(g, taps.q[k], taps.w[k]);
     }
     Albedos to = albedos_of(surface, uint(p.z));
     float inv = 1.0 / g.weight;
