@@ -95,6 +95,7 @@ def test_pixels_a_box_hides_from_the_first_eye_are_traced_by_the_second(gpu):
     with Renderer(scene, graph(reuse="views"), views=views) as r:
         r.render()
         k = kinds(r)
+        assert not (r.read_output(DECISION)[..., 0] & 4).any()   # no SVGF: no pixel is flagged DECISION_SPREAD
         pos = r.read_output("GBuffer.posW").astype(np.float64)
         word = r.read_output("GBuffer.effect")[..., 0]
         rays = r.compiled.ray_counts()
@@ -212,6 +213,8 @@ def test_bad_trace_settings_are_one_clear_error(gpu):
         TraceDecision(source_stride=1)
     with pytest.raises(OptionError, match="reuse_min_roughness"):
         TraceDecision(reuse_min_roughness=2.0)
+    with pytest.raises(OptionError, match="'spread' follows denoise='svgf'"):
+        rv.graphs.hybrid(reuse="views", decision={"spread": True})
 
 
 def test_reuse_under_the_clean_preset_converges_as_independent_eyes_do(gpu):
@@ -239,9 +242,10 @@ def test_reused_light_is_denoised_once_in_the_source_eye(gpu):
     """SVGF filters the source eye; the second eye's reused pixels take its filtered light at their
     point (bilinear over the first eye's pixels there), remodulated by their own albedo: on a
     wall of one colour, the first eye's denoised colour there. Filtering each eye's own noisy light
-    left them 1-13% apart."""
+    left them 1-13% apart. The decision flags those pixels for SVGF, and the composite leaves them
+    (0): no ray pass fills them nor the composite lights them."""
     g = rv.graphs.hybrid(reuse="views")
-    for pin in ("SVGF.color", DECISION, "GBuffer.effect", "GBuffer.faceNormalW"):
+    for pin in ("SVGF.color", DECISION, "GBuffer.effect", "GBuffer.faceNormalW", "Composite.diffuse"):
         g.mark_output(pin)
     with Renderer(lambert_cornell(), g, views=2, size=SIZE) as r:
         for _ in range(2):
@@ -250,7 +254,11 @@ def test_reused_light_is_denoised_once_in_the_source_eye(gpu):
         t = r.read_output(DECISION)
         word = r.read_output("GBuffer.effect")[..., 0]
         ng = r.read_output("GBuffer.faceNormalW")[..., :3].astype(np.float64)
+        composite = r.read_output("Composite.diffuse")[..., :3]
     k = t[..., 0] & 3
+    flagged = (t[..., 0] & 4) != 0   # DECISION_SPREAD
+    assert flagged[1].sum() > 500 and np.array_equal(flagged, k == REUSE)
+    assert (composite[flagged] == 0).all() and (composite[0][word[0] != 0xFF] > 0).any()
     px, py = (t[1, ..., 1] & 0xFFFF) / 8.0 - 0.5, (t[1, ..., 1] >> 16) / 8.0 - 0.5   # taps at pixel centres
     errors = []
     for y, x in zip(*np.nonzero(k[1] == REUSE)):

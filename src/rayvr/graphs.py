@@ -92,10 +92,11 @@ def _denoised(g: RenderGraph, denoise: str | None, color: str, lobes: tuple[str,
 
 
 def _trace_decision(g: RenderGraph, reuse, foveation, decision: dict | None, where: str,
-                    every_surface: bool = False) -> bool:
+                    every_surface: bool = False, spread: bool = False) -> bool:
     """Add the trace decision (pass "Decision", rayvr.passes.TraceDecision) when `reuse` or
-    `foveation` asks for it, fed by the G-buffer, with `decision` as its further properties; False
-    (and nothing added) when neither does."""
+    `foveation` asks for it, fed by the G-buffer, with `decision` as its further properties and
+    `spread` (SVGF gives reusing pixels their source's filtered light); False (and nothing added)
+    when neither does."""
     from . import passes as P
     from .passes.gbuffer import channels
 
@@ -105,8 +106,10 @@ def _trace_decision(g: RenderGraph, reuse, foveation, decision: dict | None, whe
             raise OptionError(f"{where}(decision=...): trace decision settings need reuse='views' or foveation="
                               f"'fixed' or 'gaze'")
         return False
+    if "spread" in (decision or {}):
+        raise OptionError(f"{where}(decision={{'spread': ...}}): 'spread' follows denoise='svgf'; leave it out")
     props = {"reuse": reuse == "views", "foveation": foveation or "none", "every_surface": every_surface,
-             **dict(decision or {})}
+             "spread": spread, **dict(decision or {})}
     g.add_pass(P.TraceDecision(props), "Decision")
     channels.wire(g, "GBuffer", "Decision")
     return True
@@ -232,8 +235,9 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     _denoised(g, denoise, HDR_OUTPUT, ("Composite.diffuse", "Composite.specular"))
     if taa and not svgf:
         _add_taa(g)
-    if _trace_decision(g, reuse, foveation, decision, "hybrid"):
-        _read_decision(g, ("Compaction", "Shadows", "Reflections", "PathTracer", "SVGF"))
+    if _trace_decision(g, reuse, foveation, decision, "hybrid", spread=svgf):
+        # the composite reads it only to leave the pixels SVGF spreads to
+        _read_decision(g, ("Compaction", "Shadows", "Reflections", "PathTracer", *(("Composite",) * svgf), "SVGF"))
     return g
 
 
@@ -282,7 +286,8 @@ def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int 
     if denoise != "svgf":
         g.mark_output(PT_HDR_OUTPUT)
     _denoised(g, denoise, PT_HDR_OUTPUT, ("PathTracer.diffuse", "PathTracer.specular"))
-    if _trace_decision(g, reuse, foveation, decision, "path_traced", every_surface=True):
+    if _trace_decision(g, reuse, foveation, decision, "path_traced", every_surface=True,
+                       spread=denoise == "svgf"):
         from .passes.gbuffer import channels
 
         g.add_pass(P.EffectCompaction(path_list=True, every_surface=True), "Compaction")

@@ -1,8 +1,8 @@
 // The per-pixel trace decision (rayvr/passes/trace_decision): which pixels trace rays this frame
 // and where each of the others takes its light from. TraceDecision writes one rg32ui texel per
 // pixel and view before the ray passes:
-//   x: the kind (bits 0-1) | the ray budget at the pixel (bits 8-15, 0-255 for 0-1) | the source's
-//      view (bits 16-23)
+//   x: the kind (bits 0-1) | DECISION_SPREAD (bit 2) | the ray budget at the pixel (bits 8-15, 0-255
+//      for 0-1) | the source's view (bits 16-23)
 //   y: the source position in that view, in pixels (x | y << 16, each fixed point 13.3 bits)
 // Kinds: DECISION_NONE no ray work (RASTER, or nothing drawn), DECISION_TRACE traced for real,
 // DECISION_REUSE the shaded light of the same surface in another view, interpolated at the point's
@@ -11,8 +11,10 @@
 // traced pixels, so reconstruction is one dispatch after the tracing (passes/trace_decision/fill.comp).
 // A pass that reads the decision defines TRACE_DECISION 1 and binds it to the sampler
 // `trace_decision`; then decision_reconstructed(p) says a pixel leaves its rays to others and
-// decision_density(p) is its budget (a denoiser widens its history and filter where it is low);
-// decision_borrowed(p, t) says its light is another view's.
+// decision_density(p) is its budget (a denoiser widens its history and filter where it is low).
+// DECISION_SPREAD marks a pixel whose light is another view's (REUSE, or FILL from another view)
+// when the denoiser spreads the source's filtered light itself (TraceDecision `spread`, set with
+// SVGF): the ray passes' fills and the composite leave it, SVGF writes it (svgf_spread.comp).
 #pragma once
 #ifndef TRACE_DECISION
 #define TRACE_DECISION 0
@@ -22,14 +24,17 @@ const uint DECISION_NONE = 0u;
 const uint DECISION_TRACE = 1u;
 const uint DECISION_REUSE = 2u;
 const uint DECISION_FILL = 3u;
+const uint DECISION_SPREAD = 4u;   // a flag beside the kind
+
 
 uint decision_kind(uvec2 t) { return t.x & 3u; }
+bool decision_spread(uvec2 t) { return (t.x & DECISION_SPREAD) != 0u; }
 float decision_budget(uvec2 t) { return float((t.x >> 8u) & 0xFFu) / 255.0; }
 const float DECISION_POSITION_STEPS = 8.0;   // sub-pixel steps of a source position
 vec2 decision_position(uvec2 t) { return vec2(uvec2(t.y & 0xFFFFu, t.y >> 16u)) / DECISION_POSITION_STEPS; }
 uint decision_view(uvec2 t) { return (t.x >> 16u) & 0xFFu; }
 ivec3 decision_source(uvec2 t) { return ivec3(ivec2(floor(decision_position(t))), int(decision_view(t))); }
-// A texel for `kind` at `budget` whose source is at `position` (pixels) of view `view`.
+// A texel for `kind` (with its flag) at `budget` whose source is at `position` (pixels) of view `view`.
 uvec2 decision_pack(uint kind, float budget, uint view, vec2 position) {
     uint b = uint(clamp(budget, 0.0, 1.0) * 255.0 + 0.5);
     uvec2 q = uvec2(clamp(position * DECISION_POSITION_STEPS + 0.5, vec2(0.0), vec2(65535.0)));
@@ -43,10 +48,4 @@ uvec2 decision_at(ivec3 p) { return texelFetch(trace_decision, p, 0).xy; }
 // The pixel takes its light from another pixel's rays this frame (it traces none).
 bool decision_reconstructed(ivec3 p) { return decision_kind(decision_at(p)) >= DECISION_REUSE; }
 float decision_density(ivec3 p) { return decision_budget(decision_at(p)); }
-// Pixel p's light this frame is another view's (texel t): a denoiser gives it that view's filtered
-// light instead of filtering its own (passes/svgf/svgf_spread.comp).
-bool decision_borrowed(ivec3 p, uvec2 t) {
-    uint kind = decision_kind(t);
-    return kind == DECISION_REUSE || (kind == DECISION_FILL && int(decision_view(t)) != p.z);
-}
 #endif

@@ -8,6 +8,7 @@ from ..dispatch import COMPUTE_GROUP, check_shape, groups_2d, ray_group, ray_gro
 from ..effects import effect_defines
 from ..gbuffer import channels
 from ..probe_gi import inputs as probe_inputs
+from ..trace_decision.fill import DECISION, DecisionFill
 
 # input pin -> the sampler uniform composite.comp reads it through (the G-buffer's: channels.bind_inputs)
 SAMPLERS = {"direct": "direct_tex", "shadowed": "shadowed_tex", "reflection": "reflection_tex", "pathTraced": "path_tex",
@@ -26,7 +27,8 @@ class HybridComposite(RenderPass):
     With `lobes` the pass also writes the light as a denoiser demodulates it (rayvr.passes.SVGF):
     `diffuse` (direct or shadowed light minus the G-buffer's `emissive`, or the path tracer's
     `pathDiffuse`; the background where nothing was drawn) and `specular` (reflections, or
-    `pathSpecular`)."""
+    `pathSpecular`). With the optional `decision` (TraceDecision) a pixel it flags for SVGF to
+    spread another view's filtered light to (`spread`) is 0 in every output."""
 
     EFFECT, DIRECT, SHADOWED, REFLECTION, PATH_TRACED = "effect", "direct", "shadowed", "reflection", "pathTraced"
     EMISSIVE, PATH_DIFFUSE, PATH_SPECULAR = "emissive", "pathDiffuse", "pathSpecular"
@@ -61,6 +63,7 @@ class HybridComposite(RenderPass):
             r.add_output(self.DIFFUSE, "diffuse light, emission excluded (background where nothing was drawn)"
                          ).format("rgba16f")
             r.add_output(self.SPECULAR, "specular light").format("rgba16f")
+        DecisionFill.add_input(r)
         return r
 
     def compile(self, ctx, cd):
@@ -68,6 +71,8 @@ class HybridComposite(RenderPass):
         has = {"HAS_SHADOWS": self.SHADOWED, "HAS_REFLECTIONS": self.REFLECTION, "HAS_PATHS": self.PATH_TRACED,
                "HAS_PATH_LOBES": self.PATH_DIFFUSE}
         defines = {d: int(pin in cd.input_formats) for d, pin in has.items()}
+        if DecisionFill.connected(cd):
+            defines["TRACE_DECISION"] = 1
         self._probes = probe_inputs.bound(cd) and all(n in cd.input_formats for n in channels.LIGHTING)
         if self._probes:
             import moderngl
@@ -91,6 +96,8 @@ class HybridComposite(RenderPass):
             tex = data.get(pin)
             if tex is not None:
                 self._res.texture(sampler, tex)
+        if DECISION in data:
+            self._res.texture("trace_decision", data[DECISION])
         self._res.image("dst", data[self.COLOR])
         if self.lobes:
             self._res.image("dst_diffuse", data[self.DIFFUSE])

@@ -8,7 +8,7 @@
 // rays are traced) stretches its history: the new frame weighs b times as much and the history may
 // grow 1 / b times as long, so a sparsely traced pixel averages about as many of its own samples
 // as a dense one; and the variance is that of b x history samples, which widens the filter there.
-// With SVGF_SHARED a pixel whose light is another view's (decision_borrowed) is left to
+// With SVGF_SHARED a pixel flagged DECISION_SPREAD (its light is another view's) is left to
 // svgf_spread.comp: here it is written as having no surface, so the variance and a-trous stages
 // neither filter it nor take it as a tap.
 #include "svgf_common.glsl"
@@ -66,7 +66,7 @@ void main() {
     uint word = gbuf_fetch_effect(p);
     bool borrowed = false;
 #if SVGF_SHARED
-    borrowed = decision_borrowed(p, decision_at(p));
+    borrowed = decision_spread(decision_at(p));
 #endif
     if (!svgf_has_geometry(word) || borrowed) {
         imageStore(out_illum, p, svgf_illum_pack(vec4(0.0), vec4(0.0)));

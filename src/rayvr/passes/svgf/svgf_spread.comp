@@ -1,5 +1,5 @@
 // SVGF's last stage where a trace decision reuses light across views (SVGF_SHARED): every pixel
-// whose light this frame is another view's (glsl/trace_decision.glsl decision_borrowed) takes
+// whose light this frame is another view's (flagged DECISION_SPREAD: glsl/trace_decision.glsl) takes
 // that view's filtered illumination over the traced pixels of its surface there
 // (glsl/decision_taps.glsl), remodulated by its own albedos and emission. The reprojection wrote
 // it as having no surface, so the variance and a-trous stages did no work for it; here it also
@@ -26,7 +26,7 @@ void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(p, imageSize(dst)))) return;
     uvec2 t = decision_at(p);
-    if (!decision_borrowed(p, t)) return;
+    if (!decision_spread(t)) return;
     GSurface g = gbuf_load(p);
     DecisionTaps taps = decision_taps(p, t, g);
     vec3 d = vec3(0.0), s = vec3(0.0), hd = vec3(0.0), hs = vec3(0.0);

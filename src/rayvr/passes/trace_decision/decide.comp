@@ -9,6 +9,8 @@
 //   FOVEATION 1 (fixed: the image's centre) or 2 (gaze: the eye tracker's, else the centre): a pixel
 //     traces with probability budget(e) (FOVEAL_RADIUS degrees, PERIPHERY_SHARE), an 8x8 ordered
 //     dither whose ranks the frame index rotates through, so a pixel's turns are spread over frames
+//   REUSE_SPREAD 1: a pixel whose light is another view's is flagged DECISION_SPREAD (SVGF spreads
+//     the source's filtered light to it; the fills and the composite leave it)
 //   EVERY_SURFACE 1: every drawn pixel has rays to trace (a path tracer from the camera; the sky
 //     traces too), else those of effect SHADOWS and above
 #define GBUF_READER 1
@@ -193,5 +195,8 @@ void main() {
     } else if (EVERY_SURFACE != 0 || effect >= EFFECT_SHADOWS) {
         kind = decide(p, gbuf_load(p), budget, view, at);
     }
+#if REUSE_SPREAD
+    if (kind == DECISION_REUSE || (kind == DECISION_FILL && int(view) != p.z)) kind |= DECISION_SPREAD;
+#endif
     imageStore(dst, p, uvec4(decision_pack(kind, budget, view, at), 0u, 0u));
 }

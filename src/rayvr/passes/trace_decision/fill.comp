@@ -6,7 +6,7 @@
 // Images fill0..fill<FILL_IMAGES - 1>, each of format FILL<i>_FORMAT holding lobe FILL<i>_LOBE:
 // 0 the whole light (emission + both lobes), 1 the diffuse lobe, 2 the specular lobe. With
 // FILL_COLOR_FROM_LOBES fill0 is instead the pixel's emission + its filled fill1 + fill2. Pixels of
-// effect below FILL_MIN_EFFECT are not this pass's.
+// effect below FILL_MIN_EFFECT are not this pass's, nor are pixels flagged DECISION_SPREAD (SVGF's).
 #define GBUF_READER 1
 #define TRACE_DECISION 1
 #include "views.glsl"
@@ -73,7 +73,7 @@ void main() {
     if (any(greaterThanEqual(p, size))) return;
     uvec2 t = decision_at(p);
     uint kind = decision_kind(t);
-    if (kind < DECISION_REUSE) return;
+    if (kind < DECISION_REUSE || decision_spread(t)) return;   // flagged: SVGF writes it
     uint effect = gbuf_effect_at(p);
     if (effect == GBUF_NO_GEOMETRY || effect < uint(FILL_MIN_EFFECT)) return;
     GSurface surface = gbuf_load(p);

@@ -39,7 +39,9 @@ class TraceDecision(RenderPass):
       turn FILLs from the nearest traced pixel of the same surface within 2 pixels (none: it traces).
 
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
-    SHADOWS and above. The ray passes read the decision (their lists and tiles skip the
+    SHADOWS and above. `spread` (the graphs set it with SVGF): SVGF gives a pixel whose light is
+    another view's that view's filtered light itself, so the decision flags it (DECISION_SPREAD)
+    and the ray passes' fills and the composite leave it. The ray passes read the decision (their lists and tiles skip the
     reconstructed pixels, and a last dispatch of each fills them: trace_decision.fill) and SVGF
     follows the budget. With one view and foveation 'none' there is nothing to decide: the pass is
     left out, and so is its texture."""
@@ -51,7 +53,7 @@ class TraceDecision(RenderPass):
     PROPERTIES = {"reuse": False, "foveation": "none", "foveal_radius_deg": foveation.DEFAULT_RADIUS_DEG,
                   "periphery_share": foveation.DEFAULT_PERIPHERY_SHARE, "reuse_min_roughness": 0.5,
                   "reuse_lobe_fraction": 0.25,
-                  "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False}
+                  "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False}
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -94,7 +96,8 @@ class TraceDecision(RenderPass):
                          "REUSE_LOBE_FRACTION": float(self.reuse_lobe_fraction),
                          "FOVEATION": FOVEATION.index(self.foveation), "FOVEAL_RADIUS": float(self.foveal_radius_deg),
                          "PERIPHERY_SHARE": float(self.periphery_share),
-                         "EVERY_SURFACE": int(bool(self.every_surface))}
+                         "EVERY_SURFACE": int(bool(self.every_surface)),
+                         "REUSE_SPREAD": int(bool(self.spread) and self.reuses(cd.views))}
         self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
             **scene_defines(ctx), **effect_defines(), **self._defines}))
         self._groups = groups_2d(cd.size, cd.views)
@@ -107,7 +110,8 @@ class TraceDecision(RenderPass):
             d["reuse"] = (f"views reuse rough surfaces (roughness >= {self.reuse_min_roughness:g}{lobes}) "
                           "of source views: "
                           + ("the first eye" if not self.alternate else "the eye of the frame's parity")
-                          + f" with 2 views, else every {self.source_stride}th of {d['REUSE_COLS']} columns and rows")
+                          + f" with 2 views, else every {self.source_stride}th of {d['REUSE_COLS']} columns and rows"
+                          + ("; SVGF spreads their filtered light to the reusing pixels" if d.get("REUSE_SPREAD") else ""))
         if d.get("FOVEATION"):
             d["foveation"] = (f"{self.foveation}: every pixel within {self.foveal_radius_deg:g} degrees of "
                               + ("each view's centre" if self.foveation == "fixed" else "the gaze (else the centre)")
