@@ -160,7 +160,9 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     'gaze' (fewer rays away from each view's centre or the eye tracker's gaze) add the trace
     decision (rayvr.passes.TraceDecision, pass "Decision", with `decision` as its properties, e.g.
     {"foveal_radius_deg": 5, "periphery_share": 0.25}): the ray passes trace only the pixels it
-    leaves their rays and fill the others from their sources; SVGF follows its ray budget.
+    leaves their rays and fill the others from their sources; SVGF follows its ray budget, and
+    with several views filters the source views only: a reused pixel takes its source's filtered
+    light from SVGF (the fills and the composite leave it).
     Outputs: `ToneMap.dst` (rgba8 sRGB) and `Composite.color` (HDR), with TAA or a denoiser then
     its HDR output (`TAA.dst` or `Denoise.dst`; `hdr_output(graph)` names a graph's)."""
     from . import passes as P
