@@ -107,18 +107,19 @@ vec3 svgf_demodulate(vec3 radiance, vec3 albedo) {
 
 vec3 svgf_remodulate(vec3 illumination, vec3 albedo) { return illumination * max(albedo, vec3(SVGF_ALBEDO_EPS)); }
 
-// The output colour at p (a pixel with geometry) from its filtered illumination: each lobe times
-// its albedo, plus the G-buffer's emission.
-vec3 svgf_color(ivec3 p, vec3 diffuse, vec3 specular) {
-    GSurface g = gbuf_load(p);
+// The output colour of G-buffer surface g seen from `view` (a pixel with geometry) from its
+// filtered illumination: each lobe times its albedo, plus the surface's emission.
+vec3 svgf_color(GSurface g, uint view, vec3 diffuse, vec3 specular) {
     vec3 albedo_d, albedo_s;
-    svgf_albedo(g, uint(p.z), albedo_d, albedo_s);
+    svgf_albedo(g, view, albedo_d, albedo_s);
     vec3 c = svgf_remodulate(diffuse, albedo_d) + g.emissive;
 #if SVGF_SPECULAR
     c += svgf_remodulate(specular, albedo_s);
 #endif
     return c;
 }
+// The same for pixel p.
+vec3 svgf_color(ivec3 p, vec3 diffuse, vec3 specular) { return svgf_color(gbuf_load(p), uint(p.z), diffuse, specular); }
 
 // The depth gradient as the a-trous iterations read it (the variance stage writes it once a
 // frame, rg16f): finite, so that a zero offset times it stays zero.

@@ -46,7 +46,7 @@ void main() {
         m += w * imageLoad(moments_cur, q);
         history += w * uintBitsToFloat(imageLoad(surface_cur, q).y);
     }
-    imageStore(dst, p, vec4(to_half_range(svgf_color(p, d, s)), 1.0));
+    imageStore(dst, p, vec4(to_half_range(svgf_color(g, uint(p.z), d, s)), 1.0));
     imageStore(history_diffuse, p, vec4(hd, 0.0));
 #if SVGF_SPECULAR
     imageStore(history_specular, p, vec4(hs, 0.0));
