@@ -238,6 +238,28 @@ def test_reuse_under_the_clean_preset_converges_as_independent_eyes_do(gpu):
     assert e_alternate < 1.5 * e_independent + 1e-4, (e_alternate, e_independent)
 
 
+def test_restir_direct_light_is_reused_across_eyes(gpu):
+    """ReSTIR DI under the trace decision: the source eye is the same render, reservoir for
+    reservoir; the second eye resamples only where it traces (its spatial reuse skips pixels that
+    made no reservoir this frame) and fills the rest, as close to the converged image as an
+    independent second eye; with foveation too, and under the clean preset, nothing non-finite."""
+    scene = lambert_cornell()
+    reference, _ = mean_color(scene, 96, direct="restir")
+    independent, rays_independent = mean_color(scene, 8, direct="restir")
+    reused, rays_reused = mean_color(scene, 8, direct="restir", reuse="views")
+    assert np.array_equal(reused[0], independent[0]) and rays_reused[0] == rays_independent[0]
+    assert rays_reused[1] <= 0.1 * rays_reused[0]
+    e_reused, e_independent = rel_mse(reused[1], reference[1]), rel_mse(independent[1], reference[1])
+    assert e_reused < 1.5 * e_independent + 1e-4, (e_reused, e_independent)
+    g = rv.graphs.hybrid(direct="restir", reuse="views", foveation="fixed")
+    with Renderer(scene, g, views=2, size=SIZE) as r:
+        for _ in range(4):
+            r.render()
+        shown = r.read_output("TAA.dst")[..., :3]
+        assert np.isfinite(shown).all() and not any(r.profile().nonfinite.values())
+        assert abs(shown[1].mean() - shown[0].mean()) < 0.05 * shown[0].mean()   # the eyes see one box alike
+
+
 def test_reused_light_is_denoised_once_in_the_source_eye(gpu):
     """SVGF filters the source eye; the second eye's reused pixels take its filtered light at their
     point (bilinear over the first eye's pixels there), remodulated by their own albedo: on a

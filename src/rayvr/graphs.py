@@ -181,10 +181,6 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
         raise OptionError(f"hybrid(direct={direct!r}): use None ('none') or {DIRECT.either()}")
     if restir and direct != "restir":
         raise OptionError("hybrid(restir=...): ReSTIR settings need direct='restir'")
-    if direct == "restir" and any(v not in (None, "none") for v in (reuse, foveation)):
-        # the trace decision's fill reconstructs RTShadows' skipped pixels; ReSTIRDI has none yet
-        raise OptionError("hybrid(direct='restir'): not with reuse= or foveation= yet (ReSTIRDI lights every "
-                          "pixel itself); use one or the other")
     denoise = denoiser(denoise)
     svgf = denoise == "svgf"
     g = RenderGraph(name)

@@ -1,6 +1,7 @@
 // ReSTIR DI stage 3, spatial reuse: this pixel's reservoir (canonical) and those of up to
 // RESTIR_SPATIAL_SAMPLES pixels drawn uniformly within RESTIR_SPATIAL_RADIUS pixels of it that show
-// its surface (restir_neighbour_matches) and hold a sample (a neighbour that found no visible light
+// its surface (restir_neighbour_matches), made a reservoir this frame (with a trace decision: it
+// traces) and hold a sample (a neighbour that found no visible light
 // gives none: restir_di.py on visibility reuse), combined by generalized RIS with pairwise MIS of the
 // unshadowed targets (restir_di.glsl): each target is evaluated at its own pixel's surface, so
 // which neighbours pass the surface test changes the noise, not the mean. With RESTIR_SHARE_VIEWS a pixel of view
@@ -41,6 +42,9 @@ bool restir_neighbour(ivec3 p, vec3 pos, float depth, vec3 n, uint word, int k, 
     float q_depth_want;
     if (!restir_neighbour_pixel(p, pos, depth, k, u, size, q, q_depth_want)) return false;
     if (!pixel_inside(q.xy, size.xy)) return false;
+#if TRACE_DECISION
+    if (decision_reconstructed(q)) return false;   // it made no reservoir this frame
+#endif
     if (!(reservoir_unpack(imageLoad(reservoirs_in, q)).weight > 0.0)) return false;
     return restir_neighbour_matches(q_depth_want, n, word, gbuf_fetch_posW(q).w, normalize(gbuf_fetch_normW(q).xyz),
                                     gbuf_fetch_effect(q));
