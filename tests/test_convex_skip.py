@@ -209,12 +209,14 @@ def test_path_traced_image_is_the_same_with_the_skip_as_without(kernel):
     np.testing.assert_allclose(skip, full, rtol=1e-4, atol=1e-5 * full.max())
 
 
-@pytest.mark.parametrize("gbuffer,direct", [("raster", None), ("rt", None), ("rt", "restir")])
-def test_hybrid_image_is_the_same_with_the_skip_as_without(gbuffer, direct):
+@pytest.mark.parametrize("gbuffer,direct,gi", [("raster", None, None), ("rt", None, None), ("rt", "restir", None),
+                                               ("rt", None, "probes")])
+def test_hybrid_image_is_the_same_with_the_skip_as_without(gbuffer, direct, gi):
     """Shadow and reflection rays from the G-buffer (raster or ray traced) skip as path vertices do:
-    the G-buffer keeps each texel's exit instance."""
+    the G-buffer keeps each texel's exit instance; so do the shadow rays of the probes' rays (the
+    probe ray record carries it from the shading stage to the shadow stage)."""
     def graph():
-        return rv.graphs.hybrid(preset="raw", gbuffer=gbuffer, **({"direct": direct} if direct else {}))
+        return rv.graphs.hybrid(preset="raw", gbuffer=gbuffer, gi=gi, **({"direct": direct} if direct else {}))
 
     effects = {"M": rv.Effect.REFLECTIONS}
     skip = render(graph(), "Composite.color", True, effects)

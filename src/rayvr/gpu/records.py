@@ -87,7 +87,8 @@ PROBE_RAY = Record("ProbeRay", (
     Field("ids", "uvec4", meaning="trace: instance, primitive; shade: the shadow ray's direction (float bits), kind"),
     Field("radiance", "vec4", meaning="shade: rgb what needs no ray (a miss's environment, the bounce); a: "
                                       "distance for the depth moments"),
-    Field("direct", "vec4", meaning="shade: rgb the light sample's unshadowed contribution (0: no shadow ray); "
+    Field("direct", "vec4", meaning="shade: rgb the light sample's unshadowed contribution (0: no shadow ray), "
+                                    "a the instance its shadow ray may skip + 1 (0: none; probe_skip_pack); "
                                     "shadow: a, its visibility"),
 ), meaning="What one probe ray's update stage hands on to the next (probe_rays.glsl).")
 

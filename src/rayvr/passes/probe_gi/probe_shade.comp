@@ -32,6 +32,7 @@ void main() {
     vec3 direct = vec3(0.0);
     vec3 origin = vec3(0.0), to = vec3(0.0);
     float tmax = 0.0;
+    uint skip = SCENE_NO_INSTANCE;
     if (kind == PROBE_RAY_MISS) {
         radiance.rgb = environment_radiance(dir);
     } else {
@@ -56,6 +57,7 @@ void main() {
             if (direct.x + direct.y + direct.z > 0.0) {
                 origin = offset_ray_origin(s.pos, s.ng);
                 shadow_ray(s.pos, origin, ls, to, tmax);
+                skip = path_vertex_skip(s, to);
             }
 #endif
         }
@@ -63,5 +65,5 @@ void main() {
     probe_rays[i].hit = vec4(origin, tmax);
     probe_rays[i].ids = uvec4(floatBitsToUint(to), kind);
     probe_rays[i].radiance = vec4(nonfinite_scrub(radiance.rgb), radiance.a);
-    probe_rays[i].direct = vec4(direct, 0.0);
+    probe_rays[i].direct = vec4(direct, probe_skip_pack(skip));
 }
