@@ -10,6 +10,7 @@
 // included here, outside any #if, because include guards are textual
 #include "color.glsl"
 #include "gbuffer_channels.glsl"
+#include "exit_instance.glsl"   // normW.w
 
 // effect word (r32ui): low byte effect id (rayvr.Effect), upper 24 bits material index;
 // GBUF_NO_GEOMETRY where no surface was drawn (sky).
@@ -18,10 +19,6 @@ const uint GBUF_NO_GEOMETRY = 0xFFu;
 uint gbuf_effect_of(uint word) { return word & 0xFFu; }
 uint gbuf_material_of(uint word) { return word >> 8u; }
 uint gbuf_pack_effect(uint effect, uint material) { return (material << 8u) | (effect & 0xFFu); }
-
-// normW.w: the surface's SurfacePoint.exit_instance + 1 (0: none; exact below 2^24 instances).
-float gbuf_pack_exit(uint exit_instance) { return exit_instance < 0xFFFFFFu ? float(exit_instance + 1u) : 0.0; }
-uint gbuf_exit_of(float w) { return w >= 1.0 ? uint(w) - 1u : 0xFFFFFFFFu; }
 
 #ifdef GBUF_WRITER
 // The effect a surface of material m is shaded with: its material's, but with REFLECTION_MAX_ROUGHNESS
@@ -46,7 +43,7 @@ GBufferTexel gbuf_encode(uint v, vec3 pos, vec3 n, vec3 ng, bool front_face, Mat
                          uint exit_instance) {
     GBufferTexel t;
     t.posW = vec4(pos, -(views[v].view * vec4(pos, 1.0)).z);
-    t.normW = vec4(n, gbuf_pack_exit(exit_instance));
+    t.normW = vec4(n, exit_instance_pack(exit_instance));
     t.faceNormalW = vec4(ng, front_face ? 0.0 : 1.0);
     t.baseColor = vec4(m.base_color, m.alpha);
     // float16 rounds roughness either way: keep the side of the delta threshold (a near mirror
@@ -104,7 +101,7 @@ GSurface gbuf_load(ivec3 p) {
     s.pos = gbuf_fetch_posW(p).xyz;
     vec4 n = gbuf_fetch_normW(p);
     s.n = normalize(n.xyz);
-    s.exit_instance = gbuf_exit_of(n.w);
+    s.exit_instance = exit_instance_unpack(n.w);
     vec4 ng = gbuf_fetch_faceNormalW(p);
     s.ng = normalize(ng.xyz);
     s.front_face = ng.w < 0.5;

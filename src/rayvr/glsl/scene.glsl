@@ -74,7 +74,7 @@ layout(std430, binding = RAYVR_TRIANGLE_MATERIAL_SSBO) readonly buffer SceneTria
 // The whole mesh lies behind this triangle (rayvr.scene.convex_faces): a ray leaving it through
 // its front cannot meet the mesh again.
 #define TRIANGLE_CONVEX_BIT 0x80000000u
-#define SCENE_NO_INSTANCE 0xFFFFFFFFu
+#include "exit_instance.glsl"   // SCENE_NO_INSTANCE
 
 uint triangle_word_material(uint word) { return word & ~TRIANGLE_CONVEX_BIT; }
 bool triangle_word_convex(uint word) { return (word & TRIANGLE_CONVEX_BIT) != 0u; }

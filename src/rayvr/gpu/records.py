@@ -88,7 +88,7 @@ PROBE_RAY = Record("ProbeRay", (
     Field("radiance", "vec4", meaning="shade: rgb what needs no ray (a miss's environment, the bounce); a: "
                                       "distance for the depth moments"),
     Field("direct", "vec4", meaning="shade: rgb the light sample's unshadowed contribution (0: no shadow ray), "
-                                    "a the instance its shadow ray may skip + 1 (0: none; probe_skip_pack); "
+                                    "a the instance its shadow ray may skip + 1 (0: none; glsl/exit_instance.glsl); "
                                     "shadow: a, its visibility"),
 ), meaning="What one probe ray's update stage hands on to the next (probe_rays.glsl).")
 

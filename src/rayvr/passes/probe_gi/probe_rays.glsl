@@ -26,11 +26,6 @@ vec3 spherical_fibonacci(uint i, uint n) {
     return vec3(r * cos(phi), r * sin(phi), z);
 }
 
-// The instance a probe ray's shadow ray may skip (path_vertex_skip), as the shade stage hands it to
-// the shadow stage in `direct.a`: + 1 as a float, 0 for none (instance indices stay below 2^24).
-float probe_skip_pack(uint skip) { return skip == SCENE_NO_INSTANCE ? 0.0 : float(skip + 1u); }
-uint probe_skip_unpack(float a) { return a > 0.5 ? uint(a + 0.5) - 1u : SCENE_NO_INSTANCE; }
-
 vec3 probe_ray_direction(uint ray) { return normalize(probe_rotation * spherical_fibonacci(ray, uint(PROBE_RAYS))); }
 
 uint probe_volume_of(uint probe) {

@@ -65,5 +65,5 @@ void main() {
     probe_rays[i].hit = vec4(origin, tmax);
     probe_rays[i].ids = uvec4(floatBitsToUint(to), kind);
     probe_rays[i].radiance = vec4(nonfinite_scrub(radiance.rgb), radiance.a);
-    probe_rays[i].direct = vec4(direct, probe_skip_pack(skip));
+    probe_rays[i].direct = vec4(direct, exit_instance_pack(skip));   // the shadow stage's skip
 }

@@ -22,6 +22,6 @@ void main() {
     vec3 dir = uintBitsToFloat(probe_rays[i].ids.xyz);
     Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT_PROBE_SHADOW);
     rq_blend_begin(rng);
-    uint skip = probe_skip_unpack(probe_rays[i].direct.a);
+    uint skip = exit_instance_unpack(probe_rays[i].direct.a);
     probe_rays[i].direct.a = trace_transmittance(origin.xyz, dir, origin.w, skip);
 }
