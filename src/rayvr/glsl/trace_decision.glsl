@@ -26,7 +26,6 @@ const uint DECISION_REUSE = 2u;
 const uint DECISION_FILL = 3u;
 const uint DECISION_SPREAD = 4u;   // a flag beside the kind
 
-
 uint decision_kind(uvec2 t) { return t.x & 3u; }
 bool decision_spread(uvec2 t) { return (t.x & DECISION_SPREAD) != 0u; }
 float decision_budget(uvec2 t) { return float((t.x >> 8u) & 0xFFu) / 255.0; }

@@ -22,12 +22,11 @@ uniform SVGF_ILLUM_SAMPLER src_illum;
 uniform sampler2DArray svgf_diffuse_in;
 layout(rgba16f) writeonly uniform image2DArray dst;
 #define OUT_SIZE imageSize(dst)
+#else
+#define OUT_SIZE imageSize(dst_illum)
 #endif
 #if !SVGF_FINAL || SVGF_SHARED
 layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE dst_illum;
-#endif
-#if !SVGF_FINAL
-#define OUT_SIZE imageSize(dst_illum)
 #endif
 layout(rgba16f) writeonly uniform image2DArray history_diffuse;
 #if SVGF_SPECULAR

@@ -51,11 +51,10 @@ vec3 remodulate(vec3 illumination, int lobe, Albedos a) {
     return lobe == 0 ? r + a.emissive : r;
 }
 
-struct Gathered { float weight; vec3 l0; vec3 l1; vec3 l2; };
+struct Gathered { vec3 l0; vec3 l1; vec3 l2; };   // weighted by the taps' weights, which sum to 1
 
 void gather(inout Gathered g, ivec3 q, float w) {
     Albedos a = albedos_of(gbuf_load(q), uint(q.z));
-    g.weight += w;
 #if !FILL_COLOR_FROM_LOBES
     g.l0 += w * demodulate(imageLoad(fill0, q).rgb, FILL0_LOBE, a);
 #endif
@@ -78,24 +77,23 @@ void main() {
     if (effect == GBUF_NO_GEOMETRY || effect < uint(FILL_MIN_EFFECT)) return;
     GSurface surface = gbuf_load(p);
     DecisionTaps taps = decision_taps(p, t, surface);
-    Gathered g = Gathered(0.0, vec3(0.0), vec3(0.0), vec3(0.0));
+    Gathered g = Gathered(vec3(0.0), vec3(0.0), vec3(0.0));
     for (int k = 0; k < 4; ++k) {
         if (taps.w[k] > 0.0) gather(g, taps.q[k], taps.w[k]);
     }
     Albedos to = albedos_of(surface, uint(p.z));
-    float inv = 1.0 / g.weight;
 #if FILL_IMAGES > 1
-    vec3 f1 = remodulate(g.l1 * inv, FILL1_LOBE, to);
+    vec3 f1 = remodulate(g.l1, FILL1_LOBE, to);
     imageStore(fill1, p, vec4(to_half_range(f1), 1.0));
 #endif
 #if FILL_IMAGES > 2
-    vec3 f2 = remodulate(g.l2 * inv, FILL2_LOBE, to);
+    vec3 f2 = remodulate(g.l2, FILL2_LOBE, to);
     imageStore(fill2, p, vec4(to_half_range(f2), 1.0));
 #endif
 #if FILL_COLOR_FROM_LOBES
     vec3 f0 = to.emissive + f1 + f2;
 #else
-    vec3 f0 = remodulate(g.l0 * inv, FILL0_LOBE, to);
+    vec3 f0 = remodulate(g.l0, FILL0_LOBE, to);
 #endif
     imageStore(fill0, p, vec4(to_half_range(f0), 1.0));
 }
