@@ -25,6 +25,32 @@ def add_arguments(parser) -> None:
     parser.add_argument("--lobe-fractions", default="",
                         help="comma-separated reuse_lobe_fraction values, a reuse row each beside the default's "
                              "(the Decision pass's: glossier lobes reused where wide against the eyes' parallax)")
+    parser.add_argument("--variants", default="",
+                        help="';'-separated reuse rows beside the default's, each comma-separated Pass.property=value "
+                             "overrides of the reuse graph, e.g. 'Shadows.dispatch_mode=image;Decision.source_stride=3'")
+
+
+def parse_variants(text: str) -> list[tuple[str, dict]]:
+    """`--variants` as (label, {pass: {property: value}}) pairs; values are Python literals or words."""
+    import ast
+
+    out = []
+    for part in (v.strip() for v in text.split(";")):
+        if not part:
+            continue
+        props: dict = {}
+        for item in part.split(","):
+            key, sep, value = item.strip().partition("=")
+            name, dot, prop = key.partition(".")
+            if not sep or not dot:
+                raise SystemExit(f"--variants: '{item.strip()}' is not Pass.property=value")
+            try:
+                value = ast.literal_eval(value)
+            except (ValueError, SyntaxError):
+                pass
+            props.setdefault(name, {})[prop] = value
+        out.append((f"views, {part}", props))
+    return out
 
 
 def run(args) -> dict:
@@ -32,6 +58,7 @@ def run(args) -> dict:
     from rayvr.xr.cameras import default_views
 
     s = settings(args)
+    variants = parse_variants(args.variants)
     counts = [int(v) for v in args.views.split(",")]
     if args.quick and args.views == "2,64":
         counts = [2, 4]
@@ -50,6 +77,11 @@ def run(args) -> dict:
             g = rv.graphs.hybrid(preset=args.preset, reuse="views")
             g.update_pass("Decision", {"reuse_lobe_fraction": fraction})
             out[f"views, lobe fraction {fraction:g}"] = measure(scene, view_set, g, s, ref, args.ppd)
+        for label, props in variants:
+            g = rv.graphs.hybrid(preset=args.preset, reuse="views")
+            for name, p in props.items():
+                g.update_pass(name, p)
+            out[label] = measure(scene, view_set, g, s, ref, args.ppd)
         base = out[None]
         for reuse, row in out.items():
             first, others = row["rays"][0], row["rays"][1:]
