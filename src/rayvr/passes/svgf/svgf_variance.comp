@@ -27,16 +27,15 @@ void main() {
     ivec3 size = imageSize(illum);
     if (any(greaterThanEqual(p, size))) return;
     SvgfSurface c = svgf_unpack(texelFetch(key_cur, p, 0).xy, texelFetch(surface_cur, p, 0).xy);
+    // no geometry (or light another view's, svgf_spread.comp): nothing here is read again, neither
+    // the gradient by the a-trous stage nor the history by the next reprojection (its length is 0)
+    if (!(c.depth > 0.0)) return;
     SvgfIllum centre = imageLoad(illum, p);
     if (svgf_write_history) {   // the temporal mean as it is, before any spatial filter
         imageStore(history_diffuse, p, vec4(svgf_illum_diffuse(centre).rgb, 0.0));
 #if SVGF_SPECULAR
         imageStore(history_specular, p, vec4(svgf_illum_specular(centre).rgb, 0.0));
 #endif
-    }
-    if (!(c.depth > 0.0)) {   // no geometry: the a-trous stage reads no gradient here
-        imageStore(gradient_out, p, vec4(0.0));
-        return;
     }
     vec2 gradient = svgf_depth_gradient(p, c.depth, size.xy);
     imageStore(gradient_out, p, vec4(svgf_gradient_store(gradient), 0.0, 0.0));
