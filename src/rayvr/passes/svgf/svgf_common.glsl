@@ -12,14 +12,11 @@
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
-#include "path_vertex.glsl"
+#include "demodulation.glsl"
 #include "nonfinite.glsl"
 #include "octahedral.glsl"
 #include "reprojection.glsl"   // the disocclusion test and depth gradients
 
-// Demodulation divides by max(albedo, SVGF_ALBEDO_EPS) and remodulation multiplies by the same,
-// so a black lobe round-trips exactly.
-const float SVGF_ALBEDO_EPS = 1e-3;
 // Below this history length the variance comes from a 7x7 neighbourhood (section 4.2).
 const float SVGF_MIN_HISTORY = 4.0;
 
@@ -95,26 +92,17 @@ SvgfSurface svgf_no_geometry() {
 
 bool svgf_inside(ivec2 q, ivec2 size) { return pixel_inside(q, size); }
 
-// The directional albedos of the diffuse and specular lobes at G-buffer surface g seen from `view`.
-void svgf_albedo(GSurface g, uint view, out vec3 diffuse, out vec3 specular) {
-    PathVertex s = path_vertex_at_gbuffer(g, view);
-    bsdf_albedo(s.bsdf, s.n, s.v, diffuse, specular);
-}
-
-vec3 svgf_demodulate(vec3 radiance, vec3 albedo) {
-    return to_half_range(max(nonfinite_scrub(radiance), 0.0) / max(albedo, vec3(SVGF_ALBEDO_EPS)));
-}
-
-vec3 svgf_remodulate(vec3 illumination, vec3 albedo) { return illumination * max(albedo, vec3(SVGF_ALBEDO_EPS)); }
+// A lobe's radiance demodulated (demodulation.glsl), non-finite samples scrubbed, in float16 range.
+vec3 svgf_demodulate(vec3 radiance, vec3 albedo) { return to_half_range(demodulate(nonfinite_scrub(radiance), albedo)); }
 
 // The output colour of G-buffer surface g seen from `view` (a pixel with geometry) from its
 // filtered illumination: each lobe times its albedo, plus the surface's emission.
 vec3 svgf_color(GSurface g, uint view, vec3 diffuse, vec3 specular) {
     vec3 albedo_d, albedo_s;
-    svgf_albedo(g, view, albedo_d, albedo_s);
-    vec3 c = svgf_remodulate(diffuse, albedo_d) + g.emissive;
+    surface_albedos(g, view, albedo_d, albedo_s);
+    vec3 c = remodulate(diffuse, albedo_d) + g.emissive;
 #if SVGF_SPECULAR
-    c += svgf_remodulate(specular, albedo_s);
+    c += remodulate(specular, albedo_s);
 #endif
     return c;
 }
