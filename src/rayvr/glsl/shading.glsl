@@ -37,6 +37,25 @@ vec3 light_sample_unshadowed(PathVertex s, vec3 u, bool specular_traced, out Lig
 }
 #endif
 
+#if SCENE_HAS_LIGHTS && SHADE_SHADOWS
+// What light sample ls brings s (from `origin`, its offset ray origin) through its shadow ray:
+// f cos * Le / pdf times the expected visibility through BLEND surfaces (not a coin toss per
+// surface: a light behind a half-transparent leaf is half visible in every pixel), which is
+// `visible` (0 without a ray: the sample brings nothing unshadowed).
+vec3 shade_light_sample(PathVertex s, vec3 origin, LightSample ls, bool specular_traced, out float visible) {
+    visible = 0.0;
+    vec3 f = light_bsdf(s, ls, specular_traced);
+    if (f.x + f.y + f.z <= 0.0) return vec3(0.0);
+    vec3 c = f * ls.weight;   // weight = radiance / pdf (lights.glsl)
+    if (c.x + c.y + c.z <= 0.0) return vec3(0.0);
+    vec3 dir;
+    float tmax;
+    shadow_ray(s.pos, origin, ls, dir, tmax);
+    visible = trace_transmittance(origin, dir, tmax, path_vertex_skip(s, dir));
+    return visible > 0.0 ? c * visible : vec3(0.0);
+}
+#endif
+
 // Mean over LIGHT_SAMPLES light samples of f(v, l) cos * Le / pdf at vertex s, with visibility
 // when SHADE_SHADOWS. `specular_traced`: a ray pass also samples s's specular lobes
 // (bsdf_sample_specular) and adds the lights its rays find (RTReflections, at the pixels whose
@@ -52,23 +71,59 @@ vec3 shade_direct_mis(PathVertex s, inout Rng rng, bool specular_traced) {
 #endif
     for (int k = 0; k < LIGHT_SAMPLES; ++k) {
         LightSample ls;
-        vec3 c = light_sample_unshadowed(s, rng_next3(rng), specular_traced, ls);
-        if (c.x + c.y + c.z <= 0.0) continue;
 #if SHADE_SHADOWS
-        // the shadow ray's expected visibility through BLEND surfaces, not a coin toss per
-        // surface: a light behind a half-transparent leaf is half visible in every pixel
-        vec3 dir;
-        float tmax;
-        shadow_ray(s.pos, origin, ls, dir, tmax);
-        float visible = trace_transmittance(origin, dir, tmax, path_vertex_skip(s, dir));
-        if (visible <= 0.0) continue;
-        c *= visible;
+        ls = sample_light(s.pos, rng_next3(rng));
+        float visible;
+        sum += shade_light_sample(s, origin, ls, specular_traced, visible);
+#else
+        sum += light_sample_unshadowed(s, rng_next3(rng), specular_traced, ls);
 #endif
-        sum += c;
     }
     sum *= 1.0 / float(LIGHT_SAMPLES);
 #endif
     return sum;
+}
+
+// -- one light sample shared by the views (RTShadows under a trace decision) ----------------------
+// A light sample another pixel may take up, when it shows the same surface from another eye: which
+// point of which light (lights.glsl `id`), 1 / the pdf it was drawn with in that light's measure,
+// and the visibility its shadow ray found. The other pixel shades its own lobes towards that
+// point over the same visibility: its glossy highlight is its own, its shadows the source's.
+struct SharedLight { uvec2 id; float inv_pdf; float visible; };
+
+uvec4 shared_light_pack(SharedLight l) { return uvec4(l.id, floatBitsToUint(l.inv_pdf), floatBitsToUint(l.visible)); }
+SharedLight shared_light_unpack(uvec4 t) { return SharedLight(t.xy, uintBitsToFloat(t.z), uintBitsToFloat(t.w)); }
+
+#if SHADE_SHADOWS
+// shade_direct(s, rng) with one light sample (LIGHT_SAMPLES 1), which `record` records.
+vec3 shade_direct_shared(PathVertex s, inout Rng rng, out SharedLight record) {
+    record = SharedLight(uvec2(0xFFFFFFFFu, 0u), 0.0, 0.0);
+#if SCENE_HAS_LIGHTS
+    uvec2 id;
+    LightSample ls = sample_light_named(s.pos, rng_next3(rng), false, id);
+    vec3 c = shade_light_sample(s, offset_ray_origin(s.pos, s.ng), ls, false, record.visible);
+    // its weight over the same point's weight without its pdf (light_id_eval): 1 / that pdf
+    float unweighted = max3(light_id_eval(id, s.pos).weight);
+    record.id = id;
+    record.inv_pdf = ls.valid && unweighted > 0.0 ? max3(ls.weight) / unweighted : 0.0;
+    return c;
+#else
+    return vec3(0.0);
+#endif
+}
+#endif
+
+// The light that shared sample `l` brings vertex s: s's own f cos towards that point of that
+// light and its geometry factor, the source's pdf and visibility.
+vec3 shade_direct_from(PathVertex s, SharedLight l) {
+#if SCENE_HAS_LIGHTS
+    if (!(l.visible > 0.0) || !(l.inv_pdf > 0.0)) return vec3(0.0);
+    LightSample ls = light_id_eval(l.id, s.pos);
+    if (!ls.valid) return vec3(0.0);
+    return light_bsdf(s, ls, false) * ls.weight * (l.inv_pdf * l.visible);
+#else
+    return vec3(0.0);
+#endif
 }
 
 vec3 shade_direct(PathVertex s, inout Rng rng) { return shade_direct_mis(s, rng, false); }

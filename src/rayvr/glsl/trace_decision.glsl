@@ -1,7 +1,7 @@
 // The per-pixel trace decision (rayvr/passes/trace_decision): which pixels trace rays this frame
 // and where each of the others takes its light from. TraceDecision writes one rg32ui texel per
 // pixel and view before the ray passes:
-//   x: the kind (bits 0-1) | DECISION_SPREAD (bit 2) | the ray budget at the pixel (bits 8-15, 0-255
+//   x: the kind (bits 0-1) | DECISION_SPREAD (bit 2) | DECISION_SHARED_LIGHT (bit 3) | the ray budget at the pixel (bits 8-15, 0-255
 //      for 0-1) | the source's view (bits 16-23)
 //   y: the source position in that view, in pixels (x | y << 16, each fixed point 13.3 bits)
 // Kinds: DECISION_NONE no ray work (RASTER, or nothing drawn), DECISION_TRACE traced for real,
@@ -15,6 +15,11 @@
 // DECISION_SPREAD marks a pixel whose light is another view's (REUSE, or FILL from another view)
 // when the denoiser spreads the source's filtered light itself (TraceDecision `spread`, set with
 // SVGF): the ray passes' fills and the composite leave it, SVGF writes it (svgf_spread.comp).
+// DECISION_SHARED_LIGHT marks a traced pixel of effect SHADOWS whose glossy lobe cannot take
+// another view's light, but whose direct light sample can (TraceDecision `share_light_samples`):
+// RTShadows shades its own lobes over the sample its source pixel (decision_source) drew and the
+// visibility that sample's shadow ray found, and traces no shadow ray for it; every other pass
+// traces it as any other.
 #pragma once
 #ifndef TRACE_DECISION
 #define TRACE_DECISION 0
@@ -25,9 +30,11 @@ const uint DECISION_TRACE = 1u;
 const uint DECISION_REUSE = 2u;
 const uint DECISION_FILL = 3u;
 const uint DECISION_SPREAD = 4u;   // a flag beside the kind
+const uint DECISION_SHARED_LIGHT = 8u;   // another flag, on DECISION_TRACE
 
 uint decision_kind(uvec2 t) { return t.x & 3u; }
 bool decision_spread(uvec2 t) { return (t.x & DECISION_SPREAD) != 0u; }
+bool decision_shared_light(uvec2 t) { return (t.x & DECISION_SHARED_LIGHT) != 0u; }
 float decision_budget(uvec2 t) { return float((t.x >> 8u) & 0xFFu) / 255.0; }
 const float DECISION_POSITION_STEPS = 8.0;   // sub-pixel steps of a source position
 vec2 decision_position(uvec2 t) { return vec2(uvec2(t.y & 0xFFFFu, t.y >> 16u)) / DECISION_POSITION_STEPS; }

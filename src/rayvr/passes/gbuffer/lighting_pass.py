@@ -128,16 +128,20 @@ class GBufferLightingPass(RenderPass):
         return dict(getattr(self, "_defines", {}) or self.shader_defines())
 
     def execute(self, ctx, data):
-        res = self._res
+        self.run_program(self._res, data)
+        self._fill.run(ctx, data)
+
+    def run_program(self, res, data) -> None:
+        """Bind what program `res` of the pass reads (uniforms, its pixels and their surfaces, the
+        probes) and its output `dst`, then dispatch it over the pass's pixels."""
         self.set_uniforms(res)
         self.bind_pixels(res, data)
         res.image("dst", data[self.OUTPUT])
         if self._probes:
             probe_inputs.bind(res, data, self._probe_sampler)
-        self.dispatch(self._prog, data)
+        self.dispatch(res.prog, data)
         if self._probes:
             probe_inputs.unbind(res)
-        self._fill.run(ctx, data)
 
     def bind_pixels(self, res, data) -> None:
         """Bind what a program of the pass needs to find its pixels and their surfaces: the G-buffer

@@ -1,6 +1,10 @@
 // Emission + ray-traced shadowed direct light for the pixels whose effect is SHADOWS or above: those
 // on the shadow list (indirect dispatch), or with PIXELS_2D every pixel of the image in tiles;
 // + the probes' indirect diffuse light with PROBE_GI.
+// With SHARED_LIGHT (a trace decision over several views, one light sample): the traced pixels of
+// effect SHADOWS record their sample (shading.glsl SharedLight) in `shared_lights`; a pixel the
+// decision flags DECISION_SHARED_LIGHT traces no ray of its own: a second dispatch of this shader,
+// built with SHARED_LIGHT_TAKE, shades its own lobes over its source pixel's sample.
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
@@ -16,16 +20,42 @@ layout(local_size_x = RAY_GROUP_SIZE) in;
 layout(local_size_x = PIXEL_LIST_GROUP) in;
 #endif
 layout(rgba16f) writeonly uniform image2DArray dst;
+#ifndef SHARED_LIGHT
+#define SHARED_LIGHT 0
+#endif
+#ifndef SHARED_LIGHT_TAKE
+#define SHARED_LIGHT_TAKE 0
+#endif
+#if SHARED_LIGHT
+layout(rgba32ui) uniform uimage2DArray shared_lights;
+#endif
 
 void main() {
     ivec3 p;
     if (!ray_pass_pixel(EFFECT_SHADOWS, imageSize(dst), p)) return;
+#if SHARED_LIGHT
+    uvec2 t = decision_at(p);
+    if (decision_shared_light(t) != bool(SHARED_LIGHT_TAKE)) return;   // the other dispatch's
+#endif
     GSurface g = gbuf_load(p);
+    PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
+    vec3 direct;
+#if SHARED_LIGHT_TAKE
+    direct = shade_direct_from(s, shared_light_unpack(imageLoad(shared_lights, decision_source(t))));
+#else
     Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
     rq_blend_begin(rng);   // alphaMode BLEND: this pixel's decisions
-    PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
+#if SHARED_LIGHT
+    if (g.effect == EFFECT_SHADOWS) {
+        SharedLight record;
+        direct = shade_direct_shared(s, rng, record);
+        imageStore(shared_lights, p, shared_light_pack(record));
+    } else
+#endif
     // REFLECTIONS and above: RTReflections traces the specular lobes and shares their light (MIS)
-    vec3 c = g.emissive + shade_direct_mis(s, rng, g.effect >= EFFECT_REFLECTIONS) + probe_gi_diffuse(s);
+    direct = shade_direct_mis(s, rng, g.effect >= EFFECT_REFLECTIONS);
+#endif
+    vec3 c = g.emissive + direct + probe_gi_diffuse(s);
     imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(c)), 1.0));   // the target is rgba16f
     ray_count_commit(uint(p.z));
 }

@@ -9,6 +9,9 @@
 //   FOVEATION 1 (fixed: the image's centre) or 2 (gaze: the eye tracker's, else the centre): a pixel
 //     traces with probability budget(e) (FOVEAL_RADIUS degrees, PERIPHERY_SHARE), an 8x8 ordered
 //     dither whose ranks the frame index rotates through, so a pixel's turns are spread over frames
+//   SHARE_LIGHT_SAMPLES 1 (with REUSE): a pixel of effect SHADOWS that traces for its glossy lobe but
+//     finds the same surface in a source view is flagged DECISION_SHARED_LIGHT there (RTShadows
+//     shades it over that pixel's light sample)
 //   REUSE_SPREAD 1: a pixel whose light is another view's is flagged DECISION_SPREAD (SVGF spreads
 //     the source's filtered light to it; the fills and the composite leave it)
 //   EVERY_SURFACE 1: every drawn pixel has rays to trace (a path tracer from the camera; the sky
@@ -155,29 +158,48 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at) {
     bool reuses = !is_source(v);
     uint s[2];
     int n = reuses ? sources_of(v, s[0], s[1]) : 0;
-    if (reuses && view_independent(g.roughness, g.material, g.pos, v, s[0])) {
+    bool independent = reuses && view_independent(g.roughness, g.material, g.pos, v, s[0]);
+    // a glossy lobe traces, but its direct light sample may be a source pixel's: shared_view then
+    bool shares = SHARE_LIGHT_SAMPLES != 0 && reuses && !independent && g.effect == EFFECT_SHADOWS
+                  && !(material_factors(g.material).transmission > 0.0);
+    uint shared_view = v;
+    vec2 shared_at = at;
+    if (independent || shares) {
         for (int i = 0; i < n; ++i) {
-            uint kind = reuse_from(g, v, s[i], at);
-            if (kind != DECISION_NONE) {
+            vec2 found;
+            uint kind = reuse_from(g, v, s[i], found);
+            if (kind == DECISION_NONE) continue;
+            if (independent) {
                 view = s[i];
+                at = found;
                 return kind;
             }
+            shared_view = s[i];   // the traced pixel at `found` shows this surface: its centre
+            shared_at = floor(found) + 0.5;
+            break;
         }
-        at = vec2(p.xy) + 0.5;
-        return DECISION_TRACE;   // disoccluded, or the source's surface differs: traced, never filled
+        if (independent) return DECISION_TRACE;   // disoccluded, or the source's surface differs: traced, never filled
     }
 #endif
 #if FOVEATION
-    if (selected(p, budget)) return DECISION_TRACE;
-    // a neighbour that certainly traces: its turn, and in a view that reuses a lobe that cannot
-    for (int k = 1; k < TAPS; ++k) {
-        ivec3 q = p + ivec3(TAP[k], 0);
-        if (!inside(q) || !selected(q) || !same_surface(g, v, q, FAR_PIXELS)) continue;
+    if (!selected(p, budget)) {
+        // a neighbour that certainly traces: its turn, and in a view that reuses a lobe that cannot
+        for (int k = 1; k < TAPS; ++k) {
+            ivec3 q = p + ivec3(TAP[k], 0);
+            if (!inside(q) || !selected(q) || !same_surface(g, v, q, FAR_PIXELS)) continue;
 #if REUSE
-        if (reuses && view_independent(gbuf_fetch_metalRough(q).y, g.material, g.pos, v, s[0])) continue;
+            if (reuses && view_independent(gbuf_fetch_metalRough(q).y, g.material, g.pos, v, s[0])) continue;
 #endif
-        at = vec2(q.xy) + 0.5;
-        return DECISION_FILL;
+            at = vec2(q.xy) + 0.5;
+            return DECISION_FILL;
+        }
+    }
+#endif
+#if REUSE
+    if (shared_view != v) {
+        view = shared_view;
+        at = shared_at;
+        return DECISION_TRACE | DECISION_SHARED_LIGHT;
     }
 #endif
     return DECISION_TRACE;

@@ -38,6 +38,11 @@ class TraceDecision(RenderPass):
       a pixel at budget b traces on a share b of the frames, evenly spread; a pixel without its
       turn FILLs from the nearest traced pixel of the same surface within 2 pixels (none: it traces).
 
+    `share_light_samples` (with `reuse`): a pixel of effect SHADOWS whose lobe fails that test but
+    whose surface the source view shows on a traced pixel still traces (its lobe is its own), yet
+    takes that pixel's direct light sample and shadow ray (DECISION_SHARED_LIGHT: RTShadows with
+    its own `share_light_samples` shades it over them; a pass that does not traces it as any other).
+
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
     SHADOWS and above. `spread` (the graphs set it with SVGF): SVGF gives a pixel whose light is
     another view's that view's filtered light itself, so the decision flags it (DECISION_SPREAD)
@@ -53,7 +58,8 @@ class TraceDecision(RenderPass):
     PROPERTIES = {"reuse": False, "foveation": "none", "foveal_radius_deg": foveation.DEFAULT_RADIUS_DEG,
                   "periphery_share": foveation.DEFAULT_PERIPHERY_SHARE, "reuse_min_roughness": 0.5,
                   "reuse_lobe_fraction": 0.25,
-                  "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False}
+                  "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
+                  "share_light_samples": True}
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -97,7 +103,8 @@ class TraceDecision(RenderPass):
                          "FOVEATION": FOVEATION.index(self.foveation), "FOVEAL_RADIUS": float(self.foveal_radius_deg),
                          "PERIPHERY_SHARE": float(self.periphery_share),
                          "EVERY_SURFACE": int(bool(self.every_surface)),
-                         "REUSE_SPREAD": int(bool(self.spread) and self.reuses(cd.views))}
+                         "REUSE_SPREAD": int(bool(self.spread) and self.reuses(cd.views)),
+                         "SHARE_LIGHT_SAMPLES": int(bool(self.share_light_samples) and self.reuses(cd.views))}
         self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
             **scene_defines(ctx), **effect_defines(), **self._defines}))
         self._groups = groups_2d(cd.size, cd.views)
@@ -111,7 +118,9 @@ class TraceDecision(RenderPass):
                           "of source views: "
                           + ("the first eye" if not self.alternate else "the eye of the frame's parity")
                           + f" with 2 views, else every {self.source_stride}th of {d['REUSE_COLS']} columns and rows"
-                          + ("; SVGF spreads their filtered light to the reusing pixels" if d.get("REUSE_SPREAD") else ""))
+                          + ("; SVGF spreads their filtered light to the reusing pixels" if d.get("REUSE_SPREAD") else "")
+                          + ("; glossier SHADOWS surfaces take the source's light samples and their shadow rays"
+                             if d.get("SHARE_LIGHT_SAMPLES") else ""))
         if d.get("FOVEATION"):
             d["foveation"] = (f"{self.foveation}: every pixel within {self.foveal_radius_deg:g} degrees of "
                               + ("each view's centre" if self.foveation == "fixed" else "the gaze (else the centre)")
