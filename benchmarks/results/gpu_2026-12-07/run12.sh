@@ -7,7 +7,10 @@ source tools/gpu-preamble.sh; nvidia-smi --query-gpu=name,driver_version,clocks.
 date
 OFF="Decision.share_light_samples=False,Shadows.share_light_samples=False"
 V=${VIEWS:-64}
-if [ "$V" = 2 ]; then VARIANTS="$OFF"; else VARIANTS="$OFF;Shadows.dispatch_mode=image;Decision.source_stride=3"; fi
+if [ -z "${VARIANTS+x}" ]; then
+  if [ "$V" = 2 ]; then VARIANTS="$OFF"; else VARIANTS="$OFF;Shadows.dispatch_mode=image;Decision.source_stride=3"; fi
+fi
+[ "$VARIANTS" = off ] && VARIANTS="$OFF"
 timeout ${LIMIT:-540} python3 -m benchmarks view_reuse --scene .scenes/tauray_test.glb --views $V --out $OUT \
   --variants "$VARIANTS" > $OUT/view_reuse$V.log 2>&1
 grep -v -i warn $OUT/view_reuse$V.log | tail -8 | cut -c1-560; date
