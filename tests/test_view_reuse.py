@@ -377,3 +377,19 @@ def test_a_shared_area_light_sample_converges_to_the_same_image(gpu):
     assert abs(converged.mean() - ref.mean()) < 0.02 * ref.mean(), (converged.mean(), ref.mean())
     e_shared, e_independent = rel_mse(shared[1][flagged], ref), rel_mse(independent[1][flagged], ref)
     assert e_shared < 1.5 * e_independent + 1e-4, (e_shared, e_independent)
+
+
+def test_only_reuse_compiles_the_spread_and_the_shared_light_samples(gpu):
+    """The decision flags pixels for SVGF to spread to, and shares light samples, only when views
+    reuse: with foveation alone SVGF compiles no spread stage, the composite reads no decision and
+    RTShadows records no samples (no `sharedLights` texture)."""
+    for reuse in (None, "views"):
+        g = rv.graphs.hybrid(foveation="fixed", reuse=reuse)
+        with Renderer(lambert_cornell(), g, views=2, size=SIZE) as r:
+            r.render()
+            report = r.report()
+        on = reuse is not None
+        assert ("SVGF_SHARED" in report.defines["SVGF"]) == on
+        assert (report.defines["Shadows"].get("SHARED_LIGHT") == 1) == on
+        assert ("TRACE_DECISION" in report.defines["Composite"]) == on
+        assert any(res.name == "Shadows.sharedLights" for res in report.resources) == on

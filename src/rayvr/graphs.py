@@ -236,8 +236,11 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     if taa and not svgf:
         _add_taa(g)
     if _trace_decision(g, reuse, foveation, decision, "hybrid", spread=svgf):
-        # the composite reads it only to leave the pixels SVGF spreads to
-        _read_decision(g, ("Compaction", "Shadows", "Reflections", "PathTracer", *(("Composite",) * svgf), "SVGF"))
+        # the composite reads it only to leave the pixels SVGF spreads to, which only reuse flags
+        spreads = svgf and reuse == "views"
+        _read_decision(g, ("Compaction", "Shadows", "Reflections", "PathTracer", *(("Composite",) * spreads), "SVGF"))
+        if svgf and not spreads:
+            g.update_pass("SVGF", {"spread": False})
     return g
 
 
@@ -295,6 +298,8 @@ def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int 
         g.add_edge("Compaction.pathPixels", "PathTracer.pixels")
         channels.wire(g, "GBuffer", "PathTracer")   # the fill's albedos
         _read_decision(g, ("Compaction", "PathTracer", "SVGF"))
+        if denoise == "svgf" and reuse != "views":
+            g.update_pass("SVGF", {"spread": False})
     return g
 
 

@@ -80,7 +80,10 @@ class SVGF(HistoryOwner, RenderPass):
     `max_history` (frames the history length counts to while the view moves), `still_max_history`
     (the same on a still frame, where a pixel that did not move keeps an exact running mean:
     rayvr.passes.history; the float16 colour history bounds it), `phi_color`, `phi_normal`, `phi_depth`
-    (the edge-stopping sigmas of luminance, normal and depth)."""
+    (the edge-stopping sigmas of luminance, normal and depth), `spread` (True: with a decision bound
+    over several views, leave the pixels it flags DECISION_SPREAD to a last dispatch that gives them
+    their sources' filtered light; the graphs set it False when the decision reuses no view, as
+    with foveation alone, whose decision flags none)."""
 
     DIFFUSE, SPECULAR, COLOR = "diffuse", "specular", "color"
     HISTORY_DIFFUSE, HISTORY_SPECULAR = "historyDiffuse", "historySpecular"
@@ -91,7 +94,8 @@ class SVGF(HistoryOwner, RenderPass):
     GRADIENT = "gradient"
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"iterations": 5, "kernel": 3, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2,
-                  "max_history": 32, "still_max_history": 256, "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0}
+                  "max_history": 32, "still_max_history": 256, "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0,
+                  "spread": True}
     USES_SCENE = True
 
     def __init__(self, props: dict | None = None, **kwargs):
@@ -152,7 +156,7 @@ class SVGF(HistoryOwner, RenderPass):
         self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular)}
         self._density = DecisionFill.connected(cd)
         # with several views a decision may hand pixels another view's light: they take its filtered light
-        self._shared = self._density and cd.views > 1
+        self._shared = self._density and cd.views > 1 and bool(self.spread)
         if self._shared:
             self._defines["SVGF_SHARED"] = 1
         reproject = {**self._defines, "TRACE_DECISION": int(self._density)}
