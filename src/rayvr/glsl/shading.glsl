@@ -95,13 +95,14 @@ uvec4 shared_light_pack(SharedLight l) { return uvec4(l.id, floatBitsToUint(l.in
 SharedLight shared_light_unpack(uvec4 t) { return SharedLight(t.xy, uintBitsToFloat(t.z), uintBitsToFloat(t.w)); }
 
 #if SHADE_SHADOWS
-// shade_direct(s, rng) with one light sample (LIGHT_SAMPLES 1), which `record` records.
-vec3 shade_direct_shared(PathVertex s, inout Rng rng, out SharedLight record) {
+// shade_direct_mis(s, rng, specular_traced) with one light sample (LIGHT_SAMPLES 1), which
+// `record` records.
+vec3 shade_direct_shared(PathVertex s, inout Rng rng, bool specular_traced, out SharedLight record) {
     record = SharedLight(uvec2(0xFFFFFFFFu, 0u), 0.0, 0.0);
 #if SCENE_HAS_LIGHTS
     uvec2 id;
     LightSample ls = sample_light_named(s.pos, rng_next3(rng), false, id);
-    vec3 c = shade_light_sample(s, offset_ray_origin(s.pos, s.ng), ls, false, record.visible);
+    vec3 c = shade_light_sample(s, offset_ray_origin(s.pos, s.ng), ls, specular_traced, record.visible);
     // its weight over the same point's weight without its pdf (light_id_eval): 1 / that pdf
     float unweighted = max3(light_id_eval(id, s.pos).weight);
     record.id = id;
@@ -114,13 +115,15 @@ vec3 shade_direct_shared(PathVertex s, inout Rng rng, out SharedLight record) {
 #endif
 
 // The light that shared sample `l` brings vertex s: s's own f cos towards that point of that
-// light and its geometry factor, the source's pdf and visibility.
-vec3 shade_direct_from(PathVertex s, SharedLight l) {
+// light and its geometry factor, the source's pdf and visibility. `specular_traced` as in
+// shade_direct_mis: s's own rays sample its specular lobes, and the power heuristic weighs its
+// own pdfs of the point (the source's, drawn a pixel footprint away, differs little).
+vec3 shade_direct_from(PathVertex s, SharedLight l, bool specular_traced) {
 #if SCENE_HAS_LIGHTS
     if (!(l.visible > 0.0) || !(l.inv_pdf > 0.0)) return vec3(0.0);
     LightSample ls = light_id_eval(l.id, s.pos);
     if (!ls.valid) return vec3(0.0);
-    return light_bsdf(s, ls, false) * ls.weight * (l.inv_pdf * l.visible);
+    return light_bsdf(s, ls, specular_traced) * ls.weight * (l.inv_pdf * l.visible);
 #else
     return vec3(0.0);
 #endif

@@ -15,7 +15,7 @@
 // DECISION_SPREAD marks a pixel whose light is another view's (REUSE, or FILL from another view)
 // when the denoiser spreads the source's filtered light itself (TraceDecision `spread`, set with
 // SVGF): the ray passes' fills and the composite leave it, SVGF writes it (svgf_spread.comp).
-// DECISION_SHARED_LIGHT marks a traced pixel of effect SHADOWS whose glossy lobe cannot take
+// DECISION_SHARED_LIGHT marks a traced pixel of effect SHADOWS or REFLECTIONS whose lobe cannot take
 // another view's light, but whose direct light sample can (TraceDecision `share_light_samples`):
 // RTShadows shades its own lobes over the sample its source pixel (decision_source) drew and the
 // visibility that sample's shadow ray found, and traces no shadow ray for it; every other pass

@@ -2,7 +2,7 @@
 // on the shadow list (indirect dispatch), or with PIXELS_2D every pixel of the image in tiles;
 // + the probes' indirect diffuse light with PROBE_GI.
 // With SHARED_LIGHT (a trace decision over several views, one light sample): the traced pixels of
-// effect SHADOWS record their sample (shading.glsl SharedLight) in `shared_lights`; a pixel the
+// effect SHADOWS and REFLECTIONS record their sample (shading.glsl SharedLight) in `shared_lights`; a pixel the
 // decision flags DECISION_SHARED_LIGHT traces no ray of its own: a second dispatch of this shader,
 // built with SHARED_LIGHT_TAKE, shades its own lobes over its source pixel's sample.
 #define GBUF_READER 1
@@ -40,20 +40,21 @@ void main() {
     GSurface g = gbuf_load(p);
     PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
     vec3 direct;
+    // REFLECTIONS and above: RTReflections traces the specular lobes and shares their light (MIS)
+    bool specular_traced = g.effect >= EFFECT_REFLECTIONS;
 #if SHARED_LIGHT_TAKE
-    direct = shade_direct_from(s, shared_light_unpack(imageLoad(shared_lights, decision_source(t))));
+    direct = shade_direct_from(s, shared_light_unpack(imageLoad(shared_lights, decision_source(t))), specular_traced);
 #else
     Rng rng = rng_init(uvec2(p.xy), view_global_index(uint(p.z)), frame_index(), RNG_SALT);
     rq_blend_begin(rng);   // alphaMode BLEND: this pixel's decisions
 #if SHARED_LIGHT
-    if (g.effect == EFFECT_SHADOWS) {
+    if (g.effect <= EFFECT_REFLECTIONS) {
         SharedLight record;
-        direct = shade_direct_shared(s, rng, record);
+        direct = shade_direct_shared(s, rng, specular_traced, record);
         imageStore(shared_lights, p, shared_light_pack(record));
     } else
 #endif
-    // REFLECTIONS and above: RTReflections traces the specular lobes and shares their light (MIS)
-    direct = shade_direct_mis(s, rng, g.effect >= EFFECT_REFLECTIONS);
+    direct = shade_direct_mis(s, rng, specular_traced);
 #endif
     vec3 c = g.emissive + direct + probe_gi_diffuse(s);
     imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(c)), 1.0));   // the target is rgba16f

@@ -23,7 +23,7 @@ class RTShadows(GBufferLightingPass):
     surfaces visited, some noise; 0: the exact product, 1: a coin per surface).
 
     `share_light_samples` (hybrid(reuse='views') sets it; with a trace decision over several views
-    and one light sample): the pixels of effect SHADOWS it traces record their light sample and its
+    and one light sample): the pixels of effect SHADOWS and REFLECTIONS it traces record their light sample and its
     visibility (`sharedLights`, scratch), and a pixel the decision flags DECISION_SHARED_LIGHT (a
     glossy lobe that another view's shaded light would not suit) traces no shadow ray: a second
     dispatch shades its own lobes towards its source pixel's sample, over that sample's visibility."""

@@ -9,7 +9,7 @@
 //   FOVEATION 1 (fixed: the image's centre) or 2 (gaze: the eye tracker's, else the centre): a pixel
 //     traces with probability budget(e) (FOVEAL_RADIUS degrees, PERIPHERY_SHARE), an 8x8 ordered
 //     dither whose ranks the frame index rotates through, so a pixel's turns are spread over frames
-//   SHARE_LIGHT_SAMPLES 1 (with REUSE): a pixel of effect SHADOWS that traces for its glossy lobe but
+//   SHARE_LIGHT_SAMPLES 1 (with REUSE): a pixel of effect SHADOWS or REFLECTIONS that traces for its lobe but
 //     finds the same surface in a source view is flagged DECISION_SHARED_LIGHT there (RTShadows
 //     shades it over that pixel's light sample)
 //   REUSE_SPREAD 1: a pixel whose light is another view's is flagged DECISION_SPREAD (SVGF spreads
@@ -160,7 +160,8 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at) {
     int n = reuses ? sources_of(v, s[0], s[1]) : 0;
     bool independent = reuses && view_independent(g.roughness, g.material, g.pos, v, s[0]);
     // a glossy lobe traces, but its direct light sample may be a source pixel's: shared_view then
-    bool shares = SHARE_LIGHT_SAMPLES != 0 && reuses && !independent && g.effect == EFFECT_SHADOWS
+    bool shares = SHARE_LIGHT_SAMPLES != 0 && reuses && !independent && g.effect >= EFFECT_SHADOWS
+                  && g.effect <= EFFECT_REFLECTIONS
                   && !(material_factors(g.material).transmission > 0.0);
     uint shared_view = v;
     vec2 shared_at = at;

@@ -38,7 +38,8 @@ class TraceDecision(RenderPass):
       a pixel at budget b traces on a share b of the frames, evenly spread; a pixel without its
       turn FILLs from the nearest traced pixel of the same surface within 2 pixels (none: it traces).
 
-    `share_light_samples` (with `reuse`): a pixel of effect SHADOWS whose lobe fails that test but
+    `share_light_samples` (with `reuse`, not `every_surface`): a pixel of effect SHADOWS or
+    REFLECTIONS whose lobe fails that test but
     whose surface the source view shows on a traced pixel still traces (its lobe is its own), yet
     takes that pixel's direct light sample and shadow ray (DECISION_SHARED_LIGHT: RTShadows with
     its own `share_light_samples` shades it over them; a pass that does not traces it as any other).
@@ -104,7 +105,8 @@ class TraceDecision(RenderPass):
                          "PERIPHERY_SHARE": float(self.periphery_share),
                          "EVERY_SURFACE": int(bool(self.every_surface)),
                          "REUSE_SPREAD": int(bool(self.spread) and self.reuses(cd.views)),
-                         "SHARE_LIGHT_SAMPLES": int(bool(self.share_light_samples) and self.reuses(cd.views))}
+                         "SHARE_LIGHT_SAMPLES": int(bool(self.share_light_samples) and self.reuses(cd.views)
+                                                   and not self.every_surface)}
         self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
             **scene_defines(ctx), **effect_defines(), **self._defines}))
         self._groups = groups_2d(cd.size, cd.views)
@@ -119,7 +121,7 @@ class TraceDecision(RenderPass):
                           + ("the first eye" if not self.alternate else "the eye of the frame's parity")
                           + f" with 2 views, else every {self.source_stride}th of {d['REUSE_COLS']} columns and rows"
                           + ("; SVGF spreads their filtered light to the reusing pixels" if d.get("REUSE_SPREAD") else "")
-                          + ("; glossier SHADOWS surfaces take the source's light samples and their shadow rays"
+                          + ("; glossier surfaces take the source's light samples and their shadow rays"
                              if d.get("SHARE_LIGHT_SAMPLES") else ""))
         if d.get("FOVEATION"):
             d["foveation"] = (f"{self.foveation}: every pixel within {self.foveal_radius_deg:g} degrees of "
