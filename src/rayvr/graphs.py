@@ -194,7 +194,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
     if direct == "restir":
         g.add_pass(P.ReSTIRDI(dict(restir or {})), "Shadows")
     else:
-        # with reuse, glossy SHADOWS pixels of other views shade over the source's light samples
+        # with reuse, other views' glossy pixels shade over the source's light samples
         shares = reuse == "views" and bool((decision or {}).get("share_light_samples", True))
         g.add_pass(P.RTShadows(light_samples=light_samples, share_light_samples=shares), "Shadows")
     g.add_pass(P.RTReflections(max_bounces=max_bounces, light_samples=light_samples), "Reflections")

@@ -2,9 +2,9 @@
 // on the shadow list (indirect dispatch), or with PIXELS_2D every pixel of the image in tiles;
 // + the probes' indirect diffuse light with PROBE_GI.
 // With SHARED_LIGHT (a trace decision over several views, one light sample): the traced pixels of
-// effect SHADOWS and REFLECTIONS record their sample (shading.glsl SharedLight) in `shared_lights`; a pixel the
-// decision flags DECISION_SHARED_LIGHT traces no ray of its own: a second dispatch of this shader,
-// built with SHARED_LIGHT_TAKE, shades its own lobes over its source pixel's sample.
+// effect SHADOWS and REFLECTIONS record their sample (shading.glsl SharedLight) in `shared_lights`;
+// a pixel the decision flags DECISION_SHARED_LIGHT traces no ray of its own: a second dispatch of
+// this shader, built with SHARED_LIGHT_TAKE, shades its own lobes over its source pixel's sample.
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"

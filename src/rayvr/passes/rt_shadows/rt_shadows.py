@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 from ...errors import OptionError
-from ...gpu.rng_salts import RNG_SALTS
 from ...gpu.program_resources import program_resources
+from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access
@@ -23,10 +23,11 @@ class RTShadows(GBufferLightingPass):
     surfaces visited, some noise; 0: the exact product, 1: a coin per surface).
 
     `share_light_samples` (hybrid(reuse='views') sets it; with a trace decision over several views
-    and one light sample): the pixels of effect SHADOWS and REFLECTIONS it traces record their light sample and its
-    visibility (`sharedLights`, scratch), and a pixel the decision flags DECISION_SHARED_LIGHT (a
-    glossy lobe that another view's shaded light would not suit) traces no shadow ray: a second
-    dispatch shades its own lobes towards its source pixel's sample, over that sample's visibility."""
+    and one light sample): the pixels of effect SHADOWS and REFLECTIONS it traces record their light
+    sample and its visibility (`sharedLights`, scratch), and a pixel the decision flags
+    DECISION_SHARED_LIGHT (a glossy lobe that another view's shaded light would not suit) traces no
+    shadow ray: a second dispatch shades its own lobes towards its source pixel's sample, over that
+    sample's visibility."""
 
     SHARED = "sharedLights"
 
@@ -39,6 +40,7 @@ class RTShadows(GBufferLightingPass):
     SALT = RNG_SALTS["rt_shadows"]
     PROPERTIES = {"light_samples": 1, "blend_roulette": 0.0, "share_light_samples": False,
                   **ray_properties(view_group=16)}
+    _sharing = False   # compiled with shared light samples (shares(cd))
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -65,8 +67,6 @@ class RTShadows(GBufferLightingPass):
     def shader_defines(self):
         return {"LIGHT_SAMPLES": max(1, int(self.light_samples)), "SHADE_SHADOWS": 1,
                 "RQ_BLEND_ROULETTE": repr(float(self.blend_roulette)), "SHARED_LIGHT": int(self._sharing)}
-
-    _sharing = False
 
     def compile(self, ctx, cd):
         self._sharing = self.shares(cd)
