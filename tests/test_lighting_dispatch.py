@@ -72,14 +72,39 @@ def test_whole_image_dispatch_lights_the_same_pixels_as_the_list(gpu, monkeypatc
 
 
 @pytest.mark.parametrize("path_traced", [False, True])
-def test_ray_passes_run_on_the_image_unless_a_material_is_path_traced(gpu, path_traced):
+@pytest.mark.parametrize("reuse", [None, "views"])
+def test_ray_passes_run_on_the_image_unless_a_material_is_path_traced(gpu, path_traced, reuse):
+    """With a trace decision too (view reuse over two views): its tiles skip the pixels it does not
+    trace, which measured faster than the list of the others."""
     scene = scene_with_every_light_kind()
     if path_traced:
         scene.materials["ShortBox"].effect = rv.Effect.PATH_TRACED
-    with Renderer(scene, rv.graphs.hybrid(preset="raw"), views=default_views(scene, 1, (8, 8)), gpu=gpu) as r:
+    views = default_views(scene, 2 if reuse else 1, (8, 8))
+    with Renderer(scene, rv.graphs.hybrid(preset="raw", reuse=reuse), views=views, gpu=gpu) as r:
         assert r.compiled.passes["Reflections"].defines()["PIXELS_2D"] == int(not path_traced)
         assert r.compiled.passes["Shadows"].defines()["PIXELS_2D"] == int(not path_traced)
         # the pixel lists are made only when a pass reads them; the report says why not
         assert ("Compaction" in r.compiled.plan.order) == path_traced
         assert ("leave unused: Shadows.pixels (runs over the whole image" in str(r.report())) == (not path_traced)
         assert ("PIXEL_LIST_INPUT" in r.compiled.passes["Shadows"].defines()) == path_traced
+
+
+def test_under_view_reuse_the_image_and_the_list_light_the_same_pixels(gpu):
+    """With view reuse (reused pixels filled, glossy ones taking the first eye's light samples in a
+    second dispatch) the two dispatch forms give the same image."""
+    scene = scene_with_every_light_kind()
+    out = {}
+    for mode in ("list", "image"):
+        g = rv.graphs.hybrid(preset="raw", reuse="views")
+        for name in ("Shadows", "Reflections"):
+            g.update_pass(name, {"dispatch_mode": mode})
+        g.mark_output("Decision.decision")
+        with Renderer(scene, g, views=default_views(scene, 2, (40, 36)), gpu=gpu) as r:
+            r.render()
+            out[mode] = (r.read_output("Composite.color")[..., :3].copy(), r.compiled.ray_counts(),
+                         r.read_output("Decision.decision")[..., 0])
+    t = out["list"][2][1]
+    assert ((t & 3) >= 2).sum() > 200 and (t & 8).sum() > 0   # reused, and sharing light samples
+    assert out["list"][1] == out["image"][1]
+    close = np.isclose(out["list"][0], out["image"][0], rtol=1e-3, atol=1e-5).all(axis=-1)
+    assert close.mean() > 0.999, int((~close).sum())

@@ -20,8 +20,11 @@ from . import channels
 # workgroups, where the pixels whose effect needs no such rays leave at once; "list" runs over the
 # compaction's pixel list (indirect dispatch); "auto" takes the image unless a material is PATH_TRACED. Same
 # pixels, same random numbers, same image. Neighbouring pixels in one warp trace alike rays; the
-# list's tiles come in random order and a warp often straddles two of them. With a trace decision
-# (TraceDecision) over several views "auto" takes the list: the pixels that trace are sparse.
+# list's tiles come in random order and a warp often straddles two of them. Under a trace decision
+# (TraceDecision) too the image wins though fewer of its lanes trace: with view reuse on tauray's
+# stereo pair (2 x 1440x1600, a third of the second eye's pixels tracing) RTShadows took 1.04 ms
+# over the image against 1.57 over the list, and the compaction's 0.13 ms went with it
+# (benchmarks/RESULTS.md, 2026-12-07, third).
 DISPATCHES = {"auto": "the whole image unless a material is PATH_TRACED", "image": "",
               "list": "the compaction's pixels"}
 TILE = [8, 4]   # one warp (ray_group spreads it over views)
@@ -115,8 +118,6 @@ class GBufferLightingPass(RenderPass):
         if self.dispatch_mode != "auto":
             return self.dispatch_mode == "image"
         # A PATH_TRACED pixel may be on the path tracer's list instead of this one: only the list knows.
-        if DecisionFill.connected(cd) and cd.views > 1:
-            return False
         used = effects_used(cd)
         return used is not None and Effect.PATH_TRACED not in used
 
