@@ -24,7 +24,7 @@ from . import channels
 # (TraceDecision) too the image wins though fewer of its lanes trace: with view reuse on tauray's
 # stereo pair (2 x 1440x1600, a third of the second eye's pixels tracing) RTShadows took 1.04 ms
 # over the image against 1.57 over the list, and the compaction's 0.13 ms went with it
-# (benchmarks/RESULTS.md, 2026-12-07, third).
+# (benchmarks/RESULTS.md has the measurement).
 DISPATCHES = {"auto": "the whole image unless a material is PATH_TRACED", "image": "",
               "list": "the compaction's pixels"}
 TILE = [8, 4]   # one warp (ray_group spreads it over views)
