@@ -1,8 +1,8 @@
 // The per-pixel trace decision (rayvr/passes/trace_decision): which pixels trace rays this frame
 // and where each of the others takes its light from. TraceDecision writes one rg32ui texel per
 // pixel and view before the ray passes:
-//   x: the kind (bits 0-1) | DECISION_SPREAD (bit 2) | DECISION_SHARED_LIGHT (bit 3) | the ray budget at the pixel (bits 8-15, 0-255
-//      for 0-1) | the source's view (bits 16-23)
+//   x: the kind (bits 0-1) | DECISION_SPREAD (bit 2) | DECISION_SHARED_LIGHT (bit 3) | the ray
+//      budget at the pixel (bits 8-15, 0-255 for 0-1) | the source's view (bits 16-23)
 //   y: the source position in that view, in pixels (x | y << 16, each fixed point 13.3 bits)
 // Kinds: DECISION_NONE no ray work (RASTER, or nothing drawn), DECISION_TRACE traced for real,
 // DECISION_REUSE the shaded light of the same surface in another view, interpolated at the point's
@@ -15,8 +15,8 @@
 // DECISION_SPREAD marks a pixel whose light is another view's (REUSE, or FILL from another view)
 // when the denoiser spreads the source's filtered light itself (TraceDecision `spread`, set with
 // SVGF): the ray passes' fills and the composite leave it, SVGF writes it (svgf_spread.comp).
-// DECISION_SHARED_LIGHT marks a traced pixel of effect SHADOWS or REFLECTIONS whose lobe cannot take
-// another view's light, but whose direct light sample can (TraceDecision `share_light_samples`):
+// DECISION_SHARED_LIGHT marks a traced pixel of effect SHADOWS or REFLECTIONS whose lobe cannot
+// take another view's light, but whose direct light sample can (TraceDecision `share_light_samples`):
 // RTShadows shades its own lobes over the sample its source pixel (decision_source) drew and the
 // visibility that sample's shadow ray found, and traces no shadow ray for it; every other pass
 // traces it as any other.

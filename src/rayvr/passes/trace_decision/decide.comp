@@ -9,9 +9,9 @@
 //   FOVEATION 1 (fixed: the image's centre) or 2 (gaze: the eye tracker's, else the centre): a pixel
 //     traces with probability budget(e) (FOVEAL_RADIUS degrees, PERIPHERY_SHARE), an 8x8 ordered
 //     dither whose ranks the frame index rotates through, so a pixel's turns are spread over frames
-//   SHARE_LIGHT_SAMPLES 1 (with REUSE): a pixel of effect SHADOWS or REFLECTIONS that traces for its lobe but
-//     finds the same surface in a source view is flagged DECISION_SHARED_LIGHT there (RTShadows
-//     shades it over that pixel's light sample)
+//   SHARE_LIGHT_SAMPLES 1 (with REUSE): a pixel of effect SHADOWS or REFLECTIONS that traces for
+//     its lobe but finds the same surface in a source view is flagged DECISION_SHARED_LIGHT there
+//     (RTShadows shades it over that pixel's light sample)
 //   REUSE_SPREAD 1: a pixel whose light is another view's is flagged DECISION_SPREAD (SVGF spreads
 //     the source's filtered light to it; the fills and the composite leave it)
 //   EVERY_SURFACE 1: every drawn pixel has rays to trace (a path tracer from the camera; the sky
@@ -90,12 +90,15 @@ bool selected(ivec3 q) { return true; }
 
 // -- reuse between views ----------------------------------------------------------------------------
 #if REUSE
+// Light refracts through the material: what another eye sees through it is another path.
+bool refracts(uint material) { return material_factors(material).transmission > 0.0; }
+
 // A lobe that looks alike from view v's eye and source s's: no refraction, and rough enough
 // (roughness >= REUSE_MIN_ROUGHNESS), or the angle between the two eyes seen from the point `pos`
 // below REUSE_LOBE_FRACTION of the GGX lobe's width (alpha = roughness^2 radians): a far glossy
 // surface looks the same to both eyes, a near one does not.
 bool view_independent(float roughness, uint material, vec3 pos, uint v, uint s) {
-    if (material_factors(material).transmission > 0.0) return false;
+    if (refracts(material)) return false;
     if (roughness >= REUSE_MIN_ROUGHNESS) return true;
     vec3 a = views[v].eye.xyz - pos, b = views[s].eye.xyz - pos;
     float parallax = atan(length(cross(a, b)), dot(a, b));
@@ -161,8 +164,7 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at) {
     bool independent = reuses && view_independent(g.roughness, g.material, g.pos, v, s[0]);
     // a glossy lobe traces, but its direct light sample may be a source pixel's: shared_view then
     bool shares = SHARE_LIGHT_SAMPLES != 0 && reuses && !independent && g.effect >= EFFECT_SHADOWS
-                  && g.effect <= EFFECT_REFLECTIONS
-                  && !(material_factors(g.material).transmission > 0.0);
+                  && g.effect <= EFFECT_REFLECTIONS && !refracts(g.material);
     uint shared_view = v;
     vec2 shared_at = at;
     if (independent || shares) {
@@ -179,7 +181,8 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at) {
             shared_at = floor(found) + 0.5;
             break;
         }
-        if (independent) return DECISION_TRACE;   // disoccluded, or the source's surface differs: traced, never filled
+        // disoccluded, or the source's surface differs: traced, never filled
+        if (independent) return DECISION_TRACE;
     }
 #endif
 #if FOVEATION

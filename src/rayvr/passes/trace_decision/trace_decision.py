@@ -39,17 +39,17 @@ class TraceDecision(RenderPass):
       turn FILLs from the nearest traced pixel of the same surface within 2 pixels (none: it traces).
 
     `share_light_samples` (with `reuse`, not `every_surface`): a pixel of effect SHADOWS or
-    REFLECTIONS whose lobe fails that test but
-    whose surface the source view shows on a traced pixel still traces (its lobe is its own), yet
-    takes that pixel's direct light sample and shadow ray (DECISION_SHARED_LIGHT: RTShadows with
-    its own `share_light_samples` shades it over them; a pass that does not traces it as any other).
+    REFLECTIONS whose lobe fails that test but whose surface the source view shows on a traced
+    pixel still traces (its lobe is its own), yet takes that pixel's direct light sample and shadow
+    ray (DECISION_SHARED_LIGHT: RTShadows with its own `share_light_samples` shades it over them; a
+    pass that does not traces it as any other).
 
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
     SHADOWS and above. `spread` (the graphs set it with SVGF): SVGF gives a pixel whose light is
     another view's that view's filtered light itself, so the decision flags it (DECISION_SPREAD)
-    and the ray passes' fills and the composite leave it. The ray passes read the decision (their lists and tiles skip the
-    reconstructed pixels, and a last dispatch of each fills them: trace_decision.fill) and SVGF
-    follows the budget. With one view and foveation 'none' there is nothing to decide: the pass is
+    and the ray passes' fills and the composite leave it. The ray passes read the decision (their
+    lists and tiles skip the reconstructed pixels, and a last dispatch of each fills them:
+    trace_decision.fill) and SVGF follows the budget. With one view and foveation 'none' there is nothing to decide: the pass is
     left out, and so is its texture."""
 
     USES_SCENE = True
