@@ -95,8 +95,9 @@ def _trace_decision(g: RenderGraph, reuse, foveation, decision: dict | None, whe
                     every_surface: bool = False, spread: bool = False) -> bool:
     """Add the trace decision (pass "Decision", rayvr.passes.TraceDecision) when `reuse` or
     `foveation` asks for it, fed by the G-buffer, with `decision` as its further properties and
-    `spread` (SVGF gives reusing pixels their source's filtered light); False (and nothing added)
-    when neither does."""
+    `spread` (SVGF, already in `g`, gives reusing pixels their source's filtered light; without
+    reuse it has none to give, and its `spread` is turned off); False (and nothing added) when
+    neither does."""
     from . import passes as P
     from .passes.gbuffer import channels
 
@@ -112,6 +113,8 @@ def _trace_decision(g: RenderGraph, reuse, foveation, decision: dict | None, whe
              "spread": spread, **dict(decision or {})}
     g.add_pass(P.TraceDecision(props), "Decision")
     channels.wire(g, "GBuffer", "Decision")
+    if spread and reuse != "views":   # foveation alone flags no pixel for SVGF to spread to
+        g.update_pass("SVGF", {"spread": False})
     return True
 
 
@@ -195,7 +198,7 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
         g.add_pass(P.ReSTIRDI(dict(restir or {})), "Shadows")
     else:
         # with reuse, other views' glossy pixels shade over the source's light samples
-        shares = reuse == "views" and bool((decision or {}).get("share_light_samples", True))
+        shares = reuse == "views" and bool({**P.TraceDecision.PROPERTIES, **(decision or {})}["share_light_samples"])
         g.add_pass(P.RTShadows(light_samples=light_samples, share_light_samples=shares), "Shadows")
     g.add_pass(P.RTReflections(max_bounces=max_bounces, light_samples=light_samples), "Reflections")
     g.add_pass(P.PathTracer(mode="gbuffer", max_bounces=path_bounces, lobes=svgf), "PathTracer")
@@ -239,8 +242,6 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
         # the composite reads it only to leave the pixels SVGF spreads to, which only reuse flags
         spreads = svgf and reuse == "views"
         _read_decision(g, ("Compaction", "Shadows", "Reflections", "PathTracer", *(("Composite",) * spreads), "SVGF"))
-        if svgf and not spreads:
-            g.update_pass("SVGF", {"spread": False})
     return g
 
 
@@ -298,8 +299,6 @@ def path_traced(samples_per_pixel: int = 1, max_bounces: int = 4, rr_start: int 
         g.add_edge("Compaction.pathPixels", "PathTracer.pixels")
         channels.wire(g, "GBuffer", "PathTracer")   # the fill's albedos
         _read_decision(g, ("Compaction", "PathTracer", "SVGF"))
-        if denoise == "svgf" and reuse != "views":
-            g.update_pass("SVGF", {"spread": False})
     return g
 
 
