@@ -58,7 +58,9 @@ def run(args) -> dict:
     from rayvr.xr.cameras import default_views
 
     s = settings(args)
-    variants = parse_variants(args.variants)
+    variants = [(f"views, lobe fraction {f:g}", {"Decision": {"reuse_lobe_fraction": f}})
+                for f in (float(x) for x in args.lobe_fractions.split(",") if x.strip())]
+    variants += parse_variants(args.variants)
     counts = [int(v) for v in args.views.split(",")]
     if args.quick and args.views == "2,64":
         counts = [2, 4]
@@ -73,10 +75,6 @@ def run(args) -> dict:
         out = {}
         for reuse in (None, "views"):
             out[reuse] = measure(scene, view_set, rv.graphs.hybrid(preset=args.preset, reuse=reuse), s, ref, args.ppd)
-        for fraction in (float(f) for f in args.lobe_fractions.split(",") if f.strip()):
-            g = rv.graphs.hybrid(preset=args.preset, reuse="views")
-            g.update_pass("Decision", {"reuse_lobe_fraction": fraction})
-            out[f"views, lobe fraction {fraction:g}"] = measure(scene, view_set, g, s, ref, args.ppd)
         for label, props in variants:
             g = rv.graphs.hybrid(preset=args.preset, reuse="views")
             for name, p in props.items():
