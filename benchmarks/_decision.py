@@ -3,8 +3,11 @@ its rays per view counted and its displayed image judged against a converged pat
 reference by FLIP, FLIP within the foveal radius and FLIP weighted by eccentricity."""
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
+from ._dispatches import dispatch_ms, labelled_programs
 from ._timing import wall_ms_per_frame
 
 
@@ -19,6 +22,9 @@ def add_common_arguments(parser, default_scene: str = "cornell_box") -> None:
     parser.add_argument("--reference-frames", type=int, default=64,
                         help="frames of the path-traced reference (quick: 4)")
     parser.add_argument("--reference-spp", type=int, default=16, help="its paths per pixel per frame (quick: 4)")
+    parser.add_argument("--dispatches", type=int, default=0,
+                        help="frames over which to time each compute dispatch apart (a column of Pass/shader ms; "
+                             "default 0: off)")
     parser.add_argument("--ppd", type=float, default=None,
                         help="FLIP's pixels per degree (default: the index headset's)")
 
@@ -26,9 +32,10 @@ def add_common_arguments(parser, default_scene: str = "cornell_box") -> None:
 def settings(args) -> dict:
     """The frame counts of a full run or --quick."""
     if args.quick:
-        return {"frames": 3, "warmup": 1, "judged": 2, "ref_frames": 4, "ref_spp": 4}
+        return {"frames": 3, "warmup": 1, "judged": 2, "ref_frames": 4, "ref_spp": 4,
+                "dispatches": min(args.dispatches, 2)}
     return {"frames": args.frames, "warmup": args.warmup, "judged": args.judged_frames,
-            "ref_frames": args.reference_frames, "ref_spp": args.reference_spp}
+            "ref_frames": args.reference_frames, "ref_spp": args.reference_spp, "dispatches": args.dispatches}
 
 
 def reference(scene, view_set, s: dict):
@@ -41,7 +48,8 @@ def reference(scene, view_set, s: dict):
 
 def measure(scene, view_set, graph, s: dict, judge_ref, ppd: float | None) -> dict:
     """Time `graph` on `view_set` (wall and GPU ms per frame), count its rays per view in the last
-    frame, render still frames and judge the last one against `judge_ref`."""
+    frame, render still frames and judge the last one against `judge_ref`; with `s["dispatches"]`
+    frames, also GPU ms per compute dispatch (benchmarks._dispatches)."""
     import rayvr as rv
     from rayvr.graphs import hdr_output
     from rayvr.study.display import Display
@@ -49,12 +57,15 @@ def measure(scene, view_set, graph, s: dict, judge_ref, ppd: float | None) -> di
     from rayvr.xr import foveation
     from rayvr.xr.presets import get_preset
 
-    with rv.Renderer(scene, graph, views=view_set) as r:
+    with contextlib.ExitStack() as stack:
+        rec = stack.enter_context(labelled_programs()) if s.get("dispatches") else None
+        r = stack.enter_context(rv.Renderer(scene, graph, views=view_set))
         wall = wall_ms_per_frame(r, s["frames"], s["warmup"])
         profile = r.profile()
         gpu = profile.total_ms if r.gpu.caps.timer_queries else None
         passes = {name: round(st.mean_ms, 3) for name, st in profile.passes.items()} if gpu is not None else {}
         rays = r.compiled.ray_counts()
+        dispatches = dispatch_ms(r, rec, s["dispatches"]) if rec is not None else {}
         for _ in range(s["judged"]):
             r.render()
         image = r.read_output(hdr_output(graph), flip_y=True)[..., :3].astype(np.float32)
@@ -62,7 +73,7 @@ def measure(scene, view_set, graph, s: dict, judge_ref, ppd: float | None) -> di
     display = Display().fixed(judge_ref[..., :3])
     per_view, _ = evaluate(image, judge_ref[..., :3], display, ppd or get_preset("index").pixels_per_degree,
                            which=("flip", "flip_fovea", "flip_ecc"), eccentricity=ecc)
-    return {"wall_ms": wall, "gpu_ms": gpu, "rays": rays, "passes": passes,
+    return {"wall_ms": wall, "gpu_ms": gpu, "rays": rays, "passes": passes, "dispatches": dispatches,
             **{m: float(np.mean(v)) for m, v in per_view.items()}}
 
 

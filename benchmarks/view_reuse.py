@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from rayvr.cli.options import load_scene_arg, parse_size
 
+from ._dispatches import dispatch_cell
 from ._decision import add_common_arguments, cells, measure, ms, passes_cell, reference, settings
 
 TARGETS = {2: "rays_other/first <= 0.3, flip <= 1.05x", 64: "gpu <= 0.5x, flip <= 1.05x"}
@@ -89,11 +90,11 @@ def run(args) -> dict:
             rows.append([n, f"{size[0]}x{size[1]}", reuse or "independent", *cells(row), first,
                          round(other_ratio, 3), round(ms(row) / ms(base), 3), round(flip_ratio, 3),
                          ("yes" if ok and flip_ratio <= 1.05 else "NO") if reuse and n in TARGETS else "",
-                         passes_cell(row)])
+                         passes_cell(row), *([dispatch_cell(row["dispatches"])] if s["dispatches"] else [])])
     return {
         "columns": ["views", "view_size", "config", "wall_ms", "gpu_ms", "rays_total", "flip", "flip_fovea",
                     "flip_ecc", "rays_first", "rays_other/first", "ms/independent", "flip/independent",
-                    "meets_target", "passes_ms"],
+                    "meets_target", "passes_ms", *(["dispatch_ms"] if s["dispatches"] else [])],
         "rows": rows,
         "notes": [f"scene {args.scene}, hybrid preset {args.preset}; rays: GPU counters of the ray passes "
                   f"(shadow, reflection and path rays; not the G-buffer's or the probes') in the last timed frame",
