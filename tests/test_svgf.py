@@ -376,3 +376,35 @@ def test_bad_denoise_option_names_the_choices():
     with pytest.raises(OptionError, match="'svgf' or 'oidn'"):
         rv.graphs.hybrid(preset="raw", denoise="bm3d")
     assert rv.graphs.hybrid(preset="raw", denoise="none").outputs == rv.graphs.hybrid(preset="raw").outputs
+
+
+def _spoil_scratch(r):
+    """Fill SVGF's scratch textures with NaN, as a pass they alias with may leave them."""
+    for name in SVGF.FILTER:
+        tex = r.compiled.resources[f"SVGF.{name}"]
+        texel = tex.components * int(tex.dtype[1:])   # rgba16f or rgba32ui: 'f2' or 'u4'
+        tex.write(b"\xff" * (tex.size[0] * tex.size[1] * tex.size[2] * texel))
+
+
+@pytest.mark.parametrize("reuse", [None, "views"])
+def test_what_the_scratch_textures_held_before_never_reaches_the_image(gpu, reuse):
+    """The a-trous iterations write nothing where nothing is filtered (the background, and with view
+    reuse the pixels SVGF spreads another view's light to); the reprojection's zeros in both scratch
+    textures are what their neighbours' variance taps read there. NaN left in the scratch textures
+    before each frame changes no pixel."""
+    scene = _box_scene()
+    images = []
+    for spoil in (False, True):
+        g = rv.graphs.hybrid(denoise="svgf", reuse=reuse)
+        g.mark_output("SVGF.color")
+        g.mark_output("GBuffer.effect")
+        with Renderer(scene, g, views=default_views(scene, 2, SIZE), jitter=False) as r:
+            for _ in range(3):
+                if spoil:
+                    _spoil_scratch(r)
+                r.render()
+            images.append(rgb(r, "SVGF.color"))
+            effect = r.read_output("GBuffer.effect")[..., 0].astype(np.int64) & 0xFF
+    assert (effect == 0xFF).mean() > 0.1   # background beside the filtered surfaces
+    assert np.isfinite(images[1]).all()
+    np.testing.assert_array_equal(images[1], images[0])

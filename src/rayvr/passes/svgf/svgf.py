@@ -234,6 +234,7 @@ class SVGF(HistoryOwner, RenderPass):
         if self._density:
             res.texture("trace_decision", data[DECISION])
         res.image("out_illum", scratch[0])
+        res.image("out_illum_other", scratch[1])
         res.image("moments_out", data[self.MOMENTS[cur]])
         res.image("key_out", data[self.KEY[cur]])
         res.image("surface_out", data[self.SURFACE[cur]])
@@ -269,6 +270,8 @@ class SVGF(HistoryOwner, RenderPass):
             res.texture("src_illum", scratch[src])
             if final:
                 self._bind_modulate(res, data)
+                if self._shared:
+                    res.texture("trace_decision", data[DECISION])
             if not final or self._shared:
                 res.image("dst_illum", scratch[1 - src])
             res.set("svgf_step", 1 << i)

@@ -17,6 +17,10 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #ifndef SVGF_FINAL
 #define SVGF_FINAL 0
 #endif
+#if SVGF_SHARED && SVGF_FINAL   // the pixels svgf_spread.comp writes
+#define TRACE_DECISION 1
+#endif
+#include "trace_decision.glsl"
 uniform SVGF_ILLUM_SAMPLER src_illum;
 #if SVGF_FINAL
 uniform sampler2DArray svgf_diffuse_in;
@@ -110,21 +114,19 @@ void main() {
     if (any(greaterThanEqual(p, size))) return;
     uvec2 key = texelFetch(key_cur, p, 0).xy;
     c_depth = svgf_key_depth(key);
-    SvgfIllum centre = texelFetch(src_illum, p, 0);
-    if (!(c_depth > 0.0)) {   // nothing to filter: the texel as it came
+    // nothing to filter: the reprojection wrote 0 to both scratch texels and no history is read
+    // here, so only the last iteration writes, the background where nothing was drawn (a pixel
+    // with another view's light gets it from svgf_spread.comp)
+    if (!(c_depth > 0.0)) {
 #if SVGF_FINAL
+#if SVGF_SHARED
+        if (decision_spread(decision_at(p))) return;
+#endif
         imageStore(dst, p, vec4(to_half_range(texelFetch(svgf_diffuse_in, p, 0).rgb), 1.0));
-#else
-        imageStore(dst_illum, p, centre);
 #endif
-        if (svgf_write_history) {
-            imageStore(history_diffuse, p, vec4(svgf_illum_diffuse(centre).rgb, 0.0));
-#if SVGF_SPECULAR
-            imageStore(history_specular, p, vec4(svgf_illum_specular(centre).rgb, 0.0));
-#endif
-        }
         return;
     }
+    SvgfIllum centre = texelFetch(src_illum, p, 0);
     c_n = oct_unpack_snorm16(key.y);
     vec4 d = svgf_illum_diffuse(centre), s = svgf_illum_specular(centre);
     {

@@ -26,10 +26,11 @@ void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     ivec3 size = imageSize(illum);
     if (any(greaterThanEqual(p, size))) return;
-    SvgfSurface c = svgf_unpack(texelFetch(key_cur, p, 0).xy, texelFetch(surface_cur, p, 0).xy);
+    uvec2 key = texelFetch(key_cur, p, 0).xy;
     // no geometry (or light another view's, svgf_spread.comp): nothing here is read again, neither
     // the gradient by the a-trous stage nor the history by the next reprojection (its length is 0)
-    if (!(c.depth > 0.0)) return;
+    if (!(svgf_key_depth(key) > 0.0)) return;
+    SvgfSurface c = svgf_unpack(key, texelFetch(surface_cur, p, 0).xy);
     SvgfIllum centre = imageLoad(illum, p);
     if (svgf_write_history) {   // the temporal mean as it is, before any spatial filter
         imageStore(history_diffuse, p, vec4(svgf_illum_diffuse(centre).rgb, 0.0));
