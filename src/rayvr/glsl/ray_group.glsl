@@ -4,7 +4,8 @@
 // nearly parallel and hit nearly the same surfaces. The dispatch is (pixels / X, pixels / Y,
 // views / Z) workgroups of RAY_GROUP_SIZE invocations (the shader declares its local size: an
 // #include is expanded even inside a false #if, so this file declares no layout). With
-// RAY_GROUP_Z 1 this is the usual X x Y tile of one view.
+// RAY_GROUP_Z 1 this is the usual X x Y tile of one view. With RAY_GROUP_VIEW_ORDER (a uint array of
+// RAY_GROUP_VIEWS entries: passes.dispatch.view_order) the workgroups take the views in that order.
 #pragma once
 #ifdef RAY_GROUP_Z
 
@@ -15,7 +16,12 @@
 ivec3 ray_group_pixel_of(uvec3 group, uint lane) {
     uint tile = lane / uint(RAY_GROUP_Z);
     uvec3 local = uvec3(tile % uint(RAY_GROUP_X), tile / uint(RAY_GROUP_X), lane % uint(RAY_GROUP_Z));
-    return ivec3(group * uvec3(RAY_GROUP_X, RAY_GROUP_Y, RAY_GROUP_Z) + local);
+    ivec3 p = ivec3(group * uvec3(RAY_GROUP_X, RAY_GROUP_Y, RAY_GROUP_Z) + local);
+#ifdef RAY_GROUP_VIEW_ORDER
+    const uint order[RAY_GROUP_VIEWS] = RAY_GROUP_VIEW_ORDER;
+    if (p.z < RAY_GROUP_VIEWS) p.z = int(order[p.z]);
+#endif
+    return p;
 }
 
 // This invocation's (x, y, view).

@@ -85,6 +85,27 @@ def check_shape(pass_name: str, key: str, value):
     return value
 
 
-def ray_group_defines(group: tuple[int, int, int]) -> dict:
-    """The #defines glsl/ray_group.glsl reads."""
-    return {"RAY_GROUP_X": group[0], "RAY_GROUP_Y": group[1], "RAY_GROUP_Z": group[2]}
+# RenderContext.dictionary's key for the views a trace decision traces in full (TraceDecision).
+SOURCE_VIEWS = "source_views"
+
+
+def view_order(ctx, views: int, group: tuple[int, int, int]) -> tuple[int, ...] | None:
+    """The order in which a ray pass's workgroups take the views when they span several
+    (group[2] > 1) and a trace decision (SOURCE_VIEWS in `ctx.dictionary`) traces some views in full
+    and only a few pixels of the others: the source views first, then the others, each in grid
+    order, so that no warp mixes a source view's pixels, all traced, with another view's, mostly
+    idle. None: the grid order."""
+    sources = set(ctx.dictionary.get(SOURCE_VIEWS, ()))
+    if group[2] <= 1 or not sources or len(sources) >= views:
+        return None
+    order = tuple(sorted(range(views), key=lambda v: (v not in sources, v)))
+    return None if order == tuple(range(views)) else order
+
+
+def ray_group_defines(group: tuple[int, int, int], order: tuple[int, ...] | None = None) -> dict:
+    """The #defines glsl/ray_group.glsl reads (`order`: view_order's)."""
+    defines = {"RAY_GROUP_X": group[0], "RAY_GROUP_Y": group[1], "RAY_GROUP_Z": group[2]}
+    if order:
+        defines["RAY_GROUP_VIEWS"] = len(order)
+        defines["RAY_GROUP_VIEW_ORDER"] = f"uint[{len(order)}](" + ", ".join(f"{v}u" for v in order) + ")"
+    return defines

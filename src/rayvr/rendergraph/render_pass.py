@@ -227,6 +227,9 @@ class RenderContext:
     frame_index: int = 0
     sample_index: int | None = None   # samples since the last camera or scene change (0: one
                                       # happened); None when no Renderer counts them
+    # what a pass's compile() publishes for the passes compiled after it (Falcor's render-graph
+    # dictionary), e.g. TraceDecision's source views; one per compile of the graph
+    dictionary: dict = dataclasses.field(default_factory=dict)
 
     def barrier(self, *accesses: Access | str) -> None:
         """A memory barrier inside a pass, between two of its own dispatches: make what the first

@@ -4,7 +4,7 @@ from __future__ import annotations
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
-from ..dispatch import COMPUTE_GROUP, check_shape, groups_2d, ray_group, ray_group_defines
+from ..dispatch import COMPUTE_GROUP, check_shape, groups_2d, ray_group, ray_group_defines, view_order
 from ..effects import effect_defines
 from ..gbuffer import channels
 from ..probe_gi import inputs as probe_inputs
@@ -82,7 +82,8 @@ class HybridComposite(RenderPass):
                                                           repeat_x=False, repeat_y=False))
         self._group = (ray_group(cd.views, tuple(self.probe_tile), self.probe_view_group) if self._probes
                        else (*COMPUTE_GROUP, 1))
-        self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group)}
+        order = view_order(ctx, cd.views, self._group) if DecisionFill.connected(cd) else None
+        self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group, order)}
         self._prog = self.compute_program(ctx.gl, "composite.comp", {**effect_defines(), **self._defines})
         self._res = program_resources(self._prog)
         self._groups = groups_2d(cd.size, cd.views, self._group)

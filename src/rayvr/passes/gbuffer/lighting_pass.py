@@ -10,7 +10,8 @@ from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
-from ..dispatch import COMPUTE_GROUP, VIEW_GROUP, check_shape, groups_2d, ray_group, ray_group_defines
+from ..dispatch import (COMPUTE_GROUP, VIEW_GROUP, check_shape, groups_2d, ray_group, ray_group_defines,
+                        view_order)
 from ..effects import effect_defines, effects_used, scene_defines
 from ..probe_gi import inputs as probe_inputs
 from ..trace_decision.fill import DecisionFill
@@ -98,8 +99,10 @@ class GBufferLightingPass(RenderPass):
             self._group = ray_group(cd.views, tuple(self.tile), self.view_group)
         else:
             self._group = ray_group(cd.views, tuple(TILE))
+        order = view_order(ctx, cd.views, self._group) if self._fill.bound else None
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": self.SALT, **self.shader_defines(),
-                         "PIXELS_2D": int(self._pixels_2d), **ray_group_defines(self._group), **self._fill.defines()}
+                         "PIXELS_2D": int(self._pixels_2d), **ray_group_defines(self._group, order),
+                         **self._fill.defines()}
         if self.PIXEL_LIST and not self._pixels_2d:
             self._defines["PIXEL_LIST_INPUT"] = 1
         self._probes = probe_inputs.bound(cd)

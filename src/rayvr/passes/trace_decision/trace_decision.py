@@ -8,7 +8,7 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ...xr import foveation
 from ...xr.cameras import grid_for_views
-from ..dispatch import groups_2d
+from ..dispatch import SOURCE_VIEWS, groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from .fill import DECISION
@@ -44,6 +44,10 @@ class TraceDecision(RenderPass):
     ray (DECISION_SHARED_LIGHT: RTShadows with its own `share_light_samples` shades it over them; a
     pass that does not traces it as any other).
 
+    `source_views_first` (more than two views, with `reuse`): the ray passes' workgroups that span
+    several views take the source views first (rayvr.passes.dispatch.view_order), so that a warp
+    holds either views traced in full or views that trace a few pixels, never both.
+
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
     SHADOWS and above. `spread` (the graphs set it with SVGF): SVGF gives a pixel whose light is
     another view's that view's filtered light itself, so the decision flags it (DECISION_SPREAD)
@@ -60,7 +64,7 @@ class TraceDecision(RenderPass):
                   "periphery_share": foveation.DEFAULT_PERIPHERY_SHARE, "reuse_min_roughness": 0.5,
                   "reuse_lobe_fraction": 0.25,
                   "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
-                  "share_light_samples": True}
+                  "share_light_samples": True, "source_views_first": True}
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -107,9 +111,16 @@ class TraceDecision(RenderPass):
                          "REUSE_SPREAD": int(bool(self.spread) and self.reuses(cd.views)),
                          "SHARE_LIGHT_SAMPLES": int(bool(self.share_light_samples) and self.reuses(cd.views)
                                                    and not self.every_surface)}
+        if self.source_views_first and self.reuses(cd.views) and cd.views > 2:   # stereo's may alternate
+            ctx.dictionary[SOURCE_VIEWS] = self.source_views(cd.views, cols)
         self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
             **scene_defines(ctx), **effect_defines(), **self._defines}))
         self._groups = groups_2d(cd.size, cd.views)
+
+    def source_views(self, views: int, cols: int) -> tuple[int, ...]:
+        """The views of a grid of `cols` columns that trace in full (more than two views)."""
+        stride = int(self.source_stride)
+        return tuple(v for v in range(views) if (v % cols) % stride == 0 and (v // cols) % stride == 0)
 
     def defines(self) -> dict:
         d = dict(getattr(self, "_defines", {}))
