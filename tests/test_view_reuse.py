@@ -429,3 +429,20 @@ def test_workgroups_take_the_source_views_first_and_render_the_same_image(gpu):
     np.testing.assert_array_equal(out[True][0], out[False][0])
     np.testing.assert_array_equal(out[True][1], out[False][1])
     assert out[True][2] == out[False][2] and all(out[True][2][v] > 0 for v in sources)
+
+
+@pytest.mark.parametrize("foveation, denoise, fills", [("none", "svgf", False), ("fixed", "svgf", True),
+                                                       ("none", None, True)])
+def test_the_ray_passes_fill_only_where_the_decision_leaves_them_pixels(gpu, foveation, denoise, fills):
+    """With SVGF spreading every reused pixel and no foveation, no pixel is left to the ray passes'
+    fills: they are left out, and the compile report says so. Foveation (a pixel takes a traced
+    neighbour's light in its own view) or no denoiser (reused light is filled) keeps them."""
+    g = rv.graphs.hybrid(foveation=foveation, reuse="views", denoise=denoise)
+    with Renderer(lambert_cornell(), g, views=2, size=SIZE) as r:
+        r.render()
+        shadows = r.compiled.passes["Shadows"]
+        report = r.report()
+        image = r.read_output("ToneMap.dst")
+    assert (shadows._fill._res is not None) == fills
+    assert ("decision_fill" not in report.defines["Shadows"]) == fills
+    assert image[..., :3].max() > 0

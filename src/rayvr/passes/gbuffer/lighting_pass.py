@@ -129,7 +129,8 @@ class GBufferLightingPass(RenderPass):
         between passes with the same defines."""
 
     def defines(self) -> dict:
-        return dict(getattr(self, "_defines", {}) or self.shader_defines())
+        fill = self._fill.report() if hasattr(self, "_fill") else {}
+        return {**(getattr(self, "_defines", {}) or self.shader_defines()), **fill}
 
     def execute(self, ctx, data):
         self.run_program(self._res, data)

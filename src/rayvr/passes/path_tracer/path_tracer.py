@@ -214,7 +214,8 @@ class PathTracer(RenderPass):
             self._res = program_resources(self._prog)
 
     def defines(self) -> dict:
-        return dict(getattr(self, "_defines", {}))
+        fill = self._fill.report() if hasattr(self, "_fill") else {}
+        return {**getattr(self, "_defines", {}), **fill}
 
     def _set_uniforms(self, res) -> None:
         # with lobes Russian roulette spares the first vertex: its lobes' shares must be drawn

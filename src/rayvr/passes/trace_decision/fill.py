@@ -18,6 +18,9 @@ from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 
 DECISION = "decision"   # the input pin, the sampler `trace_decision` (glsl/trace_decision.glsl)
+# RenderContext.dictionary's key (TraceDecision's): False when the decision leaves no pixel to the
+# fills, as when SVGF spreads every pixel whose light is another view's and nothing is foveated
+DECISION_FILLS = "decision_fills"
 LOBES = {"whole": 0, "diffuse": 1, "specular": 2}
 FORMATS = ("rgba16f", "rgba32f")
 SHADER = Path(__file__).resolve().parent / "fill.comp"
@@ -54,7 +57,8 @@ class DecisionFill:
         default all)."""
         self.bound = self.connected(cd)
         self._res = None
-        if not self.bound:
+        self.left_out = self.bound and not ctx.dictionary.get(DECISION_FILLS, True)
+        if not self.bound or self.left_out:
             return
         self._images = list(images if images is not None else self.images)
         defines = {**scene_defines(ctx), **effect_defines(), "FILL_IMAGES": len(self._images),
@@ -64,6 +68,12 @@ class DecisionFill:
             defines[f"FILL{i}_LOBE"] = LOBES[lobe]
         self._res = program_resources(compute_program(ctx.gl, SHADER, defines))
         self._groups = groups_2d(cd.size, cd.views)
+
+    def report(self) -> dict:
+        """For the pass's compile report: the fill when it is left out."""
+        if getattr(self, "left_out", False):
+            return {"decision_fill": "left out: the decision leaves no pixel to it (SVGF spreads the reused ones)"}
+        return {}
 
     def bind(self, res, data) -> None:
         """Bind the decision to program `res` (one of the pass's own)."""

@@ -11,7 +11,7 @@ from ...xr.cameras import grid_for_views
 from ..dispatch import SOURCE_VIEWS, groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
-from .fill import DECISION
+from .fill import DECISION, DECISION_FILLS
 
 FOVEATION = ("none", *foveation.MODES)
 
@@ -111,6 +111,7 @@ class TraceDecision(RenderPass):
                          "REUSE_SPREAD": int(bool(self.spread) and self.reuses(cd.views)),
                          "SHARE_LIGHT_SAMPLES": int(bool(self.share_light_samples) and self.reuses(cd.views)
                                                    and not self.every_surface)}
+        ctx.dictionary[DECISION_FILLS] = not (self._defines["REUSE_SPREAD"] and self.foveation == "none")
         if self.source_views_first and self.reuses(cd.views) and cd.views > 2:   # stereo's may alternate
             ctx.dictionary[SOURCE_VIEWS] = self.source_views(cd.views, cols)
         self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
