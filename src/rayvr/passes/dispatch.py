@@ -92,13 +92,18 @@ SOURCE_VIEWS = "source_views"
 def view_order(ctx, views: int, group: tuple[int, int, int]) -> tuple[int, ...] | None:
     """The order in which a ray pass's workgroups take the views when they span several
     (group[2] > 1) and a trace decision (SOURCE_VIEWS in `ctx.dictionary`) traces some views in full
-    and only a few pixels of the others: the source views first, then the others, each in grid
-    order, so that no warp mixes a source view's pixels, all traced, with another view's, mostly
-    idle. None: the grid order."""
-    sources = set(ctx.dictionary.get(SOURCE_VIEWS, ()))
-    if group[2] <= 1 or not sources or len(sources) >= views:
+    and only a few pixels of the others: as many whole workgroups of source views as the sources
+    fill go first, then every other view in grid order, so that a warp of source views has no
+    mostly idle lanes. Sources that would share a workgroup with other views stay in grid order:
+    a workgroup of neighbouring cameras traces nearly parallel rays, and one of scattered cameras
+    costs more than the idle lanes save (benchmarks/RESULTS.md, source views first).
+    None: the grid order."""
+    sources = sorted(set(ctx.dictionary.get(SOURCE_VIEWS, ())))
+    whole = len(sources) // group[2] * group[2] if group[2] > 1 else 0
+    if whole == 0 or len(sources) >= views:
         return None
-    order = tuple(sorted(range(views), key=lambda v: (v not in sources, v)))
+    first = sources[:whole]
+    order = tuple(first) + tuple(v for v in range(views) if v not in set(first))
     return None if order == tuple(range(views)) else order
 
 

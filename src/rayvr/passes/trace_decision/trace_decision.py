@@ -45,8 +45,8 @@ class TraceDecision(RenderPass):
     pass that does not traces it as any other).
 
     `source_views_first` (more than two views, with `reuse`): the ray passes' workgroups that span
-    several views take the source views first (rayvr.passes.dispatch.view_order), so that a warp
-    holds either views traced in full or views that trace a few pixels, never both.
+    several views take whole workgroups of source views first (rayvr.passes.dispatch.view_order), so
+    that such a warp holds only views traced in full; sources too few to fill one stay in grid order.
 
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
     SHADOWS and above. `spread` (the graphs set it with SVGF): SVGF gives a pixel whose light is
