@@ -1,0 +1,9 @@
+#!/bin/bash
+# device call 15: the ray passes' workgroup shape under view reuse (diag15.py): tauray, clean preset,
+# 64 views of 512x683 and stereo 2x1440x1600, GPU ms per pass per variant
+cd "$(dirname "$0")/../../.."
+source tools/gpu-preamble.sh; nvidia-smi --query-gpu=name,driver_version,clocks.sm,temperature.gpu --format=csv > $OUT/gpu.txt
+date
+timeout 400 python3 benchmarks/results/gpu_2026-12-07b/diag15.py .scenes/tauray_test.glb 20 $OUT/diag15.json 2>&1 \
+  | grep -v -i warn | cut -c1-1500 | tee $OUT/diag15.log
+date
