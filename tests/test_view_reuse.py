@@ -403,31 +403,30 @@ def test_only_reuse_compiles_the_spread_and_the_shared_light_samples(gpu):
         assert any(res.name == "Shadows.sharedLights" for res in report.resources) == on
 
 
-def test_workgroups_take_whole_groups_of_source_views_first_and_render_the_same_image(gpu):
-    """With 16 views (sources every 2nd column and row of a 4x4 grid: four) a ray pass whose
-    workgroups span four views takes the four sources first, then the others in grid order; one
-    whose workgroups span more keeps the grid order (sources would share a workgroup with scattered
-    cameras). Which lane shades which pixel changes nothing: the images and rays per view are the
-    grid order's."""
+def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
+    """With 16 views (sources every 2nd column and row of a 4x4 grid: four) the ray passes that read
+    the decision take one view per workgroup (`one_view_tiles`), and the composite, whose
+    workgroups span four views, takes the four sources first, then the others in grid order
+    (`source_views_first`). Which lane shades which pixel changes nothing: the images and rays per
+    view are those of the grid order's workgroups over several views."""
     scene = lambert_cornell()
     out = {}
-    for first in (True, False):
+    for on in (True, False):
         g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf")
-        g.update_pass("Decision", {"source_views_first": first})
-        g.update_pass("Shadows", {"view_group": 16})
+        g.update_pass("Decision", {"source_views_first": on, "one_view_tiles": on})
         g.mark_output("SVGF.color")
         with Renderer(scene, g, views=16, size=(16, 16)) as r:
             for _ in range(2):
                 r.render()
-            out[first] = (r.read_output("Composite.color"), r.read_output("SVGF.color"), r.compiled.ray_counts(),
-                          {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite")})
+            out[on] = (r.read_output("Composite.color"), r.read_output("SVGF.color"), r.compiled.ray_counts(),
+                       {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite")})
     cols = rv.xr.grid_for_views(16)[0]
     sources = [v for v in range(16) if (v % cols) % 2 == 0 and (v // cols) % 2 == 0]
     composite, shadows = out[True][3]["Composite"], out[True][3]["Shadows"]
     assert composite["RAY_GROUP_Z"] == 4 and "RAY_GROUP_VIEW_ORDER" not in out[False][3]["Composite"]
     order = [int(v.strip(" u")) for v in composite["RAY_GROUP_VIEW_ORDER"].split("(")[1].rstrip(")").split(",")]
     assert order == sources + [v for v in range(16) if v not in sources]
-    assert shadows["RAY_GROUP_Z"] == 16 and "RAY_GROUP_VIEW_ORDER" not in shadows
+    assert shadows["RAY_GROUP_Z"] == 1 and out[False][3]["Shadows"]["RAY_GROUP_Z"] > 1
     np.testing.assert_array_equal(out[True][0], out[False][0])
     np.testing.assert_array_equal(out[True][1], out[False][1])
     assert out[True][2] == out[False][2] and all(out[True][2][v] > 0 for v in sources)

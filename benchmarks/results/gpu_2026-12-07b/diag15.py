@@ -11,19 +11,18 @@ scene = load_scene_arg(sys.argv[1])
 frames = int(sys.argv[2]) if len(sys.argv) > 2 else 20
 quick = len(sys.argv) > 4 and sys.argv[4] == "quick"
 out = {}
-G1 = {"Shadows": {"view_group": 1}}
 VARIANTS64 = [
     ("independent", None, {}),
     ("reuse", "views", {}),
-    ("reuse, Shadows view_group 1", "views", G1),
-    ("reuse, Shadows+Composite view_group 1", "views", {**G1, "Composite": {"probe_view_group": 1}}),
-    ("reuse, Shadows view_group 1 tile 16x2", "views", {"Shadows": {"view_group": 1, "tile": [16, 2]}}),
-    ("reuse, Shadows view_group 1 tile 4x8", "views", {"Shadows": {"view_group": 1, "tile": [4, 8]}}),
-    ("reuse, Shadows view_group 2 tile 4x4", "views", {"Shadows": {"view_group": 2, "tile": [4, 4]}}),
-    ("reuse, Shadows view_group 1, source_stride 3", "views", {**G1, "Decision": {"source_stride": 3}}),
-    ("reuse, Shadows view_group 1, source_stride 4", "views", {**G1, "Decision": {"source_stride": 4}}),
+    ("reuse, Decision one_view_tiles False", "views", {"Decision": {"one_view_tiles": False}}),
+    ("reuse, Composite probe_view_group 1", "views", {"Composite": {"probe_view_group": 1}}),
+    ("reuse, Shadows tile 16x2", "views", {"Shadows": {"tile": [16, 2]}}),
+    ("reuse, Shadows tile 4x8", "views", {"Shadows": {"tile": [4, 8]}}),
+    ("reuse, Shadows tile 8x8", "views", {"Shadows": {"tile": [8, 8]}}),
+    ("reuse, source_stride 3", "views", {"Decision": {"source_stride": 3}}),
+    ("reuse, source_stride 4", "views", {"Decision": {"source_stride": 4}}),
 ]
-VARIANTS2 = [("independent", None, {}), ("reuse", "views", {}), ("reuse, Shadows view_group 1", "views", G1)]
+VARIANTS2 = [("independent", None, {}), ("reuse", "views", {})]
 
 
 def time(label, views, reuse, props):

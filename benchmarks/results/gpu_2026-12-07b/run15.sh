@@ -1,5 +1,5 @@
 #!/bin/bash
-# device call 15: the ray passes' workgroup shape under view reuse (diag15.py): tauray, clean preset,
+# device call 15: the ray passes take one view per workgroup under view reuse (diag15.py: variants): tauray, clean preset,
 # 64 views of 512x683 and stereo 2x1440x1600, GPU ms per pass per variant
 cd "$(dirname "$0")/../../.."
 source tools/gpu-preamble.sh; nvidia-smi --query-gpu=name,driver_version,clocks.sm,temperature.gpu --format=csv > $OUT/gpu.txt

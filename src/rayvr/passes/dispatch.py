@@ -87,6 +87,20 @@ def check_shape(pass_name: str, key: str, value):
 
 # RenderContext.dictionary's key for the views a trace decision traces in full (TraceDecision).
 SOURCE_VIEWS = "source_views"
+# RenderContext.dictionary's key, true when a trace decision reuses light across the views of a
+# camera grid and the ray passes that read it take one view per workgroup (TraceDecision).
+ONE_VIEW_TILES = "one_view_tiles"
+
+
+def decision_view_group(ctx, view_group: int) -> int:
+    """The views a workgroup of a ray pass that reads a trace decision spans: 1 where the decision
+    publishes ONE_VIEW_TILES, else the pass's `view_group`. A view that reuses another's light
+    traces a few pixels, gathered where the source does not see its surface: a tile of one view
+    over a reused region has no work and leaves at once, while the same pixels of several views
+    almost always hold one traced lane, which holds its warp (benchmarks/RESULTS.md, one-view
+    tiles under view reuse)."""
+    return 1 if ctx.dictionary.get(ONE_VIEW_TILES) else view_group
+
 
 
 def view_order(ctx, views: int, group: tuple[int, int, int]) -> tuple[int, ...] | None:

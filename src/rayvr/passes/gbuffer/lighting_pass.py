@@ -10,8 +10,8 @@ from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
-from ..dispatch import (COMPUTE_GROUP, VIEW_GROUP, check_shape, groups_2d, ray_group, ray_group_defines,
-                        view_order)
+from ..dispatch import (COMPUTE_GROUP, VIEW_GROUP, check_shape, decision_view_group, groups_2d, ray_group,
+                        ray_group_defines, view_order)
 from ..effects import effect_defines, effects_used, scene_defines
 from ..probe_gi import inputs as probe_inputs
 from ..trace_decision.fill import DecisionFill
@@ -96,7 +96,8 @@ class GBufferLightingPass(RenderPass):
             self._fill.compile(ctx, cd)
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
         if self.PIXEL_LIST:   # the ray passes: the shape is theirs to set
-            self._group = ray_group(cd.views, tuple(self.tile), self.view_group)
+            view_group = decision_view_group(ctx, self.view_group) if self._fill.bound else self.view_group
+            self._group = ray_group(cd.views, tuple(self.tile), view_group)
         else:
             self._group = ray_group(cd.views, tuple(TILE))
         order = view_order(ctx, cd.views, self._group) if self._fill.bound else None

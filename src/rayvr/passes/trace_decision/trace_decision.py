@@ -8,7 +8,7 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ...xr import foveation
 from ...xr.cameras import grid_for_views
-from ..dispatch import SOURCE_VIEWS, groups_2d
+from ..dispatch import ONE_VIEW_TILES, SOURCE_VIEWS, groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from .fill import DECISION, DECISION_FILLS
@@ -47,6 +47,9 @@ class TraceDecision(RenderPass):
     `source_views_first` (more than two views, with `reuse`): the ray passes' workgroups that span
     several views take whole workgroups of source views first (rayvr.passes.dispatch.view_order), so
     that such a warp holds only views traced in full; sources too few to fill one stay in grid order.
+    `one_view_tiles` (more than two views, with `reuse`): the ray passes' workgroups that read the
+    decision hold one view each whatever their `view_group` (rayvr.passes.dispatch.decision_view_group):
+    a tile of a view that reuses is mostly idle or wholly so, and a wholly idle one costs nothing.
 
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
     SHADOWS and above. `spread` (the graphs set it with SVGF): SVGF gives a pixel whose light is
@@ -64,7 +67,8 @@ class TraceDecision(RenderPass):
                   "periphery_share": foveation.DEFAULT_PERIPHERY_SHARE, "reuse_min_roughness": 0.5,
                   "reuse_lobe_fraction": 0.25,
                   "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
-                  "share_light_samples": True, "source_views_first": True}
+                  "share_light_samples": True, "source_views_first": True,
+                  "one_view_tiles": True}
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -114,6 +118,7 @@ class TraceDecision(RenderPass):
         ctx.dictionary[DECISION_FILLS] = not (self._defines["REUSE_SPREAD"] and self.foveation == "none")
         if self.source_views_first and self.reuses(cd.views) and cd.views > 2:   # stereo's may alternate
             ctx.dictionary[SOURCE_VIEWS] = self.source_views(cd.views, cols)
+        ctx.dictionary[ONE_VIEW_TILES] = bool(self.one_view_tiles) and self.reuses(cd.views) and cd.views > 2
         self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
             **scene_defines(ctx), **effect_defines(), **self._defines}))
         self._groups = groups_2d(cd.size, cd.views)
