@@ -102,7 +102,6 @@ def decision_view_group(ctx, view_group: int) -> int:
     return 1 if ctx.dictionary.get(ONE_VIEW_TILES) else view_group
 
 
-
 def view_order(ctx, views: int, group: tuple[int, int, int]) -> tuple[int, ...] | None:
     """The order in which a ray pass's workgroups take the views when they span several
     (group[2] > 1) and a trace decision (SOURCE_VIEWS in `ctx.dictionary`) traces some views in full
