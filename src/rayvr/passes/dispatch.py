@@ -115,8 +115,8 @@ def view_order(ctx, views: int, group: tuple[int, int, int]) -> tuple[int, ...] 
     whole = len(sources) // group[2] * group[2] if group[2] > 1 else 0
     if whole == 0 or len(sources) >= views:
         return None
-    first = sources[:whole]
-    order = tuple(first) + tuple(v for v in range(views) if v not in set(first))
+    first = set(sources[:whole])
+    order = tuple(sources[:whole]) + tuple(v for v in range(views) if v not in first)
     return None if order == tuple(range(views)) else order
 
 

@@ -116,9 +116,10 @@ class TraceDecision(RenderPass):
                          "SHARE_LIGHT_SAMPLES": int(bool(self.share_light_samples) and self.reuses(cd.views)
                                                    and not self.every_surface)}
         ctx.dictionary[DECISION_FILLS] = not (self._defines["REUSE_SPREAD"] and self.foveation == "none")
-        if self.source_views_first and self.reuses(cd.views) and cd.views > 2:   # stereo's may alternate
+        grid_reuse = self.reuses(cd.views) and cd.views > 2   # a camera grid's: stereo's source may alternate
+        if self.source_views_first and grid_reuse:
             ctx.dictionary[SOURCE_VIEWS] = self.source_views(cd.views, cols)
-        ctx.dictionary[ONE_VIEW_TILES] = bool(self.one_view_tiles) and self.reuses(cd.views) and cd.views > 2
+        ctx.dictionary[ONE_VIEW_TILES] = bool(self.one_view_tiles) and grid_reuse
         self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
             **scene_defines(ctx), **effect_defines(), **self._defines}))
         self._groups = groups_2d(cd.size, cd.views)
