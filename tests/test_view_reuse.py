@@ -407,29 +407,44 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     """With 16 views (sources every 2nd column and row of a 4x4 grid: four) the ray passes that read
     the decision take one view per workgroup (`one_view_tiles`), and the composite, whose
     workgroups span four views, takes the four sources first, then the others in grid order
-    (`source_views_first`). Which lane shades which pixel changes nothing: the images and rays per
-    view are those of the grid order's workgroups over several views."""
+    (`source_views_first`). With `compact_tile` the ray passes' workgroups are squares (here larger
+    than the image) whose traced pixels take the first lanes, in both of RTShadows' dispatches (a
+    glossy box's pixels take their source's light sample). Which lane shades which pixel changes
+    nothing: the images and rays per view are those of the grid order's workgroups over several views."""
     scene = lambert_cornell()
+    for name in ("TallBox", "ShortBox"):
+        m = scene.materials[name]
+        m.metallic, m.roughness = 0.5, 0.2
     out = {}
-    for on in (True, False):
+    configs = {"grid": {"source_views_first": False, "one_view_tiles": False},
+               "one view": {}, "compact": {"compact_tile": 32}}
+    for name, props in configs.items():
         g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf")
-        g.update_pass("Decision", {"source_views_first": on, "one_view_tiles": on})
+        g.update_pass("Decision", props)
         g.mark_output("SVGF.color")
+        g.mark_output(DECISION)
         with Renderer(scene, g, views=16, size=(16, 16)) as r:
             for _ in range(2):
                 r.render()
-            out[on] = (r.read_output("Composite.color"), r.read_output("SVGF.color"), r.compiled.ray_counts(),
-                       {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite")})
+            out[name] = (r.read_output("Composite.color"), r.read_output("SVGF.color"), r.compiled.ray_counts(),
+                         {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite")},
+                         r.read_output(DECISION)[..., 0])
     cols = rv.xr.grid_for_views(16)[0]
     sources = [v for v in range(16) if (v % cols) % 2 == 0 and (v // cols) % 2 == 0]
-    composite, shadows = out[True][3]["Composite"], out[True][3]["Shadows"]
-    assert composite["RAY_GROUP_Z"] == 4 and "RAY_GROUP_VIEW_ORDER" not in out[False][3]["Composite"]
+    composite = out["one view"][3]["Composite"]
+    assert composite["RAY_GROUP_Z"] == 4 and "RAY_GROUP_VIEW_ORDER" not in out["grid"][3]["Composite"]
     order = [int(v.strip(" u")) for v in composite["RAY_GROUP_VIEW_ORDER"].split("(")[1].rstrip(")").split(",")]
     assert order == sources + [v for v in range(16) if v not in sources]
-    assert shadows["RAY_GROUP_Z"] == 1 and out[False][3]["Shadows"]["RAY_GROUP_Z"] > 1
-    np.testing.assert_array_equal(out[True][0], out[False][0])
-    np.testing.assert_array_equal(out[True][1], out[False][1])
-    assert out[True][2] == out[False][2] and all(out[True][2][v] > 0 for v in sources)
+    shadows = {name: o[3]["Shadows"] for name, o in out.items()}
+    assert shadows["one view"]["RAY_GROUP_Z"] == 1 and shadows["grid"]["RAY_GROUP_Z"] > 1
+    assert "RAY_GROUP_COMPACT" not in shadows["one view"]
+    assert shadows["compact"]["RAY_GROUP_COMPACT"] == 1 and shadows["compact"]["RAY_GROUP_X"] == 32
+    assert ((out["compact"][4] & SHARED_LIGHT) != 0).sum() > 50   # the take dispatch has pixels
+    for name in ("one view", "compact"):
+        np.testing.assert_array_equal(out[name][0], out["grid"][0])
+        np.testing.assert_array_equal(out[name][1], out["grid"][1])
+        assert out[name][2] == out["grid"][2]
+    assert all(out["grid"][2][v] > 0 for v in sources)
 
 
 @pytest.mark.parametrize("foveation, denoise, fills", [("none", "svgf", False), ("fixed", "svgf", True),
