@@ -407,9 +407,9 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     """With 16 views (sources every 2nd column and row of a 4x4 grid: four) the ray passes that read
     the decision take one view per workgroup (`one_view_tiles`), and the composite, whose
     workgroups span four views, takes the four sources first, then the others in grid order
-    (`source_views_first`). With `compact_tile` the ray passes' workgroups are squares (here larger
-    than the image) whose traced pixels take the first lanes, in both of RTShadows' dispatches (a
-    glossy box's pixels take their source's light sample). Which lane shades which pixel changes
+    (`source_views_first`). With `compact_tile` the ray passes' and the composite's workgroups are
+    squares (here larger than the image) whose pixels with work take the first lanes, in both of
+    RTShadows' dispatches (a glossy box's pixels take their source's light sample). Which lane shades which pixel changes
     nothing: the images and rays per view are those of the grid order's workgroups over several views."""
     scene = lambert_cornell()
     for name in ("TallBox", "ShortBox"):
@@ -439,6 +439,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     assert shadows["one view"]["RAY_GROUP_Z"] == 1 and shadows["grid"]["RAY_GROUP_Z"] > 1
     assert "RAY_GROUP_COMPACT" not in shadows["one view"]
     assert shadows["compact"]["RAY_GROUP_COMPACT"] == 1 and shadows["compact"]["RAY_GROUP_X"] == 32
+    assert out["compact"][3]["Composite"]["RAY_GROUP_COMPACT"] == 1
     assert ((out["compact"][4] & SHARED_LIGHT) != 0).sum() > 50   # the take dispatch has pixels
     for name in ("one view", "compact"):
         np.testing.assert_array_equal(out[name][0], out["grid"][0])

@@ -4,7 +4,8 @@ from __future__ import annotations
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
-from ..dispatch import COMPUTE_GROUP, check_shape, groups_2d, ray_group, ray_group_defines, view_order
+from ..dispatch import (COMPACT_TILE, COMPUTE_GROUP, check_shape, decision_group, groups_2d, ray_group,
+                        ray_group_defines, view_order)
 from ..effects import effect_defines
 from ..gbuffer import channels
 from ..probe_gi import inputs as probe_inputs
@@ -80,10 +81,16 @@ class HybridComposite(RenderPass):
             defines["PROBE_GI"] = 1
             self._probe_sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR),
                                                           repeat_x=False, repeat_y=False))
-        self._group = (ray_group(cd.views, tuple(self.probe_tile), self.probe_view_group) if self._probes
-                       else (*COMPUTE_GROUP, 1))
+        tile = tuple(self.probe_tile) if self._probes else COMPUTE_GROUP
+        warp = None
+        if DecisionFill.connected(cd) and ctx.dictionary.get(COMPACT_TILE):   # as the ray passes: see there
+            self._group, _ = decision_group(ctx, cd.views, tile, self.probe_view_group)
+            warp = tile if self._group[0] % tile[0] == 0 and self._group[1] % tile[1] == 0 else self._group[:2]
+        else:
+            self._group = ray_group(cd.views, tile, self.probe_view_group) if self._probes else (*COMPUTE_GROUP, 1)
         order = view_order(ctx, cd.views, self._group) if DecisionFill.connected(cd) else None
-        self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group, order)}
+        self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)),
+                         **ray_group_defines(self._group, order, warp)}
         self._prog = self.compute_program(ctx.gl, "composite.comp", {**effect_defines(), **self._defines})
         self._res = program_resources(self._prog)
         self._groups = groups_2d(cd.size, cd.views, self._group)
