@@ -415,6 +415,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     for name in ("TallBox", "ShortBox"):
         m = scene.materials[name]
         m.metallic, m.roughness = 0.5, 0.2
+    scene.materials["TallBox"].effect = rv.Effect.REFLECTIONS   # RTReflections' dispatches too
     out = {}
     configs = {"grid": {"source_views_first": False, "one_view_tiles": False},
                "one view": {}, "compact": {"compact_tile": 32}}
@@ -427,7 +428,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
             for _ in range(2):
                 r.render()
             out[name] = (r.read_output("Composite.color"), r.read_output("SVGF.color"), r.compiled.ray_counts(),
-                         {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite")},
+                         {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite", "Reflections")},
                          r.read_output(DECISION)[..., 0])
     cols = rv.xr.grid_for_views(16)[0]
     sources = [v for v in range(16) if (v % cols) % 2 == 0 and (v // cols) % 2 == 0]
@@ -440,6 +441,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     assert "RAY_GROUP_COMPACT" not in shadows["one view"]
     assert shadows["compact"]["RAY_GROUP_COMPACT"] == 1 and shadows["compact"]["RAY_GROUP_X"] == 32
     assert out["compact"][3]["Composite"]["RAY_GROUP_COMPACT"] == 1
+    assert out["compact"][3]["Reflections"]["RAY_GROUP_COMPACT"] == 1
     assert ((out["compact"][4] & SHARED_LIGHT) != 0).sum() > 50   # the take dispatch has pixels
     for name in ("one view", "compact"):
         np.testing.assert_array_equal(out[name][0], out["grid"][0])
