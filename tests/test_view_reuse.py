@@ -409,7 +409,8 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     workgroups span four views, takes the four sources first, then the others in grid order
     (`source_views_first`). With `compact_tile` the ray passes' and the composite's workgroups are
     squares (here larger than the image) whose pixels with work take the first lanes, in both of
-    RTShadows' dispatches (a glossy box's pixels take their source's light sample). Which lane shades which pixel changes
+    RTShadows' dispatches (a glossy box's pixels take their source's light sample); so are SVGF's
+    a-trous iterations'. Which lane shades which pixel changes
     nothing: the images and rays per view are those of the grid order's workgroups over several views."""
     scene = lambert_cornell()
     for name in ("TallBox", "ShortBox"):
@@ -428,7 +429,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
             for _ in range(2):
                 r.render()
             out[name] = (r.read_output("Composite.color"), r.read_output("SVGF.color"), r.compiled.ray_counts(),
-                         {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite", "Reflections")},
+                         {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite", "Reflections", "SVGF")},
                          r.read_output(DECISION)[..., 0])
     cols = rv.xr.grid_for_views(16)[0]
     sources = [v for v in range(16) if (v % cols) % 2 == 0 and (v // cols) % 2 == 0]
@@ -442,6 +443,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     assert shadows["compact"]["RAY_GROUP_COMPACT"] == 1 and shadows["compact"]["RAY_GROUP_X"] == 32
     assert out["compact"][3]["Composite"]["RAY_GROUP_COMPACT"] == 1
     assert out["compact"][3]["Reflections"]["RAY_GROUP_COMPACT"] == 1
+    assert out["compact"][3]["SVGF"]["RAY_GROUP_COMPACT"] == 1   # its a-trous iterations
     assert ((out["compact"][4] & SHARED_LIGHT) != 0).sum() > 50   # the take dispatch has pixels
     for name in ("one view", "compact"):
         np.testing.assert_array_equal(out[name][0], out["grid"][0])
