@@ -10,6 +10,7 @@ import pytest
 from PIL import Image
 
 import rayvr as rv
+import rayvr.cli.render
 import rayvr.renderer
 from rayvr.cli.main import main
 from rayvr.fileio import atomic_group, check_writable, write_text
@@ -75,6 +76,8 @@ MISUSES = [
     (["render", "--out", "x.tiff"], ["--out x.tiff", ".png or .jpg", ".exr"]),
     (["render", "--layout", "diagonal"], ["argument --layout", "invalid choice: 'diagonal'"]),
     (["render", "--no-such-option"], ["unrecognized arguments: --no-such-option"]),
+    (["render", "--set", "Shadows.light_samples=NaN"], ["--set Shadows.light_samples=NaN", "must be a finite number"]),
+    (["render", "--set", "ToneMap.exposure=1e999"], ["--set ToneMap.exposure=1e999", "must be a finite number"]),
     (["tune", "--budget-ms", "nan"], ["--budget-ms nan", "finite number > 0"]),
     (["tune", "--budget-ms", "-1"], ["--budget-ms -1", "> 0"]),
     (["tune", "--frames", "0"], ["--frames 0", "from 1 to 100000"]),
@@ -154,6 +157,44 @@ def test_unwritable_output_is_refused_before_rendering(tmp_path, capsys, monkeyp
               "read-only": "Read-only file system"}[where]
     one_error_line(err, option, reason)
     assert files(tmp_path) == before
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--set", "Nope.x=1"], ["--set Nope.x=1", "no pass 'Nope'"]),
+    (["--set", "Shadows.light_samples=Infinity"], ["--set Shadows.light_samples=Infinity", "finite number"]),
+    (["--foveal-radius", "5"], ["--foveal-radius", "add --foveation fixed or gaze"]),
+])
+def test_a_bad_graph_option_is_refused_before_the_scene_loads_and_warns(tmp_path, capsys, monkeypatch, argv, words):
+    def refuse(*args, **kwargs):
+        raise AssertionError("the scene was loaded (and its warnings printed) before the bad option was refused")
+    monkeypatch.setattr(rayvr.cli.render, "load_scene_arg", refuse)
+    code, out, err = run(capsys, "render", *TINY, "--out", str(tmp_path / "x.png"), *argv)
+    assert code == 2, (out, err)
+    one_error_line(err, *words)
+    assert files(tmp_path) == []
+
+
+def test_written_files_and_report_folders_get_the_usual_mode_not_a_private_one(tmp_path):
+    from rayvr.fileio import atomic_folder
+
+    mask = os.umask(0o022)
+    try:
+        write_text(tmp_path / "new.txt", "a")
+        with atomic_group():
+            write_text(tmp_path / "pair_L.txt", "l")
+            write_text(tmp_path / "pair_R.txt", "r")
+        with atomic_folder(tmp_path / "report") as folder:
+            (folder / "report.md").write_text("# r")
+        (tmp_path / "kept.txt").write_text("old")
+        os.chmod(tmp_path / "kept.txt", 0o640)
+        write_text(tmp_path / "kept.txt", "new")
+    finally:
+        os.umask(mask)
+    mode = {name: (tmp_path / name).stat().st_mode & 0o777 for name in
+            ("new.txt", "pair_L.txt", "pair_R.txt", "report", "kept.txt")}
+    assert mode == {"new.txt": 0o644, "pair_L.txt": 0o644, "pair_R.txt": 0o644, "report": 0o755,
+                    "kept.txt": 0o640}   # a replaced file keeps its mode
+    assert (tmp_path / "kept.txt").read_text() == "new"
 
 
 def test_check_writable_accepts_a_new_folder_and_leaves_no_probe(tmp_path):

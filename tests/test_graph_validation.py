@@ -210,3 +210,25 @@ def test_a_property_with_choices_takes_only_them_and_the_error_lists_them():
     assert p.choice_define("kernel") == 2
     p.set_properties({"kernel": "narrow"})
     assert p.choice_define("kernel") == 7
+
+
+def test_a_number_property_refuses_nan_and_infinities_and_the_graph_stays_as_it_was():
+    with pytest.raises(OptionError, match=r"^pass Src: property 'scale' must be a finite number, got nan$"):
+        Src(scale=float("nan"))
+    g = chain()
+    for bad in (float("inf"), float("-inf"), float("nan")):
+        with pytest.raises(OptionError, match=r"^update_pass\('A'\): pass A: property 'layers' must be a finite number"):
+            g.update_pass("A", {"layers": bad})
+    assert g.get_pass("A").layers == 0
+
+
+def test_properties_that_are_not_a_dict_are_an_option_error_naming_the_pass():
+    with pytest.raises(OptionError, match=r"^pass Src: properties must be a dict of name: value, got \[1\]$"):
+        Src([1])
+    with pytest.raises(OptionError, match=r"^update_pass\('A'\): pass A: properties must be a dict of name: value, got 'x'$"):
+        chain().update_pass("A", "x")
+
+
+def test_a_size_or_view_count_that_is_not_a_number_is_a_graph_error():
+    assert "compile size 'abc' x 1 views: give size=(width, height)" in error_of(lambda: chain().plan(size="abc"))
+    assert "compile size (8, 8) x 'two' views" in error_of(lambda: chain().plan(size=(8, 8), views="two"))

@@ -17,6 +17,7 @@ import contextvars
 import io
 import os
 import shutil
+import stat
 import tempfile
 from pathlib import Path
 
@@ -31,6 +32,20 @@ _GROUP: contextvars.ContextVar["_Group | None"] = contextvars.ContextVar("rayvr_
 
 def _reason(exc: OSError) -> str:
     return exc.strerror or str(exc)
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _publish_mode(tmp: Path, target: Path, folder: bool = False) -> None:
+    """Give a temporary (made private by mkstemp/mkdtemp) the mode `target` would have had if
+    opened directly: the replaced file's mode, else the default mode less the umask."""
+    with contextlib.suppress(OSError):   # the mode is a courtesy: the data is written either way
+        mode = stat.S_IMODE(target.stat().st_mode) if target.exists() else (0o777 if folder else 0o666) & ~_umask()
+        os.chmod(tmp, mode)
 
 
 def _existing_ancestor(folder: Path) -> Path:
@@ -119,6 +134,7 @@ class _Group:
         except OSError as exc:
             raise OutputError(f"{path}: cannot write ({_reason(exc)}); free space or choose another "
                               f"folder") from None
+        _publish_mode(Path(tmp), path)
         return path
 
     def commit(self) -> None:
@@ -268,6 +284,7 @@ def atomic_folder(path):
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
     try:
         yield tmp
+        _publish_mode(tmp, path, folder=True)
         old = None
         if path.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{path.name}.old.", dir=path.parent))

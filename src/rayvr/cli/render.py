@@ -273,6 +273,8 @@ def run(args) -> int:
         value = getattr(args, option.name)
         if value != NONE:
             option[value].require(f"--{option.name} {value}")
+    graph = build_graph(args, exposure, auto_exposure, probes, grid)   # a bad option or --set is refused
+    apply_pass_properties(graph, args.pass_properties)                  # before the scene loads and warns
     scene = load_scene_arg(args.scene)
     apply_effects(scene, args.effect)
     apply_lighting(scene, args)
@@ -283,8 +285,6 @@ def run(args) -> int:
         views = quilt_views(scene, grid[0], grid[1], size, args.view_cone)
     else:
         views = default_views(scene, args.views, size, ipd=args.ipd, grid=grid)
-    graph = build_graph(args, exposure, auto_exposure, probes, grid)
-    apply_pass_properties(graph, args.pass_properties)
     hdr = out.suffix.lower() == ".exr"
     if camera_path is not None:
         with atomic_group():   # every frame's files, or none

@@ -148,8 +148,12 @@ def validate(graph, size=(64, 64), views: int = 1) -> Topology:
     name = graph.name
     passes = graph.passes
     edges: list[Edge] = graph.edges
-    size = (int(size[0]), int(size[1]))
-    if size[0] < 1 or size[1] < 1 or int(views) < 1:
+    try:
+        size, views = (int(size[0]), int(size[1])), int(views)
+    except (TypeError, ValueError, IndexError, OverflowError):
+        raise GraphError(f"graph '{name}': compile size {size!r} x {views!r} views: give size=(width, height) "
+                         f"and views as whole numbers, e.g. size=(256, 256), views=2") from None
+    if size[0] < 1 or size[1] < 1 or views < 1:
         raise GraphError(f"graph '{name}': compile size {size} x {views} views must be positive")
     if not passes:
         raise GraphError(f"graph '{name}' is empty: add passes with add_pass(pass, 'Name')")

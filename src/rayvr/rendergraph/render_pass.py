@@ -18,6 +18,8 @@ from __future__ import annotations
 import copy
 import dataclasses
 import enum
+import math
+from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 from ..errors import OptionError, did_you_mean
@@ -285,10 +287,14 @@ class RenderPass:
         self._props = copy.deepcopy(self.PROPERTIES)
         self.name = type(self).__name__   # the graph sets the instance name on add_pass
         self._owned: list = []
+        if props is not None and not isinstance(props, Mapping):
+            raise OptionError(f"pass {self.name}: properties must be a dict of name: value, got {props!r}")
         self.set_properties({**(props or {}), **kwargs})
 
     # -- properties ------------------------------------------------------------------------
     def set_properties(self, props: dict) -> None:
+        if not isinstance(props, Mapping):
+            raise OptionError(f"pass {self.name}: properties must be a dict of name: value, got {props!r}")
         for key, value in props.items():
             if key not in self._props:
                 raise OptionError(
@@ -305,6 +311,8 @@ class RenderPass:
         if isinstance(default, (int, float)) and not isinstance(default, bool):
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise OptionError(f"pass {self.name}: property '{key}' must be a number, got {value!r}")
+            if isinstance(value, float) and not math.isfinite(value):
+                raise OptionError(f"pass {self.name}: property '{key}' must be a finite number, got {value!r}")
             return type(default)(value) if isinstance(default, float) else value
         if isinstance(value, enum.Enum):
             value = value.name.lower()
