@@ -218,3 +218,25 @@ def test_camera_grid_baseline_is_first_to_last():
     assert vs[4].pose.position[0] - vs[0].pose.position[0] == pytest.approx(0.4)
     with pytest.raises(OptionError, match="spacing"):
         camera_grid(2, 2, None, Fov.symmetric(40, 1), (8, 8))
+
+
+def test_a_scene_millimetres_across_without_a_camera_is_framed_in_front_of_the_near_plane(gpu):
+    """The framing camera of a scene with no camera keeps its near plane in front of the scene,
+    however small (a 5 mm quad, the size of some glTF samples): it renders as the same quad a
+    metre across does, red in the centre, the environment in the corners."""
+    import rayvr as rv
+    from rayvr.scene import builtin
+    from rayvr.xr.cameras import default_views
+
+    images = []
+    for size in (0.005, 1.0):
+        scene = builtin.quad(size, builtin.lambert("Quad", (0.8, 0.2, 0.2)))
+        scene.cameras.clear()
+        views = default_views(scene, 1, (16, 16))
+        assert views.views[0].near < 0.1 * float(np.linalg.norm(views.views[0].pose.position))
+        with rv.Renderer(scene, rv.graphs.hybrid(), views=views) as r:
+            r.render()
+            images.append(r.read_output("ToneMap.dst")[0, ..., :3].astype(np.int32))
+    small, large = images
+    assert small[8, 8, 0] > small[8, 8, 1] + 40 and small[0, 0, 0] == small[0, 0, 1]
+    assert np.abs(small - large).max() <= 2

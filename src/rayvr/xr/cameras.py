@@ -141,9 +141,13 @@ def scene_frustum(scene, size) -> tuple[Pose, Fov, float, float, float]:
         raise OptionError(f"size: {w}x{h} is not a positive pixel size; use e.g. 256x256")
     pose, yfov = camera_pose(scene)
     cam = (getattr(scene, "cameras", None) or [None])[0]
-    near = getattr(cam, "znear", 0.05) or 0.05
-    far = getattr(cam, "zfar", 1000.0) or 1000.0
     lo, hi = np.asarray(scene.bounds(), dtype=np.float64)
+    if cam is None:   # the framing camera's near plane stays in front of a small scene (millimetres across)
+        gap = float(np.linalg.norm(0.5 * (lo + hi) - pose.position)) - 0.5 * float(np.linalg.norm(hi - lo))
+        near = min(0.05, max(0.1 * gap, 1e-6))
+    else:
+        near = getattr(cam, "znear", 0.05) or 0.05
+    far = getattr(cam, "zfar", 1000.0) or 1000.0
     focal = max(float(np.linalg.norm(0.5 * (lo + hi) - pose.position)), near * 2)
     return pose, Fov.symmetric(math.degrees(yfov), w / h), near, far, focal
 
