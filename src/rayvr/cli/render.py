@@ -23,7 +23,6 @@ SHADOWS materials and above by ReSTIR (rayvr.passes.ReSTIRDI) instead of the lig
 from __future__ import annotations
 
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +31,7 @@ from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
 from ..graph_options import DEFAULT_PRESET, NONE, OPTIONS, PRESETS
 from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
+from ..passes.probe_gi.layout import MAX_PROBES_PER_AXIS
 from . import cluster as cluster_cli
 from .options import (MAX_VIEWS, add_lighting_arguments, add_pass_property_argument, add_trace_arguments,
                       apply_lighting, apply_pass_properties, integer, load_scene_arg,
@@ -41,7 +41,6 @@ LAYOUTS = ("per-view", "side-by-side")
 PT_SPP_PER_FRAME = 8   # the most paths per pixel one path-traced frame traces
 OUT_SUFFIXES = (".png", ".jpg", ".jpeg", ".exr")
 MAX_IPD_M = 1.0   # metres: eyes are 0.05-0.08 apart; a light-field grid's spacing stays below a metre
-MAX_PROBES_PER_AXIS = 32   # 32^3 probes keep their atlases (three copies) near 300 MiB
 
 
 def register(sub) -> None:

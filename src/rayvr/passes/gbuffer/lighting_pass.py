@@ -5,6 +5,7 @@ compaction's pixel list (indirect dispatch) or the whole image in small tiles (p
 PROBE_GI in: the shader adds the probes' indirect diffuse light (glsl/probe_gi.glsl)."""
 from __future__ import annotations
 
+from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
@@ -29,6 +30,15 @@ from . import channels
 DISPATCHES = {"auto": "the whole image unless a material is PATH_TRACED", "image": "",
               "list": "the compaction's pixels"}
 TILE = [8, 4]   # one warp (ray_group spreads it over views)
+MAX_LIGHT_SAMPLES = 256   # `light_samples`: as `rayvr render --light-samples`
+
+
+def check_count(pass_name: str, key: str, value, most: int, what: str) -> None:
+    """A property that counts something: a whole number from 1 to `most` (OptionError else)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value \
+            or not 1 <= value <= most:
+        raise OptionError(f"pass {pass_name}: property '{key}' must be a whole number of {what} from 1 to {most}, "
+                          f"got {value!r}")
 
 
 def ray_properties(view_group: int = VIEW_GROUP) -> dict:
@@ -52,6 +62,8 @@ class GBufferLightingPass(RenderPass):
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
+        if key == "light_samples":
+            check_count(self.name, key, value, MAX_LIGHT_SAMPLES, "light samples per pixel")
         return check_shape(self.name, key, value)
 
     def reflect(self, cd):

@@ -59,17 +59,21 @@ class ProbeVolume:
                 "counts": [int(c) for c in self.counts]}
 
 
+MAX_PROBES_PER_AXIS = 32   # 32^3 probes keep their atlases (three copies) near 300 MiB
+
+
 def parse_counts(value, where: str) -> tuple[int, int, int]:
-    """Probes per axis: three positive integers (or one for all three)."""
+    """Probes per axis: three integers from 1 to MAX_PROBES_PER_AXIS (or one for all three)."""
     if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
         value = [int(value)] * 3
     try:
         counts = tuple(int(c) for c in value)
-        ok = len(counts) == 3 and all(c >= 1 and c == v for c, v in zip(counts, value))
-    except (TypeError, ValueError):
+        ok = len(counts) == 3 and all(1 <= c <= MAX_PROBES_PER_AXIS and c == v for c, v in zip(counts, value))
+    except (TypeError, ValueError, OverflowError):
         ok = False
     if not ok:
-        raise OptionError(f"{where}: expected three probe counts >= 1 (x, y, z), e.g. [8, 8, 8], got {value!r}")
+        raise OptionError(f"{where}: expected three probe counts (x, y, z), each 1 to {MAX_PROBES_PER_AXIS}, "
+                          f"e.g. [8, 8, 8], got {value!r}")
     return counts
 
 

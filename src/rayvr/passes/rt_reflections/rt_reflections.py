@@ -8,10 +8,11 @@ from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access
 from ..effects import unused_effect_reason
-from ..gbuffer.lighting_pass import GBufferLightingPass, ray_properties
+from ..gbuffer.lighting_pass import GBufferLightingPass, check_count, ray_properties
 from ..probe_gi import inputs as probe_inputs
 
 RECORD_BYTES = PROBE_RECORD_TEXELS.size   # one deferred probe lookup (glsl/probe_records.glsl)
+MAX_REFLECTION_BOUNCES = 64   # as `rayvr render --max-bounces`
 
 
 @register_pass
@@ -46,6 +47,12 @@ class RTReflections(GBufferLightingPass):
     # defer_probes False looks the probes up in the traversal kernel, one dispatch and no records:
     # the reference tests/test_reflection_probe_records.py compares the deferred lookups with.
     PROPERTIES = {"max_bounces": 1, "light_samples": 1, **ray_properties(), "defer_probes": True}
+
+    def validate_property(self, key, value):
+        value = super().validate_property(key, value)
+        if key == "max_bounces":
+            check_count(self.name, key, value, MAX_REFLECTION_BOUNCES, "reflection bounces")
+        return value
 
     def skip_reason(self, cd):
         return unused_effect_reason(cd, Effect.REFLECTIONS)
