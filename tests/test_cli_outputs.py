@@ -91,6 +91,8 @@ MISUSES = [
     (["tune", "--views", "100"], ["--views 100", "from 1 to 64"]),
     (["tune", "--workers", "0"], ["--workers 0", "from 1 to 1024"]),
     (["converge", "--bounces", "0"], ["--bounces 0", "from 1 to 64"]),
+    (["converge", "--tonemap", "nope"], ["--tonemap nope", "aces, reinhard, linear"]),
+    (["converge", "--preset", "nope"], ["--preset nope", "index"]),
     (["converge", "--tolerance", "nan"], ["--tolerance nan", "finite number > 0"]),
     (["converge", "--warmup-s", "-1"], ["--warmup-s -1", ">= 0 and <= 3600 s"]),
     (["converge", "--motion-samples", "300"], ["--motion-samples 300", "from 1 to 255"]),

@@ -152,14 +152,21 @@ class StudyPlan:
         d = machine_defaults(gpu)
         self.size = parse_size(args.size, views=args.views) if args.size else parse_size(
             f"{d.size[0]}x{d.size[1]}", "the default --size", views=args.views)
-        get_preset(args.preset)
+        try:
+            get_preset(args.preset)
+        except OptionError as exc:
+            raise OptionError(f"--preset {args.preset}: {exc}") from None
         metrics = parse_list(args.metrics, "--metrics", str.lower)
         for m in metrics:
             if m not in METRICS:
                 raise OptionError(f"--metrics {args.metrics}: unknown metric '{m}'; use some of {', '.join(METRICS)}")
         self.spp = parse_list(args.spp, "--spp", parse_spp)
         self.views = args.views
-        self.display = Display(args.tonemap.lower(), parse_exposure(args.exposure))
+        exposure = parse_exposure(args.exposure)
+        try:
+            self.display = Display(args.tonemap.lower(), exposure)
+        except OptionError as exc:
+            raise OptionError(f"--tonemap {args.tonemap}: {exc}") from None
         given = {key: getattr(args, key) for key in (
             "reference_frames", "reference_max_frames", "reference_seconds", "reference_spp", "bounces", "tolerance",
             "bounce_tolerance", "trajectory", "motion_frames", "motion_samples", "frames", "timing_frames", "warmup",
