@@ -122,3 +122,21 @@ def test_setting_any_texture_slot_bumps_the_version(slot):
     v = s.materials.version
     setattr(s.materials["Quad"], slot, rv.scene.TextureRef(0))
     assert s.materials.version > v
+
+
+def test_emission_through_a_texture_does_not_count_as_lighting_the_scene():
+    """A lamp (emission without a texture) lights its scene; a helmet's glowing details or a label
+    (emission through an emissive texture) do not, so such a scene gets the neutral environment
+    instead of rendering nearly black."""
+    from rayvr.scene import DEFAULT_ENVIRONMENT
+    from rayvr.scene.model import Texture
+
+    for textured, lit in ((False, True), (True, False)):
+        s = builtin.quad()
+        s.textures.append(Texture(np.full((2, 2, 4), 255, np.uint8)))
+        m = s.materials["Quad"]
+        m.emissive = (1.0, 1.0, 1.0)
+        if textured:
+            m.emissive_texture = rv.scene.TextureRef(0)
+        assert s.has_light() == lit
+        assert (s.lighting_environment() is DEFAULT_ENVIRONMENT) == (not lit)

@@ -108,7 +108,8 @@ def apply_lighting(scene, args) -> None:
     if spec is not None:
         scene.environment = load_environment(spec, "--environment", getattr(args, "environment_strength", 1.0))
     elif scene.lighting_environment() is DEFAULT_ENVIRONMENT:
-        print(f"rayvr: warning: {scene.path or scene.name}: no light (no punctual light, emissive material or environment); "
+        print(f"rayvr: warning: {scene.path or scene.name}: no light (no punctual light, environment, or emissive "
+              f"material without an emissive texture); "
               f"lighting it with a neutral uniform environment of radiance 1 (--environment to choose one)",
               file=sys.stderr)
 

@@ -362,9 +362,12 @@ class Scene:
         self._lights = lights if isinstance(lights, LightList) else LightList(lights)
 
     def has_light(self) -> bool:
-        """Whether anything lights the scene: a punctual light, an emissive material, an environment."""
+        """Whether anything lights the scene: a punctual light, an environment, or a material that
+        emits without an emissive texture (a lamp, a light panel). Emission through a texture (a
+        helmet's glowing details, a label, a screen) still emits and is sampled as light, but does
+        not count: a scene lit by nothing else would render nearly black."""
         mats = [self.materials[i] for i in self.used_materials() if i < len(self.materials)]
-        return bool(self.lights) or any(m.is_emissive for m in mats) or (
+        return bool(self.lights) or any(m.is_emissive and m.emissive_texture is None for m in mats) or (
             self.environment is not None and not self.environment.is_black)
 
     def lighting_environment(self) -> Environment | None:
