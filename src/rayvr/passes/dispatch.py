@@ -95,20 +95,26 @@ ONE_VIEW_TILES = "one_view_tiles"
 COMPACT_TILE = "compact_tile"
 
 
-def decision_group(ctx, views: int, tile: tuple[int, int], view_group: int) -> tuple[tuple[int, int, int], bool]:
-    """The workgroup shape (x, y, views) of a ray pass that reads a trace decision, and whether its
-    workgroups compact. Where the decision publishes ONE_VIEW_TILES a workgroup holds one view,
-    whatever the pass's `view_group`: a view that reuses another's light traces a few pixels,
-    gathered where the source does not see its surface, so a tile of one view over a reused region
-    has no work and leaves at once, while the same pixels of several views almost always hold one
-    traced lane, which holds its warp (benchmarks/RESULTS.md, one-view tiles under view reuse).
-    With COMPACT_TILE too the workgroup is that square, and the invocations whose pixels trace take
+def decision_group(ctx, views: int, tile: tuple[int, int], view_group: int
+                   ) -> tuple[tuple[int, int, int], tuple[int, int] | None]:
+    """The workgroup shape (x, y, views) of a ray pass that reads a trace decision, and where its
+    workgroups compact, the tile a warp of a full one holds (ray_group_defines' `compact_warp`:
+    the pass's `tile` where it divides the square, else the square's rows); None where they do
+    not. Where the decision publishes ONE_VIEW_TILES a workgroup holds one view, whatever the
+    pass's `view_group`: a view that reuses another's light traces a few pixels, gathered where
+    the source does not see its surface, so a tile of one view over a reused region has no work
+    and leaves at once, while the same pixels of several views almost always hold one traced
+    lane, which holds its warp (benchmarks/RESULTS.md, one-view tiles under view reuse). With
+    COMPACT_TILE too the workgroup is that square, and the invocations whose pixels have work take
     its first lanes (glsl/ray_group.glsl ray_group_compact): a few traced pixels of a large tile
     fill one warp instead of holding several."""
     if not ctx.dictionary.get(ONE_VIEW_TILES):
-        return ray_group(views, tile, view_group), False
+        return ray_group(views, tile, view_group), None
     side = int(ctx.dictionary.get(COMPACT_TILE, 0))
-    return ((side, side, 1), True) if side else (ray_group(views, tile, 1), False)
+    if not side:
+        return ray_group(views, tile, 1), None
+    fits = side % tile[0] == 0 and side % tile[1] == 0
+    return (side, side, 1), (tuple(tile) if fits else (side, side))
 
 
 def view_order(ctx, views: int, group: tuple[int, int, int]) -> tuple[int, ...] | None:

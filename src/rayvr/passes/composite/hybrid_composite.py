@@ -84,8 +84,7 @@ class HybridComposite(RenderPass):
         tile = tuple(self.probe_tile) if self._probes else COMPUTE_GROUP
         warp = None
         if DecisionFill.connected(cd) and ctx.dictionary.get(COMPACT_TILE):   # as the ray passes: see there
-            self._group, _ = decision_group(ctx, cd.views, tile, self.probe_view_group)
-            warp = tile if self._group[0] % tile[0] == 0 and self._group[1] % tile[1] == 0 else self._group[:2]
+            self._group, warp = decision_group(ctx, cd.views, tile, self.probe_view_group)
         else:
             self._group = ray_group(cd.views, tile, self.probe_view_group) if self._probes else (*COMPUTE_GROUP, 1)
         order = view_order(ctx, cd.views, self._group) if DecisionFill.connected(cd) else None

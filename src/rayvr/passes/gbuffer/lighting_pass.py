@@ -107,20 +107,17 @@ class GBufferLightingPass(RenderPass):
         if self.PIXEL_LIST:
             self._fill.compile(ctx, cd)
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
-        compact = False
+        warp = None
         if not self.PIXEL_LIST:
             self._group = ray_group(cd.views, tuple(TILE))
         elif self._fill.bound:   # the ray passes: the shape is theirs to set, and the decision's
-            self._group, compact = decision_group(ctx, cd.views, tuple(self.tile), self.view_group)
+            self._group, warp = decision_group(ctx, cd.views, tuple(self.tile), self.view_group)
         else:
             self._group = ray_group(cd.views, tuple(self.tile), self.view_group)
         order = view_order(ctx, cd.views, self._group) if self._fill.bound else None
-        warp = None
-        if compact and self._pixels_2d:   # a full workgroup's warps keep the pass's tiles where they fit
-            x, y = self.tile
-            warp = (x, y) if self._group[0] % x == 0 and self._group[1] % y == 0 else self._group[:2]
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": self.SALT, **self.shader_defines(),
-                         "PIXELS_2D": int(self._pixels_2d), **ray_group_defines(self._group, order, warp),
+                         "PIXELS_2D": int(self._pixels_2d),
+                         **ray_group_defines(self._group, order, warp if self._pixels_2d else None),
                          **self._fill.defines()}
         if self.PIXEL_LIST and not self._pixels_2d:
             self._defines["PIXEL_LIST_INPUT"] = 1
