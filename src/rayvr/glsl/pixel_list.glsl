@@ -28,36 +28,24 @@ layout(std430) readonly buffer PixelList {
 #endif
 
 #if PIXEL_LIST_INPUT || PIXELS_2D
-#ifndef RAY_PASS_TAKES   // a pass that leaves some of its pixels to another dispatch of it defines this
-#define RAY_PASS_TAKES(p) true
-#endif
 // The pixel a ray pass's invocation works on; false when it has none. From the list (dispatched
 // indirectly, PIXEL_LIST_GROUP threads a group), or with PIXELS_2D the invocation's own pixel of
 // the image when its effect is min_effect or above and (TRACE_DECISION) the trace decision leaves
-// it its rays (then gbuffer.glsl must come first, and no list is declared); either way only where
-// RAY_PASS_TAKES(p). With RAY_GROUP_COMPACT those pixels take the workgroup's first lanes: every
-// invocation must call it, at the top of main.
+// it its rays (then gbuffer.glsl must come first, and no list is declared).
 bool ray_pass_pixel(uint min_effect, ivec3 image_size, out ivec3 p) {
 #if PIXELS_2D
     p = ray_group_pixel();
-    bool work = all(lessThan(p, image_size));
-    if (work) {
-        uint effect = gbuf_effect_at(p);
+    if (any(greaterThanEqual(p, image_size))) return false;
+    uint effect = gbuf_effect_at(p);
 #if TRACE_DECISION
-        work = !decision_reconstructed(p);
+    if (decision_reconstructed(p)) return false;
 #endif
-        work = work && effect != GBUF_NO_GEOMETRY && effect >= min_effect && RAY_PASS_TAKES(p);
-    }
-#if RAY_GROUP_COMPACT
-    return ray_group_compact(work, p);
-#else
-    return work;
-#endif
+    return effect != GBUF_NO_GEOMETRY && effect >= min_effect;
 #else
     uint i = gl_GlobalInvocationID.x;
     if (i >= pixel_count) return false;
     p = pixel_list_unpack(pixel_items[i]);
-    return RAY_PASS_TAKES(p);
+    return true;
 #endif
 }
 #endif

@@ -90,31 +90,17 @@ SOURCE_VIEWS = "source_views"
 # RenderContext.dictionary's key, true when a trace decision reuses light across the views of a
 # camera grid and the ray passes that read it take one view per workgroup (TraceDecision).
 ONE_VIEW_TILES = "one_view_tiles"
-# RenderContext.dictionary's key beside ONE_VIEW_TILES: the side in pixels of the square one-view
-# workgroups in which those passes gather the pixels that trace into the first lanes (0: none).
-COMPACT_TILE = "compact_tile"
 
 
-def decision_group(ctx, views: int, tile: tuple[int, int], view_group: int
-                   ) -> tuple[tuple[int, int, int], tuple[int, int] | None]:
-    """The workgroup shape (x, y, views) of a ray pass that reads a trace decision, and where its
-    workgroups compact, the tile a warp of a full one holds (ray_group_defines' `compact_warp`:
-    the pass's `tile` where it divides the square, else the square's rows); None where they do
-    not. Where the decision publishes ONE_VIEW_TILES a workgroup holds one view, whatever the
-    pass's `view_group`: a view that reuses another's light traces a few pixels, gathered where
-    the source does not see its surface, so a tile of one view over a reused region has no work
-    and leaves at once, while the same pixels of several views almost always hold one traced
-    lane, which holds its warp (benchmarks/RESULTS.md, one-view tiles under view reuse). With
-    COMPACT_TILE too the workgroup is that square, and the invocations whose pixels have work take
-    its first lanes (glsl/ray_group.glsl ray_group_compact): a few traced pixels of a large tile
-    fill one warp instead of holding several."""
-    if not ctx.dictionary.get(ONE_VIEW_TILES):
-        return ray_group(views, tile, view_group), None
-    side = int(ctx.dictionary.get(COMPACT_TILE, 0))
-    if not side:
-        return ray_group(views, tile, 1), None
-    fits = side % tile[0] == 0 and side % tile[1] == 0
-    return (side, side, 1), (tuple(tile) if fits else (side, side))
+def decision_view_group(ctx, view_group: int) -> int:
+    """The views a workgroup of a pass that reads a trace decision (the ray passes, the composite)
+    spans: 1 where the decision publishes ONE_VIEW_TILES, else the pass's `view_group`. A view
+    that reuses another's light traces a few pixels, gathered where the source does not see its
+    surface, and composites as few (SVGF spreads the rest): a tile of one view
+    over a reused region has no work and leaves at once, while the same pixels of several views
+    almost always hold one traced lane, which holds its warp (benchmarks/RESULTS.md, one-view
+    tiles under view reuse)."""
+    return 1 if ctx.dictionary.get(ONE_VIEW_TILES) else view_group
 
 
 def view_order(ctx, views: int, group: tuple[int, int, int]) -> tuple[int, ...] | None:
@@ -135,16 +121,9 @@ def view_order(ctx, views: int, group: tuple[int, int, int]) -> tuple[int, ...] 
     return None if order == tuple(range(views)) else order
 
 
-def ray_group_defines(group: tuple[int, int, int], order: tuple[int, ...] | None = None,
-                      compact_warp: tuple[int, int] | None = None) -> dict:
-    """The #defines glsl/ray_group.glsl reads (`order`: view_order's; `compact_warp`: the tile of
-    pixels a warp of a compacting workgroup (decision_group) holds when every pixel has work,
-    which must divide the workgroup's)."""
+def ray_group_defines(group: tuple[int, int, int], order: tuple[int, ...] | None = None) -> dict:
+    """The #defines glsl/ray_group.glsl reads (`order`: view_order's)."""
     defines = {"RAY_GROUP_X": group[0], "RAY_GROUP_Y": group[1], "RAY_GROUP_Z": group[2]}
-    if compact_warp:
-        if group[2] != 1 or group[0] % compact_warp[0] or group[1] % compact_warp[1]:
-            raise ValueError(f"a compacting workgroup {group} is not made of {compact_warp} tiles of one view")
-        defines.update(RAY_GROUP_COMPACT=1, RAY_GROUP_WARP_X=compact_warp[0], RAY_GROUP_WARP_Y=compact_warp[1])
     if order:
         defines["RAY_GROUP_VIEWS"] = len(order)
         defines["RAY_GROUP_VIEW_ORDER"] = f"uint[{len(order)}](" + ", ".join(f"{v}u" for v in order) + ")"

@@ -14,8 +14,7 @@
 // This pass traces no rays, so the lookup's registers cost no BVH traversal its occupancy, as
 // they did in RTShadows (the probe update measured 2.2x from the same split).
 // With TRACE_DECISION a pixel the decision flags DECISION_SPREAD (SVGF gives it another view's
-// filtered light) is left: 0 in every output; with RAY_GROUP_COMPACT the others of a workgroup
-// gather into its first lanes.
+// filtered light) is left: 0 in every output.
 #define GBUF_READER 1
 #include "gbuffer.glsl"
 #include "trace_decision.glsl"
@@ -48,21 +47,16 @@ layout(rgba16f) writeonly uniform image2DArray dst_specular;
 
 void main() {
     ivec3 p = ray_group_pixel();
-    bool work = all(lessThan(p, imageSize(dst)));   // not past the image or the last view
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;   // past the image or the last view
 #if TRACE_DECISION
-    if (work && decision_spread(decision_at(p))) {
+    if (decision_spread(decision_at(p))) {
         imageStore(dst, p, vec4(0.0, 0.0, 0.0, 1.0));
 #if SPLIT_LOBES
         imageStore(dst_diffuse, p, vec4(0.0, 0.0, 0.0, 1.0));
         imageStore(dst_specular, p, vec4(0.0, 0.0, 0.0, 1.0));
 #endif
-        work = false;
+        return;
     }
-#endif
-#if RAY_GROUP_COMPACT   // the pixels left take the workgroup's first lanes (glsl/ray_group.glsl)
-    if (!ray_group_compact(work, p)) return;
-#else
-    if (!work) return;
 #endif
     uint effect = gbuf_effect_at(p);
     vec3 c = texelFetch(direct_tex, p, 0).rgb;

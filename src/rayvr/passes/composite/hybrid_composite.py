@@ -4,8 +4,8 @@ from __future__ import annotations
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
-from ..dispatch import (COMPACT_TILE, COMPUTE_GROUP, check_shape, decision_group, groups_2d, ray_group,
-                        ray_group_defines, view_order)
+from ..dispatch import (COMPUTE_GROUP, check_shape, decision_view_group, groups_2d, ray_group, ray_group_defines,
+                        view_order)
 from ..effects import effect_defines
 from ..gbuffer import channels
 from ..probe_gi import inputs as probe_inputs
@@ -37,7 +37,8 @@ class HybridComposite(RenderPass):
     # `probe_tile`, `probe_view_group`: with the probe lookups, one-warp workgroups spanning 4 views
     # of a camera grid (passes.dispatch.ray_group), because neighbouring views' lookups share probes
     # (8x8 tiles of one view cost them a fifth more); without probes, 8x8 tiles of one view, which
-    # take half the time of 8x4 ones (benchmarks/RESULTS.md has the measurements).
+    # take half the time of 8x4 ones (benchmarks/RESULTS.md has the measurements). Under view reuse over
+    # a camera grid one view a workgroup (TraceDecision `one_view_tiles`): 1.30 against 1.40 ms at 64 views.
     PROPERTIES = {"lobes": False, "probe_tile": [8, 4], "probe_view_group": 4}
 
     def validate_property(self, key, value):
@@ -81,15 +82,11 @@ class HybridComposite(RenderPass):
             defines["PROBE_GI"] = 1
             self._probe_sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR),
                                                           repeat_x=False, repeat_y=False))
-        tile = tuple(self.probe_tile) if self._probes else COMPUTE_GROUP
-        warp = None
-        if DecisionFill.connected(cd) and ctx.dictionary.get(COMPACT_TILE):   # as the ray passes: see there
-            self._group, warp = decision_group(ctx, cd.views, tile, self.probe_view_group)
-        else:
-            self._group = ray_group(cd.views, tile, self.probe_view_group) if self._probes else (*COMPUTE_GROUP, 1)
+        view_group = (decision_view_group(ctx, self.probe_view_group) if DecisionFill.connected(cd)
+                      else self.probe_view_group)
+        self._group = ray_group(cd.views, tuple(self.probe_tile), view_group) if self._probes else (*COMPUTE_GROUP, 1)
         order = view_order(ctx, cd.views, self._group) if DecisionFill.connected(cd) else None
-        self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)),
-                         **ray_group_defines(self._group, order, warp)}
+        self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group, order)}
         self._prog = self.compute_program(ctx.gl, "composite.comp", {**effect_defines(), **self._defines})
         self._res = program_resources(self._prog)
         self._groups = groups_2d(cd.size, cd.views, self._group)

@@ -11,7 +11,7 @@ from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
-from ..dispatch import (COMPUTE_GROUP, VIEW_GROUP, check_shape, decision_group, groups_2d, ray_group,
+from ..dispatch import (COMPUTE_GROUP, VIEW_GROUP, check_shape, decision_view_group, groups_2d, ray_group,
                         ray_group_defines, view_order)
 from ..effects import effect_defines, effects_used, scene_defines
 from ..probe_gi import inputs as probe_inputs
@@ -107,17 +107,14 @@ class GBufferLightingPass(RenderPass):
         if self.PIXEL_LIST:
             self._fill.compile(ctx, cd)
         self._pixels_2d = bool(self.PIXEL_LIST) and self._dispatch_2d(cd)
-        warp = None
-        if not self.PIXEL_LIST:
-            self._group = ray_group(cd.views, tuple(TILE))
-        elif self._fill.bound:   # the ray passes: the shape is theirs to set, and the decision's
-            self._group, warp = decision_group(ctx, cd.views, tuple(self.tile), self.view_group)
+        if self.PIXEL_LIST:   # the ray passes: the shape is theirs to set
+            view_group = decision_view_group(ctx, self.view_group) if self._fill.bound else self.view_group
+            self._group = ray_group(cd.views, tuple(self.tile), view_group)
         else:
-            self._group = ray_group(cd.views, tuple(self.tile), self.view_group)
+            self._group = ray_group(cd.views, tuple(TILE))
         order = view_order(ctx, cd.views, self._group) if self._fill.bound else None
         self._defines = {**scene_defines(ctx), **effect_defines(), "RNG_SALT": self.SALT, **self.shader_defines(),
-                         "PIXELS_2D": int(self._pixels_2d),
-                         **ray_group_defines(self._group, order, warp if self._pixels_2d else None),
+                         "PIXELS_2D": int(self._pixels_2d), **ray_group_defines(self._group, order),
                          **self._fill.defines()}
         if self.PIXEL_LIST and not self._pixels_2d:
             self._defines["PIXEL_LIST_INPUT"] = 1

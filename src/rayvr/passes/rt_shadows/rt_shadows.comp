@@ -6,15 +6,6 @@
 // a pixel the decision flags DECISION_SHARED_LIGHT traces no ray of its own: a second dispatch of
 // this shader, built with SHARED_LIGHT_TAKE, shades its own lobes over its source pixel's sample.
 #define GBUF_READER 1
-#ifndef SHARED_LIGHT
-#define SHARED_LIGHT 0
-#endif
-#ifndef SHARED_LIGHT_TAKE
-#define SHARED_LIGHT_TAKE 0
-#endif
-#if SHARED_LIGHT   // each dispatch its own pixels: the traced ones, or those taking a source's sample
-#define RAY_PASS_TAKES(p) (decision_shared_light(decision_at(p)) == bool(SHARED_LIGHT_TAKE))
-#endif
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "pixel_list.glsl"
@@ -29,6 +20,12 @@ layout(local_size_x = RAY_GROUP_SIZE) in;
 layout(local_size_x = PIXEL_LIST_GROUP) in;
 #endif
 layout(rgba16f) writeonly uniform image2DArray dst;
+#ifndef SHARED_LIGHT
+#define SHARED_LIGHT 0
+#endif
+#ifndef SHARED_LIGHT_TAKE
+#define SHARED_LIGHT_TAKE 0
+#endif
 #if SHARED_LIGHT
 layout(rgba32ui) uniform uimage2DArray shared_lights;
 #endif
@@ -36,8 +33,9 @@ layout(rgba32ui) uniform uimage2DArray shared_lights;
 void main() {
     ivec3 p;
     if (!ray_pass_pixel(EFFECT_SHADOWS, imageSize(dst), p)) return;
-#if SHARED_LIGHT_TAKE
+#if SHARED_LIGHT
     uvec2 t = decision_at(p);
+    if (decision_shared_light(t) != bool(SHARED_LIGHT_TAKE)) return;   // the other dispatch's
 #endif
     GSurface g = gbuf_load(p);
     PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));

@@ -55,7 +55,7 @@ from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
-from ..dispatch import COMPACT_TILE, COMPUTE_GROUP, groups_2d, ray_group_defines
+from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from ..history import HistoryOwner, LightingHistory, still_frame
@@ -167,16 +167,10 @@ class SVGF(HistoryOwner, RenderPass):
         if self._shared:
             self._res["spread"] = program_resources(self.compute_program(
                 ctx.gl, "svgf_spread.comp", {**self._defines, "TRACE_DECISION": 1}))
-        self._groups = groups_2d(cd.size, cd.views)
-        self._atrous_groups, self._compact = self._groups, {}
-        side = int(ctx.dictionary.get(COMPACT_TILE, 0)) if self._shared else 0
-        if side:   # as the ray passes under view reuse: see glsl/ray_group.glsl
-            group = (side, side, 1)
-            self._compact = ray_group_defines(group, compact_warp=COMPUTE_GROUP)
-            self._atrous_groups = groups_2d(cd.size, cd.views, group)
         self._atrous = {}
         self._atrous_program()
         self._atrous_program(final=True)
+        self._groups = groups_2d(cd.size, cd.views)
         self._history.restart()
 
     def _atrous_program(self, final: bool = False):
@@ -186,14 +180,14 @@ class SVGF(HistoryOwner, RenderPass):
         key = (int(self.kernel), bool(final))
         if key not in self._atrous:
             self._atrous[key] = program_resources(self.compute_program(
-                self._gl, "svgf_atrous.comp", {**self._defines, **self._compact, "SVGF_KERNEL": key[0], "SVGF_FINAL": int(final)}))
+                self._gl, "svgf_atrous.comp", {**self._defines, "SVGF_KERNEL": key[0], "SVGF_FINAL": int(final)}))
         return self._atrous[key]
 
     def defines(self) -> dict:
         if not hasattr(self, "_defines"):
             return {}
         density = {"TRACE_DECISION": 1} if self._density else {}   # the reprojection's
-        return {**self._defines, **self._compact, "SVGF_KERNEL": int(self.kernel), **density}   # the a-trous stage's
+        return {**self._defines, "SVGF_KERNEL": int(self.kernel), **density}   # the a-trous stage's kernel
 
     def _histories(self, res, data) -> None:
         """Bind the colour histories as the images `history_diffuse` (and `_specular`) of `res`."""
@@ -282,7 +276,7 @@ class SVGF(HistoryOwner, RenderPass):
                 res.image("dst_illum", scratch[1 - src])
             res.set("svgf_step", 1 << i)
             res.set("svgf_write_history", i == tap)
-            res.prog.run(*self._atrous_groups)
+            res.prog.run(*self._groups)
             if not final:
                 ctx.barrier(*between)
             src = 1 - src

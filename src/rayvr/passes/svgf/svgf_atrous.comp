@@ -9,18 +9,10 @@
 // into the output colour `dst` here (svgf_color; the background as it came where nothing was
 // drawn), which spares a pass that would read it back (the modulate stage serves 0 iterations);
 // with SVGF_SHARED it is stored too (`dst_illum`), for svgf_spread.comp to give other views.
-// With RAY_GROUP_COMPACT (the trace decision's compact_tile, under view reuse) a workgroup is a
-// larger square of one view whose pixels with something to filter take its first lanes
-// (glsl/ray_group.glsl): a reusing view filters few pixels, scattered along silhouettes.
 #define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
-#include "ray_group.glsl"
 
-#if RAY_GROUP_COMPACT
-layout(local_size_x = RAY_GROUP_SIZE) in;
-#else
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
-#endif
 
 #ifndef SVGF_FINAL
 #define SVGF_FINAL 0
@@ -116,36 +108,24 @@ void add_tap(ivec3 q, ivec2 size, float depth_scale, float log_k) {
 #endif
 }
 
-// Whether pixel p has something to filter (its filter key's depth in c_depth). Where it has
-// not, the reprojection wrote 0 to both scratch texels and no history is read here, so only the
-// last iteration writes, the background where nothing was drawn (a pixel with another view's
-// light gets it from svgf_spread.comp).
-bool filters(ivec3 p, ivec3 size, out uvec2 key) {
-    if (any(greaterThanEqual(p, size))) return false;
-    key = texelFetch(key_cur, p, 0).xy;
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    ivec3 size = OUT_SIZE;
+    if (any(greaterThanEqual(p, size))) return;
+    uvec2 key = texelFetch(key_cur, p, 0).xy;
     c_depth = svgf_key_depth(key);
-    if (c_depth > 0.0) return true;
+    // nothing to filter: the reprojection wrote 0 to both scratch texels and no history is read
+    // here, so only the last iteration writes, the background where nothing was drawn (a pixel
+    // with another view's light gets it from svgf_spread.comp)
+    if (!(c_depth > 0.0)) {
 #if SVGF_FINAL
 #if SVGF_SHARED
-    if (decision_spread(decision_at(p))) return false;
+        if (decision_spread(decision_at(p))) return;
 #endif
-    imageStore(dst, p, vec4(to_half_range(texelFetch(svgf_diffuse_in, p, 0).rgb), 1.0));
+        imageStore(dst, p, vec4(to_half_range(texelFetch(svgf_diffuse_in, p, 0).rgb), 1.0));
 #endif
-    return false;
-}
-
-void main() {
-    ivec3 size = OUT_SIZE;
-    uvec2 key;
-#if RAY_GROUP_COMPACT
-    ivec3 p = ray_group_pixel();
-    if (!ray_group_compact(filters(p, size, key), p)) return;
-    key = texelFetch(key_cur, p, 0).xy;   // the pixel this lane took
-    c_depth = svgf_key_depth(key);
-#else
-    ivec3 p = ivec3(gl_GlobalInvocationID);
-    if (!filters(p, size, key)) return;
-#endif
+        return;
+    }
     SvgfIllum centre = texelFetch(src_illum, p, 0);
     c_n = oct_unpack_snorm16(key.y);
     vec4 d = svgf_illum_diffuse(centre), s = svgf_illum_specular(centre);

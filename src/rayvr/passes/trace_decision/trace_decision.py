@@ -8,13 +8,12 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ...xr import foveation
 from ...xr.cameras import grid_for_views
-from ..dispatch import COMPACT_TILE, ONE_VIEW_TILES, SOURCE_VIEWS, groups_2d
+from ..dispatch import ONE_VIEW_TILES, SOURCE_VIEWS, groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from .fill import DECISION, DECISION_FILLS
 
 FOVEATION = ("none", *foveation.MODES)
-COMPACT_TILES = (0, 8, 16, 32)   # `compact_tile`: 0 (off) or a square workgroup's side in pixels
 
 
 @register_pass
@@ -48,12 +47,10 @@ class TraceDecision(RenderPass):
     `source_views_first` (more than two views, with `reuse`): the ray passes' workgroups that span
     several views take whole workgroups of source views first (rayvr.passes.dispatch.view_order), so
     that such a warp holds only views traced in full; sources too few to fill one stay in grid order.
-    `one_view_tiles` (more than two views, with `reuse`): the ray passes' workgroups that read the
-    decision hold one view each whatever their `view_group` (rayvr.passes.dispatch.decision_group):
+    `one_view_tiles` (more than two views, with `reuse`): the ray passes' and the composite's
+    workgroups that read the decision hold one view each whatever their view group
+    (rayvr.passes.dispatch.decision_view_group; `source_views_first` then has no workgroup to order):
     a tile of a view that reuses is mostly idle or wholly so, and a wholly idle one costs nothing.
-    `compact_tile` (with `one_view_tiles`; 0: off): those workgroups are squares of that many
-    pixels a side (8, 16 or 32), in which the pixels that trace take the first lanes, so that the
-    few traced pixels of a reusing view fill warps instead of idling most of their lanes.
 
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
     SHADOWS and above. `spread` (the graphs set it with SVGF): SVGF gives a pixel whose light is
@@ -72,7 +69,7 @@ class TraceDecision(RenderPass):
                   "reuse_lobe_fraction": 0.25,
                   "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
                   "share_light_samples": True, "source_views_first": True,
-                  "one_view_tiles": True, "compact_tile": 0}
+                  "one_view_tiles": True}
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -86,10 +83,6 @@ class TraceDecision(RenderPass):
         if key == "reuse_lobe_fraction" and not (isinstance(value, (int, float)) and 0.0 <= value <= 4.0):
             raise OptionError(f"pass {self.name}: property 'reuse_lobe_fraction' must be a number in [0, 4] (the "
                               f"eyes' parallax as a fraction of the lobe's width; 0: roughness alone), got {value!r}")
-        if key == "compact_tile" and (isinstance(value, bool) or value not in COMPACT_TILES):
-            raise OptionError(f"pass {self.name}: property 'compact_tile' must be one of "
-                              f"{', '.join(map(str, COMPACT_TILES))} (0: off; else a workgroup's side in pixels), "
-                              f"got {value!r}")
         low = {"source_stride": 2, "grid_cols": 0}.get(key)
         if low is not None and (int(value) != value or value < low):
             raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= {low}, got {value!r}")
@@ -128,7 +121,6 @@ class TraceDecision(RenderPass):
         if self.source_views_first and grid_reuse:
             ctx.dictionary[SOURCE_VIEWS] = self.source_views(cd.views, cols)
         ctx.dictionary[ONE_VIEW_TILES] = bool(self.one_view_tiles) and grid_reuse
-        ctx.dictionary[COMPACT_TILE] = int(self.compact_tile) if ctx.dictionary[ONE_VIEW_TILES] else 0
         self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
             **scene_defines(ctx), **effect_defines(), **self._defines}))
         self._groups = groups_2d(cd.size, cd.views)
