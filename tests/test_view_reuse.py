@@ -165,7 +165,8 @@ def test_a_camera_grid_reuses_from_its_sources(gpu):
         rays = r.compiled.ray_counts()
         k = kinds(r)
     cols = rv.xr.grid_for_views(16)[0]
-    sources = [v for v in range(16) if (v % cols) % 2 == 0 and (v // cols) % 2 == 0]
+    stride = TraceDecision.PROPERTIES["source_stride"]
+    sources = [v for v in range(16) if (v % cols) % stride == 0 and (v // cols) % stride == 0]
     assert len(sources) == 4
     for v in range(16):
         drawn = k[v] != NONE
@@ -430,7 +431,8 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
                          {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite", "Reflections")},
                          r.read_output(DECISION)[..., 0])
     cols = rv.xr.grid_for_views(16)[0]
-    sources = [v for v in range(16) if (v % cols) % 2 == 0 and (v // cols) % 2 == 0]
+    stride = TraceDecision.PROPERTIES["source_stride"]
+    sources = [v for v in range(16) if (v % cols) % stride == 0 and (v // cols) % stride == 0]
     composite = out["sources first"][3]["Composite"]
     assert composite["RAY_GROUP_Z"] == 4 and "RAY_GROUP_VIEW_ORDER" not in out["grid"][3]["Composite"]
     order = [int(v.strip(" u")) for v in composite["RAY_GROUP_VIEW_ORDER"].split("(")[1].rstrip(")").split(",")]

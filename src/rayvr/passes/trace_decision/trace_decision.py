@@ -30,8 +30,9 @@ class TraceDecision(RenderPass):
       then it REUSEs that pixel's shaded light (`reuse`; with two views the first eye is the
       source, or the eye of the frame's parity with `alternate`; with more, every
       `source_stride`-th column and row of a grid of `grid_cols` columns, 0: the default grid of
-      rayvr.xr.grid_for_views). A pixel that fails the test traces: disocclusions are traced, never
-      filled; and
+      rayvr.xr.grid_for_views; 3 by default: at 64 views of tauray 13.3 ms a frame against 14.2
+      at 2, at the same FLIP, benchmarks/RESULTS.md). A pixel that fails the test traces:
+      disocclusions are traced, never filled; and
     - the foveation budget (`foveation` 'fixed' about each image's centre, 'gaze' about where the
       eye tracker says the eye looks; rayvr.xr.foveation: 1 within `foveal_radius_deg`, falling to
       `periphery_share`) gives it its turn this frame: an ordered dither the frame index rotates, so
@@ -67,7 +68,7 @@ class TraceDecision(RenderPass):
     PROPERTIES = {"reuse": False, "foveation": "none", "foveal_radius_deg": foveation.DEFAULT_RADIUS_DEG,
                   "periphery_share": foveation.DEFAULT_PERIPHERY_SHARE, "reuse_min_roughness": 0.5,
                   "reuse_lobe_fraction": 0.25,
-                  "source_stride": 2, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
+                  "source_stride": 3, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
                   "share_light_samples": True, "source_views_first": True,
                   "one_view_tiles": True}
 
@@ -138,7 +139,7 @@ class TraceDecision(RenderPass):
             d["reuse"] = (f"views reuse rough surfaces (roughness >= {self.reuse_min_roughness:g}{lobes}) "
                           "of source views: "
                           + ("the first eye" if not self.alternate else "the eye of the frame's parity")
-                          + f" with 2 views, else every {self.source_stride}th of {d['REUSE_COLS']} columns and rows"
+                          + f" with 2 views, else one in {self.source_stride} of the {d['REUSE_COLS']} columns and of the rows"
                           + ("; SVGF spreads their filtered light to the reusing pixels" if d.get("REUSE_SPREAD") else "")
                           + ("; glossier surfaces take the source's light samples and their shadow rays"
                              if d.get("SHARE_LIGHT_SAMPLES") else ""))
