@@ -139,7 +139,8 @@ class TraceDecision(RenderPass):
             d["reuse"] = (f"views reuse rough surfaces (roughness >= {self.reuse_min_roughness:g}{lobes}) "
                           "of source views: "
                           + ("the first eye" if not self.alternate else "the eye of the frame's parity")
-                          + f" with 2 views, else one in {self.source_stride} of the {d['REUSE_COLS']} columns and of the rows"
+                          + f" with 2 views, else one in {self.source_stride} of the {d['REUSE_COLS']} columns "
+                            "and of the rows"
                           + ("; SVGF spreads their filtered light to the reusing pixels" if d.get("REUSE_SPREAD") else "")
                           + ("; glossier surfaces take the source's light samples and their shadow rays"
                              if d.get("SHARE_LIGHT_SAMPLES") else ""))
