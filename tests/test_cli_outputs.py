@@ -92,6 +92,7 @@ MISUSES = [
     (["tune", "--workers", "0"], ["--workers 0", "from 1 to 1024"]),
     (["converge", "--bounces", "0"], ["--bounces 0", "from 1 to 64"]),
     (["converge", "--tonemap", "nope"], ["--tonemap nope", "aces, reinhard, linear"]),
+    (["converge", "--no-cache", "--cache", "refs"], ["--cache refs with --no-cache", "leave one of them out"]),
     (["converge", "--preset", "nope"], ["--preset nope", "index"]),
     (["converge", "--tolerance", "nan"], ["--tolerance nan", "finite number > 0"]),
     (["converge", "--warmup-s", "-1"], ["--warmup-s -1", ">= 0 and <= 3600 s"]),

@@ -175,6 +175,8 @@ class StudyPlan:
         self.reference, self.settings, picked = plan_settings(d, given, lambda key: f"--{key.replace('_', '-')}")
         chosen = {} if args.size else {"--size": f"{d.size[0]}x{d.size[1]}"}
         chosen.update(picked)
+        if args.no_cache and args.cache:
+            raise OptionError(f"--cache {args.cache} with --no-cache: --no-cache stores nothing; leave one of them out")
         self.cache = False if args.no_cache else args.cache
         self.denoised_levels = d.denoised_levels
         self.probes = {"counts": list(d.probe_counts)} if d.probe_counts and not args.configs else None
