@@ -444,6 +444,14 @@ def test_huge_declared_sizes_are_refused_before_allocation(tmp_path, case):
     assert peak < 16 << 20, peak   # the declared sizes are terabytes
 
 
+@pytest.mark.parametrize("path", [None, 3, ["scene.glb"]])
+def test_load_scene_of_something_not_a_path_is_a_scene_error(path):
+    import rayvr as rv
+
+    with pytest.raises(rv.SceneError, match="expected the path of a .gltf or .glb file"):
+        rv.load_scene(path)
+
+
 def test_a_valid_glb_and_gltf_of_the_corpus_load(tmp_path):
     """The corpus mutates files that load: so each refusal is the mutation's."""
     import rayvr as rv

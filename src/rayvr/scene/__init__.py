@@ -7,8 +7,13 @@ from .gpu_scene import GpuScene
 
 def load_scene(path) -> Scene:
     """Load a glTF 2.0 scene (.gltf or .glb) into a `Scene`; bad input raises SceneError."""
+    import os
+
+    from ..errors import SceneError
     from .gltf import load_gltf
 
+    if not isinstance(path, (str, os.PathLike)):
+        raise SceneError(f"load_scene: expected the path of a .gltf or .glb file, got {path!r}")
     return load_gltf(path)
 
 
