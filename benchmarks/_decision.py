@@ -77,6 +77,45 @@ def measure(scene, view_set, graph, s: dict, judge_ref, ppd: float | None) -> di
             **{m: float(np.mean(v)) for m, v in per_view.items()}}
 
 
+class Progress:
+    """A decision benchmark's progress bar over its references and configurations, with an ETA from
+    the steps done (rayvr.study.progress). Each configuration's figures are written above the bar
+    as it is measured, so a run a timeout cuts short keeps them in its log. `jobs`: (view set,
+    configurations judged against its reference) for each reference the run renders."""
+
+    def __init__(self, s: dict, jobs, desc: str):
+        from rayvr.study.progress import StudyProgress
+
+        self.s = s
+        self.bar = StudyProgress(desc=desc)
+        for view_set, configurations in jobs:
+            self.bar.plan("render", self._units(view_set, True) + configurations * self._units(view_set, False))
+
+    def _units(self, view_set, reference_: bool) -> float:
+        """Pixel-frames rendered: the reference's paths, or a configuration's frames."""
+        pixels = sum(v.width * v.height for v in view_set.views)
+        frames = (max(2, self.s["ref_frames"]) * self.s["ref_spp"] if reference_
+                  else self.s["warmup"] + self.s["frames"] + self.s["judged"] + self.s.get("dispatches", 0))
+        return float(pixels * frames)
+
+    def __enter__(self):
+        self.bar.start()
+        return self
+
+    def __exit__(self, *exc):
+        self.bar.close()
+
+    def reference(self, scene, view_set):
+        with self.bar.step("render", self._units(view_set, True), f"{len(view_set.views)} views: reference"):
+            return reference(scene, view_set, self.s)
+
+    def measure(self, label: str, scene, view_set, graph, judge_ref, ppd: float | None) -> dict:
+        with self.bar.step("render", self._units(view_set, False), label):
+            row = measure(scene, view_set, graph, self.s, judge_ref, ppd)
+        self.bar.note(f"{label}: {ms(row):.3f} ms a frame, FLIP {row['flip']:.4f}, rays {sum(row['rays']):,}")
+        return row
+
+
 def ms(row: dict) -> float:
     """The GPU ms where the driver times it, else the wall ms."""
     return row["gpu_ms"] if row["gpu_ms"] is not None else row["wall_ms"]

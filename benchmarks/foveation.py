@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from rayvr.cli.options import load_scene_arg, parse_size
 
-from ._decision import add_common_arguments, cells, measure, ms, reference, settings
+from ._decision import Progress, add_common_arguments, cells, ms, settings
 
 
 def add_arguments(parser) -> None:
@@ -39,13 +39,14 @@ def run(args) -> dict:
     size = (48, 48) if args.quick else parse_size(args.size, views=2)
     scene = load_scene_arg(args.scene)
     view_set = _views(scene, size, args.fov)
-    ref = reference(scene, view_set, s)
     props = {k: v for k, v in (("foveal_radius_deg", args.foveal_radius), ("periphery_share", args.periphery_share))
              if v is not None}
     out = {}
-    for fov in (None, "fixed"):
-        g = rv.graphs.hybrid(preset=args.preset, foveation=fov, decision=props if fov else None)
-        out[fov] = measure(scene, view_set, g, s, ref, args.ppd)
+    with Progress(s, [(view_set, 2)], "foveation") as progress:
+        ref = progress.reference(scene, view_set)
+        for fov in (None, "fixed"):
+            g = rv.graphs.hybrid(preset=args.preset, foveation=fov, decision=props if fov else None)
+            out[fov] = progress.measure(f"foveation {fov or 'none'}", scene, view_set, g, ref, args.ppd)
     base = out[None]
     rows = []
     for fov, row in out.items():

@@ -13,7 +13,7 @@ from __future__ import annotations
 from rayvr.cli.options import load_scene_arg, parse_size
 
 from ._dispatches import dispatch_cell
-from ._decision import add_common_arguments, cells, measure, ms, passes_cell, reference, settings
+from ._decision import Progress, add_common_arguments, cells, ms, passes_cell, settings
 
 TARGETS = {2: "rays_other/first <= 0.3, flip <= 1.05x", 64: "gpu <= 0.5x, flip <= 1.05x"}
 
@@ -54,6 +54,21 @@ def parse_variants(text: str) -> list[tuple[str, dict]]:
     return out
 
 
+def _rows(n: int, size, out: dict, s: dict) -> list:
+    """The table's rows of `n` views: each configuration against independent views (out[None])."""
+    base, rows = out[None], []
+    for reuse, row in out.items():
+        first, others = row["rays"][0], row["rays"][1:]
+        other_ratio = (sum(others) / len(others)) / max(first, 1)
+        flip_ratio = row["flip"] / max(base["flip"], 1e-12)
+        ok = other_ratio <= 0.3 if n == 2 else ms(row) <= 0.5 * ms(base)
+        rows.append([n, f"{size[0]}x{size[1]}", reuse or "independent", *cells(row), first,
+                     round(other_ratio, 3), round(ms(row) / ms(base), 3), round(flip_ratio, 3),
+                     ("yes" if ok and flip_ratio <= 1.05 else "NO") if reuse and n in TARGETS else "",
+                     passes_cell(row), *([dispatch_cell(row["dispatches"])] if s["dispatches"] else [])])
+    return rows
+
+
 def run(args) -> dict:
     import rayvr as rv
     from rayvr.xr.cameras import default_views
@@ -66,31 +81,26 @@ def run(args) -> dict:
     if args.quick and args.views == "2,64":
         counts = [2, 4]
     rows = []
+    scene = load_scene_arg(args.scene)
+    view_sets = {}
     for n in counts:
         size = parse_size(args.stereo_size if n <= 2 else args.grid_size, views=n)
         if args.quick:
             size = (32, 32) if n <= 2 else (16, 16)
-        scene = load_scene_arg(args.scene)
-        view_set = default_views(scene, n, size)
-        ref = reference(scene, view_set, s)
-        out = {}
-        for reuse in (None, "views"):
-            out[reuse] = measure(scene, view_set, rv.graphs.hybrid(preset=args.preset, reuse=reuse), s, ref, args.ppd)
-        for label, props in variants:
-            g = rv.graphs.hybrid(preset=args.preset, reuse="views")
-            for name, p in props.items():
-                g.update_pass(name, p)
-            out[label] = measure(scene, view_set, g, s, ref, args.ppd)
-        base = out[None]
-        for reuse, row in out.items():
-            first, others = row["rays"][0], row["rays"][1:]
-            other_ratio = (sum(others) / len(others)) / max(first, 1)
-            flip_ratio = row["flip"] / max(base["flip"], 1e-12)
-            ok = other_ratio <= 0.3 if n == 2 else ms(row) <= 0.5 * ms(base)
-            rows.append([n, f"{size[0]}x{size[1]}", reuse or "independent", *cells(row), first,
-                         round(other_ratio, 3), round(ms(row) / ms(base), 3), round(flip_ratio, 3),
-                         ("yes" if ok and flip_ratio <= 1.05 else "NO") if reuse and n in TARGETS else "",
-                         passes_cell(row), *([dispatch_cell(row["dispatches"])] if s["dispatches"] else [])])
+        view_sets[n] = (size, default_views(scene, n, size))
+    with Progress(s, [(v, 2 + len(variants)) for _, v in view_sets.values()], "view_reuse") as progress:
+        for n, (size, view_set) in view_sets.items():
+            ref = progress.reference(scene, view_set)
+            out = {}
+            for reuse in (None, "views"):
+                out[reuse] = progress.measure(f"{n} views, {reuse or 'independent'}", scene, view_set,
+                                              rv.graphs.hybrid(preset=args.preset, reuse=reuse), ref, args.ppd)
+            for label, props in variants:
+                g = rv.graphs.hybrid(preset=args.preset, reuse="views")
+                for name, p in props.items():
+                    g.update_pass(name, p)
+                out[label] = progress.measure(f"{n} views, {label}", scene, view_set, g, ref, args.ppd)
+            rows += _rows(n, size, out, s)
     return {
         "columns": ["views", "view_size", "config", "wall_ms", "gpu_ms", "rays_total", "flip", "flip_fovea",
                     "flip_ecc", "rays_first", "rays_other/first", "ms/independent", "flip/independent",

@@ -134,6 +134,14 @@ class StudyProgress:
             self.bar.close()
             self.bar = None
 
+    def note(self, text: str) -> None:
+        """One line of results on stderr, above the bar (and in the log)."""
+        if self.bar is not None:
+            self.bar.write(text, file=sys.stderr)
+        elif self.enabled:
+            print(text, file=sys.stderr, flush=True)
+        self._log(text)
+
     @contextlib.contextmanager
     def step(self, kind: str, units: float, label: str = ""):
         """Run one planned step; the block may call the yielded `tick(fraction)` as it goes."""
