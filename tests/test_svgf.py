@@ -408,3 +408,33 @@ def test_what_the_scratch_textures_held_before_never_reaches_the_image(gpu, reus
     assert (effect == 0xFF).mean() > 0.1   # background beside the filtered surfaces
     assert np.isfinite(images[1]).all()
     np.testing.assert_array_equal(images[1], images[0])
+
+
+def test_highlights_of_a_metal_beside_a_dielectric_keep_their_energy_through_the_filter(gpu):
+    """A glossy metal (diffuse albedo 0) and a glossy dielectric side by side in one plane, effect
+    SHADOWS, lit by the neutral environment: the lighting passes return direct light's highlights
+    in the diffuse lobe, so SVGF takes that lobe apart from both lobes' albedos, and its output
+    keeps the mean of the unfiltered frames. (Taken apart from the metal's diffuse albedo alone, a
+    highlight became an illumination 1000x too bright; where the variance let the filter mix it
+    into the dielectric, the image came out 6x too bright.)"""
+    from rayvr.scene import Scene
+
+    scene = Scene("halves")
+    for name, base, metallic in (("Metal", (0.9, 0.6, 0.2), 1.0), ("Dielectric", (0.5, 0.5, 0.5), 0.0)):
+        scene.add_material(builtin.lambert(name, base))
+        m = scene.materials[name]
+        m.metallic, m.roughness, m.effect = metallic, 0.4, rv.Effect.SHADOWS
+    for name, x0, x1 in (("Metal", -1, 0), ("Dielectric", 0, 1)):
+        scene.add_object(name, *builtin.quad_mesh([(x0, -1, 0), (x1, -1, 0), (x1, 1, 0), (x0, 1, 0)], (0, 0, 1)), name)
+    scene.cameras.append(Camera.look_at((0, 0, 2.2), (0, 0, 0), name="Camera"))
+    g = rv.graphs.hybrid(gi=None, denoise="svgf")
+    g.mark_output("SVGF.color")
+    frames, raw = 32, 0.0
+    with Renderer(scene, g, views=default_views(scene, 1, (32, 32))) as r:
+        for _ in range(frames):
+            r.render()
+            raw = raw + rgb(r, "Composite.color")
+        filtered = rgb(r, "SVGF.color")
+    raw = raw / frames
+    assert raw.mean() > 0.05
+    assert 0.8 < filtered.mean() / raw.mean() < 1.2, (filtered.mean(), raw.mean())

@@ -11,6 +11,7 @@ import pytest
 
 from rayvr.gpu.program_resources import program_resources
 from rayvr.passes import SVGF
+from rayvr.passes.effects import effect_defines
 
 W, H, L = 13, 11, 2          # partial workgroups in x and y, two views
 PHI = {"svgf_phi_color": 4.0, "svgf_phi_normal": 16.0, "svgf_phi_depth": 1.0}
@@ -143,7 +144,7 @@ def gl_texture(gl, data, components, dtype):
 def variance_gradient(gl, keys, specular):
     """The variance stage on `keys` (every history 8 frames long: it keeps the illumination and
     writes only the depth gradient): its `gradient_out` texture (rg16f)."""
-    res = program_resources(SVGF().compute_program(gl, "svgf_variance.comp", {"SVGF_SPECULAR": int(specular)}))
+    res = program_resources(SVGF().compute_program(gl, "svgf_variance.comp", {**effect_defines(), "SVGF_SPECULAR": int(specular)}))
     history = np.zeros((L, H, W, 2), np.uint32)
     history[..., 1] = np.float32(8.0).view(np.uint32)
     illum = np.zeros((L, H, W, 4), np.uint32 if specular else np.float16)
@@ -172,7 +173,7 @@ def dispatch(gl, key, d, s, step, specular, kernel=5, gradient=None):
     """One iteration on the GPU, with the history written: (diffuse, specular, history diffuse,
     history specular) as float64, rows as in the inputs. The depth gradient: the variance
     stage's from the key, or `gradient` (L, H, W, 2) as given."""
-    prog = SVGF().compute_program(gl, "svgf_atrous.comp", {"SVGF_SPECULAR": int(specular), "SVGF_KERNEL": kernel})
+    prog = SVGF().compute_program(gl, "svgf_atrous.comp", {**effect_defines(), "SVGF_SPECULAR": int(specular), "SVGF_KERNEL": kernel})
     res = program_resources(prog)
     def texture(data, components, dtype):
         return gl_texture(gl, data, components, dtype)

@@ -95,11 +95,23 @@ bool svgf_inside(ivec2 q, ivec2 size) { return pixel_inside(q, size); }
 // A lobe's radiance demodulated (demodulation.glsl), non-finite samples scrubbed, in float16 range.
 vec3 svgf_demodulate(vec3 radiance, vec3 albedo) { return to_half_range(demodulate(nonfinite_scrub(radiance), albedo)); }
 
+// The albedos SVGF takes each lobe's light apart from (demodulation.glsl) at G-buffer surface g
+// seen from `view`: the specular lobe's own; for the diffuse lobe its own where it holds diffuse
+// light alone (REFLECTIONS pixels, whose direct light leaves the specular lobe to RTReflections;
+// PATH_TRACED ones), else both lobes' together: RASTER and SHADOWS pixels' direct light comes
+// with its highlights in the diffuse lobe (HybridComposite), as does all light without a specular
+// input. A metal's diffuse albedo is 0: a highlight divided by it alone became an illumination
+// 1000x too bright, which the filter spread onto its neighbours' albedos.
+void svgf_albedos(GSurface g, uint view, out vec3 diffuse, out vec3 specular) {
+    surface_albedos(g, view, diffuse, specular);
+    if (SVGF_SPECULAR == 0 || g.effect < EFFECT_REFLECTIONS) diffuse += specular;
+}
+
 // The output colour of G-buffer surface g seen from `view` (a pixel with geometry) from its
 // filtered illumination: each lobe times its albedo, plus the surface's emission.
 vec3 svgf_color(GSurface g, uint view, vec3 diffuse, vec3 specular) {
     vec3 albedo_d, albedo_s;
-    surface_albedos(g, view, albedo_d, albedo_s);
+    svgf_albedos(g, view, albedo_d, albedo_s);
     vec3 c = remodulate(diffuse, albedo_d) + g.emissive;
 #if SVGF_SPECULAR
     c += remodulate(specular, albedo_s);

@@ -86,7 +86,7 @@ void main() {
     }
     GSurface g = gbuf_load(p);
     vec3 albedo_d, albedo_s;
-    surface_albedos(g, uint(p.z), albedo_d, albedo_s);
+    svgf_albedos(g, uint(p.z), albedo_d, albedo_s);
     vec3 diffuse = svgf_demodulate(texelFetch(svgf_diffuse_in, p, 0).rgb, albedo_d);
     vec3 specular = vec3(0.0);
 #if SVGF_SPECULAR
