@@ -95,7 +95,7 @@ class Progress:
         """Pixel-frames rendered: the reference's paths, or a configuration's frames."""
         pixels = sum(v.width * v.height for v in view_set.views)
         frames = (max(2, self.s["ref_frames"]) * self.s["ref_spp"] if reference_
-                  else self.s["warmup"] + self.s["frames"] + self.s["judged"] + self.s.get("dispatches", 0))
+                  else self.s["warmup"] + self.s["frames"] + self.s["judged"] + self.s["dispatches"])
         return float(pixels * frames)
 
     def __enter__(self):

@@ -142,13 +142,14 @@ def scene_frustum(scene, size) -> tuple[Pose, Fov, float, float, float]:
     pose, yfov = camera_pose(scene)
     cam = (getattr(scene, "cameras", None) or [None])[0]
     lo, hi = np.asarray(scene.bounds(), dtype=np.float64)
+    centre = float(np.linalg.norm(0.5 * (lo + hi) - pose.position))   # the camera's distance to the scene's centre
     if cam is None:   # the framing camera's near plane stays in front of a small scene (millimetres across)
-        gap = float(np.linalg.norm(0.5 * (lo + hi) - pose.position)) - 0.5 * float(np.linalg.norm(hi - lo))
+        gap = centre - 0.5 * float(np.linalg.norm(hi - lo))
         near = min(0.05, max(0.1 * gap, 1e-6))
     else:
         near = getattr(cam, "znear", 0.05) or 0.05
     far = getattr(cam, "zfar", 1000.0) or 1000.0
-    focal = max(float(np.linalg.norm(0.5 * (lo + hi) - pose.position)), near * 2)
+    focal = max(centre, near * 2)
     return pose, Fov.symmetric(math.degrees(yfov), w / h), near, far, focal
 
 
