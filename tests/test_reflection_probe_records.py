@@ -74,8 +74,8 @@ def test_records_only_with_probes_and_their_memory(gpu):
     for gi in (None, "probes"):
         for bounces in (1, 3):
             g = rv.graphs.hybrid(preset="raw", max_bounces=bounces, gi=gi, probes=PROBES if gi else None)
-            compiled = g.compile(scene=scene, size=size, views=views, gpu=gpu,
-                                 gpu_scene=rv.scene.GpuScene(gpu, scene))
+            gpu_scene = rv.scene.GpuScene(gpu, scene)
+            compiled = g.compile(scene=scene, size=size, views=views, gpu=gpu, gpu_scene=gpu_scene)
             try:
                 report = compiled.report()
                 records = {r.name: r for r in report.resources if r.name in RECORDS}
@@ -87,7 +87,7 @@ def test_records_only_with_probes_and_their_memory(gpu):
                 for r in records.values():
                     assert r.format == "rgba32ui" and r.layers == views * bounces
                 assert sum(r.bytes for r in records.values()) == size[0] * size[1] * views * bounces * RECORD_BYTES \
-                    == g.passes["Reflections"].record_bytes(size, views)
+                    == g.passes["Reflections"].record_bytes(size, views, gpu_scene)
                 assert "Reflections.probeHits" in str(report)
             finally:
                 compiled.release()

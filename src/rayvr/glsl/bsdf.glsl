@@ -34,6 +34,7 @@
 //   float bsdf_pdf_specular(b, n, v, l), bool bsdf_sample_specular(...)       BSDF_LOBES_SPECULAR,
 //                                                        l above (what a reflection pass traces)
 //   bsdf_albedo(b, n, v, out diffuse, out specular)      directional albedos of the two parts
+//   bsdf_albedo_parts(b, n, v, out diffuse, out reflected, out transmitted)   the second apart
 #pragma once
 #include "bsdf_lobes.glsl"
 
@@ -239,11 +240,20 @@ bool bsdf_sample_specular(BsdfParams b, vec3 n, vec3 v, vec3 u, out BsdfSample s
 }
 
 // ---- albedos ----------------------------------------------------------------------------------
-// Directional albedos at bsdf_set_view's n.v: of the diffuse lobes and of the rest.
-void bsdf_albedo(BsdfParams b, vec3 n, vec3 v, out vec3 diffuse, out vec3 specular) {
+// Directional albedos at bsdf_set_view's n.v: of the diffuse lobe, of the lobes that reflect
+// (the specular layer, the metal, glass's reflection) and of glass's transmission.
+void bsdf_albedo_parts(BsdfParams b, vec3 n, vec3 v, out vec3 diffuse, out vec3 reflected, out vec3 transmitted) {
     diffuse = vec3(0.0);
-    specular = vec3(0.0);
-    bsdf_specular_add_albedo(b, specular);
+    reflected = vec3(0.0);
+    transmitted = vec3(0.0);
+    bsdf_specular_add_albedo(b, reflected);
     bsdf_diffuse_add_albedo(b, diffuse);
-    bsdf_glass_add_albedo(b, specular);
+    bsdf_glass_add_albedo(b, reflected, transmitted);
+}
+
+// Of the diffuse lobe and of the rest, reflected and transmitted (what the denoisers demodulate by).
+void bsdf_albedo(BsdfParams b, vec3 n, vec3 v, out vec3 diffuse, out vec3 specular) {
+    vec3 transmitted;
+    bsdf_albedo_parts(b, n, v, diffuse, specular, transmitted);
+    specular += transmitted;
 }

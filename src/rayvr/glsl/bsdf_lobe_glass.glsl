@@ -166,6 +166,10 @@ void bsdf_glass_add_fresnel(BsdfParams b, float vh, inout vec3 fresnel) {
         fresnel += w.y * bsdf_glass_fresnel(b, vh) / b.glass_comp_v;
 }
 
-void bsdf_glass_add_albedo(BsdfParams b, inout vec3 albedo) {
-    albedo += bsdf_weights(b).y * bsdf_glass_fresnel(b, b.nv);
+// Its reflected share (Fresnel at n.v) and its transmitted one (the rest, tinted by the base colour).
+void bsdf_glass_add_albedo(BsdfParams b, inout vec3 reflected, inout vec3 transmitted) {
+    float w = bsdf_weights(b).y;
+    vec3 f = bsdf_glass_fresnel(b, b.nv);
+    reflected += w * f;
+    transmitted += w * b.base_color * max(vec3(1.0) - f, vec3(0.0));
 }

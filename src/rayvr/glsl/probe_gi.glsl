@@ -6,8 +6,9 @@
 //       with unit normal n; v: unit direction towards the viewer (moves the lookup off the surface)
 //   vec3 probe_gi_diffuse(PathVertex s)   diffuse albedo x irradiance / pi: the indirect diffuse
 //       radiance leaving s towards s.v
-//   vec3 probe_gi_glossy(PathVertex s)    specular albedo x irradiance about the mirror direction
-//       / pi: the glossy fallback for a reflection path that stops at s
+//   vec3 probe_gi_glossy(PathVertex s)    reflected albedo x irradiance about the mirror direction
+//       / pi: the glossy fallback for a reflection path that stops at s (glass's transmitted
+//       share is left out: its light comes from behind)
 //   vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy)   both from one lookup: the
 //       composite's indirect light for pixels whose reflections are not traced (the glossy part
 //       about the lobe's dominant direction, probe_gi_glossy_direction)
@@ -136,7 +137,7 @@ vec3 probe_gi_glossy_direction(vec3 n, vec3 v, float roughness) {
     return normalize(mix(n, reflect(-v, n), f));
 }
 
-// Both at once, from one lookup: probe_gi_diffuse's value, and in `glossy` the specular albedo x
+// Both at once, from one lookup: probe_gi_diffuse's value, and in `glossy` the reflected albedo x
 // irradiance about the lobe's dominant direction / pi (a surface whose reflections are not traced:
 // RASTER and SHADOWS pixels). Where that direction is within ~10 degrees of the normal (rough
 // surfaces) the normal's irradiance serves both: irradiance is cosine-smoothed, and the second
@@ -144,8 +145,8 @@ vec3 probe_gi_glossy_direction(vec3 n, vec3 v, float roughness) {
 vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy) {
     glossy = vec3(0.0);
 #if PROBE_GI
-    vec3 diffuse, specular, e_r;
-    bsdf_albedo(s.bsdf, s.n, s.v, diffuse, specular);
+    vec3 diffuse, specular, transmitted, e_r;   // a transmission's light comes from behind: not from here
+    bsdf_albedo_parts(s.bsdf, s.n, s.v, diffuse, specular, transmitted);
     vec3 d = probe_gi_glossy_direction(s.n, s.v, s.bsdf.roughness);
     bool apart = dot(d, s.n) < 0.985;
     vec3 e_n = probe_gi_irradiance_at(s.pos, s.n, s.v, apart, d, e_r);
@@ -158,9 +159,9 @@ vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy) {
 
 vec3 probe_gi_glossy(PathVertex s) {
 #if PROBE_GI
-    vec3 diffuse, specular;
-    bsdf_albedo(s.bsdf, s.n, s.v, diffuse, specular);
-    return specular * probe_gi_irradiance(s.pos, reflect(-s.v, s.n), s.v) * (1.0 / RAYVR_PI);
+    vec3 diffuse, reflected, transmitted;   // a transmission's light comes from behind: not from here
+    bsdf_albedo_parts(s.bsdf, s.n, s.v, diffuse, reflected, transmitted);
+    return reflected * probe_gi_irradiance(s.pos, reflect(-s.v, s.n), s.v) * (1.0 / RAYVR_PI);
 #else
     return vec3(0.0);
 #endif

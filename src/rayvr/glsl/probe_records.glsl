@@ -45,8 +45,8 @@ ProbeRecord probe_record_none() {
 }
 
 ProbeRecord probe_record_at(PathVertex s, vec3 throughput, bool glossy) {
-    vec3 diffuse, specular;
-    bsdf_albedo(s.bsdf, s.n, s.v, diffuse, specular);
+    vec3 diffuse, specular, transmitted;   // the glossy fallback lights what the surface reflects
+    bsdf_albedo_parts(s.bsdf, s.n, s.v, diffuse, specular, transmitted);
     ProbeRecord r;
     r.pos = s.pos;
     r.n = s.n;

@@ -10,6 +10,12 @@ def scene_defines(ctx) -> dict:
     return {} if ctx.scene is None else dict(ctx.scene.defines())
 
 
+def scene_transmits(scene) -> bool:
+    """Whether a pass must provide for transmission: unless `scene` (a GpuScene) is known not to
+    transmit. Its features are those of its upload, not of later material edits."""
+    return scene is None or "SCENE_HAS_TRANSMISSION" in scene.features
+
+
 def effect_defines() -> dict:
     """EFFECT_RASTER .. EFFECT_PATH_TRACED as #defines, so GLSL and rayvr.Effect agree."""
     return {f"EFFECT_{e.name}": int(e) for e in Effect}

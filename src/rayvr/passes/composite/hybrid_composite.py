@@ -6,7 +6,7 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..dispatch import (COMPUTE_GROUP, check_shape, decision_view_group, groups_2d, ray_group, ray_group_defines,
                         view_order)
-from ..effects import effect_defines
+from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from ..probe_gi import inputs as probe_inputs
 from ..trace_decision.fill import DECISION, DecisionFill
@@ -87,7 +87,9 @@ class HybridComposite(RenderPass):
         self._group = ray_group(cd.views, tuple(self.probe_tile), view_group) if self._probes else (*COMPUTE_GROUP, 1)
         order = view_order(ctx, cd.views, self._group) if DecisionFill.connected(cd) else None
         self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group, order)}
-        self._prog = self.compute_program(ctx.gl, "composite.comp", {**effect_defines(), **self._defines})
+        # the scene's features: the probe lookup shades the G-buffer surface with its whole material
+        self._prog = self.compute_program(ctx.gl, "composite.comp",
+                                          {**scene_defines(ctx), **effect_defines(), **self._defines})
         self._res = program_resources(self._prog)
         self._groups = groups_2d(cd.size, cd.views, self._group)
 

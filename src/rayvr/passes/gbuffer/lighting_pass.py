@@ -33,12 +33,12 @@ TILE = [8, 4]   # one warp (ray_group spreads it over views)
 MAX_LIGHT_SAMPLES = 256   # `light_samples`: as `rayvr render --light-samples`
 
 
-def check_count(pass_name: str, key: str, value, most: int, what: str) -> None:
-    """A property that counts something: a whole number from 1 to `most` (OptionError else)."""
+def check_count(pass_name: str, key: str, value, most: int, what: str, least: int = 1) -> None:
+    """A property that counts something: a whole number from `least` to `most` (OptionError else)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value \
-            or not 1 <= value <= most:
-        raise OptionError(f"pass {pass_name}: property '{key}' must be a whole number of {what} from 1 to {most}, "
-                          f"got {value!r}")
+            or not least <= value <= most:
+        raise OptionError(f"pass {pass_name}: property '{key}' must be a whole number of {what} from {least} to "
+                          f"{most}, got {value!r}")
 
 
 def ray_properties(view_group: int = VIEW_GROUP) -> dict:

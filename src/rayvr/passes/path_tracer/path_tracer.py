@@ -33,7 +33,7 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Choice, Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
 from ..dispatch import COMPUTE_GROUP, VIEW_GROUP, check_shape, groups_2d, ray_group, ray_group_defines
-from ..effects import effect_defines, scene_defines, unused_effect_reason
+from ..effects import effect_defines, scene_defines, scene_transmits, unused_effect_reason
 from ..gbuffer import channels
 from ..trace_decision.fill import DecisionFill
 
@@ -127,10 +127,9 @@ class PathTracer(RenderPass):
 
     @staticmethod
     def wave_has_medium(scene) -> bool:
-        """Whether the wavefront's state keeps a path's medium: unless `scene` is known not to
-        transmit. The buffer's size and the shaders' PTW_HAS_MEDIUM both follow it (the
-        GpuScene's features are those of its upload, not of later material edits)."""
-        return scene is None or "SCENE_HAS_TRANSMISSION" in scene.features
+        """Whether the wavefront's state keeps a path's medium (scene_transmits). The buffer's size
+        and the shaders' PTW_HAS_MEDIUM both follow it."""
+        return scene_transmits(scene)
 
     def wave_slot_bytes(self, scene=None) -> int:
         """Bytes of the wavefront's state per path slot (wave_has_medium: one field more)."""

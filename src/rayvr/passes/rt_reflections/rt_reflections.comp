@@ -3,16 +3,17 @@
 // the BSDF's specular lobes (GGX VNDF reflection, and for transmissive materials refraction or a
 // thin wall's pass-through; exact deltas at roughness 0), trace, shade the hit with emission and
 // shadowed direct light, continue up to MAX_BOUNCES through reflective hits (absorbing inside
-// volumes). Light a rough lobe's ray finds (emitters, the environment) and the light sample of
-// the vertex it left share it by the power heuristic (shading.glsl shade_direct_mis). Output: that radiance weighted by the specular lobes, which the composite adds to the
-// direct light (the diffuse part is the direct-light passes'). Each hit adds the probes' indirect
-// diffuse light, and a path stopped by MAX_BOUNCES on a reflective surface their glossy fallback:
-// with PROBE_RECORDS (the graph's way) this kernel only records what the lookups need
-// (glsl/probe_records.glsl: one record per view and bounce, an empty one past the path's end) and
-// rt_reflections_probes.comp, dispatched after it over the same pixels, looks them up and adds
-// them (the lookup's registers here would cost the traversal its occupancy: several times
-// slower); with PROBE_GI instead they are looked up in this kernel
-// (only tests compile that, as the reference).
+// volumes), REFLECTION_BOUNCES of them reflected (the others transmitted). Light a rough lobe's ray
+// finds (emitters, the environment) and the light sample of the vertex it left share it by the
+// power heuristic (shading.glsl shade_direct_mis). Output: that radiance weighted by the specular
+// lobes, which the composite adds to the direct light (the diffuse part is the direct-light
+// passes'). Each hit adds the probes' indirect diffuse light, and a path whose reflections end on a
+// reflective surface their glossy fallback: with PROBE_RECORDS (the graph's way) this kernel only
+// records what the lookups need (glsl/probe_records.glsl: one record per view and bounce, an empty
+// one past the path's end) and rt_reflections_probes.comp, dispatched after it over the same
+// pixels, looks them up and adds them (the lookup's registers here would cost the traversal its
+// occupancy: several times slower); with PROBE_GI instead they are looked up in this kernel (only
+// tests compile that, as the reference).
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
@@ -30,6 +31,9 @@ layout(local_size_x = PIXEL_LIST_GROUP) in;
 layout(rgba16f) writeonly uniform image2DArray dst;
 #ifndef PROBE_RECORDS
 #define PROBE_RECORDS 0
+#endif
+#ifndef REFLECTION_BOUNCES
+#define REFLECTION_BOUNCES MAX_BOUNCES
 #endif
 #if PROBE_RECORDS
 layout(rgba32ui) writeonly uniform uimage2DArray probe_hits;
@@ -54,9 +58,11 @@ void main() {
 #if PROBE_RECORDS
     int recorded = 0;   // records stored; the rest are stored empty after the loop
 #endif
+    int reflections = 0;   // bounces that reflected (REFLECTION_BOUNCES at most; the rest transmit)
     for (int bounce = 0; bounce < MAX_BOUNCES; ++bounce) {
         BsdfSample bs;
         if (!bsdf_sample_specular(s.bsdf, s.n, s.v, rng_next3(rng), bs)) break;
+        if (!bs.transmitted && ++reflections > REFLECTION_BOUNCES) break;   // the glossy fallback has it
         float side = dot(bs.l, s.ng);
         if (bs.transmitted ? side >= 0.0 : side <= 0.0) break;
         throughput *= bs.weight;
@@ -84,17 +90,19 @@ void main() {
         if (max3(mp.emissive) > 0.0 && (sp.front_face || mp.double_sided))
             emitted = mp.emissive * (whole ? 1.0 : power_heuristic(bs.pdf, emissive_light_pdf(sp, hit.instance, from)));
 #endif
-        // Only surfaces that are themselves reflective carry the path further.
+        // Only surfaces that are themselves reflective carry the path further; a reflected ray
+        // leaves this vertex while reflections are left, a transmitted one while bounces are.
         bool continues = mp.effect >= EFFECT_REFLECTIONS;
+        bool reflects_on = bounce + 1 < MAX_BOUNCES && reflections < REFLECTION_BOUNCES;
 #if PROBE_RECORDS   // stored before the shadow rays: nothing of it stays live across their traversal
-        store_probe_record(p, bounce, probe_record_at(s, throughput, continues && bounce == MAX_BOUNCES - 1));
+        store_probe_record(p, bounce, probe_record_at(s, throughput, continues && !reflects_on));
         recorded = bounce + 1;
 #endif
         // (probe_gi_diffuse and probe_gi_glossy are 0 unless PROBE_GI: the in-kernel reference)
-        radiance += throughput * (emitted + shade_direct_mis(s, rng, continues && bounce + 1 < MAX_BOUNCES)
+        radiance += throughput * (emitted + shade_direct_mis(s, rng, continues && reflects_on)
                                   + probe_gi_diffuse(s));
         if (!continues) break;
-        if (bounce == MAX_BOUNCES - 1) radiance += throughput * probe_gi_glossy(s);
+        if (!reflects_on) radiance += throughput * probe_gi_glossy(s);
     }
 #if PROBE_RECORDS
     for (int b = recorded; b < MAX_BOUNCES; ++b) store_probe_record(p, b, probe_record_none());

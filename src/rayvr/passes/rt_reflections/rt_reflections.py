@@ -7,7 +7,7 @@ from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access
-from ..effects import unused_effect_reason
+from ..effects import scene_transmits, unused_effect_reason
 from ..gbuffer.lighting_pass import GBufferLightingPass, check_count, ray_properties
 from ..probe_gi import inputs as probe_inputs
 
@@ -18,7 +18,10 @@ MAX_REFLECTION_BOUNCES = 64   # as `rayvr render --max-bounces`
 @register_pass
 class RTReflections(GBufferLightingPass):
     """Mirror and glossy (GGX VNDF) reflections for the pixels whose effect is REFLECTIONS or above,
-    `max_bounces` deep; reflected hits are shaded with ray-traced shadows. Emitters and the
+    `max_bounces` reflections deep; reflected hits are shaded with ray-traced shadows. Where the
+    scene transmits, a path may also pass `transmission_bounces` more surfaces through their
+    transmission (default 1: the far wall of a thin-walled glass object, so that what lies behind
+    it shows); those bounces are compiled in only then. Emitters and the
     environment that a glossy ray finds are weighed against the direct-light passes' light samples
     by the power heuristic (those weigh the specular lobes of REFLECTIONS pixels the other way:
     shading.glsl shade_direct_mis), so near-mirrors reflect the sky. The output is the
@@ -29,7 +32,7 @@ class RTReflections(GBufferLightingPass):
     With the probe inputs bound, the hits' probe lookups (indirect diffuse light, and the glossy
     fallback where MAX_BOUNCES stops a path) are deferred: the traversal kernel stores a record per
     pixel, view and bounce in two scratch outputs `probeHits` and `probeFactors` (rgba32ui, views x
-    max_bounces layers, 32 bytes a record: glsl/probe_records.glsl), and a second program
+    bounces() layers, 32 bytes a record: glsl/probe_records.glsl), and a second program
     (rt_reflections_probes.comp), dispatched over the same pixels after a barrier, looks them up
     and adds them to the output. The lookup's registers in the traversal kernel cost it its
     occupancy (benchmarks/RESULTS.md). Graphs without probes allocate no records."""
@@ -46,36 +49,50 @@ class RTReflections(GBufferLightingPass):
     SALT = RNG_SALTS["rt_reflections"]
     # defer_probes False looks the probes up in the traversal kernel, one dispatch and no records:
     # the reference tests/test_reflection_probe_records.py compares the deferred lookups with.
-    PROPERTIES = {"max_bounces": 1, "light_samples": 1, **ray_properties(), "defer_probes": True}
+    PROPERTIES = {"max_bounces": 1, "transmission_bounces": 1, "light_samples": 1, **ray_properties(),
+                  "defer_probes": True}
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
         if key == "max_bounces":
             check_count(self.name, key, value, MAX_REFLECTION_BOUNCES, "reflection bounces")
+        if key == "transmission_bounces":
+            check_count(self.name, key, value, MAX_REFLECTION_BOUNCES, "bounces through transmission", least=0)
         return value
 
     def skip_reason(self, cd):
         return unused_effect_reason(cd, Effect.REFLECTIONS)
 
-    def bounces(self) -> int:
-        return max(1, int(self.max_bounces))
+    def bounces(self, scene=None) -> int:
+        """Vertices a path may reach: `max_bounces`, plus `transmission_bounces` where `scene`
+        transmits (scene_transmits)."""
+        return int(self.max_bounces) + (int(self.transmission_bounces) if scene_transmits(scene) else 0)
+
+    def compile(self, ctx, cd):
+        self._scene = cd.scene   # shader_defines' bounces
+        super().compile(ctx, cd)
+        self._lookup = None
+        if self._defines.get("PROBE_RECORDS"):
+            defines = {k: v for k, v in self._defines.items() if k != "PROBE_RECORDS"}
+            self._lookup = program_resources(self.compute_program(ctx.gl, self.PROBE_SHADER,
+                                                                  {**defines, "PROBE_GI": 1}))
 
     def shader_defines(self):
-        return {"MAX_BOUNCES": self.bounces(), "LIGHT_SAMPLES": max(1, int(self.light_samples)),
-                "SHADE_SHADOWS": 1}
+        return {"MAX_BOUNCES": self.bounces(getattr(self, "_scene", None)), "REFLECTION_BOUNCES": int(self.max_bounces),
+                "LIGHT_SAMPLES": max(1, int(self.light_samples)), "SHADE_SHADOWS": 1}
 
     def defers_probes(self, cd) -> bool:
         """Whether the probe lookups run in the second dispatch (probe inputs bound and read)."""
         return bool(self.defer_probes) and probe_inputs.bound(cd) and self.probes_unused(cd) is None
 
-    def record_bytes(self, size, views: int) -> int:
-        """The probe records' memory at a per-view `size` (both scratch outputs)."""
-        return int(size[0]) * int(size[1]) * int(views) * self.bounces() * RECORD_BYTES
+    def record_bytes(self, size, views: int, scene=None) -> int:
+        """The probe records' memory at a per-view `size` (both scratch outputs) for `scene`."""
+        return int(size[0]) * int(size[1]) * int(views) * self.bounces(scene) * RECORD_BYTES
 
     def reflect(self, cd):
         r = super().reflect(cd)
         if self.defers_probes(cd):
-            layers = cd.views * self.bounces()
+            layers = cd.views * self.bounces(cd.scene)
             r.add_output(self.PROBE_HITS, "probe lookups deferred from the traversal (scratch): hit position "
                                           "(float bits), octahedral normal; a layer per bounce and view"
                          ).format("rgba32ui").views(layers)
@@ -86,14 +103,6 @@ class RTReflections(GBufferLightingPass):
 
     def probe_defines(self, cd):
         return {"PROBE_RECORDS": 1} if self.defers_probes(cd) else super().probe_defines(cd)
-
-    def compile(self, ctx, cd):
-        super().compile(ctx, cd)
-        self._lookup = None
-        if self._defines.get("PROBE_RECORDS"):
-            defines = {k: v for k, v in self._defines.items() if k != "PROBE_RECORDS"}
-            self._lookup = program_resources(self.compute_program(ctx.gl, self.PROBE_SHADER,
-                                                                  {**defines, "PROBE_GI": 1}))
 
     def defines(self) -> dict:
         d = super().defines()

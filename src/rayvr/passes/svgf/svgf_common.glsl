@@ -97,14 +97,15 @@ vec3 svgf_demodulate(vec3 radiance, vec3 albedo) { return to_half_range(demodula
 
 // The albedos SVGF takes each lobe's light apart from (demodulation.glsl) at G-buffer surface g
 // seen from `view`: the specular lobe's own; for the diffuse lobe its own where it holds diffuse
-// light alone (REFLECTIONS pixels, whose direct light leaves the specular lobe to RTReflections;
-// PATH_TRACED ones), else both lobes' together: RASTER and SHADOWS pixels' direct light comes
-// with its highlights in the diffuse lobe (HybridComposite), as does all light without a specular
-// input. A metal's diffuse albedo is 0: a highlight divided by it alone became an illumination
-// 1000x too bright, which the filter spread onto its neighbours' albedos.
+// light alone (PATH_TRACED pixels, whose path tracer splits its lobes), else both lobes' together:
+// the lighting passes return direct light with its highlights in the diffuse lobe (HybridComposite),
+// at REFLECTIONS pixels too, where a punctual light's highlight stays whole (no reflection ray
+// finds it), as does all light without a specular input. A metal's diffuse albedo is 0: a
+// highlight divided by it alone became an illumination 1000x too bright, which the filter spread
+// onto its neighbours' albedos.
 void svgf_albedos(GSurface g, uint view, out vec3 diffuse, out vec3 specular) {
     surface_albedos(g, view, diffuse, specular);
-    if (SVGF_SPECULAR == 0 || g.effect < EFFECT_REFLECTIONS) diffuse += specular;
+    if (SVGF_SPECULAR == 0 || g.effect != EFFECT_PATH_TRACED) diffuse += specular;
 }
 
 // The output colour of G-buffer surface g seen from `view` (a pixel with geometry) from its
