@@ -136,25 +136,6 @@ def test_materials_extensions_lights_cameras_and_effect(tmp_path):
     np.testing.assert_allclose(cam.position, [0, 1, 5])
 
 
-def test_a_transmissive_material_without_an_effect_gets_reflections(tmp_path):
-    """What lies behind glass shows only through traced rays, so a material that transmits takes
-    REFLECTIONS unless its extras name an effect; an opaque one and a metal keep SHADOWS."""
-    doc, blob = base_doc()
-    doc["extensionsUsed"] = ["KHR_materials_transmission"]
-    transmits = {"KHR_materials_transmission": {"transmissionFactor": 1.0}}
-    dielectric = {"pbrMetallicRoughness": {"metallicFactor": 0.0}}   # glTF's default is a metal
-    doc["materials"] = [
-        {"name": "Glass", "extensions": transmits, **dielectric},
-        {"name": "Told", "extensions": transmits, "extras": {"rayvr_effect": "shadows"}, **dielectric},
-        {"name": "Metal", "extensions": transmits},
-        {"name": "Opaque", **dielectric},
-    ]
-    s = rv.load_scene(write(tmp_path, doc, blob))
-    effects = {name: s.materials[name].effect for name in ("Glass", "Told", "Metal", "Opaque")}
-    assert effects == {"Glass": rv.Effect.REFLECTIONS, "Told": rv.Effect.SHADOWS, "Metal": rv.Effect.SHADOWS,
-                       "Opaque": rv.Effect.SHADOWS}
-
-
 @pytest.mark.filterwarnings("ignore:Conversion will leave")
 def test_glb_and_triangle_strips_load(tmp_path):
     import pygltflib

@@ -338,8 +338,6 @@ class _Loader:
                     m.effect = Effect.parse(extras["rayvr_effect"], f"{self.r.path}: {f}.extras.rayvr_effect")
                 except OptionError as exc:
                     raise SceneError(str(exc)) from None
-            elif m.transmission > 0 and m.metallic < 1:
-                m.effect = Effect.REFLECTIONS   # what lies behind glass shows only through traced rays
             self.scene.add_material(m)
 
     def _default_material(self) -> int:
