@@ -232,3 +232,25 @@ def test_properties_that_are_not_a_dict_are_an_option_error_naming_the_pass():
 def test_a_size_or_view_count_that_is_not_a_number_is_a_graph_error():
     assert "compile size 'abc' x 1 views: give size=(width, height)" in error_of(lambda: chain().plan(size="abc"))
     assert "compile size (8, 8) x 'two' views" in error_of(lambda: chain().plan(size=(8, 8), views="two"))
+
+
+def test_every_counted_property_takes_whole_numbers_in_its_range_and_only_those():
+    """RenderPass.WHOLE, one rule for every pass: a counted property's least value comes back as an
+    int, and a fraction, a value below the least or above the most is refused with a
+    message naming the pass, the property and the range."""
+    import rayvr.passes  # noqa: F401  (registers the passes)
+    from rayvr.rendergraph.registry import registered_passes
+
+    counted = {name: cls for name, cls in registered_passes().items() if cls.WHOLE}
+    assert {"RTShadows", "RTReflections", "SVGF", "ProbeGI", "PathTracer", "ReSTIRDI", "TraceDecision"} <= set(counted)
+    for name, cls in counted.items():
+        p = cls()
+        for key, (least, most, _) in cls.WHOLE.items():
+            assert key in cls.PROPERTIES, (name, key)
+            p.set_properties({key: float(least)})
+            assert type(p.get_properties()[key]) is int and p.get_properties()[key] == least
+            bad = [least - 1, least + 0.5] + ([most + 1] if most is not None else [])
+            for value in bad:
+                with pytest.raises(OptionError, match=rf"pass {p.name}: property '{key}' must be an integer "
+                                                      rf"(from {least} to {most}|>= {least})"):
+                    p.set_properties({key: value})

@@ -7,6 +7,7 @@ an edit: the values reach the shaders as the RAY_GROUP_* defines."""
 from __future__ import annotations
 
 from ..errors import OptionError
+from ..rendergraph.render_pass import whole_number
 
 COMPUTE_GROUP = (8, 8)   # the local size of the passes' 2D compute shaders
 
@@ -65,14 +66,7 @@ def _whole(v) -> int:
 
 def check_view_group(pass_name: str, key: str, value) -> int:
     """A `view_group` property: the views a workgroup spans, an integer >= 1 (1: one view)."""
-    try:
-        v = _whole(value)
-    except ValueError:
-        v = 0
-    if v < 1:
-        raise OptionError(f"pass {pass_name}: property '{key}' must be an integer >= 1 (views a workgroup "
-                          f"spans; 1: one view), got {value!r}")
-    return v
+    return whole_number(f"pass {pass_name}: property '{key}'", value, 1, None, "views a workgroup spans; 1: one view")
 
 
 def check_shape(pass_name: str, key: str, value):

@@ -26,6 +26,17 @@ from ..errors import OptionError, did_you_mean
 from .formats import get_format
 
 
+def whole_number(where: str, value, least: int, most: int | None = None, what: str = "") -> int:
+    """`value` as an int when it is a whole number from `least` to `most` (None: no bound), else an
+    OptionError naming `where` (e.g. "pass Shadows: property 'light_samples'") and what it counts."""
+    whole = not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value) \
+        and int(value) == value
+    if not (whole and value >= least and (most is None or value <= most)):
+        span = f"from {least} to {most}" if most is not None else f">= {least}"
+        raise OptionError(f"{where} must be an integer {span}" + (f" ({what})" if what else "") + f", got {value!r}")
+    return int(value)
+
+
 class Choice(NamedTuple):
     """One name of a choice property (RenderPass.CHOICES) that its shaders see as a number."""
 
@@ -282,6 +293,10 @@ class RenderPass:
     # validate_property refuses any other value (one message for every pass), and the viewer's
     # property panel offers them.
     CHOICES: dict = {}
+    # Properties that count something: key -> (least, most or None for no bound, what is counted).
+    # validate_property refuses anything but a whole number in range (one message for every pass)
+    # and gives it as an int.
+    WHOLE: dict[str, tuple] = {}
 
     def __init__(self, props: dict | None = None, **kwargs):
         self._props = copy.deepcopy(self.PROPERTIES)
@@ -313,6 +328,8 @@ class RenderPass:
                 raise OptionError(f"pass {self.name}: property '{key}' must be a number, got {value!r}")
             if isinstance(value, float) and not math.isfinite(value):
                 raise OptionError(f"pass {self.name}: property '{key}' must be a finite number, got {value!r}")
+            if key in self.WHOLE:
+                return whole_number(f"pass {self.name}: property '{key}'", value, *self.WHOLE[key])
             return type(default)(value) if isinstance(default, float) else value
         if isinstance(value, enum.Enum):
             value = value.name.lower()

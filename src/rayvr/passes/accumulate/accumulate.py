@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
@@ -28,19 +27,13 @@ class Accumulate(RenderPass):
     SUM, COMPENSATION = "sum", "compensation"
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"enabled": True, "max_frames": 0, "auto_reset": True}
+    WHOLE = {"max_frames": (0, None, "frames averaged; 0: no limit")}
 
     def __init__(self, props: dict | None = None, **kwargs):
         super().__init__(props, **kwargs)
         self._count = 0
         self._pending_reset = True
         self._key = None
-
-    def validate_property(self, key, value):
-        value = super().validate_property(key, value)
-        if key == "max_frames" and (int(value) != value or value < 0):
-            raise OptionError(f"pass {self.name}: property 'max_frames' must be an integer >= 0 (0 = no limit), "
-                              f"got {value!r}")
-        return value
 
     def on_properties_changed(self):
         self.reset()

@@ -1,7 +1,6 @@
 """Checkerboard: a test pattern of two colours, shifted by one cell per view layer."""
 from __future__ import annotations
 
-from ...errors import OptionError
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import RenderPass, Reflection
 from .compute import program, rgba, run_over, storable_format
@@ -14,14 +13,13 @@ class Checkerboard(RenderPass):
     DST = "dst"
     PROPERTIES = {"cell": 8, "color_a": [1.0, 1.0, 1.0, 1.0], "color_b": [0.0, 0.0, 0.0, 1.0],
                   "format": "rgba8"}
+    WHOLE = {"cell": (1, None, "pixels a side")}
 
     def validate_property(self, key, value):
         if key in ("color_a", "color_b"):
             return list(rgba(value, self.name, key))
         if key == "format":
             return storable_format(self.name, key, value)
-        if key == "cell" and (not isinstance(value, int) or isinstance(value, bool) or value < 1):
-            raise OptionError(f"pass {self.name}: property 'cell' must be a whole number >= 1, got {value!r}")
         return super().validate_property(key, value)
 
     def reflect(self, cd):

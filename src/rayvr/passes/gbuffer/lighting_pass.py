@@ -5,7 +5,6 @@ compaction's pixel list (indirect dispatch) or the whole image in small tiles (p
 PROBE_GI in: the shader adds the probes' indirect diffuse light (glsl/probe_gi.glsl)."""
 from __future__ import annotations
 
-from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
@@ -33,14 +32,6 @@ TILE = [8, 4]   # one warp (ray_group spreads it over views)
 MAX_LIGHT_SAMPLES = 256   # `light_samples`: as `rayvr render --light-samples`
 
 
-def check_count(pass_name: str, key: str, value, most: int, what: str, least: int = 1) -> None:
-    """A property that counts something: a whole number from `least` to `most` (OptionError else)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value \
-            or not least <= value <= most:
-        raise OptionError(f"pass {pass_name}: property '{key}' must be a whole number of {what} from {least} to "
-                          f"{most}, got {value!r}")
-
-
 def ray_properties(view_group: int = VIEW_GROUP) -> dict:
     """The properties of a lighting pass with a pixel list: its dispatch and workgroup shape."""
     return {"dispatch_mode": "auto", "tile": list(TILE), "view_group": view_group}
@@ -59,12 +50,10 @@ class GBufferLightingPass(RenderPass):
     LOWEST_EFFECT = Effect.RASTER   # the pixels it lights: this effect and above
     FILL_LOBE = "whole"   # what its output holds, for the trace decision's fill (trace_decision.fill)
     CHOICES = {"dispatch_mode": DISPATCHES}
+    WHOLE = {"light_samples": (1, MAX_LIGHT_SAMPLES, "light samples per pixel")}
 
     def validate_property(self, key, value):
-        value = super().validate_property(key, value)
-        if key == "light_samples":
-            check_count(self.name, key, value, MAX_LIGHT_SAMPLES, "light samples per pixel")
-        return check_shape(self.name, key, value)
+        return check_shape(self.name, key, super().validate_property(key, value))
 
     def reflect(self, cd):
         r = Reflection()

@@ -88,6 +88,8 @@ class PathTracer(RenderPass):
                   "clamp": 0.0, "pixel_jitter": True, "sampler": "sobol", "lobes": False, "kernel": "auto",
                   "tile": list(COMPUTE_GROUP), "view_group": VIEW_GROUP, "compact": False,
                   "persistent": False, "sort_directions": False}
+    WHOLE = {"samples_per_pixel": (1, None, "paths per pixel a frame"), "max_bounces": (0, None, "bounces"),
+             "rr_start": (0, None, "the bounce Russian roulette starts at")}
     USES_SCENE = True
     CHOICES = {"mode": MODES, "kernel": KERNELS,
                "sampler": {"sobol": Choice("Owen-scrambled Sobol, the default", 1),   # RAYVR_SAMPLER
@@ -95,10 +97,6 @@ class PathTracer(RenderPass):
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
-        if key == "samples_per_pixel" and (int(value) != value or value < 1):
-            raise OptionError(f"pass {self.name}: property 'samples_per_pixel' must be an integer >= 1, got {value!r}")
-        if key in ("max_bounces", "rr_start") and (int(value) != value or value < 0):
-            raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= 0, got {value!r}")
         if key == "clamp" and value < 0:
             raise OptionError(f"pass {self.name}: property 'clamp' must be >= 0 (0 = off), got {value!r}")
         return check_shape(self.name, key, value)

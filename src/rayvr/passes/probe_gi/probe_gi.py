@@ -66,6 +66,7 @@ class ProbeGI(RenderPass):
     RAYS = "rays"
     PROPERTIES = {"counts": [8, 8, 8], "volumes": [], "rays_per_probe": 128, "hysteresis": 0.95, "warmup": 8,
                   "normal_bias": 0.1, "view_bias": 0.3, "visibility": True}
+    WHOLE = {"rays_per_probe": (16, 1024, "rays a probe traces a frame"), "warmup": (0, None, "frames")}
 
     def validate_property(self, key, value):
         if key == "counts":
@@ -76,13 +77,8 @@ class ProbeGI(RenderPass):
                                   f"{{\"min\", \"max\", \"counts\"}} boxes ([] = one over the scene's bounds)")
             return [L.volume_from_dict(v, f"pass {self.name}: volumes[{i}]").as_dict() for i, v in enumerate(value)]
         value = super().validate_property(key, value)
-        if key == "rays_per_probe" and (int(value) != value or not 16 <= value <= 1024):
-            raise OptionError(f"pass {self.name}: property 'rays_per_probe' must be an integer in [16, 1024], "
-                              f"got {value!r}")
         if key == "hysteresis" and not 0.0 <= value < 1.0:
             raise OptionError(f"pass {self.name}: property 'hysteresis' must be in [0, 1), got {value!r}")
-        if key == "warmup" and (int(value) != value or value < 0):
-            raise OptionError(f"pass {self.name}: property 'warmup' must be an integer >= 0, got {value!r}")
         if key in ("normal_bias", "view_bias") and value < 0:
             raise OptionError(f"pass {self.name}: property '{key}' must be >= 0, got {value!r}")
         return value

@@ -102,6 +102,9 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
                   "temporal_reuse": True, "max_history_m": 20,
                   "spatial_samples": 4, "spatial_radius": 30.0, "share_views": True,
                   **ray_properties(view_group=16)}
+    WHOLE = {"candidates": (1, MAX_CANDIDATES, "light samples per pixel a frame"),
+             "max_history_m": (1, 1 << 16, "the history's confidence cap, in frames of candidates"),
+             "spatial_samples": (0, MAX_SPATIAL_SAMPLES, "neighbours reused per pixel")}
 
     def __init__(self, props: dict | None = None, **kwargs):
         super().__init__(props, **kwargs)
@@ -109,15 +112,6 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
-        ranges = {"candidates": (1, MAX_CANDIDATES, "light samples per pixel a frame"),
-                  "max_history_m": (1, 1 << 16, "the history's confidence cap, in frames of candidates"),
-                  "spatial_samples": (0, MAX_SPATIAL_SAMPLES, "neighbours reused per pixel")}
-        if key in ranges:
-            low, high, what = ranges[key]
-            if int(value) != value or not low <= value <= high:
-                raise OptionError(f"pass {self.name}: property '{key}' must be an integer from {low} to {high} "
-                                  f"({what}), got {value!r}")
-            return int(value)
         if key == "occluded_weight" and not (isinstance(value, (int, float)) and 0.0 < value <= 1.0):
             raise OptionError(f"pass {self.name}: property 'occluded_weight' must be a number in (0, 1] (the target's "
                               f"factor for a light last found occluded; 1: no visibility hints), got {value!r}")

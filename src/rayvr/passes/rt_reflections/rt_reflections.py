@@ -8,7 +8,7 @@ from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access
 from ..effects import scene_transmits, unused_effect_reason
-from ..gbuffer.lighting_pass import GBufferLightingPass, check_count, ray_properties
+from ..gbuffer.lighting_pass import GBufferLightingPass, ray_properties
 from ..probe_gi import inputs as probe_inputs
 
 RECORD_BYTES = PROBE_RECORD_TEXELS.size   # one deferred probe lookup (glsl/probe_records.glsl)
@@ -51,14 +51,8 @@ class RTReflections(GBufferLightingPass):
     # the reference tests/test_reflection_probe_records.py compares the deferred lookups with.
     PROPERTIES = {"max_bounces": 1, "transmission_bounces": 1, "light_samples": 1, **ray_properties(),
                   "defer_probes": True}
-
-    def validate_property(self, key, value):
-        value = super().validate_property(key, value)
-        if key == "max_bounces":
-            check_count(self.name, key, value, MAX_REFLECTION_BOUNCES, "reflection bounces")
-        if key == "transmission_bounces":
-            check_count(self.name, key, value, MAX_REFLECTION_BOUNCES, "bounces through transmission", least=0)
-        return value
+    WHOLE = {**GBufferLightingPass.WHOLE, "max_bounces": (1, MAX_REFLECTION_BOUNCES, "reflection bounces"),
+             "transmission_bounces": (0, MAX_REFLECTION_BOUNCES, "bounces through transmission")}
 
     def skip_reason(self, cd):
         return unused_effect_reason(cd, Effect.REFLECTIONS)

@@ -96,6 +96,9 @@ class SVGF(HistoryOwner, RenderPass):
     PROPERTIES = {"iterations": 5, "kernel": 3, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2,
                   "max_history": 32, "still_max_history": 256, "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0,
                   "spread": True}
+    WHOLE = {"iterations": (0, MAX_ITERATIONS, "a-trous passes"),
+             "feedback_tap": (-1, None, "the iteration fed back; -1: the temporal mean"),
+             "max_history": (1, None, "frames"), "still_max_history": (1, None, "frames")}
     USES_SCENE = True
 
     def __init__(self, props: dict | None = None, **kwargs):
@@ -104,15 +107,9 @@ class SVGF(HistoryOwner, RenderPass):
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
-        if key == "iterations" and (int(value) != value or not 0 <= value <= MAX_ITERATIONS):
-            raise OptionError(f"pass {self.name}: property 'iterations' must be an integer from 0 to "
-                              f"{MAX_ITERATIONS}, got {value!r}")
         if key == "kernel" and value not in KERNELS:
             raise OptionError(f"pass {self.name}: property 'kernel' must be 3 (a 3x3 a-trous kernel, 9 taps) or 5 "
                               f"(the 5x5 B3 spline, 25 taps), got {value!r}")
-        low = {"feedback_tap": -1, "max_history": 1, "still_max_history": 1}.get(key)
-        if low is not None and (int(value) != value or value < low):
-            raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= {low}, got {value!r}")
         if key in ("alpha", "moments_alpha") and not 0.0 < value <= 1.0:
             raise OptionError(f"pass {self.name}: property '{key}' must be in (0, 1] (weight of the new "
                               f"frame), got {value!r}")
@@ -120,7 +117,7 @@ class SVGF(HistoryOwner, RenderPass):
             raise OptionError(f"pass {self.name}: property '{key}' must be > 0, got {value!r}")
         if key == "phi_normal" and not value >= 0.0:
             raise OptionError(f"pass {self.name}: property 'phi_normal' must be >= 0, got {value!r}")
-        return int(value) if key in ("iterations", "kernel", "feedback_tap", "max_history", "still_max_history") else value
+        return int(value) if key == "kernel" else value
 
     def reflect(self, cd):
         r = Reflection()

@@ -71,6 +71,8 @@ class TraceDecision(RenderPass):
                   "source_stride": 3, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
                   "share_light_samples": True, "source_views_first": True,
                   "one_view_tiles": True}
+    WHOLE = {"source_stride": (2, None, "grid steps between source views"),
+             "grid_cols": (0, None, "the camera grid's columns; 0: the most square")}
 
     def validate_property(self, key, value):
         value = super().validate_property(key, value)
@@ -84,10 +86,7 @@ class TraceDecision(RenderPass):
         if key == "reuse_lobe_fraction" and not (isinstance(value, (int, float)) and 0.0 <= value <= 4.0):
             raise OptionError(f"pass {self.name}: property 'reuse_lobe_fraction' must be a number in [0, 4] (the "
                               f"eyes' parallax as a fraction of the lobe's width; 0: roughness alone), got {value!r}")
-        low = {"source_stride": 2, "grid_cols": 0}.get(key)
-        if low is not None and (int(value) != value or value < low):
-            raise OptionError(f"pass {self.name}: property '{key}' must be an integer >= {low}, got {value!r}")
-        return int(value) if low is not None else value
+        return value
 
     def reuses(self, views: int) -> bool:
         return bool(self.reuse) and views > 1
