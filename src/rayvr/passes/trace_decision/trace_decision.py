@@ -30,8 +30,8 @@ class TraceDecision(RenderPass):
       then it REUSEs that pixel's shaded light (`reuse`; with two views the first eye is the
       source, or the eye of the frame's parity with `alternate`; with more, every
       `source_stride`-th column and row of a grid of `grid_cols` columns, 0: the default grid of
-      rayvr.xr.grid_for_views; 3 by default: at 64 views of tauray 13.3 ms a frame against 14.2
-      at 2, at the same FLIP, benchmarks/RESULTS.md). A pixel that fails the test traces:
+      rayvr.xr.grid_for_views; 4 by default: at 64 views of tauray 12.5 ms a frame against 13.1
+      at 3 and 14.2 at 2, 12.5 at 5 and 8, all within 1% of the same FLIP, benchmarks/RESULTS.md). A pixel that fails the test traces:
       disocclusions are traced, never filled; and
     - the foveation budget (`foveation` 'fixed' about each image's centre, 'gaze' about where the
       eye tracker says the eye looks; rayvr.xr.foveation: 1 within `foveal_radius_deg`, falling to
@@ -68,7 +68,7 @@ class TraceDecision(RenderPass):
     PROPERTIES = {"reuse": False, "foveation": "none", "foveal_radius_deg": foveation.DEFAULT_RADIUS_DEG,
                   "periphery_share": foveation.DEFAULT_PERIPHERY_SHARE, "reuse_min_roughness": 0.5,
                   "reuse_lobe_fraction": 0.25,
-                  "source_stride": 3, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
+                  "source_stride": 4, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
                   "share_light_samples": True, "source_views_first": True,
                   "one_view_tiles": True}
     WHOLE = {"source_stride": (2, None, "grid steps between source views"),
