@@ -49,6 +49,8 @@ def no_rendering(monkeypatch):
 # --- options: every numeric option refuses NaN, infinities, negatives, out-of-range values ------
 MISUSES = [
     (["render", "--ipd", "-1"], ["--ipd -1", "> 0 and <= 1 metres"]),
+    (["render", "--environment", "-1,1,1"], ["--environment: expected one argument", "after '='"]),
+    (["render", "--environment=-1,1,1"], ["--environment", "-1"]),
     (["render", "--ipd", "nan"], ["--ipd nan", "finite number"]),
     (["render", "--ipd", "inf"], ["--ipd inf", "finite number"]),
     (["render", "--ipd", "2"], ["--ipd 2", "<= 1 metres"]),

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 import warnings
 
@@ -23,6 +24,10 @@ class Parser(argparse.ArgumentParser):
     """argparse whose usage errors are OptionErrors: one line naming the option, exit code 2."""
 
     def error(self, message: str):
+        wanted = re.match(r"argument (\S+): expected one argument$", message)
+        if wanted:   # argparse took a value such as -1,1,1 for an option
+            option = wanted.group(1).split("/")[-1]
+            message += f"; a value that starts with '-' goes after '=' ({option}=-1,...)"
         raise OptionError(f"{self.prog}: {message} (see '{self.prog} --help')")
 
 
