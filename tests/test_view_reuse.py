@@ -129,6 +129,40 @@ def test_a_mirror_is_traced_in_every_view_and_matches_its_own_render(gpu):
     assert np.array_equal(color[1][mirror], out[None][0][1][mirror])   # traced as an independent eye does
 
 
+@pytest.mark.parametrize("effect", [rv.Effect.SHADOWS, rv.Effect.REFLECTIONS])
+def test_a_smooth_dielectric_without_traced_reflections_may_reuse_its_light(gpu, effect):
+    """A smooth plastic plane (roughness 0: a delta specular layer over a white base) under a point
+    light. A SHADOWS pixel's light samples give its delta lobe nothing, so its direct light is the
+    base's alone, the same from either eye: with `reuse_delta_lobes` the second eye reuses it and
+    renders what it renders alone. A REFLECTIONS pixel traces its mirror: never reused."""
+    scene = builtin.box_on_plane()
+    plane = scene.materials["Plane"]
+    plane.effect, plane.metallic, plane.roughness, plane.specular = effect, 0.0, 0.0, 1.0
+    scene.materials["Box"].effect = rv.Effect.SHADOWS
+    views = box_stereo()
+    out = {}
+    for delta in (False, True, None):
+        g = graph(reuse="views" if delta is not None else None)
+        if delta is not None:
+            g.update_pass("Decision", {"reuse_delta_lobes": delta})
+        with Renderer(scene, g, views=views) as r:
+            r.render()
+            out[delta] = (kinds(r) if delta is not None else None, r.read_output("Composite.color")[1, ..., :3])
+            pos = r.read_output("GBuffer.posW").astype(np.float64)
+            word = r.read_output("GBuffer.effect")[..., 0]
+    _, shown = seen_by_the_first_eye(views, pos, word)
+    on_plane = shown[...] & (word[1] != 0xFF) & (pos[1, ..., 1] + views.origin()[1] < 0.01)
+    assert on_plane.sum() > 100
+    assert (out[False][0][1][on_plane] != REUSE).all(), "a delta lobe was reused without reuse_delta_lobes"
+    reused = out[True][0][1][on_plane] == REUSE
+    if effect == rv.Effect.REFLECTIONS:
+        assert not reused.any(), "a traced mirror was reused"
+        return
+    assert reused.mean() > 0.9
+    independent, mine = out[None][1][on_plane].astype(np.float64), out[True][1][on_plane].astype(np.float64)
+    assert abs(mine.mean() - independent.mean()) < 0.02 * independent.mean()
+
+
 def test_a_glossy_surface_is_reused_where_its_lobe_is_wide_against_the_eyes_parallax(gpu):
     scene = builtin.box_on_plane()
     plane = scene.materials["Plane"]

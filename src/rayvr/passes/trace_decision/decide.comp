@@ -97,9 +97,13 @@ bool refracts(uint material) { return material_factors(material).transmission > 
 // (roughness >= REUSE_MIN_ROUGHNESS), or the angle between the two eyes seen from the point `pos`
 // below REUSE_LOBE_FRACTION of the GGX lobe's width (alpha = roughness^2 radians): a far glossy
 // surface looks the same to both eyes, a near one does not.
-bool view_independent(float roughness, uint material, vec3 pos, uint v, uint s) {
+// With REUSE_DELTA_LOBES a delta lobe at a pixel whose reflections are not traced (effect below
+// REFLECTIONS) is reused too: light samples give it nothing, and the probes' glossy light about
+// its mirror direction is irradiance, smooth in direction.
+bool view_independent(float roughness, uint material, uint effect, vec3 pos, uint v, uint s) {
     if (refracts(material)) return false;
     if (roughness >= REUSE_MIN_ROUGHNESS) return true;
+    if (REUSE_DELTA_LOBES != 0 && effect < EFFECT_REFLECTIONS && roughness < MATERIAL_DELTA_ROUGHNESS) return true;
     vec3 a = views[v].eye.xyz - pos, b = views[s].eye.xyz - pos;
     float parallax = atan(length(cross(a, b)), dot(a, b));
     return parallax < float(REUSE_LOBE_FRACTION) * roughness * roughness;
@@ -161,7 +165,7 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at) {
     bool reuses = !is_source(v);
     uint s[2];
     int n = reuses ? sources_of(v, s[0], s[1]) : 0;
-    bool independent = reuses && view_independent(g.roughness, g.material, g.pos, v, s[0]);
+    bool independent = reuses && view_independent(g.roughness, g.material, g.effect, g.pos, v, s[0]);
     // a glossy lobe traces, but its direct light sample may be a source pixel's: shared_view then
     bool shares = SHARE_LIGHT_SAMPLES != 0 && reuses && !independent && g.effect >= EFFECT_SHADOWS
                   && g.effect <= EFFECT_REFLECTIONS && !refracts(g.material);
@@ -192,7 +196,7 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at) {
             ivec3 q = p + ivec3(TAP[k], 0);
             if (!inside(q) || !selected(q) || !same_surface(g, v, q, FAR_PIXELS)) continue;
 #if REUSE
-            if (reuses && view_independent(gbuf_fetch_metalRough(q).y, g.material, g.pos, v, s[0])) continue;
+            if (reuses && view_independent(gbuf_fetch_metalRough(q).y, g.material, g.effect, g.pos, v, s[0])) continue;
 #endif
             at = vec2(q.xy) + 0.5;
             return DECISION_FILL;

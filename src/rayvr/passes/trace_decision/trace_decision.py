@@ -26,7 +26,9 @@ class TraceDecision(RenderPass):
       footprints) whose lobe looks alike from both (no transmission, and roughness >=
       `reuse_min_roughness` or the angle between the two eyes seen from the point below
       `reuse_lobe_fraction` of the GGX lobe's width, roughness^2 radians (0.25: a lobe 4x wider
-      than the eyes' parallax reuses); 0: roughness alone):
+      than the eyes' parallax reuses); 0: roughness alone; with `reuse_delta_lobes` also a delta
+      lobe at a RASTER or SHADOWS pixel, whose light samples give it nothing and whose probe light
+      about the mirror direction is irradiance, smooth in direction: not timed yet, off):
       then it REUSEs that pixel's shaded light (`reuse`; with two views the first eye is the
       source, or the eye of the frame's parity with `alternate`; with more, every
       `source_stride`-th column and row of a grid of `grid_cols` columns, 0: the default grid of
@@ -70,7 +72,7 @@ class TraceDecision(RenderPass):
                   "reuse_lobe_fraction": 0.25,
                   "source_stride": 4, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
                   "share_light_samples": True, "source_views_first": True,
-                  "one_view_tiles": True}
+                  "one_view_tiles": True, "reuse_delta_lobes": False}
     WHOLE = {"source_stride": (2, None, "grid steps between source views"),
              "grid_cols": (0, None, "the camera grid's columns; 0: the most square")}
 
@@ -110,6 +112,7 @@ class TraceDecision(RenderPass):
                          "REUSE_STRIDE": int(self.source_stride), "REUSE_ALTERNATE": int(bool(self.alternate)),
                          "REUSE_MIN_ROUGHNESS": float(self.reuse_min_roughness),
                          "REUSE_LOBE_FRACTION": float(self.reuse_lobe_fraction),
+                         "REUSE_DELTA_LOBES": int(bool(self.reuse_delta_lobes)),
                          "FOVEATION": FOVEATION.index(self.foveation), "FOVEAL_RADIUS": float(self.foveal_radius_deg),
                          "PERIPHERY_SHARE": float(self.periphery_share),
                          "EVERY_SURFACE": int(bool(self.every_surface)),
