@@ -33,12 +33,17 @@ SUITES = {
 }
 
 
+ROOT = Path(__file__).resolve().parents[1]
+
+
 def run_once(tree: Path, bench: list[str], timeout: int) -> dict:
-    """One run of `python -m benchmarks` in `tree`; the JSON it writes to a scratch folder."""
+    """One run of this checkout's `python -m benchmarks` with `tree`'s src/ first on PYTHONPATH
+    (so a `--src` tree of tools/ab_trees.py serves, and relative scene paths mean the same for both
+    sides); the JSON it writes to a scratch folder."""
     with tempfile.TemporaryDirectory() as out:
-        env = {**os.environ, "PYTHONPATH": f"{tree / 'src'}:{os.environ.get('PYTHONPATH', '')}"}
+        env = {**os.environ, "PYTHONPATH": f"{tree / 'src'}:{ROOT}:{os.environ.get('PYTHONPATH', '')}"}
         cmd = [sys.executable, "-m", "benchmarks", *bench[:1], "--out", out, *bench[1:]]
-        subprocess.run(cmd, cwd=tree, env=env, check=True, timeout=timeout, stdout=subprocess.DEVNULL)
+        subprocess.run(cmd, cwd=ROOT, env=env, check=True, timeout=timeout, stdout=subprocess.DEVNULL)
         return json.loads(next(Path(out).glob("*.json")).read_text())
 
 
