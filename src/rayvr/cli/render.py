@@ -31,7 +31,9 @@ from ..errors import OptionError, did_you_mean
 from ..fileio import atomic_group, check_writable, image_format, write_exr, write_image
 from ..graph_options import DEFAULT_PRESET, NONE, OPTIONS, PRESETS
 from ..graphs import BUILDERS, COMMAND_LINE_GRAPHS
+from ..passes.gbuffer.lighting_pass import MAX_LIGHT_SAMPLES
 from ..passes.probe_gi.layout import MAX_PROBES_PER_AXIS
+from ..passes.rt_reflections.rt_reflections import MAX_REFLECTION_BOUNCES
 from . import cluster as cluster_cli
 from .options import (MAX_VIEWS, add_lighting_arguments, add_pass_property_argument, add_trace_arguments,
                       apply_lighting, apply_pass_properties, integer, load_scene_arg,
@@ -58,10 +60,10 @@ def register(sub) -> None:
     p.add_argument("--tonemap", default="aces", help="aces, reinhard or linear (default aces)")
     p.add_argument("--exposure", default="auto",
                    help="exposure in stops (-64 to 64), or 'auto' for the frame's mean luminance (default auto)")
-    p.add_argument("--max-bounces", type=integer("--max-bounces", 1, 64), default=1,
-                   help="reflection bounces, 1 to 64 (default 1)")
-    p.add_argument("--light-samples", type=integer("--light-samples", 1, 256), default=1,
-                   help="light samples per pixel, 1 to 256 (default 1)")
+    p.add_argument("--max-bounces", type=integer("--max-bounces", 1, MAX_REFLECTION_BOUNCES), default=1,
+                   help=f"reflection bounces, 1 to {MAX_REFLECTION_BOUNCES} (default 1)")
+    p.add_argument("--light-samples", type=integer("--light-samples", 1, MAX_LIGHT_SAMPLES), default=1,
+                   help=f"light samples per pixel, 1 to {MAX_LIGHT_SAMPLES} (default 1)")
     p.add_argument("--frames", type=integer("--frames", 1, 100_000), default=1,
                    help="frames to render, 1 to 100000 (timings average over them)")
     p.add_argument("--ipd", type=number("--ipd", 0, MAX_IPD_M, low_open=True, unit=" metres"), default=0.063,

@@ -73,7 +73,8 @@ class HybridComposite(RenderPass):
         has = {"HAS_SHADOWS": self.SHADOWED, "HAS_REFLECTIONS": self.REFLECTION, "HAS_PATHS": self.PATH_TRACED,
                "HAS_PATH_LOBES": self.PATH_DIFFUSE}
         defines = {d: int(pin in cd.input_formats) for d, pin in has.items()}
-        if DecisionFill.connected(cd):
+        decided = DecisionFill.connected(cd)
+        if decided:
             defines["TRACE_DECISION"] = 1
         self._probes = probe_inputs.bound(cd) and all(n in cd.input_formats for n in channels.LIGHTING)
         if self._probes:
@@ -82,10 +83,9 @@ class HybridComposite(RenderPass):
             defines["PROBE_GI"] = 1
             self._probe_sampler = self.own(ctx.gl.sampler(filter=(moderngl.LINEAR, moderngl.LINEAR),
                                                           repeat_x=False, repeat_y=False))
-        view_group = (decision_view_group(ctx, self.probe_view_group) if DecisionFill.connected(cd)
-                      else self.probe_view_group)
+        view_group = decision_view_group(ctx, self.probe_view_group) if decided else self.probe_view_group
         self._group = ray_group(cd.views, tuple(self.probe_tile), view_group) if self._probes else (*COMPUTE_GROUP, 1)
-        order = view_order(ctx, cd.views, self._group) if DecisionFill.connected(cd) else None
+        order = view_order(ctx, cd.views, self._group) if decided else None
         self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group, order)}
         # the scene's features: the probe lookup shades the G-buffer surface with its whole material
         self._prog = self.compute_program(ctx.gl, "composite.comp",

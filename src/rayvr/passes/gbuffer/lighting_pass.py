@@ -29,7 +29,7 @@ from . import channels
 DISPATCHES = {"auto": "the whole image unless a material is PATH_TRACED", "image": "",
               "list": "the compaction's pixels"}
 TILE = [8, 4]   # one warp (ray_group spreads it over views)
-MAX_LIGHT_SAMPLES = 256   # `light_samples`: as `rayvr render --light-samples`
+MAX_LIGHT_SAMPLES = 256   # `light_samples` (and `rayvr render --light-samples`)
 
 
 def ray_properties(view_group: int = VIEW_GROUP) -> dict:

@@ -12,7 +12,7 @@ from ..gbuffer.lighting_pass import GBufferLightingPass, ray_properties
 from ..probe_gi import inputs as probe_inputs
 
 RECORD_BYTES = PROBE_RECORD_TEXELS.size   # one deferred probe lookup (glsl/probe_records.glsl)
-MAX_REFLECTION_BOUNCES = 64   # as `rayvr render --max-bounces`
+MAX_REFLECTION_BOUNCES = 64   # `max_bounces` (and `rayvr render --max-bounces`)
 
 
 @register_pass

@@ -33,8 +33,8 @@ class TraceDecision(RenderPass):
       source, or the eye of the frame's parity with `alternate`; with more, every
       `source_stride`-th column and row of a grid of `grid_cols` columns, 0: the default grid of
       rayvr.xr.grid_for_views; 4 by default: at 64 views of tauray 12.5 ms a frame against 13.1
-      at 3 and 14.2 at 2, 12.5 at 5 and 8, all within 1% of the same FLIP, benchmarks/RESULTS.md). A pixel that fails the test traces:
-      disocclusions are traced, never filled; and
+      at 3 and 14.2 at 2, 12.5 at 5 and 8, all within 1% of the same FLIP, benchmarks/RESULTS.md).
+      A pixel that fails the test traces: disocclusions are traced, never filled; and
     - the foveation budget (`foveation` 'fixed' about each image's centre, 'gaze' about where the
       eye tracker says the eye looks; rayvr.xr.foveation: 1 within `foveal_radius_deg`, falling to
       `periphery_share`) gives it its turn this frame: an ordered dither the frame index rotates, so
