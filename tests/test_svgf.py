@@ -13,7 +13,7 @@ from rayvr.errors import OptionError
 from rayvr.passes import SVGF
 from rayvr.renderer import Renderer
 from rayvr.scene import builtin
-from rayvr.scene.model import Camera, Light
+from rayvr.scene.model import Camera, Environment, Light
 from rayvr.xr import quaternion
 from rayvr.xr.cameras import default_views
 from rayvr.xr.views import Pose, ViewSet
@@ -408,6 +408,41 @@ def test_what_the_scratch_textures_held_before_never_reaches_the_image(gpu, reus
     assert (effect == 0xFF).mean() > 0.1   # background beside the filtered surfaces
     assert np.isfinite(images[1]).all()
     np.testing.assert_array_equal(images[1], images[0])
+
+
+@pytest.mark.parametrize("views, size", [(2, SIZE), (16, (16, 16))])
+def test_the_filter_runs_over_the_pixels_left_to_filter_and_renders_the_same_image(gpu, views, size):
+    """Where views take other views' filtered light, the reprojection lists the pixels it filters and
+    the variance and a-trous stages run over that list (`filter_list`): each pixel with a surface
+    whose light the decision does not flag for the spread, once, and no other. The image is the
+    one the image-wide dispatches give, the background included (the spread writes it then)."""
+    from rayvr.passes.compaction import read_pixel_list
+    scene = _box_scene()
+    scene.environment = Environment((0.2, 0.3, 0.5), name="sky")   # a background the filter does not see
+    out = {}
+    for listed in (True, False):
+        g = rv.graphs.hybrid(denoise="svgf", reuse="views")
+        g.update_pass("SVGF", {"filter_list": listed})
+        for pin in ("SVGF.color", "GBuffer.effect", "Decision.decision") + ("SVGF.filterPixels",) * listed:
+            g.mark_output(pin)
+        with Renderer(scene, g, views=default_views(scene, views, size), jitter=False) as r:
+            for _ in range(3):
+                r.render()
+            spread = (r.read_output("Decision.decision")[..., 0] & 4) != 0   # DECISION_SPREAD
+            drawn = (r.read_output("GBuffer.effect")[..., 0].astype(np.int64) & 0xFF) != 0xFF
+            listing = (read_pixel_list(r.compiled.get_output("SVGF.filterPixels")) if listed else None,
+                       "SVGF_FILTER_LIST" in r.report().defines["SVGF"])
+            out[listed] = rgb(r, "SVGF.color"), listing
+    n, xyz = out[True][1][0]
+    assert out[True][1][1] and not out[False][1][1]
+    assert spread[1:].sum() > 0.3 * drawn[1:].sum() and (~drawn).mean() > 0.05
+    assert (out[True][0][~drawn] > 0.1).all()   # the sky, which the spread writes
+    listed_mask = np.zeros_like(drawn)
+    listed_mask[xyz[:, 2], xyz[:, 1], xyz[:, 0]] = True
+    assert n == len(np.unique(xyz, axis=0))   # each pixel once
+    np.testing.assert_array_equal(listed_mask, drawn & ~spread)
+    assert np.isfinite(out[True][0]).all()
+    np.testing.assert_array_equal(out[True][0], out[False][0])
 
 
 @pytest.mark.parametrize("effect,light", [("shadows", "environment"), ("reflections", "point"),

@@ -16,6 +16,13 @@
 uint pixel_list_pack(ivec3 p) { return uint(p.x) | (uint(p.y) << 13u) | (uint(p.z) << 26u); }
 ivec3 pixel_list_unpack(uint w) { return ivec3(w & 0x1FFFu, (w >> 13u) & 0x1FFFu, w >> 26u); }
 
+// Groups of PIXEL_LIST_GROUP a list's indirect dispatch gains when a writer appends [base, base + n)
+// to the [0, base) before it (each workgroup adds its own: the count grows as the list fills).
+uint pixel_list_new_groups(uint base, uint n) {
+    const uint g = PIXEL_LIST_GROUP;
+    return (base + n + g - 1u) / g - (base + g - 1u) / g;
+}
+
 #include "ray_group.glsl"
 #include "trace_decision.glsl"
 

@@ -23,12 +23,6 @@ layout(std430) buffer PathList {
 shared uint s_count[3];
 shared uint s_base[3];
 
-// Groups of PIXEL_LIST_GROUP needed for [base, base + n) beyond those [0, base) needed.
-uint new_groups(uint base, uint n) {
-    const uint g = PIXEL_LIST_GROUP;
-    return (base + n + g - 1u) / g - (base + g - 1u) / g;
-}
-
 void main() {
     if (gl_LocalInvocationIndex == 0u) { s_count[0] = 0u; s_count[1] = 0u; s_count[2] = 0u; }
     barrier();
@@ -56,15 +50,15 @@ void main() {
     if (gl_LocalInvocationIndex == 0u) {
         if (s_count[0] > 0u) {
             s_base[0] = atomicAdd(shadow_count, s_count[0]);
-            atomicAdd(shadow_dispatch[0], new_groups(s_base[0], s_count[0]));
+            atomicAdd(shadow_dispatch[0], pixel_list_new_groups(s_base[0], s_count[0]));
         }
         if (s_count[1] > 0u) {
             s_base[1] = atomicAdd(reflection_count, s_count[1]);
-            atomicAdd(reflection_dispatch[0], new_groups(s_base[1], s_count[1]));
+            atomicAdd(reflection_dispatch[0], pixel_list_new_groups(s_base[1], s_count[1]));
         }
         if (s_count[2] > 0u) {
             s_base[2] = atomicAdd(path_count, s_count[2]);
-            atomicAdd(path_dispatch[0], new_groups(s_base[2], s_count[2]));
+            atomicAdd(path_dispatch[0], pixel_list_new_groups(s_base[2], s_count[2]));
         }
     }
     barrier();

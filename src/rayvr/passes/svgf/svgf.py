@@ -43,6 +43,10 @@ several views, a pixel whose light the decision takes from another view (a view 
 view's shading) is not filtered at all: a last dispatch (svgf_spread.comp) gives it the source's
 filtered illumination, remodulated by its own albedos, and the source's history, so the
 denoising of reused light is done once, in the source view.
+There the reprojection also lists the pixels it filters (`filterPixels`, with `filter_list`), and
+the variance and a-trous stages run over that list, indirectly: a view that reuses most of its
+light has a few pixels to filter, scattered over its image, and 8x8 tiles of the image would hold
+warps of mostly idle lanes.
 
 History resets on the first frame, on `reset()` and on scene edits that change the lighting
 (materials or lights: `GpuScene.version` moved and one of them differs). Camera motion never
@@ -50,6 +54,8 @@ resets it (reprojection follows the head), nor do moved instances: their pixels 
 disocclusion test where the surface behind them changed.
 """
 from __future__ import annotations
+
+import numpy as np
 
 from ...errors import OptionError
 from ...gpu.program_resources import program_resources
@@ -59,11 +65,13 @@ from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from ..history import HistoryOwner, LightingHistory, still_frame
+from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
 from ..trace_decision.fill import DECISION, DecisionFill
 
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
 KERNELS = (3, 5)     # a-trous kernel widths: 3x3 (1/2, 1/4 per axis), 5x5 (B3 spline 3/8, 1/4, 1/16)
+EMPTY_LIST = np.array([0, 0, 1, 1], np.uint32).tobytes()   # a pixel list's header: no pixel, (0, 1, 1) groups
 
 
 @register_pass
@@ -83,7 +91,8 @@ class SVGF(HistoryOwner, RenderPass):
     (the edge-stopping sigmas of luminance, normal and depth), `spread` (True: with a decision bound
     over several views, leave the pixels it flags DECISION_SPREAD to a last dispatch that gives them
     their sources' filtered light; the graphs set it False when the decision reuses no view, as
-    with foveation alone, whose decision flags none)."""
+    with foveation alone, whose decision flags none), `filter_list` (True: with `spread` in effect, the
+    variance and a-trous stages run over the list of pixels left to filter instead of the image)."""
 
     DIFFUSE, SPECULAR, COLOR = "diffuse", "specular", "color"
     HISTORY_DIFFUSE, HISTORY_SPECULAR = "historyDiffuse", "historySpecular"
@@ -92,10 +101,11 @@ class SVGF(HistoryOwner, RenderPass):
     SURFACE = ("surface0", "surface1")
     FILTER = ("filter0", "filter1")
     GRADIENT = "gradient"
+    FILTER_PIXELS = "filterPixels"
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"iterations": 5, "kernel": 3, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2,
                   "max_history": 32, "still_max_history": 256, "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0,
-                  "spread": True}
+                  "spread": True, "filter_list": True}
     WHOLE = {"iterations": (0, MAX_ITERATIONS, "a-trous passes"),
              "feedback_tap": (-1, None, "the iteration fed back; -1: the temporal mean"),
              "max_history": (1, None, "frames"), "still_max_history": (1, None, "frames")}
@@ -127,6 +137,9 @@ class SVGF(HistoryOwner, RenderPass):
         r.add_input(self.SPECULAR, "radiance its specular lobe reflects").optional()
         DecisionFill.add_input(r)
         r.add_output(self.COLOR, "denoised radiance (remodulated, with emission)").format("rgba16f")
+        if self._lists(cd):
+            r.add_output(self.FILTER_PIXELS, "the pixels the variance and a-trous stages filter (scratch: the "
+                                             "reprojection lists them)").buffer(pixel_list_bytes(cd.size, cd.views))
         specular = self.SPECULAR in cd.input_formats
         lobes = [(self.HISTORY_DIFFUSE, "diffuse")] + [(self.HISTORY_SPECULAR, "specular")] * specular
         for history, lobe in lobes:
@@ -148,14 +161,25 @@ class SVGF(HistoryOwner, RenderPass):
             r.add_internal(name, "effect word, history length (used in turn)").format("rg32ui")
         return r
 
+    def _spreads(self, cd) -> bool:
+        """Whether views take other views' filtered light (a decision over several views, `spread`)."""
+        return DecisionFill.connected(cd) and cd.views > 1 and bool(self.spread)
+
+    def _lists(self, cd) -> bool:
+        """Whether the variance and a-trous stages run over the reprojection's list of pixels."""
+        return self._spreads(cd) and bool(self.filter_list)
+
     def compile(self, ctx, cd):
         self._specular = self.SPECULAR in cd.input_formats
         self._defines = {**scene_defines(ctx), **effect_defines(), "SVGF_SPECULAR": int(self._specular)}
         self._density = DecisionFill.connected(cd)
         # with several views a decision may hand pixels another view's light: they take its filtered light
-        self._shared = self._density and cd.views > 1 and bool(self.spread)
+        self._shared = self._spreads(cd)
+        self._listed = self._lists(cd)
         if self._shared:
             self._defines["SVGF_SHARED"] = 1
+        if self._listed:
+            self._defines["SVGF_FILTER_LIST"] = 1
         reproject = {**self._defines, "TRACE_DECISION": int(self._density)}
         self._gl = ctx.gl
         # the modulate stage's own program only when 0 iterations ask for it (_modulate_program)
@@ -230,6 +254,10 @@ class SVGF(HistoryOwner, RenderPass):
         res.texture("surface_prev", data[self.SURFACE[prev]])
         if self._density:
             res.texture("trace_decision", data[DECISION])
+        pixels = data[self.FILTER_PIXELS] if self._listed else None
+        if pixels is not None:
+            pixels.write(EMPTY_LIST)
+            res.buffer("FilterList", pixels)
         res.image("out_illum", scratch[0])
         res.image("out_illum_other", scratch[1])
         res.image("moments_out", data[self.MOMENTS[cur]])
@@ -242,7 +270,7 @@ class SVGF(HistoryOwner, RenderPass):
         res.set("svgf_still", still_frame(ctx))
         res.set("svgf_history_valid", self._history.valid)
         res.prog.run(*self._groups)
-        ctx.barrier(*between)
+        ctx.barrier(*between, *((Access.INDIRECT,) if pixels is not None else ()))
 
         res = self._res["variance"]   # in place in scratch[0]
         self._set_common(res)
@@ -253,7 +281,7 @@ class SVGF(HistoryOwner, RenderPass):
         res.texture("surface_cur", data[self.SURFACE[cur]])
         res.image("gradient_out", data[self.GRADIENT])
         res.set("svgf_write_history", tap < 0)
-        res.prog.run(*self._groups)
+        self._run_filter(res, pixels)
         ctx.barrier(*between)
 
         src = 0
@@ -273,7 +301,7 @@ class SVGF(HistoryOwner, RenderPass):
                 res.image("dst_illum", scratch[1 - src])
             res.set("svgf_step", 1 << i)
             res.set("svgf_write_history", i == tap)
-            res.prog.run(*self._groups)
+            self._run_filter(res, pixels)
             if not final:
                 ctx.barrier(*between)
             src = 1 - src
@@ -287,6 +315,14 @@ class SVGF(HistoryOwner, RenderPass):
             self._spread(ctx, data, scratch[src], cur)
         self._history.end_frame()
 
+    def _run_filter(self, res, pixels) -> None:
+        """Dispatch a variance or a-trous program over the image, or over the list `pixels`."""
+        if pixels is None:
+            res.prog.run(*self._groups)
+        else:
+            res.buffer("FilterList", pixels)
+            res.prog.run_indirect(pixels, DISPATCH_OFFSET)
+
     def _spread(self, ctx, data, illum, cur) -> None:
         """The pixels whose light is another view's take its filtered light `illum` and history
         (svgf_spread.comp)."""
@@ -295,6 +331,7 @@ class SVGF(HistoryOwner, RenderPass):
         channels.bind_inputs(res, data, GBUFFER)
         res.texture("trace_decision", data[DECISION])
         res.texture("src_illum", illum)
+        res.texture("svgf_diffuse_in", data[self.DIFFUSE])   # the background (with the list)
         res.image("dst", data[self.COLOR])
         res.image("history_diffuse", data[self.HISTORY_DIFFUSE], read=True, write=True)
         if self._specular:

@@ -12,8 +12,6 @@
 #define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
-
 #ifndef SVGF_FINAL
 #define SVGF_FINAL 0
 #endif
@@ -21,6 +19,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #define TRACE_DECISION 1
 #endif
 #include "trace_decision.glsl"
+#include "svgf_pixels.glsl"
 uniform SVGF_ILLUM_SAMPLER src_illum;
 #if SVGF_FINAL
 uniform sampler2DArray svgf_diffuse_in;
@@ -109,14 +108,15 @@ void add_tap(ivec3 q, ivec2 size, float depth_scale, float log_k) {
 }
 
 void main() {
-    ivec3 p = ivec3(gl_GlobalInvocationID);
     ivec3 size = OUT_SIZE;
-    if (any(greaterThanEqual(p, size))) return;
+    ivec3 p;
+    if (!svgf_pixel(size, p)) return;
     uvec2 key = texelFetch(key_cur, p, 0).xy;
     c_depth = svgf_key_depth(key);
     // nothing to filter: the reprojection wrote 0 to both scratch texels and no history is read
     // here, so only the last iteration writes, the background where nothing was drawn (a pixel
-    // with another view's light gets it from svgf_spread.comp)
+    // with another view's light gets it from svgf_spread.comp; over the list no such pixel comes
+    // here, and svgf_spread.comp writes the background too)
     if (!(c_depth > 0.0)) {
 #if SVGF_FINAL
 #if SVGF_SHARED

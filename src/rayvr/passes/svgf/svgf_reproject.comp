@@ -11,11 +11,12 @@
 // With SVGF_SHARED a pixel flagged DECISION_SPREAD (its light is another view's) is left to
 // svgf_spread.comp: here it is written as having no surface, so the variance and a-trous stages
 // neither filter it nor take it as a tap. Pixels without a surface get 0 in both scratch
-// textures, which the later stages then leave as they are.
+// textures, which the later stages then leave as they are. With SVGF_FILTER_LIST it lists the
+// pixels it does filter, those the later stages run over (svgf_pixels.glsl).
 #include "svgf_common.glsl"
 #include "trace_decision.glsl"
-
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#define SVGF_LIST_WRITER 1
+#include "svgf_pixels.glsl"
 
 uniform sampler2DArray svgf_diffuse_in;
 uniform sampler2DArray history_diffuse;
@@ -64,12 +65,14 @@ void add_tap(inout Reprojected r, ivec3 q, float w, uint word, vec3 n, float pre
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     ivec3 size = imageSize(out_illum);
-    if (any(greaterThanEqual(p, size))) return;
-    uint word = gbuf_fetch_effect(p);
+    bool inside = all(lessThan(p, size));
+    uint word = inside ? gbuf_fetch_effect(p) : 0u;
     bool borrowed = false;
 #if SVGF_SHARED
-    borrowed = decision_spread(decision_at(p));
+    borrowed = inside && decision_spread(decision_at(p));
 #endif
+    svgf_list_pixel(inside && svgf_has_geometry(word) && !borrowed, p);
+    if (!inside) return;
     if (!svgf_has_geometry(word) || borrowed) {
         // both scratch texels 0 (the a-trous iterations leave such pixels unwritten, and their
         // taps read the variance of every neighbour); a borrowed pixel's moments and tag are

@@ -5,7 +5,8 @@
 // it as having no surface, so the variance and a-trous stages did no work for it; here it also
 // takes its sources' history (colour history, luminance moments, history length) under its own
 // filter key, so that it goes on from there on a frame where it traces its own light (the eyes
-// alternating, a view moving off its source).
+// alternating, a view moving off its source). With SVGF_FILTER_LIST, where the a-trous stage ran over
+// the pixels it filters only, it also writes the background where nothing was drawn.
 #define TRACE_DECISION 1
 #include "svgf_common.glsl"
 #include "decision_taps.glsl"
@@ -13,6 +14,9 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 uniform SVGF_ILLUM_SAMPLER src_illum;   // this frame's filtered illumination (the last a-trous output)
+#if SVGF_FILTER_LIST
+uniform sampler2DArray svgf_diffuse_in;   // the background where nothing was drawn
+#endif
 layout(rgba16f) writeonly uniform image2DArray dst;
 layout(rgba16f) uniform image2DArray history_diffuse;
 #if SVGF_SPECULAR
@@ -26,7 +30,13 @@ void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(p, imageSize(dst)))) return;
     uvec2 t = decision_at(p);
-    if (!decision_spread(t)) return;
+    if (!decision_spread(t)) {
+#if SVGF_FILTER_LIST
+        if (!svgf_has_geometry(gbuf_fetch_effect(p)))
+            imageStore(dst, p, vec4(to_half_range(texelFetch(svgf_diffuse_in, p, 0).rgb), 1.0));
+#endif
+        return;
+    }
     GSurface g = gbuf_load(p);
     DecisionTaps taps = decision_taps(p, t, g);
     vec3 d = vec3(0.0), s = vec3(0.0), hd = vec3(0.0), hs = vec3(0.0);

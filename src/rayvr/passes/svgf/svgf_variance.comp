@@ -8,8 +8,7 @@
 // only: the a-trous iterations fetch it instead of deriving it again each iteration.
 #define SVGF_READS_SURFACE 1
 #include "svgf_common.glsl"
-
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#include "svgf_pixels.glsl"
 
 // in place: a pixel reads and writes its own texel only, and only young ones write
 layout(SVGF_ILLUM_FORMAT) uniform SVGF_ILLUM_IMAGE illum;
@@ -23,9 +22,9 @@ layout(rg16f) writeonly uniform image2DArray gradient_out;
 uniform bool svgf_write_history;
 
 void main() {
-    ivec3 p = ivec3(gl_GlobalInvocationID);
     ivec3 size = imageSize(illum);
-    if (any(greaterThanEqual(p, size))) return;
+    ivec3 p;
+    if (!svgf_pixel(size, p)) return;
     uvec2 key = texelFetch(key_cur, p, 0).xy;
     // no geometry (or light another view's, svgf_spread.comp): nothing here is read again, neither
     // the gradient by the a-trous stage nor the history by the next reprojection (its length is 0)
