@@ -9,6 +9,9 @@
 #ifndef PIXELS_2D
 #define PIXELS_2D 0
 #endif
+#ifndef PIXEL_LIST_APPEND
+#define PIXEL_LIST_APPEND 0
+#endif
 
 #define PIXEL_LIST_GROUP 64
 #define PIXEL_LIST_HEADER_WORDS 4
@@ -26,12 +29,45 @@ uint pixel_list_new_groups(uint base, uint n) {
 #include "ray_group.glsl"
 #include "trace_decision.glsl"
 
-#if PIXEL_LIST_INPUT   // a ray pass that reads a list (bound to the block PixelList by name)
+#if PIXEL_LIST_INPUT   // a pass that reads a list (bound to the block PixelList by name)
 layout(std430) readonly buffer PixelList {
     uint pixel_count;
     uint pixel_dispatch[3];
     uint pixel_items[];
 };
+// The pixel of this invocation of a dispatch over the list (indirect, PIXEL_LIST_GROUP threads a
+// group); false past its end.
+bool pixel_list_item(out ivec3 p) {
+    uint i = gl_GlobalInvocationID.x;
+    p = ivec3(0);
+    if (i >= pixel_count) return false;
+    p = pixel_list_unpack(pixel_items[i]);
+    return true;
+}
+#endif
+
+#if PIXEL_LIST_APPEND   // a pass that writes one list (the block AppendList), its workgroups' pixels
+layout(std430) buffer AppendList {
+    uint append_count;
+    uint append_dispatch[3];
+    uint append_items[];
+};
+shared uint s_append_count;
+shared uint s_append_base;
+// Appends p to the list when `listed`: one global atomic per workgroup. Every invocation of the
+// workgroup calls it, in uniform control flow (it holds barriers).
+void pixel_list_append(bool listed, ivec3 p) {
+    if (gl_LocalInvocationIndex == 0u) s_append_count = 0u;
+    barrier();
+    uint local = listed ? atomicAdd(s_append_count, 1u) : 0u;
+    barrier();
+    if (gl_LocalInvocationIndex == 0u && s_append_count > 0u) {
+        s_append_base = atomicAdd(append_count, s_append_count);
+        atomicAdd(append_dispatch[0], pixel_list_new_groups(s_append_base, s_append_count));
+    }
+    barrier();
+    if (listed) append_items[s_append_base + local] = pixel_list_pack(p);
+}
 #endif
 
 #if PIXEL_LIST_INPUT || PIXELS_2D
@@ -49,10 +85,7 @@ bool ray_pass_pixel(uint min_effect, ivec3 image_size, out ivec3 p) {
 #endif
     return effect != GBUF_NO_GEOMETRY && effect >= min_effect;
 #else
-    uint i = gl_GlobalInvocationID.x;
-    if (i >= pixel_count) return false;
-    p = pixel_list_unpack(pixel_items[i]);
-    return true;
+    return pixel_list_item(p);
 #endif
 }
 #endif

@@ -6,6 +6,7 @@ import numpy as np
 
 HEADER_BYTES = 16   # count + indirect dispatch args
 DISPATCH_OFFSET = 4
+EMPTY_HEADER = np.array([0, 0, 1, 1], np.uint32).tobytes()   # no pixel; (0, 1, 1) groups
 
 
 def pixel_list_bytes(size: tuple[int, int], views: int) -> int:

@@ -55,8 +55,6 @@ disocclusion test where the surface behind them changed.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
@@ -65,13 +63,12 @@ from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from ..history import HistoryOwner, LightingHistory, still_frame
-from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
+from ..compaction.pixel_list import DISPATCH_OFFSET, EMPTY_HEADER, pixel_list_bytes
 from ..trace_decision.fill import DECISION, DecisionFill
 
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
 KERNELS = (3, 5)     # a-trous kernel widths: 3x3 (1/2, 1/4 per axis), 5x5 (B3 spline 3/8, 1/4, 1/16)
-EMPTY_LIST = np.array([0, 0, 1, 1], np.uint32).tobytes()   # a pixel list's header: no pixel, (0, 1, 1) groups
 
 
 @register_pass
@@ -256,8 +253,8 @@ class SVGF(HistoryOwner, RenderPass):
             res.texture("trace_decision", data[DECISION])
         pixels = data[self.FILTER_PIXELS] if self._listed else None
         if pixels is not None:
-            pixels.write(EMPTY_LIST)
-            res.buffer("FilterList", pixels)
+            pixels.write(EMPTY_HEADER)
+            res.buffer("AppendList", pixels)
         res.image("out_illum", scratch[0])
         res.image("out_illum_other", scratch[1])
         res.image("moments_out", data[self.MOMENTS[cur]])
@@ -320,7 +317,7 @@ class SVGF(HistoryOwner, RenderPass):
         if pixels is None:
             res.prog.run(*self._groups)
         else:
-            res.buffer("FilterList", pixels)
+            res.buffer("PixelList", pixels)
             res.prog.run_indirect(pixels, DISPATCH_OFFSET)
 
     def _spread(self, ctx, data, illum, cur) -> None:
