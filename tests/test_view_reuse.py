@@ -341,42 +341,6 @@ def test_reused_light_is_denoised_once_in_the_source_eye(gpu):
     assert max(errors) < 2e-3, np.percentile(errors, [50, 90, 100])
 
 
-@pytest.mark.parametrize("views, size", [(2, SIZE), (16, (16, 16))])
-def test_the_composite_runs_over_the_pixels_whose_light_is_their_own(gpu, views, size):
-    """Where SVGF spreads a source's filtered light, the decision lists every other pixel
-    (`ownPixels`: traced, background, RASTER; each once) and the composite runs over that list,
-    then writes the spread pixels' zeros over the image: the same outputs as one dispatch over the
-    image (`pixel_list` False). Stereo alternates its source eye, so each frame's zeros cover pixels
-    that were the other eye's own light the frame before."""
-    from rayvr.passes.compaction import read_pixel_list
-    scene = lambert_cornell()
-    scene.materials["TallBox"].effect = rv.Effect.REFLECTIONS
-    out = {}
-    for listed in (True, False):
-        g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf", decision={"alternate": views == 2})
-        g.update_pass("Composite", {"pixel_list": listed})
-        for pin in ("Composite.diffuse", "Composite.specular", "SVGF.color", DECISION, "Decision.ownPixels"):
-            g.mark_output(pin)
-        with Renderer(scene, g, views=views, size=size) as r:
-            for _ in range(2):
-                r.render()
-            out[listed] = ([r.read_output(p) for p in ("Composite.color", "Composite.diffuse", "Composite.specular",
-                                                       "SVGF.color")],
-                           read_pixel_list(r.compiled.get_output("Decision.ownPixels")),
-                           r.read_output(DECISION)[..., 0], r.compiled.passes["Composite"].defines())
-    images, (n, xyz), t, defines = out[True]
-    spread = (t & 4) != 0
-    assert defines.get("COMPOSITE_PIXELS") == 1 and "COMPOSITE_PIXELS" not in out[False][3]
-    assert spread.sum() > 0.25 * spread[0].size and not spread.all()
-    listed_mask = np.zeros_like(spread)
-    listed_mask[xyz[:, 2], xyz[:, 1], xyz[:, 0]] = True
-    assert n == len(np.unique(xyz, axis=0)) == (~spread).sum()
-    np.testing.assert_array_equal(listed_mask, ~spread)
-    assert (images[1][spread][..., :3] == 0).all() and (images[1][~spread][..., :3] > 0).any()
-    for mine, theirs in zip(images, out[False][0]):
-        np.testing.assert_array_equal(mine, theirs)
-
-
 def test_alternating_sources_swap_the_eyes_each_frame(gpu):
     scene = lambert_cornell()
     with Renderer(scene, graph(reuse="views", decision={"alternate": True}), views=2, size=SIZE) as r:

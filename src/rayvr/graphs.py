@@ -242,8 +242,6 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
         # the composite reads it only to leave the pixels SVGF spreads to, which only reuse flags
         spreads = svgf and reuse == "views"
         _read_decision(g, ("Compaction", "Shadows", "Reflections", "PathTracer", *(("Composite",) * spreads), "SVGF"))
-        if spreads:   # the pixels left after the spread: the composite runs over them
-            g.add_edge("Decision.ownPixels", "Composite.ownPixels")
     return g
 
 

@@ -81,9 +81,6 @@ def check_shape(pass_name: str, key: str, value):
 
 # RenderContext.dictionary's key for the views a trace decision traces in full (TraceDecision).
 SOURCE_VIEWS = "source_views"
-# RenderContext.dictionary's key, true when a trace decision lists the pixels whose light is their own
-# (not spread from another view's: TraceDecision's `ownPixels`), which the composite then runs over.
-OWN_PIXELS = "own_pixels"
 # RenderContext.dictionary's key, true when a trace decision reuses light across the views of a
 # camera grid and the ray passes that read it take one view per workgroup (TraceDecision).
 ONE_VIEW_TILES = "one_view_tiles"

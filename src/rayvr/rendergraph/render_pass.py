@@ -62,6 +62,7 @@ class Access(str, enum.Enum):
     STORAGE = "storage"          # SSBO reads/writes
     INDIRECT = "indirect"        # SSBO read as indirect dispatch arguments (and as storage)
     FRAMEBUFFER = "framebuffer"  # colour attachment of a draw (written coherently: no barrier)
+    UPDATE = "update"            # a buffer the host writes (Buffer.write) after shaders wrote it
 
 
 class PinDirection(str, enum.Enum):
@@ -257,6 +258,7 @@ _BARRIER_BITS = {
     Access.STORAGE: 0x00002000,      # GL_SHADER_STORAGE_BARRIER_BIT
     Access.INDIRECT: 0x00002040,     # + GL_COMMAND_BARRIER_BIT
     Access.FRAMEBUFFER: 0x00000400,  # GL_FRAMEBUFFER_BARRIER_BIT
+    Access.UPDATE: 0x00000200,       # GL_BUFFER_UPDATE_BARRIER_BIT
 }
 # What a reader outside the graph may do with a marked output: read it back (glGetTexImage,
 # GL_TEXTURE_UPDATE_BARRIER_BIT), sample or copy it (a sink), blit it.

@@ -14,30 +14,16 @@
 // This pass traces no rays, so the lookup's registers cost no BVH traversal its occupancy, as
 // they did in RTShadows (the probe update measured 2.2x from the same split).
 // With TRACE_DECISION a pixel the decision flags DECISION_SPREAD (SVGF gives it another view's
-// filtered light) is left: 0 in every output. COMPOSITE_PIXELS says which pixels a dispatch takes:
-// 0 every pixel of the image; 1 those of the decision's list of pixels whose light is their own
-// (PixelList: the pixels left after the spread, dispatched indirectly in full warps); 2 the
-// image's spread pixels alone (their zeros), the list's companion.
-#ifndef COMPOSITE_PIXELS
-#define COMPOSITE_PIXELS 0
-#endif
+// filtered light) is left: 0 in every output.
 #define GBUF_READER 1
 #include "gbuffer.glsl"
 #include "trace_decision.glsl"
 #include "probe_gi.glsl"
 #include "ray_group.glsl"
-#if COMPOSITE_PIXELS == 1
-#define PIXEL_LIST_INPUT 1
-#endif
-#include "pixel_list.glsl"
 
 // HybridComposite's workgroups: with PROBE_GI one warp (8x4 pixels; in a camera grid 4x2 pixels of 4 views,
-// whose lookups share probes), else 8x8 pixels of one view; over the list PIXEL_LIST_GROUP of its pixels
-#if COMPOSITE_PIXELS == 1
-layout(local_size_x = PIXEL_LIST_GROUP) in;
-#else
+// whose lookups share probes), else 8x8 pixels of one view
 layout(local_size_x = RAY_GROUP_SIZE) in;
-#endif
 
 uniform sampler2DArray direct_tex;
 #if HAS_SHADOWS
@@ -59,8 +45,19 @@ layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
 layout(rgba16f) writeonly uniform image2DArray dst_specular;
 #endif
 
-// Pixel p's composited light.
-void composite(ivec3 p) {
+void main() {
+    ivec3 p = ray_group_pixel();
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;   // past the image or the last view
+#if TRACE_DECISION
+    if (decision_spread(decision_at(p))) {
+        imageStore(dst, p, vec4(0.0, 0.0, 0.0, 1.0));
+#if SPLIT_LOBES
+        imageStore(dst_diffuse, p, vec4(0.0, 0.0, 0.0, 1.0));
+        imageStore(dst_specular, p, vec4(0.0, 0.0, 0.0, 1.0));
+#endif
+        return;
+    }
+#endif
     uint effect = gbuf_effect_at(p);
     vec3 c = texelFetch(direct_tex, p, 0).rgb;
     vec3 reflected = vec3(0.0);
@@ -101,27 +98,4 @@ void composite(ivec3 p) {
     if (effect == EFFECT_PATH_TRACED) c = texelFetch(path_tex, p, 0).rgb;
 #endif
     imageStore(dst, p, vec4(to_half_range(c), 1.0));
-}
-
-void main() {
-    ivec3 p;
-#if COMPOSITE_PIXELS == 1
-    if (!pixel_list_item(p)) return;
-#else
-    p = ray_group_pixel();
-    if (any(greaterThanEqual(p, imageSize(dst)))) return;   // past the image or the last view
-#if TRACE_DECISION
-    if (decision_spread(decision_at(p))) {
-        imageStore(dst, p, vec4(0.0, 0.0, 0.0, 1.0));
-#if SPLIT_LOBES
-        imageStore(dst_diffuse, p, vec4(0.0, 0.0, 0.0, 1.0));
-        imageStore(dst_specular, p, vec4(0.0, 0.0, 0.0, 1.0));
-#endif
-        return;
-    }
-#endif
-#endif
-#if COMPOSITE_PIXELS != 2
-    composite(p);
-#endif
 }

@@ -4,9 +4,8 @@ from __future__ import annotations
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
-from ..compaction.pixel_list import DISPATCH_OFFSET, HEADER_BYTES
-from ..dispatch import (COMPUTE_GROUP, OWN_PIXELS, check_shape, decision_view_group, groups_2d, ray_group,
-                        ray_group_defines, view_order)
+from ..dispatch import (COMPUTE_GROUP, check_shape, decision_view_group, groups_2d, ray_group, ray_group_defines,
+                        view_order)
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from ..probe_gi import inputs as probe_inputs
@@ -30,21 +29,17 @@ class HybridComposite(RenderPass):
     `diffuse` (direct or shadowed light minus the G-buffer's `emissive`, or the path tracer's
     `pathDiffuse`; the background where nothing was drawn) and `specular` (reflections, or
     `pathSpecular`). With the optional `decision` (TraceDecision) a pixel it flags for SVGF to
-    spread another view's filtered light to (`spread`) is 0 in every output; then, with `pixel_list`
-    and the decision's list of the other pixels bound (`ownPixels`), the pass runs over that list
-    (indirectly, in full warps: a view that reuses most of its light has a few pixels of its own,
-    scattered over its image) and writes the zeros in a second dispatch over the image."""
+    spread another view's filtered light to (`spread`) is 0 in every output."""
 
     EFFECT, DIRECT, SHADOWED, REFLECTION, PATH_TRACED = "effect", "direct", "shadowed", "reflection", "pathTraced"
     EMISSIVE, PATH_DIFFUSE, PATH_SPECULAR = "emissive", "pathDiffuse", "pathSpecular"
-    OWN_PIXELS = "ownPixels"
     COLOR, DIFFUSE, SPECULAR = "color", "diffuse", "specular"
     # `probe_tile`, `probe_view_group`: with the probe lookups, one-warp workgroups spanning 4 views
     # of a camera grid (passes.dispatch.ray_group), because neighbouring views' lookups share probes
     # (8x8 tiles of one view cost them a fifth more); without probes, 8x8 tiles of one view, which
     # take half the time of 8x4 ones (benchmarks/RESULTS.md has the measurements). Under view reuse over
     # a camera grid one view a workgroup (TraceDecision `one_view_tiles`): 1.30 against 1.40 ms at 64 views.
-    PROPERTIES = {"lobes": False, "probe_tile": [8, 4], "probe_view_group": 4, "pixel_list": True}
+    PROPERTIES = {"lobes": False, "probe_tile": [8, 4], "probe_view_group": 4}
 
     def validate_property(self, key, value):
         return check_shape(self.name, key, super().validate_property(key, value))
@@ -71,8 +66,6 @@ class HybridComposite(RenderPass):
                          ).format("rgba16f")
             r.add_output(self.SPECULAR, "specular light").format("rgba16f")
         DecisionFill.add_input(r)
-        r.add_input(self.OWN_PIXELS, "the pixels whose light is their own, not spread from another view "
-                                     "(TraceDecision)").buffer(HEADER_BYTES).indirect().optional()
         return r
 
     def compile(self, ctx, cd):
@@ -95,27 +88,13 @@ class HybridComposite(RenderPass):
         order = view_order(ctx, cd.views, self._group) if decided else None
         self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group, order)}
         # the scene's features: the probe lookup shades the G-buffer surface with its whole material
-        # with the decision's list of the pixels left after the spread, over that list and the zeros apart
-        self._listed = (decided and bool(self.pixel_list) and self.OWN_PIXELS in cd.input_formats
-                        and bool(ctx.dictionary.get(OWN_PIXELS)))
-        if self._listed:
-            self._defines["COMPOSITE_PIXELS"] = 1
-        common = {**scene_defines(ctx), **effect_defines(), **self._defines}
-        self._prog = self.compute_program(ctx.gl, "composite.comp", common)
+        self._prog = self.compute_program(ctx.gl, "composite.comp",
+                                          {**scene_defines(ctx), **effect_defines(), **self._defines})
         self._res = program_resources(self._prog)
-        self._zeros = (program_resources(self.compute_program(ctx.gl, "composite.comp",
-                                                              {**common, "COMPOSITE_PIXELS": 2}))
-                       if self._listed else None)
         self._groups = groups_2d(cd.size, cd.views, self._group)
 
     def defines(self) -> dict:
         return dict(getattr(self, "_defines", {}))
-
-    def _bind_outputs(self, res, data) -> None:
-        res.image("dst", data[self.COLOR])
-        if self.lobes:
-            res.image("dst_diffuse", data[self.DIFFUSE])
-            res.image("dst_specular", data[self.SPECULAR])
 
     def execute(self, ctx, data):
         channels.bind_inputs(self._res, data)   # those connected: effect, emissive, the probe lookup's surface
@@ -125,16 +104,12 @@ class HybridComposite(RenderPass):
                 self._res.texture(sampler, tex)
         if DECISION in data:
             self._res.texture("trace_decision", data[DECISION])
-        self._bind_outputs(self._res, data)
+        self._res.image("dst", data[self.COLOR])
+        if self.lobes:
+            self._res.image("dst_diffuse", data[self.DIFFUSE])
+            self._res.image("dst_specular", data[self.SPECULAR])
         if self._probes:
             probe_inputs.bind(self._res, data, self._probe_sampler)
-        if self._listed:
-            self._res.buffer("PixelList", data[self.OWN_PIXELS])
-            self._prog.run_indirect(data[self.OWN_PIXELS], DISPATCH_OFFSET)
-            self._zeros.texture("trace_decision", data[DECISION])
-            self._bind_outputs(self._zeros, data)
-            self._zeros.prog.run(*self._groups)
-        else:
-            self._prog.run(*self._groups)
+        self._prog.run(*self._groups)
         if self._probes:
             probe_inputs.unbind(self._res)

@@ -252,7 +252,8 @@ class SVGF(HistoryOwner, RenderPass):
         if self._density:
             res.texture("trace_decision", data[DECISION])
         pixels = data[self.FILTER_PIXELS] if self._listed else None
-        if pixels is not None:
+        if pixels is not None:   # a transient: another pass's shaders may have written its memory
+            ctx.barrier(Access.UPDATE)
             pixels.write(EMPTY_HEADER)
             res.buffer("AppendList", pixels)
         res.image("out_illum", scratch[0])

@@ -16,19 +16,12 @@
 //     the source's filtered light to it; the fills and the composite leave it)
 //   EVERY_SURFACE 1: every drawn pixel has rays to trace (a path tracer from the camera; the sky
 //     traces too), else those of effect SHADOWS and above
-//   OWN_LIST 1 (with REUSE_SPREAD): every pixel not flagged DECISION_SPREAD goes to the list
-//     AppendList (glsl/pixel_list.glsl), the pixels whose light is their own: the composite's
 #define GBUF_READER 1
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "scene.glsl"
 #include "same_surface.glsl"
 #include "trace_decision.glsl"
-#ifndef OWN_LIST
-#define OWN_LIST 0
-#endif
-#define PIXEL_LIST_APPEND OWN_LIST
-#include "pixel_list.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 layout(rg32ui) writeonly uniform uimage2DArray dst;
@@ -237,8 +230,9 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at, out u
     return DECISION_TRACE;
 }
 
-// Decides pixel p, writes its texel and returns its kind with its flags.
-uint decide_pixel(ivec3 p) {
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;
     float budget = budget_at(p);
     uint effect = gbuf_effect_at(p);
     uint kind = DECISION_NONE, view = uint(p.z), taps = 0u;
@@ -252,14 +246,4 @@ uint decide_pixel(ivec3 p) {
     if (kind == DECISION_REUSE || (kind == DECISION_FILL && int(view) != p.z)) kind |= DECISION_SPREAD;
 #endif
     imageStore(dst, p, uvec4(decision_pack(kind | (taps << DECISION_TAP_SHIFT), budget, view, at), 0u, 0u));
-    return kind;
-}
-
-void main() {
-    ivec3 p = ivec3(gl_GlobalInvocationID);
-    bool inside = all(lessThan(p, imageSize(dst)));
-    uint kind = inside ? decide_pixel(p) : DECISION_NONE;
-#if OWN_LIST
-    pixel_list_append(inside && (kind & DECISION_SPREAD) == 0u, p);   // every invocation: its barriers
-#endif
 }

@@ -8,8 +8,7 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ...xr import foveation
 from ...xr.cameras import grid_for_views
-from ..compaction.pixel_list import EMPTY_HEADER, HEADER_BYTES, pixel_list_bytes
-from ..dispatch import ONE_VIEW_TILES, OWN_PIXELS, SOURCE_VIEWS, groups_2d
+from ..dispatch import ONE_VIEW_TILES, SOURCE_VIEWS, groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from .fill import DECISION, DECISION_FILLS
@@ -60,15 +59,13 @@ class TraceDecision(RenderPass):
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
     SHADOWS and above. `spread` (the graphs set it with SVGF): SVGF gives a pixel whose light is
     another view's that view's filtered light itself, so the decision flags it (DECISION_SPREAD)
-    and the ray passes' fills and the composite leave it; then the decision also lists the other
-    pixels (`ownPixels`, glsl/pixel_list.glsl's layout), over which the composite runs. The ray passes read the decision (their
+    and the ray passes' fills and the composite leave it. The ray passes read the decision (their
     lists and tiles skip the reconstructed pixels, and a last dispatch of each fills them:
     trace_decision.fill) and SVGF follows the budget. With one view and foveation 'none' there is nothing to decide: the pass is
     left out, and so is its texture."""
 
     USES_SCENE = True
     DECISION = DECISION
-    OWN_PIXELS = "ownPixels"
     CHOICES = {"foveation": dict(zip(FOVEATION, ("", "about each image's centre",
                                                  "about where the eye tracker says the eye looks")))}
     PROPERTIES = {"reuse": False, "foveation": "none", "foveal_radius_deg": foveation.DEFAULT_RADIUS_DEG,
@@ -102,12 +99,7 @@ class TraceDecision(RenderPass):
         channels.add_inputs(r)
         r.add_output(self.DECISION, "per pixel: trace, or reuse / fill from which traced pixel; the ray budget"
                      ).format("rg32ui")
-        r.add_output(self.OWN_PIXELS, "the pixels whose light is not spread from another view (with `spread`)"
-                     ).buffer(pixel_list_bytes(cd.size, cd.views) if self._spreads(cd.views) else HEADER_BYTES)
         return r
-
-    def _spreads(self, views: int) -> bool:
-        return bool(self.spread) and self.reuses(views)
 
     def skip_reason(self, cd):
         if self.foveation == "none" and not self.reuses(cd.views):
@@ -125,7 +117,7 @@ class TraceDecision(RenderPass):
                          "FOVEATION": FOVEATION.index(self.foveation), "FOVEAL_RADIUS": float(self.foveal_radius_deg),
                          "PERIPHERY_SHARE": float(self.periphery_share),
                          "EVERY_SURFACE": int(bool(self.every_surface)),
-                         "REUSE_SPREAD": int(self._spreads(cd.views)), "OWN_LIST": int(self._spreads(cd.views)),
+                         "REUSE_SPREAD": int(bool(self.spread) and self.reuses(cd.views)),
                          "SHARE_LIGHT_SAMPLES": int(bool(self.share_light_samples) and self.reuses(cd.views)
                                                    and not self.every_surface)}
         ctx.dictionary[DECISION_FILLS] = not (self._defines["REUSE_SPREAD"] and self.foveation == "none")
@@ -133,7 +125,6 @@ class TraceDecision(RenderPass):
         if self.source_views_first and grid_reuse:
             ctx.dictionary[SOURCE_VIEWS] = self.source_views(cd.views, cols)
         ctx.dictionary[ONE_VIEW_TILES] = bool(self.one_view_tiles) and grid_reuse
-        ctx.dictionary[OWN_PIXELS] = self._spreads(cd.views)
         self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
             **scene_defines(ctx), **effect_defines(), **self._defines}))
         self._groups = groups_2d(cd.size, cd.views)
@@ -165,7 +156,4 @@ class TraceDecision(RenderPass):
     def execute(self, ctx, data):
         channels.bind_inputs(self._res, data)
         self._res.image("dst", data[self.DECISION])
-        if self._defines["OWN_LIST"]:
-            data[self.OWN_PIXELS].write(EMPTY_HEADER)
-            self._res.buffer("AppendList", data[self.OWN_PIXELS])
         self._res.prog.run(*self._groups)
