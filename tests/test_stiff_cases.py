@@ -20,9 +20,9 @@ import pytest
 import rayvr as rv
 from rayvr.materials.material import Material
 from rayvr.renderer import Renderer
-from rayvr.scene.builtin import box, cornell_box, lambert, merge, quad_mesh
+from rayvr.scene.builtin import box, cornell_box, lambert, quad_mesh
 from rayvr.scene.model import Environment, Light, Mesh, Scene
-from rayvr.xr.cameras import default_views, look_at, stereo_views
+from rayvr.xr.cameras import default_views, look_at
 from rayvr.xr.views import Fov, View, ViewSet
 
 SIZE = 24

@@ -22,7 +22,7 @@ import numpy as np
 from ..errors import GraphError, did_you_mean
 from ..gpu.textures import zero_texture
 from ..gpu.timer import acquire_timer, release_timer, timing_method
-from .compiler import STAGES, Plan
+from .compiler import Plan
 from .formats import NUMPY_DTYPES, get_format
 from .nonfinite import NonFiniteCounters
 from .profile import Profile, RollingTimes

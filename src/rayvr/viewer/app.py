@@ -25,7 +25,7 @@ from .camera import CameraRig
 from ..tune.budget import FRAME_BUDGET_MS
 from .display import FrameDisplay
 from .input import InputEvent, InputState
-from .script import InputScript, ScriptAction
+from .script import InputScript
 from .view_rig import ViewRig
 
 BUDGET_MS = FRAME_BUDGET_MS   # 90 Hz
