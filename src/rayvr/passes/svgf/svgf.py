@@ -59,11 +59,11 @@ from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
+from ..compaction.pixel_list import DISPATCH_OFFSET, EMPTY_HEADER, pixel_list_bytes
 from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from ..history import HistoryOwner, LightingHistory, still_frame
-from ..compaction.pixel_list import DISPATCH_OFFSET, EMPTY_HEADER, pixel_list_bytes
 from ..trace_decision.fill import DECISION, DecisionFill
 
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
