@@ -115,12 +115,11 @@ vec3 pt_pixel_lobes(ivec3 p, out vec3 diffuse, out vec3 specular) {
 #endif
 
 void main() {
+    ivec3 p;
 #if PIXEL_LIST_INPUT
-    uint i = gl_GlobalInvocationID.x;
-    if (i >= pixel_count) return;
-    ivec3 p = pixel_list_unpack(pixel_items[i]);
+    if (!pixel_list_item(p)) return;
 #else
-    ivec3 p = ray_group_pixel();
+    p = ray_group_pixel();
     if (any(greaterThanEqual(p, imageSize(dst)))) return;
 #if PT_FROM_GBUFFER
     if (gbuf_effect_at(p) != EFFECT_PATH_TRACED) {

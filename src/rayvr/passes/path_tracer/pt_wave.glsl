@@ -89,11 +89,7 @@ ivec3 ptw_slot_pixel(uint i) {
 // This invocation's pixel (false: none, past the image or the list).
 bool ptw_pixel(out ivec3 p) {
 #if PIXEL_LIST_INPUT
-    uint i = gl_GlobalInvocationID.x;
-    p = ivec3(0);
-    if (i >= pixel_count) return false;
-    p = pixel_list_unpack(pixel_items[i]);
-    return true;
+    return pixel_list_item(p);
 #else
     p = ray_group_pixel();
 #if TRACE_DECISION   // a pixel the decision reconstructs has no path (its fill comes after)

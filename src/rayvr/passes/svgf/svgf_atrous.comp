@@ -122,7 +122,7 @@ void main() {
 #if SVGF_SHARED
         if (decision_spread(decision_at(p))) return;
 #endif
-        imageStore(dst, p, vec4(to_half_range(texelFetch(svgf_diffuse_in, p, 0).rgb), 1.0));
+        imageStore(dst, p, svgf_background(svgf_diffuse_in, p));
 #endif
         return;
     }

@@ -122,6 +122,9 @@ vec3 svgf_color(GSurface g, uint view, vec3 diffuse, vec3 specular) {
 // The same for pixel p.
 vec3 svgf_color(ivec3 p, vec3 diffuse, vec3 specular) { return svgf_color(gbuf_load(p), uint(p.z), diffuse, specular); }
 
+// The output where nothing was drawn: the input `diffuse` (the background) as it came.
+vec4 svgf_background(sampler2DArray diffuse, ivec3 p) { return vec4(to_half_range(texelFetch(diffuse, p, 0).rgb), 1.0); }
+
 // The depth gradient as the a-trous iterations read it (the variance stage writes it once a
 // frame, rg16f): finite, so that a zero offset times it stays zero.
 vec2 svgf_gradient_store(vec2 gradient) { return clamp(gradient, vec2(-65504.0), vec2(65504.0)); }

@@ -13,7 +13,7 @@ void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(p, imageSize(dst)))) return;
     if (!svgf_has_geometry(gbuf_fetch_effect(p))) {
-        imageStore(dst, p, vec4(to_half_range(texelFetch(svgf_diffuse_in, p, 0).rgb), 1.0));
+        imageStore(dst, p, svgf_background(svgf_diffuse_in, p));
         return;
     }
     SvgfIllum illum = texelFetch(src_illum, p, 0);

@@ -33,7 +33,7 @@ void main() {
     if (!decision_spread(t)) {
 #if SVGF_FILTER_LIST
         if (!svgf_has_geometry(gbuf_fetch_effect(p)))
-            imageStore(dst, p, vec4(to_half_range(texelFetch(svgf_diffuse_in, p, 0).rgb), 1.0));
+            imageStore(dst, p, svgf_background(svgf_diffuse_in, p));
 #endif
         return;
     }
