@@ -308,9 +308,9 @@ def test_reused_light_is_denoised_once_in_the_source_eye(gpu):
     point (bilinear over the first eye's pixels there), remodulated by their own albedo: on a
     wall of one colour, the first eye's denoised colour there. Filtering each eye's own noisy light
     left them 1-13% apart. The decision flags those pixels for SVGF, and the composite leaves them
-    (0): no ray pass fills them nor the composite lights them."""
+    (0 in its colour): no ray pass fills them nor the composite lights them."""
     g = rv.graphs.hybrid(reuse="views")
-    for pin in ("SVGF.color", DECISION, "GBuffer.effect", "GBuffer.faceNormalW", "Composite.diffuse"):
+    for pin in ("SVGF.color", DECISION, "GBuffer.effect", "GBuffer.faceNormalW", "Composite.color"):
         g.mark_output(pin)
     with Renderer(lambert_cornell(), g, views=2, size=SIZE) as r:
         for _ in range(2):
@@ -319,7 +319,7 @@ def test_reused_light_is_denoised_once_in_the_source_eye(gpu):
         t = r.read_output(DECISION)
         word = r.read_output("GBuffer.effect")[..., 0]
         ng = r.read_output("GBuffer.faceNormalW")[..., :3].astype(np.float64)
-        composite = r.read_output("Composite.diffuse")[..., :3]
+        composite = r.read_output("Composite.color")[..., :3]
     k = t[..., 0] & 3
     flagged = (t[..., 0] & 4) != 0   # DECISION_SPREAD
     assert flagged[1].sum() > 500 and np.array_equal(flagged, k == REUSE)

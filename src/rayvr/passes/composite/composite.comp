@@ -14,7 +14,8 @@
 // This pass traces no rays, so the lookup's registers cost no BVH traversal its occupancy, as
 // they did in RTShadows (the probe update measured 2.2x from the same split).
 // With TRACE_DECISION a pixel the decision flags DECISION_SPREAD (SVGF gives it another view's
-// filtered light) is left: 0 in every output.
+// filtered light) is left: 0 in `dst`, and the two lobes unwritten (SVGF, their one reader, reads
+// neither at such a pixel).
 #define GBUF_READER 1
 #include "gbuffer.glsl"
 #include "trace_decision.glsl"
@@ -49,12 +50,8 @@ void main() {
     ivec3 p = ray_group_pixel();
     if (any(greaterThanEqual(p, imageSize(dst)))) return;   // past the image or the last view
 #if TRACE_DECISION
-    if (decision_spread(decision_at(p))) {
+    if (decision_spread(decision_at(p))) {   // the lobes are left unwritten: SVGF reads neither there
         imageStore(dst, p, vec4(0.0, 0.0, 0.0, 1.0));
-#if SPLIT_LOBES
-        imageStore(dst_diffuse, p, vec4(0.0, 0.0, 0.0, 1.0));
-        imageStore(dst_specular, p, vec4(0.0, 0.0, 0.0, 1.0));
-#endif
         return;
     }
 #endif

@@ -257,7 +257,6 @@ class SVGF(HistoryOwner, RenderPass):
             pixels.write(EMPTY_HEADER)
             res.buffer("AppendList", pixels)
         res.image("out_illum", scratch[0])
-        res.image("out_illum_other", scratch[1])
         res.image("moments_out", data[self.MOMENTS[cur]])
         res.image("key_out", data[self.KEY[cur]])
         res.image("surface_out", data[self.SURFACE[cur]])

@@ -10,8 +10,8 @@
 // as a dense one; and the variance is that of b x history samples, which widens the filter there.
 // With SVGF_SHARED a pixel flagged DECISION_SPREAD (its light is another view's) is left to
 // svgf_spread.comp: here it is written as having no surface, so the variance and a-trous stages
-// neither filter it nor take it as a tap. Pixels without a surface get 0 in both scratch
-// textures, which the later stages then leave as they are. With SVGF_FILTER_LIST it lists the
+// neither filter it nor take it as a tap. The scratch texels of pixels without a surface are
+// left unwritten: the later stages test the key before they read one. With SVGF_FILTER_LIST it lists the
 // pixels it does filter, those the later stages run over (svgf_pixels.glsl).
 #include "svgf_common.glsl"
 #include "trace_decision.glsl"
@@ -25,7 +25,6 @@ uniform sampler2DArray svgf_specular_in;
 uniform sampler2DArray history_specular;
 #endif
 layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE out_illum;   // both lobes + variances
-layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE out_illum_other;   // the other scratch texture
 uniform sampler2DArray moments_prev;
 uniform usampler2DArray key_prev;
 uniform usampler2DArray surface_prev;
@@ -74,12 +73,9 @@ void main() {
     svgf_list_pixel(inside && svgf_has_geometry(word) && !borrowed, p);
     if (!inside) return;
     if (!svgf_has_geometry(word) || borrowed) {
-        // both scratch texels 0 (the a-trous iterations leave such pixels unwritten, and their
-        // taps read the variance of every neighbour); a borrowed pixel's moments and tag are
-        // svgf_spread.comp's to write, and nothing reads them before it
-        SvgfIllum zero = svgf_illum_pack(vec4(0.0), vec4(0.0));
-        imageStore(out_illum, p, zero);
-        imageStore(out_illum_other, p, zero);
+        // the key says "no surface": the later stages read neither scratch texel of this pixel
+        // (each tap tests the key first), so neither is written; a borrowed pixel's moments and
+        // tag are svgf_spread.comp's to write, and nothing reads them before it
         SvgfSurface none = svgf_no_geometry();
         imageStore(key_out, p, uvec4(svgf_pack_key(none), 0u, 0u));
         if (borrowed) return;
