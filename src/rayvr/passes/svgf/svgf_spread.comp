@@ -38,7 +38,7 @@ void main() {
         return;
     }
     GSurface g = gbuf_load(p);
-    DecisionTaps taps = decision_taps(p, t, g);
+    DecisionTaps taps = decision_taps(t);
     vec3 d = vec3(0.0), s = vec3(0.0), hd = vec3(0.0), hs = vec3(0.0);
     vec4 m = vec4(0.0);
     float history = 0.0;
