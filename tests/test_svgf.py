@@ -444,6 +444,44 @@ def test_the_filter_runs_over_the_pixels_left_to_filter_and_renders_the_same_ima
     np.testing.assert_array_equal(out[True][0], out[False][0])
 
 
+def _surface_history(r, cur):
+    """The history length per pixel of SVGF's surface tags `surface0` or `surface1`."""
+    tex = r.compiled.resources[f"SVGF.surface{cur}"]
+    w, h, layers = tex.size
+    return np.frombuffer(tex.read(), np.uint32).reshape(layers, h, w, 2)[..., 1].view(np.float32)
+
+
+def test_a_pixel_that_borrowed_its_light_goes_on_with_its_sources_history(gpu):
+    """With the eyes alternating as the source (stereo, `alternate`), each pixel with a reused
+    surface borrows its light on one frame and traces it on the next. A borrowed pixel keeps no
+    history of its own (length SVGF_BORROWED, -1): the reprojection reads its sources' through its
+    decision texel, so each traced frame goes on from the other eye's history, one frame longer.
+    Had that history been lost, every traced frame would start again at length 1."""
+    scene = _box_scene()
+    g = rv.graphs.hybrid(denoise="svgf", reuse="views", decision={"alternate": True})
+    g.mark_output("Decision.decision")
+    g.mark_output("SVGF.color")
+    frames = 6
+    with Renderer(scene, g, views=default_views(scene, 2, SIZE), jitter=False) as r:
+        for _ in range(frames):
+            r.render()
+        spread = (r.read_output("Decision.decision")[..., 0] & 4) != 0   # DECISION_SPREAD
+        lengths = [_surface_history(r, i) for i in (0, 1)]
+        color = rgb(r, "SVGF.color")
+    b = int(np.argmax(spread.sum(axis=(1, 2))))   # the eye that borrows this frame; the other traces
+    t = 1 - b
+    assert not spread[t].any() and spread[b].sum() > 0.3 * spread[b].size
+    cur = 0 if (lengths[0][b][spread[b]] == -1.0).all() else 1   # this frame's tags
+    assert (lengths[cur][b][spread[b]] == -1.0).all()
+    own = lengths[cur][t]
+    assert np.isclose(np.median(own[own > 0]), frames), np.unique(own, return_counts=True)
+    # last frame's tags: the eyes' roles the other way round
+    before = lengths[1 - cur]
+    assert (before[t] == -1.0).sum() > 0.3 * spread[b].sum()
+    assert np.isclose(np.median(before[b][before[b] > 0]), frames - 1)
+    assert np.isfinite(color).all()
+
+
 @pytest.mark.parametrize("effect,light", [("shadows", "environment"), ("reflections", "point"),
                                           ("reflections", "environment")])
 def test_highlights_of_a_metal_beside_a_dielectric_keep_their_energy_through_the_filter(gpu, effect, light):

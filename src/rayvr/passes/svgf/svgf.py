@@ -41,8 +41,10 @@ the history may grow 1 / b times as long, and the variance is that of b x histor
 sparsely traced pixel keeps a longer history and a wider filter (svgf_reproject.comp). With
 several views, a pixel whose light the decision takes from another view (a view reusing a source
 view's shading) is not filtered at all: a last dispatch (svgf_spread.comp) gives it the source's
-filtered illumination, remodulated by its own albedos, and the source's history, so the
-denoising of reused light is done once, in the source view.
+filtered illumination, remodulated by its own albedos, so the denoising of reused light is done
+once, in the source view. Its history is the source's, not copied: it keeps its decision texel
+(`spreadSource`), through which the next reprojection reads the source's history should the pixel
+trace its own light then.
 There the reprojection also lists the pixels it filters (`filterPixels`, with `filter_list`), and
 the variance and a-trous stages run over that list, indirectly: a view that reuses most of its
 light has a few pixels to filter, scattered over its image, and 8x8 tiles of the image would hold
@@ -99,6 +101,7 @@ class SVGF(HistoryOwner, RenderPass):
     FILTER = ("filter0", "filter1")
     GRADIENT = "gradient"
     FILTER_PIXELS = "filterPixels"
+    SPREAD_SOURCE = "spreadSource"
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"iterations": 5, "kernel": 3, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2,
                   "max_history": 32, "still_max_history": 256, "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0,
@@ -156,6 +159,9 @@ class SVGF(HistoryOwner, RenderPass):
                            ).format("rg32ui")
         for name in self.SURFACE:
             r.add_internal(name, "effect word, history length (used in turn)").format("rg32ui")
+        if self._spreads(cd):
+            r.add_internal(self.SPREAD_SOURCE, "last frame's decision texel of each pixel whose light, and "
+                                               "history, were another view's").format("rg32ui")
         return r
 
     def _spreads(self, cd) -> bool:
@@ -251,6 +257,8 @@ class SVGF(HistoryOwner, RenderPass):
         res.texture("surface_prev", data[self.SURFACE[prev]])
         if self._density:
             res.texture("trace_decision", data[DECISION])
+        if self._shared:
+            res.texture("spread_source", data[self.SPREAD_SOURCE])
         pixels = data[self.FILTER_PIXELS] if self._listed else None
         if pixels is not None:   # a transient: another pass's shaders may have written its memory
             ctx.barrier(Access.UPDATE)
@@ -321,7 +329,8 @@ class SVGF(HistoryOwner, RenderPass):
             res.prog.run_indirect(pixels, DISPATCH_OFFSET)
 
     def _spread(self, ctx, data, illum, cur) -> None:
-        """The pixels whose light is another view's take its filtered light `illum` and history
+        """The pixels whose light is another view's take its filtered light `illum`, and keep their
+        decision texel, through which the next reprojection reads their sources' history
         (svgf_spread.comp)."""
         ctx.barrier(Access.SAMPLED, Access.IMAGE)
         res = self._res["spread"]
@@ -330,10 +339,7 @@ class SVGF(HistoryOwner, RenderPass):
         res.texture("src_illum", illum)
         res.texture("svgf_diffuse_in", data[self.DIFFUSE])   # the background (with the list)
         res.image("dst", data[self.COLOR])
-        res.image("history_diffuse", data[self.HISTORY_DIFFUSE], read=True, write=True)
-        if self._specular:
-            res.image("history_specular", data[self.HISTORY_SPECULAR], read=True, write=True)
-        res.image("moments_cur", data[self.MOMENTS[cur]], read=True, write=True)
         res.image("key_cur", data[self.KEY[cur]])
-        res.image("surface_cur", data[self.SURFACE[cur]], read=True, write=True)
+        res.image("surface_cur", data[self.SURFACE[cur]])
+        res.image("spread_source", data[self.SPREAD_SOURCE])
         res.prog.run(*self._groups)

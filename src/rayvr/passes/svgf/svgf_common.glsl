@@ -28,8 +28,12 @@ struct SvgfSurface {
     float depth;      // linear eye depth; 0: no geometry
     vec3 n;           // shading normal (render space)
     uint word;        // G-buffer effect word
-    float history;    // frames in this pixel's history (0: none)
+    float history;    // frames in this pixel's history (0: none; SVGF_BORROWED: its sources')
 };
+
+// The history length of a pixel whose light, and history, this frame were other pixels' (another
+// view's, svgf_spread.comp): the pixels its decision texel (`spread_source`) names hold them.
+const float SVGF_BORROWED = -1.0;
 
 // The filter key: linear depth (float bits; 0: no geometry, a drawn point's depth being
 // positive) and the octahedral normal (snorm16x2), 64 bits a tap.

@@ -10,11 +10,16 @@
 // as a dense one; and the variance is that of b x history samples, which widens the filter there.
 // With SVGF_SHARED a pixel flagged DECISION_SPREAD (its light is another view's) is left to
 // svgf_spread.comp: here it is written as having no surface, so the variance and a-trous stages
-// neither filter it nor take it as a tap. The scratch texels of pixels without a surface are
-// left unwritten: the later stages test the key before they read one. With SVGF_FILTER_LIST it lists the
-// pixels it does filter, those the later stages run over (svgf_pixels.glsl).
+// neither filter it nor take it as a tap; a tap of last frame that was such a pixel (history
+// length SVGF_BORROWED) gives its sources' history, through its decision texel. The scratch
+// texels of pixels without a surface are left unwritten: the later stages test the key before
+// they read one. With SVGF_FILTER_LIST it lists the pixels it does filter, those the later stages
+// run over (svgf_pixels.glsl).
 #include "svgf_common.glsl"
 #include "trace_decision.glsl"
+#if SVGF_SHARED
+#include "decision_taps.glsl"
+#endif
 #define SVGF_LIST_WRITER 1
 #include "svgf_pixels.glsl"
 
@@ -38,6 +43,9 @@ uniform float svgf_max_history;
 uniform float svgf_still_max_history;   // the cap of a pixel that did not move on a still frame
 uniform bool svgf_still;            // this frame's views and scene are last frame's (passes/history.py)
 uniform bool svgf_history_valid;    // false on the first frame and after a scene edit
+#if SVGF_SHARED
+uniform usampler2DArray spread_source;   // last frame's decision texel where svgf_spread.comp wrote
+#endif
 
 // The history this pixel reprojects to, summed over the taps of last frame that show its surface.
 struct Reprojected {
@@ -48,17 +56,47 @@ struct Reprojected {
     float history;
 };
 
-void add_tap(inout Reprojected r, ivec3 q, float w, uint word, vec3 n, float prev_depth, float tolerance) {
-    if (w <= 0.0 || !svgf_inside(q.xy, textureSize(key_prev, 0).xy)) return;
-    SvgfSurface s = svgf_unpack(texelFetch(key_prev, q, 0).xy, texelFetch(surface_prev, q, 0).xy);
-    if (s.history <= 0.0 || !reprojection_matches(s.depth, s.n, s.word, prev_depth, n, word, tolerance)) return;
+// The history of last frame's pixel q (`history` frames long) with weight w.
+void add_history(inout Reprojected r, ivec3 q, float w, float history) {
     r.weight += w;
     r.diffuse += w * texelFetch(history_diffuse, q, 0).rgb;
 #if SVGF_SPECULAR
     r.specular += w * texelFetch(history_specular, q, 0).rgb;
 #endif
     r.moments += w * texelFetch(moments_prev, q, 0);
-    r.history += w * s.history;
+    r.history += w * history;
+}
+
+#if SVGF_SHARED
+// The history of a pixel q that borrowed its light last frame: its sources' (the traced pixels its
+// decision texel names, each with a history of its own), weighted as the spread weighed them.
+void add_borrowed_history(inout Reprojected r, ivec3 q, float w) {
+    DecisionTaps taps = decision_taps(texelFetch(spread_source, q, 0).xy);
+    float history[4];
+    float total = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        history[k] = taps.w[k] > 0.0 ? uintBitsToFloat(texelFetch(surface_prev, taps.q[k], 0).y) : 0.0;
+        if (history[k] > 0.0) total += taps.w[k];
+    }
+    if (!(total > 0.0)) return;
+    for (int k = 0; k < 4; ++k)
+        if (history[k] > 0.0) add_history(r, taps.q[k], w * taps.w[k] / total, history[k]);
+}
+#endif
+
+void add_tap(inout Reprojected r, ivec3 q, float w, uint word, vec3 n, float prev_depth, float tolerance) {
+    if (w <= 0.0 || !svgf_inside(q.xy, textureSize(key_prev, 0).xy)) return;
+    SvgfSurface s = svgf_unpack(texelFetch(key_prev, q, 0).xy, texelFetch(surface_prev, q, 0).xy);
+    bool borrowed = SVGF_SHARED != 0 && s.history == SVGF_BORROWED;
+    if (!(s.history > 0.0 || borrowed) || !reprojection_matches(s.depth, s.n, s.word, prev_depth, n, word, tolerance))
+        return;
+#if SVGF_SHARED
+    if (borrowed) {
+        add_borrowed_history(r, q, w);
+        return;
+    }
+#endif
+    add_history(r, q, w, s.history);
 }
 
 void main() {

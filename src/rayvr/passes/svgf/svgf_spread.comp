@@ -2,11 +2,12 @@
 // whose light this frame is another view's (flagged DECISION_SPREAD: glsl/trace_decision.glsl) takes
 // that view's filtered illumination over the traced pixels of its surface there
 // (glsl/decision_taps.glsl), remodulated by its own albedos and emission. The reprojection wrote
-// it as having no surface, so the variance and a-trous stages did no work for it; here it also
-// takes its sources' history (colour history, luminance moments, history length) under its own
-// filter key, so that it goes on from there on a frame where it traces its own light (the eyes
-// alternating, a view moving off its source). With SVGF_FILTER_LIST, where the a-trous stage ran over
-// the pixels it filters only, it also writes the background where nothing was drawn.
+// it as having no surface, so the variance and a-trous stages did no work for it. Its history is
+// its sources': it is not copied here. The pixel keeps its own filter key, the history length
+// SVGF_BORROWED and its decision texel (`spread_source`), and on a later frame where it traces its
+// own light (the eyes alternating, a view moving off its source) the reprojection reads the
+// sources' history through that texel. With SVGF_FILTER_LIST, where the a-trous stage ran over the
+// pixels it filters only, it also writes the background where nothing was drawn.
 #define TRACE_DECISION 1
 #include "svgf_common.glsl"
 #include "decision_taps.glsl"
@@ -18,13 +19,9 @@ uniform SVGF_ILLUM_SAMPLER src_illum;   // this frame's filtered illumination (t
 uniform sampler2DArray svgf_diffuse_in;   // the background where nothing was drawn
 #endif
 layout(rgba16f) writeonly uniform image2DArray dst;
-layout(rgba16f) uniform image2DArray history_diffuse;
-#if SVGF_SPECULAR
-layout(rgba16f) uniform image2DArray history_specular;
-#endif
-layout(rgba32f) uniform image2DArray moments_cur;
 layout(rg32ui) writeonly uniform uimage2DArray key_cur;
-layout(rg32ui) uniform uimage2DArray surface_cur;
+layout(rg32ui) writeonly uniform uimage2DArray surface_cur;
+layout(rg32ui) writeonly uniform uimage2DArray spread_source;
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
@@ -39,30 +36,19 @@ void main() {
     }
     GSurface g = gbuf_load(p);
     DecisionTaps taps = decision_taps(t);
-    vec3 d = vec3(0.0), s = vec3(0.0), hd = vec3(0.0), hs = vec3(0.0);
-    vec4 m = vec4(0.0);
-    float history = 0.0;
+    vec3 d = vec3(0.0), s = vec3(0.0);
     for (int k = 0; k < 4; ++k) {
         float w = taps.w[k];
         if (!(w > 0.0)) continue;
-        ivec3 q = taps.q[k];
-        SvgfIllum illum = texelFetch(src_illum, q, 0);
+        SvgfIllum illum = texelFetch(src_illum, taps.q[k], 0);
         d += w * svgf_illum_diffuse(illum).rgb;
-        hd += w * imageLoad(history_diffuse, q).rgb;
 #if SVGF_SPECULAR
         s += w * svgf_illum_specular(illum).rgb;
-        hs += w * imageLoad(history_specular, q).rgb;
 #endif
-        m += w * imageLoad(moments_cur, q);
-        history += w * uintBitsToFloat(imageLoad(surface_cur, q).y);
     }
     imageStore(dst, p, vec4(to_half_range(svgf_color(g, uint(p.z), d, s)), 1.0));
-    imageStore(history_diffuse, p, vec4(hd, 0.0));
-#if SVGF_SPECULAR
-    imageStore(history_specular, p, vec4(hs, 0.0));
-#endif
-    imageStore(moments_cur, p, m);
-    SvgfSurface own = svgf_surface_at(p, g, gbuf_fetch_effect(p), max(history, 1.0));
+    SvgfSurface own = svgf_surface_at(p, g, gbuf_fetch_effect(p), SVGF_BORROWED);
     imageStore(key_cur, p, uvec4(svgf_pack_key(own), 0u, 0u));
     imageStore(surface_cur, p, uvec4(svgf_pack_tag(own), 0u, 0u));
+    imageStore(spread_source, p, uvec4(t, 0u, 0u));
 }
