@@ -1,0 +1,19 @@
+#!/bin/bash
+# device call 1 (session 30): tauray, clean preset, 64 views of 512x683, `view_reuse --dispatches 5`, four trees one after
+# another with a 1 x 1 spp reference (timing only): t0 f0c1e67 (last session's), t1 1cf2dd4 (SVGF's scratch texels and the
+# composite's lobes left unwritten where SVGF spreads), t2 6099a8f (+ the decision's tap mask), head 0163c91 (+ the spread's
+# history read through the decision texel); then head with the 16 x 16 spp reference, FLIP comparable with
+# gpu_2026-12-07e's 64-view rows
+cd "$(dirname "$0")/../../.."
+source tools/gpu-preamble.sh; nvidia-smi --query-gpu=name,driver_version,clocks.sm,temperature.gpu --format=csv > $OUT/gpu.txt; date
+for t in t0 head t1 t2; do
+  s=$PWD/src; [ $t != head ] && s=$PWD/.ab/$t/src
+  mkdir -p $OUT/$t
+  PYTHONPATH=/tmp/site:$s timeout 90 python3 -m benchmarks view_reuse --scene .scenes/tauray_test.glb --views 64 --out $OUT/$t \
+    --reference-frames 1 --reference-spp 1 --dispatches 5 > $OUT/$t/view_reuse64.log 2>&1
+  echo "== $t"; grep -v -i warn $OUT/$t/view_reuse64.log | grep -v "%|" | grep "a frame" | cut -c1-200
+done; date
+mkdir -p $OUT/flip
+timeout 200 python3 -m benchmarks view_reuse --scene .scenes/tauray_test.glb --views 64 --out $OUT/flip \
+  --reference-frames 16 --dispatches 5 > $OUT/flip/view_reuse64.log 2>&1
+grep -v -i warn $OUT/flip/view_reuse64.log | grep -v "%|" | tail -5 | cut -c1-300; date
