@@ -118,15 +118,15 @@ def _trace_decision(g: RenderGraph, reuse, foveation, decision: dict | None, whe
     return True
 
 
-def _read_decision(g: RenderGraph, readers) -> None:
-    """Decision.decision into each of `readers` (pass names) that the graph has and whose pass
-    declares a `decision` input (another pass under one of these names may not read it)."""
-    from .passes.trace_decision import DECISION
+def _read_decision(g: RenderGraph, readers, pin: str = "decision") -> None:
+    """Decision.<pin> (its `decision`, or its `workTiles`) into each of `readers` (pass names) that
+    the graph has and whose pass declares that input (another pass under one of these names may not
+    read it)."""
     from .rendergraph.render_pass import CompileData
 
     for reader in readers:
-        if reader in g.passes and DECISION in g.get_pass(reader).reflect(CompileData(views=2)).pins:
-            g.add_edge("Decision.decision", f"{reader}.{DECISION}")
+        if reader in g.passes and pin in g.get_pass(reader).reflect(CompileData(views=2)).pins:
+            g.add_edge(f"Decision.{pin}", f"{reader}.{pin}")
 
 
 def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
@@ -242,6 +242,9 @@ def hybrid(max_bounces: int = 1, tonemap: str = "aces", exposure: float = 0.0,
         # the composite reads it only to leave the pixels SVGF spreads to, which only reuse flags
         spreads = svgf and reuse == "views"
         _read_decision(g, ("Compaction", "Shadows", "Reflections", "PathTracer", *(("Composite",) * spreads), "SVGF"))
+        if spreads:   # the tiles with light of their own, for the passes whose workgroup is one
+            from .passes.trace_decision.work_tiles import WORK_TILES
+            _read_decision(g, ("Shadows", "Reflections", "Composite"), WORK_TILES)
     return g
 
 

@@ -16,8 +16,7 @@
 #define PIXEL_LIST_GROUP 64
 #define PIXEL_LIST_HEADER_WORDS 4
 
-uint pixel_list_pack(ivec3 p) { return uint(p.x) | (uint(p.y) << 13u) | (uint(p.z) << 26u); }
-ivec3 pixel_list_unpack(uint w) { return ivec3(w & 0x1FFFu, (w >> 13u) & 0x1FFFu, w >> 26u); }
+#include "pixel_pack.glsl"
 
 // Groups of PIXEL_LIST_GROUP a list's indirect dispatch gains when a writer appends [base, base + n)
 // to the [0, base) before it (each workgroup adds its own: the count grows as the list fills).

@@ -6,7 +6,9 @@
 // #include is expanded even inside a false #if, so this file declares no layout). With
 // RAY_GROUP_Z 1 this is the usual X x Y tile of one view. With RAY_GROUP_VIEW_ORDER (a uint array of
 // RAY_GROUP_VIEWS entries: passes.dispatch.view_order) the workgroups take the views in that order.
+// With WORK_TILES_INPUT (glsl/work_tiles.glsl) the workgroups are the listed tiles.
 #pragma once
+#include "work_tiles.glsl"
 #ifdef RAY_GROUP_Z
 
 #define RAY_GROUP_SIZE (RAY_GROUP_X * RAY_GROUP_Y * RAY_GROUP_Z)
@@ -24,6 +26,12 @@ ivec3 ray_group_pixel_of(uvec3 group, uint lane) {
     return p;
 }
 
-// This invocation's (x, y, view).
-ivec3 ray_group_pixel() { return ray_group_pixel_of(gl_WorkGroupID, gl_LocalInvocationIndex); }
+// This invocation's (x, y, view); with WORK_TILES_INPUT its workgroup's tile is the list's.
+ivec3 ray_group_pixel() {
+#if WORK_TILES_INPUT
+    return ray_group_pixel_of(work_tile(), gl_LocalInvocationIndex);
+#else
+    return ray_group_pixel_of(gl_WorkGroupID, gl_LocalInvocationIndex);
+#endif
+}
 #endif

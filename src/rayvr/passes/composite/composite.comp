@@ -15,7 +15,8 @@
 // they did in RTShadows (the probe update measured 2.2x from the same split).
 // With TRACE_DECISION a pixel the decision flags DECISION_SPREAD (SVGF gives it another view's
 // filtered light) is left: 0 in `dst`, and the two lobes unwritten (SVGF, their one reader, reads
-// neither at such a pixel).
+// neither at such a pixel). With WORK_TILES_INPUT the workgroups are the decision's work tiles
+// (glsl/work_tiles.glsl), and the pass clears `dst` before, for the spread pixels of the others.
 #define GBUF_READER 1
 #include "gbuffer.glsl"
 #include "trace_decision.glsl"
@@ -51,7 +52,7 @@ void main() {
     if (any(greaterThanEqual(p, imageSize(dst)))) return;   // past the image or the last view
 #if TRACE_DECISION
     if (decision_spread(decision_at(p))) {   // the lobes are left unwritten: SVGF reads neither there
-        imageStore(dst, p, vec4(0.0, 0.0, 0.0, 1.0));
+        imageStore(dst, p, vec4(0.0));   // as the clear before a dispatch over the work tiles
         return;
     }
 #endif

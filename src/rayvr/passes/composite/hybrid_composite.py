@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from ...gpu.program_resources import program_resources
+from ...gpu.textures import zero_texture
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..dispatch import (COMPUTE_GROUP, check_shape, decision_view_group, groups_2d, ray_group, ray_group_defines,
@@ -9,6 +10,7 @@ from ..dispatch import (COMPUTE_GROUP, check_shape, decision_view_group, groups_
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from ..probe_gi import inputs as probe_inputs
+from ..trace_decision import work_tiles
 from ..trace_decision.fill import DECISION, DecisionFill
 
 # input pin -> the sampler uniform composite.comp reads it through (the G-buffer's: channels.bind_inputs)
@@ -66,6 +68,7 @@ class HybridComposite(RenderPass):
                          ).format("rgba16f")
             r.add_output(self.SPECULAR, "specular light").format("rgba16f")
         DecisionFill.add_input(r)
+        work_tiles.add_input(r, cd)
         return r
 
     def compile(self, ctx, cd):
@@ -86,6 +89,11 @@ class HybridComposite(RenderPass):
         view_group = decision_view_group(ctx, self.probe_view_group) if decided else self.probe_view_group
         self._group = ray_group(cd.views, tuple(self.probe_tile), view_group) if self._probes else (*COMPUTE_GROUP, 1)
         order = view_order(ctx, cd.views, self._group) if decided else None
+        # over the decision's work tiles when its workgroup is one: the colour is cleared first, so that
+        # the spread pixels of the tiles left out hold 0 as the others do
+        self._tiles = work_tiles.usable(ctx, cd, self._group)
+        if self._tiles:
+            defines["WORK_TILES_INPUT"] = 1
         self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group, order)}
         # the scene's features: the probe lookup shades the G-buffer surface with its whole material
         self._prog = self.compute_program(ctx.gl, "composite.comp",
@@ -110,6 +118,10 @@ class HybridComposite(RenderPass):
             self._res.image("dst_specular", data[self.SPECULAR])
         if self._probes:
             probe_inputs.bind(self._res, data, self._probe_sampler)
-        self._prog.run(*self._groups)
+        if self._tiles:
+            zero_texture(data[self.COLOR])
+            work_tiles.run(self._res, data[work_tiles.WORK_TILES])
+        else:
+            self._prog.run(*self._groups)
         if self._probes:
             probe_inputs.unbind(self._res)

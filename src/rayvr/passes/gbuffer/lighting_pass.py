@@ -14,6 +14,7 @@ from ..dispatch import (COMPUTE_GROUP, VIEW_GROUP, check_shape, decision_view_gr
                         ray_group_defines, view_order)
 from ..effects import effect_defines, effects_used, scene_defines
 from ..probe_gi import inputs as probe_inputs
+from ..trace_decision import work_tiles
 from ..trace_decision.fill import DecisionFill
 from . import channels
 
@@ -64,6 +65,7 @@ class GBufferLightingPass(RenderPass):
             if self._dispatch_2d(cd):
                 pin.unused("runs over the whole image: no material is PATH_TRACED")
             DecisionFill.add_input(r)
+            work_tiles.add_input(r, cd)
         r.add_output(self.OUTPUT, self.OUTPUT_DESC).format("rgba16f")
         probe_inputs.add_inputs(r, self.probes_unused(cd))
         return r
@@ -107,6 +109,10 @@ class GBufferLightingPass(RenderPass):
                          **self._fill.defines()}
         if self.PIXEL_LIST and not self._pixels_2d:
             self._defines["PIXEL_LIST_INPUT"] = 1
+        # over the decision's work tiles when its workgroup is one (glsl/work_tiles.glsl)
+        self._tiles = self._pixels_2d and work_tiles.usable(ctx, cd, self._group)
+        if self._tiles:
+            self._defines["WORK_TILES_INPUT"] = 1
         self._probes = probe_inputs.bound(cd)
         if self._probes:
             import moderngl
@@ -146,7 +152,7 @@ class GBufferLightingPass(RenderPass):
         res.image("dst", data[self.OUTPUT])
         if self._probes:
             probe_inputs.bind(res, data, self._probe_sampler)
-        self.dispatch(res.prog, data)
+        self.dispatch(res, data)
         if self._probes:
             probe_inputs.unbind(res)
 
@@ -158,10 +164,13 @@ class GBufferLightingPass(RenderPass):
         if self.PIXEL_LIST and not self._pixels_2d:
             res.buffer("PixelList", data[self.PIXEL_LIST])
 
-    def dispatch(self, prog, data) -> None:
-        """Run `prog` over the pass's pixels: the list's indirect dispatch, or the whole image."""
+    def dispatch(self, res, data) -> None:
+        """Run program `res` over the pass's pixels: the list's indirect dispatch, the decision's
+        work tiles, or the whole image."""
         if self.PIXEL_LIST and not self._pixels_2d:
-            prog.run_indirect(data[self.PIXEL_LIST], DISPATCH_OFFSET)
+            res.prog.run_indirect(data[self.PIXEL_LIST], DISPATCH_OFFSET)
+        elif self._tiles:
+            work_tiles.run(res, data[work_tiles.WORK_TILES])
         else:   # the shader declares no list (the compaction pass was pruned)
-            prog.run(*self._groups)
+            res.prog.run(*self._groups)
 

@@ -14,6 +14,8 @@
 //     (RTShadows shades it over that pixel's light sample)
 //   REUSE_SPREAD 1: a pixel whose light is another view's is flagged DECISION_SPREAD (SVGF spreads
 //     the source's filtered light to it; the fills and the composite leave it)
+//   WORK_TILES_APPEND 1 (with REUSE_SPREAD): lists the 8x4 tiles that hold a pixel whose light is
+//     not spread (glsl/work_tiles.glsl), the tiles the ray passes and the composite run over
 //   EVERY_SURFACE 1: every drawn pixel has rays to trace (a path tracer from the camera; the sky
 //     traces too), else those of effect SHADOWS and above
 #define GBUF_READER 1
@@ -22,8 +24,9 @@
 #include "scene.glsl"
 #include "same_surface.glsl"
 #include "trace_decision.glsl"
+#include "work_tiles.glsl"
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;   // two work tiles (work_tiles_append)
 layout(rg32ui) writeonly uniform uimage2DArray dst;
 
 // Candidates around a projected point or a pixel, nearest first (radius 2).
@@ -232,18 +235,24 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at, out u
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
-    if (any(greaterThanEqual(p, imageSize(dst)))) return;
-    float budget = budget_at(p);
-    uint effect = gbuf_effect_at(p);
-    uint kind = DECISION_NONE, view = uint(p.z), taps = 0u;
-    vec2 at = vec2(p.xy) + 0.5;
-    if (effect == GBUF_NO_GEOMETRY) {
-        kind = EVERY_SURFACE != 0 ? DECISION_TRACE : DECISION_NONE;
-    } else if (EVERY_SURFACE != 0 || effect >= EFFECT_SHADOWS) {
-        kind = decide(p, gbuf_load(p), budget, view, at, taps);
-    }
+    bool own_light = false;   // inside, and its light is not another view's
+    if (all(lessThan(p, imageSize(dst)))) {
+        float budget = budget_at(p);
+        uint effect = gbuf_effect_at(p);
+        uint kind = DECISION_NONE, view = uint(p.z), taps = 0u;
+        vec2 at = vec2(p.xy) + 0.5;
+        if (effect == GBUF_NO_GEOMETRY) {
+            kind = EVERY_SURFACE != 0 ? DECISION_TRACE : DECISION_NONE;
+        } else if (EVERY_SURFACE != 0 || effect >= EFFECT_SHADOWS) {
+            kind = decide(p, gbuf_load(p), budget, view, at, taps);
+        }
 #if REUSE_SPREAD
-    if (kind == DECISION_REUSE || (kind == DECISION_FILL && int(view) != p.z)) kind |= DECISION_SPREAD;
+        if (kind == DECISION_REUSE || (kind == DECISION_FILL && int(view) != p.z)) kind |= DECISION_SPREAD;
 #endif
-    imageStore(dst, p, uvec4(decision_pack(kind | (taps << DECISION_TAP_SHIFT), budget, view, at), 0u, 0u));
+        own_light = (kind & DECISION_SPREAD) == 0u;
+        imageStore(dst, p, uvec4(decision_pack(kind | (taps << DECISION_TAP_SHIFT), budget, view, at), 0u, 0u));
+    }
+#if WORK_TILES_APPEND
+    work_tiles_append(own_light);
+#endif
 }

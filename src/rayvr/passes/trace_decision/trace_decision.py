@@ -11,6 +11,7 @@ from ...xr.cameras import grid_for_views
 from ..dispatch import ONE_VIEW_TILES, SOURCE_VIEWS, groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
+from . import work_tiles
 from .fill import DECISION, DECISION_FILLS
 
 FOVEATION = ("none", *foveation.MODES)
@@ -55,6 +56,10 @@ class TraceDecision(RenderPass):
     workgroups that read the decision hold one view each whatever their view group
     (rayvr.passes.dispatch.decision_view_group; `source_views_first` then has no workgroup to order):
     a tile of a view that reuses is mostly idle or wholly so, and a wholly idle one costs nothing.
+    `work_tiles` (True; with `reuse` and `spread`): it also lists the 8x4 tiles that hold a pixel
+    whose light is not spread (`workTiles`, glsl/work_tiles.glsl), and the ray passes and the
+    composite whose workgroup is such a tile run over that list: a wholly spread tile launches
+    nothing. (False: the list is declared but left empty and unread, for comparisons.)
 
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
     SHADOWS and above. `spread` (the graphs set it with SVGF): SVGF gives a pixel whose light is
@@ -73,7 +78,7 @@ class TraceDecision(RenderPass):
                   "reuse_lobe_fraction": 0.25,
                   "source_stride": 4, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
                   "share_light_samples": True, "source_views_first": True,
-                  "one_view_tiles": True, "reuse_delta_lobes": True}
+                  "one_view_tiles": True, "reuse_delta_lobes": True, "work_tiles": True}
     WHOLE = {"source_stride": (2, None, "grid steps between source views"),
              "grid_cols": (0, None, "the camera grid's columns; 0: the most square")}
 
@@ -99,6 +104,9 @@ class TraceDecision(RenderPass):
         channels.add_inputs(r)
         r.add_output(self.DECISION, "per pixel: trace, or reuse / fill from which traced pixel; the ray budget"
                      ).format("rg32ui")
+        if self.spread and self.reuse:
+            r.add_output(work_tiles.WORK_TILES, "the 8x4 tiles that hold a pixel whose light is not spread (scratch)"
+                         ).buffer(work_tiles.work_tiles_bytes(cd.size, cd.views))
         return r
 
     def skip_reason(self, cd):
@@ -119,7 +127,9 @@ class TraceDecision(RenderPass):
                          "EVERY_SURFACE": int(bool(self.every_surface)),
                          "REUSE_SPREAD": int(bool(self.spread) and self.reuses(cd.views)),
                          "SHARE_LIGHT_SAMPLES": int(bool(self.share_light_samples) and self.reuses(cd.views)
-                                                   and not self.every_surface)}
+                                                   and not self.every_surface),
+                         "WORK_TILES_APPEND": int(bool(self.work_tiles and self.spread) and self.reuses(cd.views))}
+        ctx.dictionary[work_tiles.WORK_TILES_LISTED] = bool(self._defines["WORK_TILES_APPEND"])
         ctx.dictionary[DECISION_FILLS] = not (self._defines["REUSE_SPREAD"] and self.foveation == "none")
         grid_reuse = self.reuses(cd.views) and cd.views > 2   # a camera grid's: stereo's source may alternate
         if self.source_views_first and grid_reuse:
@@ -156,4 +166,7 @@ class TraceDecision(RenderPass):
     def execute(self, ctx, data):
         channels.bind_inputs(self._res, data)
         self._res.image("dst", data[self.DECISION])
+        if self._defines["WORK_TILES_APPEND"]:
+            work_tiles.reset(ctx, data[work_tiles.WORK_TILES])
+            self._res.buffer("WorkTiles", data[work_tiles.WORK_TILES])
         self._res.prog.run(*self._groups)
