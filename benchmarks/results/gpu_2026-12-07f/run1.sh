@@ -1,16 +1,18 @@
 #!/bin/bash
-# device call 1 (session 30): tauray, clean preset, 64 views of 512x683, `view_reuse --dispatches 5`, four trees one after
+# device call 1 (session 30): tauray, clean preset, 64 views of 512x683, `view_reuse --dispatches 5`, one tree after
 # another with a 1 x 1 spp reference (timing only): t0 f0c1e67 (last session's), t1 1cf2dd4 (SVGF's scratch texels and the
-# composite's lobes left unwritten where SVGF spreads), t2 6099a8f (+ the decision's tap mask), head 0163c91 (+ the spread's
-# history read through the decision texel); then head with the 16 x 16 spp reference, FLIP comparable with
-# gpu_2026-12-07e's 64-view rows
+# composite's lobes left unwritten where SVGF spreads), t2 6099a8f (+ the decision's tap mask), head 745dfbf (+ the spread's
+# history read through the decision texel, 0163c91, and the decision's work tiles) with the variants
+# Decision.work_tiles=False (0163c91's frame) and light samples not shared; then head with the 16 x 16 spp reference,
+# FLIP comparable with gpu_2026-12-07e's 64-view rows
 cd "$(dirname "$0")/../../.."
 source tools/gpu-preamble.sh; nvidia-smi --query-gpu=name,driver_version,clocks.sm,temperature.gpu --format=csv > $OUT/gpu.txt; date
 for t in t0 head t1 t2; do
-  s=$PWD/src; [ $t != head ] && s=$PWD/.ab/$t/src
+  s=$PWD/src; v=""; [ $t != head ] && s=$PWD/.ab/$t/src
+  [ $t = head ] && v="Decision.work_tiles=False;Decision.share_light_samples=False,Shadows.share_light_samples=False"
   mkdir -p $OUT/$t
-  PYTHONPATH=/tmp/site:$s timeout 90 python3 -m benchmarks view_reuse --scene .scenes/tauray_test.glb --views 64 --out $OUT/$t \
-    --reference-frames 1 --reference-spp 1 --dispatches 5 > $OUT/$t/view_reuse64.log 2>&1
+  PYTHONPATH=/tmp/site:$s timeout 120 python3 -m benchmarks view_reuse --scene .scenes/tauray_test.glb --views 64 --out $OUT/$t \
+    --reference-frames 1 --reference-spp 1 --dispatches 5 ${v:+--variants "$v"} > $OUT/$t/view_reuse64.log 2>&1
   echo "== $t"; grep -v -i warn $OUT/$t/view_reuse64.log | grep -v "%|" | grep "a frame" | cut -c1-200
 done; date
 mkdir -p $OUT/flip
