@@ -451,8 +451,10 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     composite take one view per workgroup (`one_view_tiles`), in both of RTShadows' dispatches (the
     glossy boxes' pixels take their source's light sample) and RTReflections'. Without it the
     composite, whose workgroups span four views, takes the four sources first, then the others in
-    grid order (`source_views_first`). Which lane shades which pixel changes nothing: the images and
-    rays per view are those of the grid order's workgroups over several views."""
+    grid order (`source_views_first`). One view per workgroup, they run over the decision's work
+    tiles (`work_tiles`), or over every tile without. Which lane shades which pixel, and which
+    workgroups launch, change nothing: the images and rays per view are those of the grid order's
+    workgroups over several views."""
     scene = lambert_cornell()
     for name in ("TallBox", "ShortBox"):
         m = scene.materials[name]
@@ -460,7 +462,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     scene.materials["TallBox"].effect = rv.Effect.REFLECTIONS
     stride = 2
     configs = {"grid": {"source_views_first": False, "one_view_tiles": False},
-               "sources first": {"one_view_tiles": False}, "one view": {}}
+               "sources first": {"one_view_tiles": False}, "one view": {}, "every tile": {"work_tiles": False}}
     out = {}
     for name, props in configs.items():
         g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf")
@@ -481,12 +483,40 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     assert order == sources + [v for v in range(16) if v not in sources]
     for p in ("Shadows", "Composite", "Reflections"):
         assert out["one view"][3][p]["RAY_GROUP_Z"] == 1 and out["grid"][3][p]["RAY_GROUP_Z"] > 1, p
+        assert out["one view"][3][p].get("WORK_TILES_INPUT") == 1, p
+        assert "WORK_TILES_INPUT" not in out["every tile"][3][p] and "WORK_TILES_INPUT" not in out["grid"][3][p], p
     assert ((out["one view"][4] & SHARED_LIGHT) != 0).sum() > 50   # RTShadows' second dispatch has pixels
-    for name in ("sources first", "one view"):
+    for name in ("sources first", "one view", "every tile"):
         np.testing.assert_array_equal(out[name][0], out["grid"][0])
         np.testing.assert_array_equal(out[name][1], out["grid"][1])
         assert out[name][2] == out["grid"][2]
     assert all(out["grid"][2][v] > 0 for v in sources)
+
+
+@pytest.mark.parametrize("views", [2, 16])
+def test_the_work_tiles_are_the_tiles_with_a_pixel_whose_light_is_not_spread(gpu, views):
+    """The decision lists, once each, every 8x4 tile of a view that holds a pixel whose light is its
+    own (not flagged DECISION_SPREAD, the sky included, and the tiles past the image's edge that
+    hold such a pixel) and no other: in the reusing views most tiles are left out."""
+    from rayvr.passes.compaction import read_pixel_list
+    size = (32, 30)   # the last row of tiles half outside
+    g = rv.graphs.hybrid(reuse="views")
+    g.update_pass("Decision", {"source_stride": 2})
+    g.mark_output(DECISION)
+    g.mark_output("Decision.workTiles")
+    with Renderer(lambert_cornell(), g, views=views, size=size) as r:
+        r.render()
+        own = (r.read_output(DECISION)[..., 0] & 4) == 0   # not DECISION_SPREAD
+        n, tiles = read_pixel_list(r.compiled.get_output("Decision.workTiles"))
+    rows = -(-size[1] // 4)
+    padded = np.zeros((views, rows * 4, size[0]), bool)
+    padded[:, :size[1]] = own
+    want = padded.reshape(views, rows, 4, size[0] // 8, 8).any(axis=(2, 4))   # (view, tile y, tile x)
+    listed = np.zeros_like(want)
+    listed[tiles[:, 2], tiles[:, 1], tiles[:, 0]] = True
+    assert n == len(np.unique(tiles, axis=0))   # each tile once
+    np.testing.assert_array_equal(listed, want)
+    assert want[0].all() and want[1:].mean() < 0.8   # the source view whole, the others far from it
 
 
 @pytest.mark.parametrize("foveation, denoise, fills", [("none", "svgf", False), ("fixed", "svgf", True),

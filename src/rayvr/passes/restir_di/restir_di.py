@@ -207,7 +207,7 @@ class ReSTIRDI(HistoryOwner, GBufferLightingPass):
                 res.image("history_in", data[self.HISTORY[prev]], read=True, write=False)
                 res.image("surface_in", data[self.SURFACE[prev]], read=True, write=False)
                 res.set("restir_history_valid", self._history.valid)
-            self.dispatch(res.prog, data)
+            self.dispatch(res, data)
             ctx.barrier(Access.IMAGE)
             source = targets[stage]
         self._res.image("reservoirs_in", data[targets["shade"]], read=True, write=False)

@@ -114,7 +114,7 @@ class RTReflections(GBufferLightingPass):
         res.image("dst", data[self.OUTPUT])
         res.image("probe_hits", data[self.PROBE_HITS])
         res.image("probe_factors", data[self.PROBE_FACTORS])
-        self.dispatch(self._prog, data)
+        self.dispatch(res, data)
         ctx.barrier(Access.IMAGE)   # the records and the radiance, for the lookups' loads
         look = self._lookup
         self.bind_pixels(look, data)
@@ -122,6 +122,6 @@ class RTReflections(GBufferLightingPass):
         look.image("probe_hits", data[self.PROBE_HITS], read=True, write=False)
         look.image("probe_factors", data[self.PROBE_FACTORS], read=True, write=False)
         probe_inputs.bind(look, data, self._probe_sampler)
-        self.dispatch(look.prog, data)
+        self.dispatch(look, data)
         probe_inputs.unbind(look)
         self._fill.run(ctx, data)
