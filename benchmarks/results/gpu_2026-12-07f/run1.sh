@@ -4,7 +4,7 @@
 # composite's lobes left unwritten where SVGF spreads), t2 6099a8f (+ the decision's tap mask), head ada2bc1 (+ the spread's
 # history read through the decision texel, 0163c91, and the decision's work tiles) with the variants
 # Decision.work_tiles=False (0163c91's frame) and light samples not shared; then head with the 16 x 16 spp reference,
-# FLIP comparable with gpu_2026-12-07e's 64-view rows
+# FLIP comparable with gpu_2026-12-07e's 64-view rows; then stereo
 cd "$(dirname "$0")/../../.."
 source tools/gpu-preamble.sh; nvidia-smi --query-gpu=name,driver_version,clocks.sm,temperature.gpu --format=csv > $OUT/gpu.txt; date
 for t in t0 head t1 t2; do
@@ -19,3 +19,8 @@ mkdir -p $OUT/flip
 timeout 200 python3 -m benchmarks view_reuse --scene .scenes/tauray_test.glb --views 64 --out $OUT/flip \
   --reference-frames 16 --dispatches 5 > $OUT/flip/view_reuse64.log 2>&1
 grep -v -i warn $OUT/flip/view_reuse64.log | grep -v "%|" | tail -5 | cut -c1-300; date
+# stereo 2x1440x1600 at head, with FLIP against the benchmark's default reference (as gpu_2026-12-07e's run3.sh)
+mkdir -p $OUT/s2
+timeout 150 python3 -m benchmarks view_reuse --scene .scenes/tauray_test.glb --views 2 --out $OUT/s2 --dispatches 5 \
+  > $OUT/s2/view_reuse2.log 2>&1
+grep -v -i warn $OUT/s2/view_reuse2.log | grep -v "%|" | tail -6 | cut -c1-300; date
