@@ -4,11 +4,11 @@ from __future__ import annotations
 from ...gpu.program_resources import program_resources
 from ...materials.effect import Effect
 from ...rendergraph.registry import register_pass
-from ...rendergraph.render_pass import Access, Reflection, RenderPass
+from ...rendergraph.render_pass import Reflection, RenderPass
 from ..dispatch import groups_2d
 from ..effects import effect_defines, effects_used, unused_effect_reason
 from ..trace_decision.fill import DECISION, DecisionFill
-from .pixel_list import HEADER_BYTES, pixel_list_bytes
+from .pixel_list import HEADER_BYTES, empty_lists, pixel_list_bytes
 
 LISTS = {"shadowPixels": "ShadowList", "reflectionPixels": "ReflectionList", "pathPixels": "PathList"}   # pin -> GLSL block
 
@@ -54,17 +54,14 @@ class EffectCompaction(RenderPass):
         self._defines = {"COMPACT_REFLECTIONS": int(reflections), "COMPACT_PATHS": int(paths),
                          "COMPACT_EVERY_SURFACE": int(every),
                          "TRACE_DECISION": int(DecisionFill.connected(cd))}
-        self._reset = program_resources(self.compute_program(ctx.gl, "compact_reset.comp"))
         self._compact = program_resources(self.compute_program(ctx.gl, "compact.comp",
                                                                {**effect_defines(), **self._defines}))
         self._groups = groups_2d(cd.size, cd.views)
 
     def execute(self, ctx, data):
+        empty_lists(ctx, *(data[pin] for pin in LISTS))
         for pin, block in LISTS.items():
-            self._reset.buffer(block, data[pin])
             self._compact.buffer(block, data[pin])
-        self._reset.prog.run(1)
-        ctx.barrier(Access.STORAGE)
         self._compact.texture("gbuf_effect", data[self.EFFECT])
         if self._defines["TRACE_DECISION"]:
             self._compact.texture("trace_decision", data[DECISION])

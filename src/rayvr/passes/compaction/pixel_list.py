@@ -9,6 +9,17 @@ DISPATCH_OFFSET = 4
 EMPTY_HEADER = np.array([0, 0, 1, 1], np.uint32).tobytes()   # no pixel; (0, 1, 1) groups
 
 
+def empty_lists(ctx, *buffers) -> None:
+    """Empty pixel lists before their writer appends (count 0, dispatch (0, 1, 1)), from the host
+    after a buffer-update barrier: a list may be a transient whose memory another pass's shaders
+    wrote just before."""
+    from ...rendergraph.render_pass import Access
+
+    ctx.barrier(Access.UPDATE)
+    for buffer in buffers:
+        buffer.write(EMPTY_HEADER)
+
+
 def pixel_list_bytes(size: tuple[int, int], views: int) -> int:
     """Bytes of a pixel list that can hold every pixel of every view."""
     return HEADER_BYTES + 4 * size[0] * size[1] * views

@@ -61,7 +61,7 @@ from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
-from ..compaction.pixel_list import DISPATCH_OFFSET, EMPTY_HEADER, pixel_list_bytes
+from ..compaction.pixel_list import DISPATCH_OFFSET, empty_lists, pixel_list_bytes
 from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
@@ -260,9 +260,8 @@ class SVGF(HistoryOwner, RenderPass):
         if self._shared:
             res.texture("spread_source", data[self.SPREAD_SOURCE])
         pixels = data[self.FILTER_PIXELS] if self._listed else None
-        if pixels is not None:   # a transient: another pass's shaders may have written its memory
-            ctx.barrier(Access.UPDATE)
-            pixels.write(EMPTY_HEADER)
+        if pixels is not None:
+            empty_lists(ctx, pixels)
             res.buffer("AppendList", pixels)
         res.image("out_illum", scratch[0])
         res.image("moments_out", data[self.MOMENTS[cur]])

@@ -9,6 +9,7 @@ from ...rendergraph.render_pass import Reflection, RenderPass
 from ...xr import foveation
 from ...xr.cameras import grid_for_views
 from ..dispatch import ONE_VIEW_TILES, SOURCE_VIEWS, groups_2d
+from ..compaction.pixel_list import empty_lists
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from . import work_tiles
@@ -167,6 +168,6 @@ class TraceDecision(RenderPass):
         channels.bind_inputs(self._res, data)
         self._res.image("dst", data[self.DECISION])
         if self._defines["WORK_TILES_APPEND"]:
-            work_tiles.reset(ctx, data[work_tiles.WORK_TILES])
+            empty_lists(ctx, data[work_tiles.WORK_TILES])
             self._res.buffer("WorkTiles", data[work_tiles.WORK_TILES])
         self._res.prog.run(*self._groups)

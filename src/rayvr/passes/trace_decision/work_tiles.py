@@ -3,7 +3,7 @@ pixel whose light is not another view's, listed by TraceDecision where SVGF spre
 and the indirect dispatch over them of a pass whose workgroup is such a tile."""
 from __future__ import annotations
 
-from ..compaction.pixel_list import DISPATCH_OFFSET, EMPTY_HEADER, HEADER_BYTES
+from ..compaction.pixel_list import DISPATCH_OFFSET, HEADER_BYTES
 
 WORK_TILES = "workTiles"
 WORK_TILES_LISTED = "work_tiles_listed"   # ctx.dictionary: TraceDecision fills the list this compile
@@ -26,15 +26,6 @@ def usable(ctx, cd, group: tuple[int, int, int]) -> bool:
     decision fills it (its `work_tiles`) and the pass's workgroup is the list's tile."""
     return (WORK_TILES in cd.input_formats and bool(ctx.dictionary.get(WORK_TILES_LISTED))
             and tuple(group) == (*TILE, 1))
-
-
-def reset(ctx, buffer) -> None:
-    """Empty the list before its writer appends (after a buffer-update barrier: the list may be a
-    transient whose memory another pass's shaders wrote)."""
-    from ...rendergraph.render_pass import Access
-
-    ctx.barrier(Access.UPDATE)
-    buffer.write(EMPTY_HEADER)
 
 
 def run(res, buffer) -> None:
