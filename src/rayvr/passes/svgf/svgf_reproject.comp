@@ -112,8 +112,8 @@ void main() {
     if (!inside) return;
     if (!svgf_has_geometry(word) || borrowed) {
         // the key says "no surface": the later stages read neither scratch texel of this pixel
-        // (each tap tests the key first), so neither is written; a borrowed pixel's moments and
-        // tag are svgf_spread.comp's to write, and nothing reads them before it
+        // (each tap tests the key first), so neither is written; a borrowed pixel's tag is
+        // svgf_spread.comp's to write (its moments are its sources'), and nothing reads it before
         SvgfSurface none = svgf_no_geometry();
         imageStore(key_out, p, uvec4(svgf_pack_key(none), 0u, 0u));
         if (borrowed) return;
