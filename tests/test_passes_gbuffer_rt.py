@@ -221,6 +221,31 @@ def test_hybrid_with_rt_gbuffer_saves_and_loads(tmp_path, suffix):
     assert type(gb).__name__ == "GBufferAuto" and gb.mode == "rt"
 
 
+def test_the_raster_reads_each_pixel_of_a_quad_at_its_own_mip_level(gpu):
+    """Four flat quadrants far apart in colour, seen about a texel a pixel: away from the seams
+    every pixel is one quadrant's colour, and the raster's texel is the ray-traced G-buffer's. The
+    raster's mip selection once used implicit derivatives inside the material's texture branches,
+    where they are undefined: llvmpipe blended the quadrants at one pixel of many 2x2 quads (a dot
+    lattice over Khronos' ToyCar)."""
+    from rayvr.materials.material import TextureRef
+    from rayvr.scene.model import Texture
+
+    n = 64
+    img = np.zeros((n, n, 4), np.uint8)
+    img[..., 3] = 255
+    img[:n // 2, :n // 2, 0] = img[:n // 2, n // 2:, 1] = img[n // 2:, :n // 2, 2] = 255
+    img[n // 2:, n // 2:, :3] = 255
+    scene = builtin.quad(material=Material("Quadrants", metallic=0.0, base_color_texture=TextureRef(0)))
+    scene.textures.append(Texture(img))
+    out = render_both(scene, 1, (48, 48))
+    mask = interior(out["raster"]["effect"])[0] & interior(out["rt"]["effect"])[0]
+    mask &= out["raster"]["effect"][0, ..., 0] != 0xFF
+    raster, rt = (out[k]["baseColor"][0][..., :3].astype(np.float64) for k in ("raster", "rt"))
+    pure = np.minimum(rt, 1.0 - rt).max(axis=-1) < 0.05   # one quadrant's colour: away from the seams
+    assert mask.sum() > 400 and (pure & mask).sum() > 0.7 * mask.sum()
+    assert np.abs(raster - rt).max(axis=-1)[mask & pure].max() < 0.02
+
+
 def test_rt_reads_textures_at_the_level_the_raster_chooses(gpu):
     # A checkerboard of single texels seen from afar: each pixel covers many texels, so the
     # raster's derivatives pick a coarse mip level (flat grey), and so must GBufferRT's ray cones;

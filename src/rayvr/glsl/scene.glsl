@@ -17,10 +17,14 @@
 //
 // Feature #defines (GpuScene.defines(), 0 or 1): SCENE_HAS_TEXTURES, SCENE_HAS_NORMAL_MAPS,
 // SCENE_HAS_ALPHA_MASK, SCENE_HAS_ALPHA_BLEND, SCENE_HAS_TRANSMISSION, SCENE_HAS_PUNCTUAL_LIGHTS,
-// SCENE_HAS_EMISSIVE_TRIANGLES, SCENE_HAS_INSTANCING. Define SCENE_MATERIAL_IMPLICIT_LOD 1 in a
-// fragment shader to sample material textures with mip selection; ray passes pass a ray cone's
-// footprint instead (surface_at_cone, material_params_at: Akenine-Moeller et al., "Texture Level of
-// Detail Strategies for Real-Time Ray Tracing", Ray Tracing Gems ch. 20), or read level 0.
+// SCENE_HAS_EMISSIVE_TRIANGLES, SCENE_HAS_INSTANCING. Define SCENE_MATERIAL_GRADIENTS 1 in a
+// fragment shader to sample material textures with mip selection from the screen-space gradients
+// of uv it sets in `material_uv_dx` / `material_uv_dy` first thing in main(): implicit derivatives
+// are undefined in the non-uniform control flow of material_params_at (a texture's `if`; a quad
+// may straddle two materials), and llvmpipe's came out as a lattice of wrong mip levels, one pixel
+// of each 2x2 quad. Ray passes pass a ray cone's footprint instead (surface_at_cone,
+// material_params_at: Akenine-Moeller et al., "Texture Level of Detail Strategies for Real-Time
+// Ray Tracing", Ray Tracing Gems ch. 20), or read level 0.
 #pragma once
 #include "color.glsl"
 #include "sampling.glsl"
@@ -44,8 +48,11 @@
 #ifndef SCENE_HAS_TRANSMISSION
 #define SCENE_HAS_TRANSMISSION 0
 #endif
-#ifndef SCENE_MATERIAL_IMPLICIT_LOD
-#define SCENE_MATERIAL_IMPLICIT_LOD 0
+#ifndef SCENE_MATERIAL_GRADIENTS
+#define SCENE_MATERIAL_GRADIENTS 0
+#endif
+#if SCENE_MATERIAL_GRADIENTS
+vec2 material_uv_dx, material_uv_dy;   // d uv / d screen x and y, set in uniform control flow
 #endif
 
 
@@ -154,8 +161,9 @@ bool material_has_texture(uint m, int slot) { return scene_materials[m].tex[2 * 
 vec4 material_texture(uint m, int slot, vec2 uv, float uv_lod) {
     vec4 r0 = scene_materials[m].tex[2 * slot], r1 = scene_materials[m].tex[2 * slot + 1];
     vec3 st = vec3(dot(r0.xy, uv) + r0.z, dot(r1.xy, uv) + r1.z, r0.w);
-#if SCENE_MATERIAL_IMPLICIT_LOD
-    return texture(scene_textures, st);
+#if SCENE_MATERIAL_GRADIENTS   // the slot's transform applied to the gradients too
+    return textureGrad(scene_textures, st, vec2(dot(r0.xy, material_uv_dx), dot(r1.xy, material_uv_dx)),
+                       vec2(dot(r0.xy, material_uv_dy), dot(r1.xy, material_uv_dy)));
 #else
     // footprint in texels: the slot's KHR_texture_transform scales uv areas by |det|
     ivec2 size = textureSize(scene_textures, 0).xy;

@@ -1,6 +1,6 @@
 // G-buffer fragment stage: material parameters, normals facing the viewer, effect id, motion;
 // the outputs (one per channel, in the table's order) come from gbuffer_channels.glsl.
-#define SCENE_MATERIAL_IMPLICIT_LOD 1
+#define SCENE_MATERIAL_GRADIENTS 1
 #define GBUF_WRITER 1
 #define GBUF_RASTER_WRITER 1
 #include "views.glsl"
@@ -21,6 +21,8 @@ flat in uint v_instance;
 
 
 void main() {
+    material_uv_dx = dFdx(v_uv);   // here, in uniform control flow (scene.glsl SCENE_MATERIAL_GRADIENTS)
+    material_uv_dy = dFdy(v_uv);
     MaterialParams m = material_params(v_material, v_uv);
 #if SCENE_HAS_ALPHA_MASK
     if (m.alpha_mode == ALPHA_MODE_MASK && m.alpha < scene_materials[v_material].emission_cutoff.a) discard;
