@@ -3,7 +3,7 @@
 // (svgf_spread.comp) gather the same taps. DECISION_REUSE: bilinear over the traced pixels of its
 // surface about its point's position in the source view; DECISION_FILL, or a REUSE none of whose
 // four taps qualifies: the decision's one pixel (it traces and shows the surface). Which taps
-// qualify the decision tested once (decision_tap_mask). Needs TRACE_DECISION 1.
+// qualify the decision tested once (decision_tap_mask): a function of the texel alone.
 #pragma once
 #include "trace_decision.glsl"
 

@@ -40,10 +40,12 @@ bool decision_shared_light(uvec2 t) { return (t.x & DECISION_SHARED_LIGHT) != 0u
 float decision_budget(uvec2 t) { return float((t.x >> 8u) & 0xFFu) / 255.0; }
 const float DECISION_POSITION_STEPS = 8.0;   // sub-pixel steps of a source position
 vec2 decision_position(uvec2 t) { return vec2(uvec2(t.y & 0xFFFFu, t.y >> 16u)) / DECISION_POSITION_STEPS; }
-// A source position as a texel stores it.
-vec2 decision_stored_position(vec2 position) {
-    return floor(clamp(position * DECISION_POSITION_STEPS + 0.5, vec2(0.0), vec2(65535.0))) / DECISION_POSITION_STEPS;
+// A source position in the texel's fixed point steps (rounded, clamped to 16 bits).
+uvec2 decision_position_steps(vec2 position) {
+    return uvec2(clamp(position * DECISION_POSITION_STEPS + 0.5, vec2(0.0), vec2(65535.0)));
 }
+// A source position as a texel stores it.
+vec2 decision_stored_position(vec2 position) { return vec2(decision_position_steps(position)) / DECISION_POSITION_STEPS; }
 // A REUSE texel's light is interpolated over the pixels about its source position: tap k (0-3) is
 // decision_tap_base(position) + (k & 1, k >> 1) of the source view, taken where bit k of
 // decision_tap_mask is set (the pixel traces and shows the same surface, within
@@ -58,7 +60,7 @@ ivec3 decision_source(uvec2 t) { return ivec3(ivec2(floor(decision_position(t)))
 // of view `view`.
 uvec2 decision_pack(uint kind, float budget, uint view, vec2 position) {
     uint b = uint(clamp(budget, 0.0, 1.0) * 255.0 + 0.5);
-    uvec2 q = uvec2(clamp(position * DECISION_POSITION_STEPS + 0.5, vec2(0.0), vec2(65535.0)));
+    uvec2 q = decision_position_steps(position);
     return uvec2(kind | (b << 8u) | (view << 16u), q.x | (q.y << 16u));
 }
 

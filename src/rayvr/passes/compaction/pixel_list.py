@@ -20,6 +20,13 @@ def empty_lists(ctx, *buffers) -> None:
         buffer.write(EMPTY_HEADER)
 
 
+def dispatch_list(res, block: str, buffer) -> None:
+    """Bind list `buffer` to the storage block `block` of program `res` and dispatch the groups its
+    header counts (indirect, at DISPATCH_OFFSET)."""
+    res.buffer(block, buffer)
+    res.prog.run_indirect(buffer, DISPATCH_OFFSET)
+
+
 def pixel_list_bytes(size: tuple[int, int], views: int) -> int:
     """Bytes of a pixel list that can hold every pixel of every view."""
     return HEADER_BYTES + 4 * size[0] * size[1] * views

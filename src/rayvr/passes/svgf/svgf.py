@@ -61,7 +61,7 @@ from ...errors import OptionError
 from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
-from ..compaction.pixel_list import DISPATCH_OFFSET, empty_lists, pixel_list_bytes
+from ..compaction.pixel_list import dispatch_list, empty_lists, pixel_list_bytes
 from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
@@ -324,8 +324,7 @@ class SVGF(HistoryOwner, RenderPass):
         if pixels is None:
             res.prog.run(*self._groups)
         else:
-            res.buffer("PixelList", pixels)
-            res.prog.run_indirect(pixels, DISPATCH_OFFSET)
+            dispatch_list(res, "PixelList", pixels)
 
     def _spread(self, ctx, data, illum, cur) -> None:
         """The pixels whose light is another view's take its filtered light `illum`, and keep their

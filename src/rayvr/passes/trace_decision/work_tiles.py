@@ -3,7 +3,7 @@ pixel whose light is not another view's, listed by TraceDecision where SVGF spre
 and the indirect dispatch over them of a pass whose workgroup is such a tile."""
 from __future__ import annotations
 
-from ..compaction.pixel_list import DISPATCH_OFFSET, HEADER_BYTES
+from ..compaction.pixel_list import HEADER_BYTES, dispatch_list
 
 WORK_TILES = "workTiles"
 WORK_TILES_LISTED = "work_tiles_listed"   # ctx.dictionary: TraceDecision fills the list this compile
@@ -30,5 +30,4 @@ def usable(ctx, cd, group: tuple[int, int, int]) -> bool:
 
 def run(res, buffer) -> None:
     """Bind the list to program `res` (block WorkTiles) and dispatch it, a workgroup a tile."""
-    res.buffer("WorkTiles", buffer)
-    res.prog.run_indirect(buffer, DISPATCH_OFFSET)
+    dispatch_list(res, "WorkTiles", buffer)
