@@ -65,29 +65,29 @@ def test_a_glass_box_shows_the_wall_behind_it(gpu, bounces):
         assert seen < 0.05 * WALL
 
 
-def test_glass_takes_no_diffuse_light_from_the_probes(gpu):
-    """A rough glass quad (effect SHADOWS) in the Cornell box: the probes' indirect light it shows
-    is what it reflects (glossy, about its reflected albedo, ~0.1), not a diffuse surface's. Before
-    the composite compiled with the scene's features it was shaded as if it did not transmit: as
-    bright as a white Lambertian quad in its place."""
-    def indirect(material: Material) -> float:
-        out = {}
-        for gi in ("probes", None):
-            scene = builtin.cornell_box()
+def test_untraced_glass_shows_what_is_behind_it_through_the_probes(gpu):
+    """A rough glass quad (effect SHADOWS, its transmission not traced) in the Cornell box, with
+    probe GI: where it stands the image shows about what lies behind it (the lit back wall, as
+    the probes see it: blurred, times the glass's transmitted albedo ~0.9, + its reflection), not
+    the near black of a surface whose transmitted light comes from nowhere (before the probes'
+    lookup behind the glass)."""
+    def pane_pixels(material: Material | None) -> float:
+        scene = builtin.cornell_box()
+        if material is not None:
             scene.add_material(material)
             scene.add_object("Pane", *quad_mesh([[-0.12, 0.15, 0.0], [0.12, 0.15, 0.0], [0.12, 0.39, 0.0],
                                                  [-0.12, 0.39, 0.0]], (0, 0, 1)), material.name)
-            g = rv.graphs.hybrid(preset="raw", gi=gi, probes={"counts": [4, 4, 4]} if gi else None)
-            views = rv.xr.cameras.default_views(scene, 1, (32, 32))
-            with Renderer(scene, g, views=views) as r:
-                for _ in range(8):
-                    r.render()
+        g = rv.graphs.hybrid(preset="raw", gi="probes", probes={"counts": [4, 4, 4]})
+        views = rv.xr.cameras.default_views(scene, 1, (32, 32))
+        with Renderer(scene, g, views=views) as r:
+            total = 0.0
+            for frame in range(16):
+                r.render()
                 img = r.read_output("Composite.color")[0, ..., :3].astype(np.float64)
-            assert np.isfinite(img).all()
-            out[gi] = img[12:20, 13:19].mean()   # the pane's middle
-        return out["probes"] - out[None]
+                assert np.isfinite(img).all()
+                total += img[12:20, 13:19].mean() if frame >= 8 else 0.0   # the pane's middle
+        return total / 8
 
-    white = indirect(lambert("Pane", (1.0, 1.0, 1.0), effect=rv.Effect.SHADOWS))
-    pane = indirect(glass("Pane", roughness=0.5, effect=rv.Effect.SHADOWS))
-    assert white > 0.02
-    assert 0.0 <= pane < 0.3 * white, (pane, white)
+    behind = pane_pixels(None)
+    pane = pane_pixels(glass("Pane", roughness=0.5, effect=rv.Effect.SHADOWS))
+    assert 0.6 * behind < pane < 1.2 * behind, (pane, behind)

@@ -11,7 +11,7 @@ from rayvr.errors import OptionError
 from rayvr.materials.material import Material
 from rayvr.passes.probe_gi import layout as L
 from rayvr.scene.builtin import box, lambert, merge, quad_mesh
-from rayvr.scene.model import Light, Scene
+from rayvr.scene.model import Environment, Light, Scene
 from rayvr.xr.cameras import look_at, stereo_views
 from rayvr.xr.views import Fov, View, ViewSet
 
@@ -444,25 +444,19 @@ def _material_mean(image, words, material_index):
     return float(image[..., :3][mask].mean())
 
 
-@pytest.mark.parametrize("roughness", [0.5, 1.0])
-def test_untraced_glossy_light_comes_from_the_probes(gpu, roughness):
-    # a rough metal box under SHADOWS (its reflections not traced) takes its indirect light about
-    # the lobe's dominant direction from the probes (at roughness 1 the normal's irradiance, the
-    # lookup's shortcut): near what a path tracer finds, where diffuse GI alone (a metal has none)
-    # would leave it with its direct highlight only
+def _shadows_and_path_traced_means(scene, material):
+    """The mean of `material`'s pixels in the raw hybrid with probe GI, every material SHADOWS, after
+    32 frames (the probes' hysteresis settles), and in a 4 spp x 64 frames path-traced image."""
     from rayvr.tune.cost_probe import effect_pin
 
-    scene = rv.scenes.cornell_box()
-    tall = scene.materials["TallBox"]
-    tall.metallic, tall.roughness, tall.base_color = 1.0, roughness, (0.9, 0.9, 0.9, 1.0)
-    index = scene.materials.names().index("TallBox")
+    index = scene.materials.names().index(material)
     for m in scene.materials:
         m.effect = rv.Effect.SHADOWS
     g = rv.graphs.hybrid(preset="raw", gi="probes")
     pin = effect_pin(g)
     g.mark_output(pin)
     with rv.Renderer(scene, g, views=1, size=(32, 32), jitter=False) as r:
-        for _ in range(32):                    # the probes' hysteresis settles
+        for _ in range(32):
             r.render()
         words = r.read_output(pin)[..., 0]
         hybrid = _material_mean(np.asarray(r.read_output("Composite.color"), np.float64), words, index)
@@ -471,7 +465,53 @@ def test_untraced_glossy_light_comes_from_the_probes(gpu, roughness):
         for _ in range(64):
             r.render()
         reference = _material_mean(np.asarray(r.read_output("Accumulate.dst"), np.float64), words, index)
+    return hybrid, reference
+
+
+@pytest.mark.parametrize("roughness", [0.5, 1.0])
+def test_untraced_glossy_light_comes_from_the_probes(gpu, roughness):
+    # a rough metal box under SHADOWS (its reflections not traced) takes its indirect light about
+    # the lobe's dominant direction from the probes (at roughness 1 the normal's irradiance, the
+    # lookup's shortcut): near what a path tracer finds, where diffuse GI alone (a metal has none)
+    # would leave it with its direct highlight only
+    scene = rv.scenes.cornell_box()
+    tall = scene.materials["TallBox"]
+    tall.metallic, tall.roughness, tall.base_color = 1.0, roughness, (0.9, 0.9, 0.9, 1.0)
+    hybrid, reference = _shadows_and_path_traced_means(scene, "TallBox")
     assert 0.7 < hybrid / reference < 1.3, (hybrid, reference)
+
+
+@pytest.mark.parametrize("effect", [rv.Effect.RASTER, rv.Effect.SHADOWS])
+def test_the_environment_is_counted_once_with_probes(gpu, effect):
+    """A white-sky-lit plane of albedo 0.5 (nothing above it) leaves radiance 0.5 x 1, with probes
+    as without: the environment is a light that every shading point samples, so probe rays that
+    leave the scene add nothing. When they took the environment the plane came out at ~1.0."""
+    s = Scene("sky_plane")
+    s.add_material(lambert("White", (0.5, 0.5, 0.5), effect=effect))
+    s.add_object("Floor", *quad_mesh([[-4, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4]], (0, 1, 0)), "White")
+    s.environment = Environment((1.0, 1.0, 1.0), name="white")
+    view = View(look_at((0, 1, 2), (0, 0, 0)), Fov.symmetric(40.0, 1.0), 24, 24, 0.01, 100.0)
+    g = rv.graphs.hybrid(preset="raw", gi="probes")
+    total = np.zeros(3)
+    with rv.Renderer(s, g, views=ViewSet([view]), gpu=gpu) as r:
+        for _ in range(8):                     # the probes settle
+            r.render()
+        for _ in range(24):
+            r.render()
+            total += np.asarray(r.read_output("Composite.color"), np.float64)[0, 14:22, 6:18, :3].mean(axis=(0, 1))
+    assert np.allclose(total / 24, 0.5, rtol=0.04), total / 24
+
+
+def test_untraced_glass_shows_the_light_behind_it(gpu):
+    """A glass tall box (one-sided, closed) under SHADOWS: its transmitted share comes from the
+    probes behind it (and the probes see through its far side), about 0.7 of what a path tracer
+    finds (the probes' irradiance misses the light that passes the glass unscattered). Without the
+    lookup behind the surface it is black (0.0); without the probes seeing through glass, 0.25."""
+    scene = rv.scenes.cornell_box()
+    tall = scene.materials["TallBox"]
+    tall.metallic, tall.roughness, tall.base_color, tall.transmission = 0.0, 0.2, (1.0, 1.0, 1.0, 1.0), 1.0
+    hybrid, reference = _shadows_and_path_traced_means(scene, "TallBox")
+    assert 0.5 < hybrid / reference < 1.2, (hybrid, reference)
 
 
 def test_rough_reflections_go_to_the_probes_and_smooth_or_transmissive_ones_stay_traced(gpu):

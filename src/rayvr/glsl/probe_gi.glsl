@@ -8,10 +8,11 @@
 //       radiance leaving s towards s.v
 //   vec3 probe_gi_glossy(PathVertex s)    reflected albedo x irradiance about the mirror direction
 //       / pi: the glossy fallback for a reflection path that stops at s (glass's transmitted
-//       share is left out: its light comes from behind)
+//       share is left out there, as in probe_records.glsl's deferred lookup)
 //   vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy)   both from one lookup: the
 //       composite's indirect light for pixels whose reflections are not traced (the glossy part
-//       about the lobe's dominant direction, probe_gi_glossy_direction)
+//       about the lobe's dominant direction, probe_gi_glossy_direction; glass's transmitted share
+//       from a second lookup behind the surface)
 //
 // Both return 0 unless PROBE_GI is 1; then the shader declares the samplers probe_irradiance_tex
 // (rgba16f, the update reads its float32 history instead; alpha: 1 where the probe is active, 0
@@ -131,26 +132,59 @@ vec3 probe_gi_diffuse(PathVertex s) {
 // The direction about which a GGX lobe of perceptual `roughness` gathers most of its light (the
 // specular dominant direction of Lagarde and de Rousiers 2014): the mirror direction for a smooth
 // surface, bending to the normal n as the lobe widens.
-vec3 probe_gi_glossy_direction(vec3 n, vec3 v, float roughness) {
+float probe_gi_lobe_bend(float roughness) {
     float a = roughness * roughness;
-    float f = (1.0 - a) * (sqrt(1.0 - a) + a);
-    return normalize(mix(n, reflect(-v, n), f));
+    return (1.0 - a) * (sqrt(1.0 - a) + a);
 }
+
+vec3 probe_gi_glossy_direction(vec3 n, vec3 v, float roughness) {
+    return normalize(mix(n, reflect(-v, n), probe_gi_lobe_bend(roughness)));
+}
+
+// The direction about which a transmission lobe gathers most of its light, by analogy with
+// probe_gi_glossy_direction: straight through (-v, as a thin sheet; the probes' irradiance is too
+// smooth for a refracted image to matter) for a smooth surface, bending to -n as the lobe widens.
+vec3 probe_gi_transmitted_direction(vec3 n, vec3 v, float roughness) {
+    return -normalize(mix(n, v, probe_gi_lobe_bend(roughness)));
+}
+
+#if PROBE_GI
+// `transmitted` (the surface's transmitted albedo) x the irradiance behind s about
+// probe_gi_transmitted_direction / pi: a lookup from a point moved past the surface, made only
+// where the surface transmits.
+vec3 probe_gi_behind(PathVertex s, vec3 transmitted) {
+    if (all(equal(transmitted, vec3(0.0)))) return vec3(0.0);
+    vec3 t = probe_gi_transmitted_direction(s.n, s.v, s.bsdf.roughness);
+    return transmitted * probe_gi_irradiance(s.pos, t, -s.v) * (1.0 / RAYVR_PI);
+}
+
+// probe_gi_diffuse's light + what a transmitting surface passes from behind (probe_gi_behind):
+// the light a probe ray's hit sends back, so that glass does not darken the probes around it.
+vec3 probe_gi_diffuse_transmitted(PathVertex s) {
+    vec3 diffuse, specular, transmitted;
+    bsdf_albedo_parts(s.bsdf, s.n, s.v, diffuse, specular, transmitted);
+    return diffuse * probe_gi_irradiance(s.pos, s.n, s.v) * (1.0 / RAYVR_PI) + probe_gi_behind(s, transmitted);
+}
+#endif
 
 // Both at once, from one lookup: probe_gi_diffuse's value, and in `glossy` the reflected albedo x
 // irradiance about the lobe's dominant direction / pi (a surface whose reflections are not traced:
 // RASTER and SHADOWS pixels). Where that direction is within ~10 degrees of the normal (rough
 // surfaces) the normal's irradiance serves both: irradiance is cosine-smoothed, and the second
-// fetch per probe costs a third of the composite's lookup.
+// fetch per probe costs a third of the composite's lookup. A transmitting surface adds its
+// transmitted albedo x the irradiance behind it about probe_gi_transmitted_direction / pi (a lookup
+// of its own, from a point moved past the surface), so untraced glass shows the light behind it
+// (blurred, and without the emitters and the environment seen straight through) instead of black.
 vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy) {
     glossy = vec3(0.0);
 #if PROBE_GI
-    vec3 diffuse, specular, transmitted, e_r;   // a transmission's light comes from behind: not from here
+    vec3 diffuse, specular, transmitted, e_r;
     bsdf_albedo_parts(s.bsdf, s.n, s.v, diffuse, specular, transmitted);
     vec3 d = probe_gi_glossy_direction(s.n, s.v, s.bsdf.roughness);
     bool apart = dot(d, s.n) < 0.985;
     vec3 e_n = probe_gi_irradiance_at(s.pos, s.n, s.v, apart, d, e_r);
     glossy = specular * (apart ? e_r : e_n) * (1.0 / RAYVR_PI);
+    glossy += probe_gi_behind(s, transmitted);
     return diffuse * e_n * (1.0 / RAYVR_PI);
 #else
     return vec3(0.0);

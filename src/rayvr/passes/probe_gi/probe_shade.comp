@@ -1,9 +1,10 @@
 // Stage 2 of a probe update (rayvr.passes.ProbeGI; records in probe_rays.glsl): each invocation
-// shades its ray's hit from stage 1. A miss takes the environment. A back face of a one-sided
-// material counts as near (so that Chebyshev hides the probe behind it) and adds no light. A
-// surface adds the light it reflects from the previous update's probes (so bounces add up over
-// updates) and draws one light sample, unshadowed: stage 3 (probe_shadow.comp) traces the shadow
-// ray this stage records. Emission is left out: the light sample draws every emitter at the hit.
+// shades its ray's hit from stage 1. A miss adds no light (only its distance). A back face of a
+// one-sided opaque material counts as near (so that Chebyshev hides the probe behind it) and adds
+// no light. A surface adds the light it reflects, and glass what it passes from behind, from the
+// previous update's probes (so bounces add up over updates) and draws one light sample,
+// unshadowed: stage 3 (probe_shadow.comp) traces the shadow ray this stage records. Emission is
+// left out: the light sample draws every emitter at the hit.
 #define PROBE_GI 1
 #include "probe_rays.glsl"
 #include "shading.glsl"
@@ -33,9 +34,9 @@ void main() {
     vec3 origin = vec3(0.0), to = vec3(0.0);
     float tmax = 0.0;
     uint skip = SCENE_NO_INSTANCE;
-    if (kind == PROBE_RAY_MISS) {
-        radiance.rgb = environment_radiance(dir);
-    } else {
+    // A miss adds no light: the environment is in the light table, and every point that reads the
+    // probes samples it directly (the probes hold light that scattered at least once).
+    if (kind != PROBE_RAY_MISS) {
         Hit hit;
         hit.t = rec_hit.x;
         hit.barycentrics = rec_hit.yz;
@@ -44,12 +45,12 @@ void main() {
         SurfacePoint sp;
         MaterialParams mp;
         PathVertex s = path_vertex_at_hit(hit, dir, hit.t * PROBE_RAY_SPREAD, PROBE_RAY_SPREAD, sp, mp);
-        if (!sp.front_face && !mp.double_sided) {
+        if (!sp.front_face && !mp.double_sided && mp.transmission == 0.0) {   // glass's far side passes light
             kind = PROBE_RAY_BACKFACE;
             radiance.a = min(PROBE_BACKFACE_DEPTH * hit.t, radiance.a);
         } else {
             radiance.a = min(hit.t, radiance.a);
-            if (probe_history != 0) radiance.rgb = probe_gi_diffuse(s);
+            if (probe_history != 0) radiance.rgb = probe_gi_diffuse_transmitted(s);
 #if SCENE_HAS_LIGHTS
             Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT_PROBE_SHADE);
             LightSample ls;
