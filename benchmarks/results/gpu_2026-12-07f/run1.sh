@@ -9,15 +9,19 @@
 #   for c in f0c1e67:t0 1cf2dd4:t1 6099a8f:t2; do python3 tools/ab_trees.py --src ${c%%:*} ${c##*:}; done
 # and carry [".gl", ".whl", ".scenes", ".ab"] with RAYVR_COMMIT=<head's hash>.
 cd "$(dirname "$0")/../../.."
+part=${1:-all}   # trees | flip | all (one device call allows 600 s)
 source tools/gpu-preamble.sh; nvidia-smi --query-gpu=name,driver_version,clocks.sm,temperature.gpu --format=csv > $OUT/gpu.txt; date
-for t in t0 head t1 t2; do
-  s=$PWD/src; v=""; [ $t != head ] && s=$PWD/.ab/$t/src
+if [ $part != flip ]; then
+for t in ${TREES:-t0 head t1 t2}; do
+  s=$PWD/.ab/t3/src; v=""; [ $t != head ] && s=$PWD/.ab/$t/src   # head: f394dc2 (.ab/t3)
   [ $t = head ] && v="Decision.work_tiles=False;Decision.share_light_samples=False,Shadows.share_light_samples=False"
   mkdir -p $OUT/$t
   PYTHONPATH=/tmp/site:$s timeout 120 python3 -m benchmarks view_reuse --scene .scenes/tauray_test.glb --views 64 --out $OUT/$t \
     --reference-frames 1 --reference-spp 1 --dispatches 5 ${v:+--variants "$v"} > $OUT/$t/view_reuse64.log 2>&1
   echo "== $t"; grep -v -i warn $OUT/$t/view_reuse64.log | grep -v "%|" | grep "a frame" | cut -c1-200
 done; date
+fi
+[ $part = trees ] && exit 0
 mkdir -p $OUT/flip
 timeout 200 python3 -m benchmarks view_reuse --scene .scenes/tauray_test.glb --views 64 --out $OUT/flip \
   --reference-frames 16 --dispatches 5 > $OUT/flip/view_reuse64.log 2>&1
