@@ -2,11 +2,11 @@
 # device call 1 (prepared in session 30, not run: no device machine was lent): tauray, clean preset, 64 views of
 # 512x683, `view_reuse --dispatches 5`, one tree after another with a 1 x 1 spp reference (timing only):
 # t0 f0c1e67 (session 29's frame), t1 1cf2dd4 (SVGF's scratch texels and the composite's lobes left unwritten where
-# SVGF spreads), t2 6099a8f (+ the decision's tap mask), head = the working tree (+ the spread's history read through
+# SVGF spreads), t2 6099a8f (+ the decision's tap mask), head = .ab/t3, f394dc2 (+ the spread's history read through
 # the decision texel, 0163c91, and the decision's work tiles, 745dfbf) with the variants Decision.work_tiles=False
 # (0163c91's frame) and light samples not shared; then head with the 16 x 16 spp reference (FLIP comparable with
 # gpu_2026-12-07e's 64-view rows); then stereo. First, here:
-#   for c in f0c1e67:t0 1cf2dd4:t1 6099a8f:t2; do python3 tools/ab_trees.py --src ${c%%:*} ${c##*:}; done
+#   for c in f0c1e67:t0 1cf2dd4:t1 6099a8f:t2 f394dc2:t3; do python3 tools/ab_trees.py --src ${c%%:*} ${c##*:}; done
 # and carry [".gl", ".whl", ".scenes", ".ab"] with RAYVR_COMMIT=<head's hash>.
 cd "$(dirname "$0")/../../.."
 part=${1:-all}   # trees | flip | all (one device call allows 600 s)
