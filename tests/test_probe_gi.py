@@ -502,6 +502,45 @@ def test_the_environment_is_counted_once_with_probes(gpu, effect):
     assert np.allclose(total / 24, 0.5, rtol=0.04), total / 24
 
 
+def _mirror_floor_mean(gpu, graph, ceiling: bool, frames: int, effect=rv.Effect.SHADOWS) -> float:
+    """A smooth metal floor (roughness 0: a delta lobe, which light samples never reach) under a
+    white sky, seen at a slant; with `ceiling` a black quad above it fills its mirror direction."""
+    s = Scene("mirror_floor")
+    s.add_material(Material("Mirror", base_color=(0.8, 0.8, 0.8, 1.0), metallic=1.0, roughness=0.0, effect=effect))
+    s.add_object("Floor", *quad_mesh([[-4, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4]], (0, 1, 0)), "Mirror")
+    if ceiling:
+        s.add_material(lambert("Black", (0.0, 0.0, 0.0), effect=effect))
+        s.add_object("Ceiling", *quad_mesh([[-6, 1.5, -10], [-6, 1.5, 1], [6, 1.5, 1], [6, 1.5, -10]], (0, -1, 0)),
+                     "Black")
+    s.environment = Environment((1.0, 1.0, 1.0), name="white")
+    view = View(look_at((0, 1, 2), (0, 0, 0)), Fov.symmetric(40.0, 1.0), 24, 24, 0.01, 100.0)
+    with rv.Renderer(s, graph, views=ViewSet([view]), gpu=gpu) as r:
+        for _ in range(frames):
+            r.render()
+        name = "Composite.color" if "Composite" in graph.passes else "Accumulate.dst"
+        return float(np.asarray(r.read_output(name), np.float64)[0, 14:22, 6:18, :3].mean())
+
+
+def test_an_untraced_mirror_sees_the_sky_where_the_probes_see_it(gpu):
+    """A delta lobe at a SHADOWS pixel gets the environment along its mirror direction times the
+    share of the probes' rays that leave the scene that way (no light sample can reach it): under an
+    open sky the mirror floor matches the path tracer's, under a black ceiling it stays near the path
+    tracer's dark. Without the sky's share it was black under both; with misses recorded at the
+    depth limit itself (far hits stop there too) the covered floor showed the sky (0.67)."""
+    def hybrid():
+        return rv.graphs.hybrid(preset="raw", gi="probes", probes={"counts": [6, 4, 12]})
+
+    pt = rv.tune.path_traced_graph(spp=1, max_bounces=2)
+    open_reference = _mirror_floor_mean(gpu, pt, False, 4, rv.Effect.PATH_TRACED)
+    covered_reference = _mirror_floor_mean(gpu, rv.tune.path_traced_graph(spp=1, max_bounces=2), True, 4,
+                                           rv.Effect.PATH_TRACED)
+    open_sky = _mirror_floor_mean(gpu, hybrid(), False, 8)
+    covered = _mirror_floor_mean(gpu, hybrid(), True, 8)
+    assert open_reference > 0.7 and covered_reference < 0.2 * open_reference
+    assert open_sky == pytest.approx(open_reference, rel=0.05), (open_sky, open_reference)
+    assert covered < covered_reference + 0.15 * open_reference, (covered, covered_reference)
+
+
 def test_untraced_glass_shows_the_light_behind_it(gpu):
     """A glass tall box (one-sided, closed) under SHADOWS: its transmitted share comes from the
     probes behind it (and the probes see through its far side), about 0.7 of what a path tracer

@@ -27,6 +27,7 @@
 #pragma once
 #include "path_vertex.glsl"
 #include "octahedral.glsl"
+#include "lights.glsl"   // environment_radiance: the sky a delta lobe sees
 
 #ifndef PROBE_GI
 #define PROBE_GI 0
@@ -34,6 +35,7 @@
 
 #define PROBE_IRRADIANCE_TILE 8   // texels per side of a probe's tile, one-texel border included
 #define PROBE_DEPTH_TILE 16
+#define PROBE_MISS_DEPTH 2.0   // escaped rays' recorded distance, in depth limits (vol.lo.w); hits stop at 1
 #define PROBE_FLAG_VISIBILITY 1u
 
 #if PROBE_GI
@@ -63,10 +65,25 @@ vec3 probe_tile_uv(sampler2DArray atlas, uint probe, vec3 d, int tile) {
     return vec3(texel / vec2(textureSize(atlas, 0).xy), 0.0);
 }
 
+// Chebyshev's bound on a probe's depth reaching d that way, from its depth moments m (mean, mean
+// of squares): 1 up to the mean distance.
+float probe_chebyshev(vec2 m, float d) {
+    if (d <= m.x) return 1.0;
+    float variance = abs(m.y - m.x * m.x);
+    float beyond = d - m.x;
+    return variance / (variance + beyond * beyond);
+}
+
 // The irradiance about n at p, and with `both` also about direction r (`along_r`) from the same
-// probes and weights: one more fetch per probe, not a second lookup.
-vec3 probe_gi_irradiance_at(vec3 p, vec3 n, vec3 v, const bool both, vec3 r, out vec3 along_r) {
+// probes and weights: one more fetch per probe, not a second lookup. With `sky`, `sky_r` is the
+// share of the probes' rays along r that leave the scene: escaped rays record PROBE_MISS_DEPTH
+// times the depth limit (hits at most the limit), and probe_chebyshev there is that share where
+// the rays either escape or stop at one distance (an upper bound otherwise), blended with the same
+// weights; another fetch per probe; 0 without depth visibility.
+vec3 probe_gi_irradiance_at(vec3 p, vec3 n, vec3 v, const bool both, vec3 r, out vec3 along_r,
+                            const bool sky, out float sky_r) {
     along_r = vec3(0.0);
+    sky_r = 0.0;
     if (probe_info.x == 0u) return vec3(0.0);
     ProbeVolume vol = probe_volumes[probe_volume_at(p)];
     bool visibility = (probe_info.w & PROBE_FLAG_VISIBILITY) != 0u;
@@ -91,12 +108,8 @@ vec3 probe_gi_irradiance_at(vec3 p, vec3 n, vec3 v, const bool both, vec3 r, out
             float d = length(from_probe);
             vec2 m = texture(probe_depth_tex, probe_tile_uv(probe_depth_tex, probe, d > 0.0 ? from_probe / d : n,
                                                             PROBE_DEPTH_TILE)).xy;
-            if (d > m.x) {   // farther than the probe's mean distance that way: Chebyshev's bound
-                float variance = abs(m.y - m.x * m.x);
-                float beyond = d - m.x;
-                float chebyshev = variance / (variance + beyond * beyond);
-                w *= chebyshev * chebyshev * chebyshev;
-            }
+            float chebyshev = probe_chebyshev(m, d);   // farther than the mean distance that way
+            w *= chebyshev * chebyshev * chebyshev;
         }
         w = max(w, 1e-6);
         const float crush = 0.2;   // tiny weights to nearly nothing: no faint light behind walls
@@ -107,15 +120,21 @@ vec3 probe_gi_irradiance_at(vec3 p, vec3 n, vec3 v, const bool both, vec3 r, out
         if (both)
             along_r += w * texture(probe_irradiance_tex, probe_tile_uv(probe_irradiance_tex, probe, r,
                                                                        PROBE_IRRADIANCE_TILE)).rgb;
+        if (sky && visibility)
+            sky_r += w * probe_chebyshev(texture(probe_depth_tex, probe_tile_uv(probe_depth_tex, probe, r,
+                                                                                PROBE_DEPTH_TILE)).xy,
+                                         vol.lo.w * PROBE_MISS_DEPTH * 0.999);
         total += w;
     }
     along_r = total > 0.0 ? along_r / total : vec3(0.0);
+    sky_r = total > 0.0 ? sky_r / total : 0.0;
     return total > 0.0 ? sum / total : vec3(0.0);
 }
 
 vec3 probe_gi_irradiance(vec3 p, vec3 n, vec3 v) {
     vec3 unused;
-    return probe_gi_irradiance_at(p, n, v, false, n, unused);
+    float no_sky;
+    return probe_gi_irradiance_at(p, n, v, false, n, unused, false, no_sky);
 }
 #endif
 
@@ -155,7 +174,11 @@ vec3 probe_gi_transmitted_direction(vec3 n, vec3 v, float roughness) {
 vec3 probe_gi_behind(PathVertex s, vec3 transmitted) {
     if (all(equal(transmitted, vec3(0.0)))) return vec3(0.0);
     vec3 t = probe_gi_transmitted_direction(s.n, s.v, s.bsdf.roughness);
-    return transmitted * probe_gi_irradiance(s.pos, t, -s.v) * (1.0 / RAYVR_PI);
+    vec3 unused;
+    float sky;
+    bool delta = bsdf_is_delta(s.bsdf);
+    vec3 e = probe_gi_irradiance_at(s.pos, t, -s.v, false, t, unused, delta, sky);
+    return transmitted * (e * (1.0 / RAYVR_PI) + (delta ? environment_radiance(t) * sky : vec3(0.0)));
 }
 
 // probe_gi_diffuse's light + what a transmitting surface passes from behind (probe_gi_behind):
@@ -182,8 +205,10 @@ vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy) {
     bsdf_albedo_parts(s.bsdf, s.n, s.v, diffuse, specular, transmitted);
     vec3 d = probe_gi_glossy_direction(s.n, s.v, s.bsdf.roughness);
     bool apart = dot(d, s.n) < 0.985;
-    vec3 e_n = probe_gi_irradiance_at(s.pos, s.n, s.v, apart, d, e_r);
-    glossy = specular * (apart ? e_r : e_n) * (1.0 / RAYVR_PI);
+    bool delta = bsdf_is_delta(s.bsdf);   // no light sample reaches it: the sky comes from here
+    float sky;
+    vec3 e_n = probe_gi_irradiance_at(s.pos, s.n, s.v, apart, d, e_r, delta, sky);
+    glossy = specular * ((apart ? e_r : e_n) * (1.0 / RAYVR_PI) + (delta ? environment_radiance(d) * sky : vec3(0.0)));
     glossy += probe_gi_behind(s, transmitted);
     return diffuse * e_n * (1.0 / RAYVR_PI);
 #else

@@ -4,7 +4,9 @@ After DDGI (Majercik et al. 2019) and Tauray's DDISH-GI (Ikkala et al. 2021). Ir
 as an octahedral map per probe (6x6 texels inside a one-texel border) with depth moments (mean
 and mean squared distance, 14x14) beside it: the moments let a shading point test, by
 Chebyshev's inequality, whether a probe can see it, which is what stops light leaking through
-thin walls; spherical harmonics would be cheaper but carry no visibility. Each update traces
+thin walls, and give a mirror the share of its direction that leaves the scene (escaped rays
+record twice the depth limit, hits at most the limit); spherical harmonics would be cheaper but
+carry no visibility. Each update traces
 `rays_per_probe` rays per probe (a spherical Fibonacci set under a new random rotation each
 update), shades the hits with shadowed direct light and, through the previous update's probes,
 the light those surfaces reflect (multi-bounce), and blends the result into the maps by

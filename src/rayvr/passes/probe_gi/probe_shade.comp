@@ -1,5 +1,6 @@
 // Stage 2 of a probe update (rayvr.passes.ProbeGI; records in probe_rays.glsl): each invocation
-// shades its ray's hit from stage 1. A miss adds no light (only its distance). A back face of a
+// shades its ray's hit from stage 1. A miss adds no light, only its distance (PROBE_MISS_DEPTH times
+// the depth limit, so that the sky's share can be told from far hits). A back face of a
 // one-sided opaque material counts as near (so that Chebyshev hides the probe behind it) and adds
 // no light. A surface adds the light it reflects, and glass what it passes from behind, from the
 // previous update's probes (so bounces add up over updates) and draws one light sample,
@@ -29,7 +30,8 @@ void main() {
     uvec4 ids = probe_rays[i].ids;
     vec3 dir = probe_ray_direction(ray);
     uint kind = floatBitsToUint(rec_hit.w);
-    vec4 radiance = vec4(0.0, 0.0, 0.0, probe_volumes[probe_volume_of(probe)].lo.w);
+    float limit = probe_volumes[probe_volume_of(probe)].lo.w;
+    vec4 radiance = vec4(0.0, 0.0, 0.0, limit * PROBE_MISS_DEPTH);   // a miss: beyond every hit (the sky's share)
     vec3 direct = vec3(0.0);
     vec3 origin = vec3(0.0), to = vec3(0.0);
     float tmax = 0.0;
@@ -47,9 +49,9 @@ void main() {
         PathVertex s = path_vertex_at_hit(hit, dir, hit.t * PROBE_RAY_SPREAD, PROBE_RAY_SPREAD, sp, mp);
         if (!sp.front_face && !mp.double_sided && mp.transmission == 0.0) {   // glass's far side passes light
             kind = PROBE_RAY_BACKFACE;
-            radiance.a = min(PROBE_BACKFACE_DEPTH * hit.t, radiance.a);
+            radiance.a = min(PROBE_BACKFACE_DEPTH * hit.t, limit);
         } else {
-            radiance.a = min(hit.t, radiance.a);
+            radiance.a = min(hit.t, limit);
             if (probe_history != 0) radiance.rgb = probe_gi_diffuse_transmitted(s);
 #if SCENE_HAS_LIGHTS
             Rng rng = rng_init(uvec2(probe, ray), probe_step, probe_frame, RNG_SALT_PROBE_SHADE);
