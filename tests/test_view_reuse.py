@@ -462,7 +462,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     scene.materials["TallBox"].effect = rv.Effect.REFLECTIONS
     stride = 2
     configs = {"grid": {"source_views_first": False, "one_view_tiles": False},
-               "sources first": {"one_view_tiles": False}, "one view": {}, "every tile": {"work_tiles": False}}
+               "sources first": {"one_view_tiles": False}, "one view": {"work_tiles": True}, "every tile": {}}
     out = {}
     for name, props in configs.items():
         g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf")
@@ -501,7 +501,7 @@ def test_the_work_tiles_are_the_tiles_with_a_pixel_whose_light_is_not_spread(gpu
     from rayvr.passes.compaction import read_pixel_list
     size = (32, 30)   # the last row of tiles half outside
     g = rv.graphs.hybrid(reuse="views")
-    g.update_pass("Decision", {"source_stride": 2})
+    g.update_pass("Decision", {"source_stride": 2, "work_tiles": True})
     g.mark_output(DECISION)
     g.mark_output("Decision.workTiles")
     with Renderer(lambert_cornell(), g, views=views, size=size) as r:
