@@ -197,7 +197,8 @@ vec3 probe_gi_diffuse_transmitted(PathVertex s) {
 // fetch per probe costs a third of the composite's lookup. A transmitting surface adds its
 // transmitted albedo x the irradiance behind it about probe_gi_transmitted_direction / pi (a lookup
 // of its own, from a point moved past the surface), so untraced glass shows the light behind it
-// (blurred, and without the emitters and the environment seen straight through) instead of black.
+// (blurred, without the emitters seen straight through; the environment only through a delta
+// lobe, as far as the probes see it) instead of black.
 vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy) {
     glossy = vec3(0.0);
 #if PROBE_GI
