@@ -60,8 +60,8 @@ class TraceDecision(RenderPass):
     `work_tiles` (False; with `reuse` and `spread`): True also lists the 8x4 tiles that hold a pixel
     whose light is not spread (`workTiles`, glsl/work_tiles.glsl), and the ray passes and the
     composite whose workgroup is such a tile run over that list: a wholly spread tile launches
-    nothing. Off by default: on an H100 (64 views of 512x683, tauray) it took the frame from 11.01
-    to 13.83 ms, the composite's clear of its colour before the tiles costing ~3 ms. (False: the
+    nothing. Off by default, as measured slower (benchmarks/RESULTS.md, 2026-12-07 ninth): the
+    composite's clear of its colour before the tiles costs more than the tiles save. (False: the
     list is declared but left empty and unread.)
 
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
