@@ -138,11 +138,24 @@ vec3 probe_gi_irradiance(vec3 p, vec3 n, vec3 v) {
 }
 #endif
 
+#if PROBE_GI
+// Diffuse albedo `diffuse` x the irradiance about s's normal / pi.
+vec3 probe_gi_diffuse_of(PathVertex s, vec3 diffuse) {
+    return diffuse * probe_gi_irradiance(s.pos, s.n, s.v) * (1.0 / RAYVR_PI);
+}
+
+// What a delta lobe (no light sample reaches it) gets of the environment along `dir`, seen by the
+// probes as the share `sky` of their rays escaping that way; 0 for any other lobe.
+vec3 probe_gi_sky(bool delta, vec3 dir, float sky) {
+    return delta ? environment_radiance(dir) * sky : vec3(0.0);
+}
+#endif
+
 vec3 probe_gi_diffuse(PathVertex s) {
 #if PROBE_GI
     vec3 diffuse, specular;
     bsdf_albedo(s.bsdf, s.n, s.v, diffuse, specular);
-    return diffuse * probe_gi_irradiance(s.pos, s.n, s.v) * (1.0 / RAYVR_PI);
+    return probe_gi_diffuse_of(s, diffuse);
 #else
     return vec3(0.0);
 #endif
@@ -178,7 +191,7 @@ vec3 probe_gi_behind(PathVertex s, vec3 transmitted) {
     float sky;
     bool delta = bsdf_is_delta(s.bsdf);
     vec3 e = probe_gi_irradiance_at(s.pos, t, -s.v, false, t, unused, delta, sky);
-    return transmitted * (e * (1.0 / RAYVR_PI) + (delta ? environment_radiance(t) * sky : vec3(0.0)));
+    return transmitted * (e * (1.0 / RAYVR_PI) + probe_gi_sky(delta, t, sky));
 }
 
 // probe_gi_diffuse's light + what a transmitting surface passes from behind (probe_gi_behind):
@@ -186,7 +199,7 @@ vec3 probe_gi_behind(PathVertex s, vec3 transmitted) {
 vec3 probe_gi_diffuse_transmitted(PathVertex s) {
     vec3 diffuse, specular, transmitted;
     bsdf_albedo_parts(s.bsdf, s.n, s.v, diffuse, specular, transmitted);
-    return diffuse * probe_gi_irradiance(s.pos, s.n, s.v) * (1.0 / RAYVR_PI) + probe_gi_behind(s, transmitted);
+    return probe_gi_diffuse_of(s, diffuse) + probe_gi_behind(s, transmitted);
 }
 #endif
 
@@ -209,7 +222,7 @@ vec3 probe_gi_diffuse_glossy(PathVertex s, out vec3 glossy) {
     bool delta = bsdf_is_delta(s.bsdf);   // no light sample reaches it: the sky comes from here
     float sky;
     vec3 e_n = probe_gi_irradiance_at(s.pos, s.n, s.v, apart, d, e_r, delta, sky);
-    glossy = specular * ((apart ? e_r : e_n) * (1.0 / RAYVR_PI) + (delta ? environment_radiance(d) * sky : vec3(0.0)));
+    glossy = specular * ((apart ? e_r : e_n) * (1.0 / RAYVR_PI) + probe_gi_sky(delta, d, sky));
     glossy += probe_gi_behind(s, transmitted);
     return diffuse * e_n * (1.0 / RAYVR_PI);
 #else

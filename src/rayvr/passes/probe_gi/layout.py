@@ -138,7 +138,8 @@ def pack_volumes(volumes: list[ProbeVolume], atlas: Atlas, origin, normal_bias: 
         row["origin"] = (*(v.first_probe_position - origin), normal_bias * least)
         row["spacing"] = (*spacing, view_bias * least)
         row["counts"] = (*v.counts, first)
-        row["lo"] = (*(np.asarray(v.lo) - origin), 1.5 * float(np.linalg.norm(spacing)))   # hits' depths stop here; misses record 2x (PROBE_MISS_DEPTH)
+        # the depth limit: hits' depths stop here, misses record twice it (probe_gi.glsl PROBE_MISS_DEPTH)
+        row["lo"] = (*(np.asarray(v.lo) - origin), 1.5 * float(np.linalg.norm(spacing)))
         row["hi"][:3] = np.asarray(v.hi) - origin
         first += v.probe_count
     return head.tobytes() + rows.tobytes()
