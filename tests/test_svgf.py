@@ -388,9 +388,9 @@ def _spoil_scratch(r):
 
 @pytest.mark.parametrize("reuse", [None, "views"])
 def test_what_the_scratch_textures_held_before_never_reaches_the_image(gpu, reuse):
-    """No stage writes the scratch textures where nothing is filtered (the background, and with view
-    reuse the pixels SVGF spreads another view's light to), and no tap reads them there: each tests
-    the filter key first. NaN left in the scratch textures before each frame changes no pixel."""
+    """Where nothing is filtered (the background, and with view reuse the pixels SVGF spreads
+    another view's light to) no tap reads the scratch textures unless the reprojection wrote them
+    (0, without reuse): NaN left in the scratch textures before each frame changes no pixel."""
     scene = _box_scene()
     images = []
     for spoil in (False, True):

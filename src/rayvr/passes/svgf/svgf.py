@@ -264,6 +264,8 @@ class SVGF(HistoryOwner, RenderPass):
             empty_lists(ctx, pixels)
             res.buffer("AppendList", pixels)
         res.image("out_illum", scratch[0])
+        if not self._shared:   # the no-surface pixels' 0 in both (svgf_reproject.comp)
+            res.image("out_illum_other", scratch[1])
         res.image("moments_out", data[self.MOMENTS[cur]])
         res.image("key_out", data[self.KEY[cur]])
         res.image("surface_out", data[self.SURFACE[cur]])

@@ -56,8 +56,8 @@ const float LOG2E = 1.4426950408889634;
 uniform sampler2DArray gradient_cur;
 
 // The variance at p blurred by a 3x3 Gaussian (x diffuse, y specular): a steadier luminance scale.
-// A neighbour without a surface of its own to filter counts with variance 0; its illumination
-// texel is not read (the reprojection leaves it unwritten).
+// A neighbour without a surface of its own to filter counts with variance 0: the reprojection
+// wrote 0 there or, with SVGF_SHARED, left it unwritten and the key says so.
 vec2 blurred_variance(ivec3 p, ivec2 size) {
     vec2 sum = vec2(0.0);
     float total = 0.0;
@@ -67,8 +67,10 @@ vec2 blurred_variance(ivec3 p, ivec2 size) {
             if (!svgf_inside(q.xy, size)) continue;
             float k = (dx == 0 ? 0.5 : 0.25) * (dy == 0 ? 0.5 : 0.25);
             total += k;
-            if ((dx == 0 && dy == 0) || svgf_key_depth(texelFetch(key_cur, q, 0).xy) > 0.0)
-                sum += k * svgf_illum_variance(texelFetch(src_illum, q, 0));
+#if SVGF_SHARED
+            if (!(dx == 0 && dy == 0) && !(svgf_key_depth(texelFetch(key_cur, q, 0).xy) > 0.0)) continue;
+#endif
+            sum += k * svgf_illum_variance(texelFetch(src_illum, q, 0));
         }
     return sum / total;
 }
@@ -116,8 +118,8 @@ void main() {
     if (!svgf_pixel(size, p)) return;
     uvec2 key = texelFetch(key_cur, p, 0).xy;
     c_depth = svgf_key_depth(key);
-    // nothing to filter: no stage reads this pixel's scratch texels, nor its history, so only the
-    // last iteration writes, the background where nothing was drawn (a pixel
+    // nothing to filter: no tap reads this pixel's scratch texels (the variance blur reads the
+    // reprojection's 0 or tests the key), nor its history, so only the last iteration writes, the background where nothing was drawn (a pixel
     // with another view's light gets it from svgf_spread.comp; over the list no such pixel comes
     // here, and svgf_spread.comp writes the background too)
     if (!(c_depth > 0.0)) {

@@ -11,9 +11,10 @@
 // With SVGF_SHARED a pixel flagged DECISION_SPREAD (its light is another view's) is left to
 // svgf_spread.comp: here it is written as having no surface, so the variance and a-trous stages
 // neither filter it nor take it as a tap; a tap of last frame that was such a pixel (history
-// length SVGF_BORROWED) gives its sources' history, through its decision texel. The scratch
-// texels of pixels without a surface are left unwritten: the later stages test the key before
-// they read one. With SVGF_FILTER_LIST it lists the pixels it does filter, those the later stages
+// length SVGF_BORROWED) gives its sources' history, through its decision texel, and the scratch
+// texels of pixels without a surface are left unwritten: the variance blur tests the key before it
+// reads one. Without SVGF_SHARED they are written 0 (few pixels, and no key test in the blur's
+// nine taps at every pixel). With SVGF_FILTER_LIST it lists the pixels it does filter, those the later stages
 // run over (svgf_pixels.glsl).
 #include "svgf_common.glsl"
 #include "trace_decision.glsl"
@@ -30,6 +31,9 @@ uniform sampler2DArray svgf_specular_in;
 uniform sampler2DArray history_specular;
 #endif
 layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE out_illum;   // both lobes + variances
+#if !SVGF_SHARED
+layout(SVGF_ILLUM_FORMAT) writeonly uniform SVGF_ILLUM_IMAGE out_illum_other;   // the other scratch texture
+#endif
 uniform sampler2DArray moments_prev;
 uniform usampler2DArray key_prev;
 uniform usampler2DArray surface_prev;
@@ -111,9 +115,14 @@ void main() {
     svgf_list_pixel(inside && svgf_has_geometry(word) && !borrowed, p);
     if (!inside) return;
     if (!svgf_has_geometry(word) || borrowed) {
-        // the key says "no surface": the later stages read neither scratch texel of this pixel
-        // (each tap tests the key first), so neither is written; a borrowed pixel's tag is
+        // the key says "no surface": no a-trous tap reads this pixel; the variance blur reads its
+        // scratch texels (0) or, with SVGF_SHARED, tests the key first; a borrowed pixel's tag is
         // svgf_spread.comp's to write (its moments are its sources'), and nothing reads it before
+#if !SVGF_SHARED
+        SvgfIllum zero = svgf_illum_pack(vec4(0.0), vec4(0.0));
+        imageStore(out_illum, p, zero);
+        imageStore(out_illum_other, p, zero);
+#endif
         SvgfSurface none = svgf_no_geometry();
         imageStore(key_out, p, uvec4(svgf_pack_key(none), 0u, 0u));
         if (borrowed) return;
