@@ -2,9 +2,10 @@
 // and where each of the others takes its light from. TraceDecision writes one rg32ui texel per
 // pixel and view before the ray passes:
 //   x: the kind (bits 0-1) | DECISION_SPREAD (bit 2) | DECISION_SHARED_LIGHT (bit 3) | on a
-//      DECISION_REUSE texel, which of the four pixels about its source position show its surface
-//      traced (bits 4-7, decision_tap_mask) | the ray budget at the pixel (bits 8-15, 0-255 for
-//      0-1) | the source's view (bits 16-23)
+//      DECISION_REUSE texel once its reader tested them (glsl/decision_taps.glsl; TraceDecision
+//      writes 0), which of the four pixels about its source position show its surface traced
+//      (bits 4-7, decision_tap_mask) | the ray budget at the pixel (bits 8-15, 0-255 for 0-1) |
+//      the source's view (bits 16-23)
 //   y: the source position in that view, in pixels (x | y << 16, each fixed point 13.3 bits)
 // Kinds: DECISION_NONE no ray work (RASTER, or nothing drawn), DECISION_TRACE traced for real,
 // DECISION_REUSE the shaded light of the same surface in another view, interpolated at the point's
@@ -44,12 +45,10 @@ vec2 decision_position(uvec2 t) { return vec2(uvec2(t.y & 0xFFFFu, t.y >> 16u)) 
 uvec2 decision_position_steps(vec2 position) {
     return uvec2(clamp(position * DECISION_POSITION_STEPS + 0.5, vec2(0.0), vec2(65535.0)));
 }
-// A source position as a texel stores it.
-vec2 decision_stored_position(vec2 position) { return vec2(decision_position_steps(position)) / DECISION_POSITION_STEPS; }
 // A REUSE texel's light is interpolated over the pixels about its source position: tap k (0-3) is
 // decision_tap_base(position) + (k & 1, k >> 1) of the source view, taken where bit k of
 // decision_tap_mask is set (the pixel traces and shows the same surface, within
-// DECISION_TAP_PIXELS footprints: TraceDecision tests it once, glsl/decision_taps.glsl reads it).
+// DECISION_TAP_PIXELS footprints: glsl/decision_taps.glsl tests and reads it).
 const uint DECISION_TAP_SHIFT = 4u;
 const float DECISION_TAP_PIXELS = 1.5;
 uint decision_tap_mask(uvec2 t) { return (t.x >> DECISION_TAP_SHIFT) & 15u; }

@@ -4,7 +4,7 @@
 // (glsl/decision_taps.glsl), remodulated by its own albedos and emission. The reprojection wrote
 // it as having no surface, so the variance and a-trous stages did no work for it. Its history is
 // its sources': it is not copied here. The pixel keeps its own filter key, the history length
-// SVGF_BORROWED and its decision texel (`spread_source`), and on a later frame where it traces its
+// SVGF_BORROWED and its decision texel with the taps tested (`spread_source`), and on a later frame where it traces its
 // own light (the eyes alternating, a view moving off its source) the reprojection reads the
 // sources' history through that texel. With SVGF_FILTER_LIST, where the a-trous stage ran over the
 // pixels it filters only, it also writes the background where nothing was drawn.
@@ -35,6 +35,7 @@ void main() {
         return;
     }
     GSurface g = gbuf_load(p);
+    t = decision_tested_taps(p, t, g);
     DecisionTaps taps = decision_taps(t);
     vec3 d = vec3(0.0), s = vec3(0.0);
     for (int k = 0; k < 4; ++k) {

@@ -135,20 +135,6 @@ int sources_of(uint v, out uint s0, out uint s1) {
     return s1 < view_count() && s1 != s0 ? 2 : 1;
 }
 
-// Which of the four pixels a REUSE texel interpolates over about source position `at` (as the texel
-// stores it) of source view s trace this frame and show g's surface (seen from view v): the texel's
-// tap mask (glsl/trace_decision.glsl). A source view's pixel of that surface traces unless the
-// foveation leaves it out this frame.
-uint reuse_taps(GSurface g, uint v, uint s, vec2 at) {
-    ivec2 base = decision_tap_base(at);
-    uint mask = 0u;
-    for (int k = 0; k < 4; ++k) {
-        ivec3 q = ivec3(base + ivec2(k & 1, k >> 1), int(s));
-        if (inside(q) && selected(q) && same_surface(g, v, q, DECISION_TAP_PIXELS)) mask |= 1u << uint(k);
-    }
-    return mask;
-}
-
 // Where g's point lies in source view s, when the pixel it projects to shows the same surface
 // (else the point is hidden there, or off its image: DECISION_NONE): DECISION_REUSE at that
 // position (the fill interpolates the traced pixels of the surface about it). With foveation the
@@ -173,13 +159,11 @@ uint reuse_from(GSurface g, uint v, uint s, out vec2 at) {
 #endif
 
 // -- the decision -----------------------------------------------------------------------------------
-// The kind of pixel p (surface g) and its source: view `view`, position `at` (pixels); `taps` the
-// tap mask of a REUSE.
-uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at, out uint taps) {
+// The kind of pixel p (surface g) and its source: view `view`, position `at` (pixels).
+uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at) {
     uint v = uint(p.z);
     view = v;
     at = vec2(p.xy) + 0.5;
-    taps = 0u;
 #if REUSE
     bool reuses = !is_source(v);
     uint s[2];
@@ -197,8 +181,7 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at, out u
             if (kind == DECISION_NONE) continue;
             if (independent) {
                 view = s[i];
-                at = decision_stored_position(found);
-                if (kind == DECISION_REUSE) taps = reuse_taps(g, v, s[i], at);
+                at = found;
                 return kind;
             }
             shared_view = s[i];   // the traced pixel at `found` shows this surface: its centre
@@ -239,18 +222,18 @@ void main() {
     if (all(lessThan(p, imageSize(dst)))) {
         float budget = budget_at(p);
         uint effect = gbuf_effect_at(p);
-        uint kind = DECISION_NONE, view = uint(p.z), taps = 0u;
+        uint kind = DECISION_NONE, view = uint(p.z);
         vec2 at = vec2(p.xy) + 0.5;
         if (effect == GBUF_NO_GEOMETRY) {
             kind = EVERY_SURFACE != 0 ? DECISION_TRACE : DECISION_NONE;
         } else if (EVERY_SURFACE != 0 || effect >= EFFECT_SHADOWS) {
-            kind = decide(p, gbuf_load(p), budget, view, at, taps);
+            kind = decide(p, gbuf_load(p), budget, view, at);
         }
 #if REUSE_SPREAD
         if (kind == DECISION_REUSE || (kind == DECISION_FILL && int(view) != p.z)) kind |= DECISION_SPREAD;
 #endif
         own_light = (kind & DECISION_SPREAD) == 0u;
-        imageStore(dst, p, uvec4(decision_pack(kind | (taps << DECISION_TAP_SHIFT), budget, view, at), 0u, 0u));
+        imageStore(dst, p, uvec4(decision_pack(kind, budget, view, at), 0u, 0u));
     }
 #if WORK_TILES_APPEND
     work_tiles_append(own_light);

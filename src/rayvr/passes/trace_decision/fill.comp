@@ -69,7 +69,7 @@ void main() {
     uint effect = gbuf_effect_at(p);
     if (effect == GBUF_NO_GEOMETRY || effect < uint(FILL_MIN_EFFECT)) return;
     GSurface surface = gbuf_load(p);
-    DecisionTaps taps = decision_taps(t);
+    DecisionTaps taps = decision_taps(decision_tested_taps(p, t, surface));
     Gathered g = Gathered(vec3(0.0), vec3(0.0), vec3(0.0));
     for (int k = 0; k < 4; ++k) {
         if (taps.w[k] > 0.0) gather(g, taps.q[k], taps.w[k]);
