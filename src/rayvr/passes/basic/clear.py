@@ -44,7 +44,24 @@ class Clear(RenderPass):
         self._prog = program(ctx.gl, "clear.comp", self.format)
 
     def execute(self, ctx, data):
-        # The program is shared by every Clear of this format, so its uniforms are set each time.
-        self._prog["colors"].write(self._colors)
-        self._prog["color_count"].value = self._count
-        run_over(self._prog, data[self.DST])
+        clear_over(self._prog, data[self.DST], self._colors, self._count)
+
+
+def clear_over(prog, dst, colors: bytes, count: int) -> None:
+    """Run clear.comp `prog` over texture array `dst` with `count` of the packed `colors`."""
+    # The program is shared by every clear of its format, so its uniforms are set each time.
+    prog["colors"].write(colors)
+    prog["color_count"].value = count
+    run_over(prog, dst)
+
+
+def zero_program(gl, fmt: str):
+    """The program zero_image runs over images of format `fmt` (build it in compile())."""
+    return program(gl, "clear.comp", fmt)
+
+
+def zero_image(prog, dst) -> None:
+    """Write 0 in every texel of texture array `dst` with zero_program's `prog`: a compute dispatch
+    that costs a write of the image, where glClearTexImage over the many layers of a half-float
+    image took milliseconds on one driver (benchmarks/RESULTS.md, 2026-12-07 ninth)."""
+    clear_over(prog, dst, bytes(16 * BINDINGS["RAYVR_MAX_VIEWS"]), 1)

@@ -2,9 +2,9 @@
 from __future__ import annotations
 
 from ...gpu.program_resources import program_resources
-from ...gpu.textures import zero_texture
 from ...rendergraph.registry import register_pass
-from ...rendergraph.render_pass import Reflection, RenderPass
+from ...rendergraph.render_pass import Access, Reflection, RenderPass
+from ..basic.clear import zero_image, zero_program
 from ..dispatch import (COMPUTE_GROUP, check_shape, decision_view_group, groups_2d, ray_group, ray_group_defines,
                         view_order)
 from ..effects import effect_defines, scene_defines
@@ -94,6 +94,7 @@ class HybridComposite(RenderPass):
         self._tiles = work_tiles.usable(ctx, cd, self._group)
         if self._tiles:
             defines["WORK_TILES_INPUT"] = 1
+            self._clear = zero_program(ctx.gl, "rgba16f")
         self._defines = {**defines, "SPLIT_LOBES": int(bool(self.lobes)), **ray_group_defines(self._group, order)}
         # the scene's features: the probe lookup shades the G-buffer surface with its whole material
         self._prog = self.compute_program(ctx.gl, "composite.comp",
@@ -119,7 +120,8 @@ class HybridComposite(RenderPass):
         if self._probes:
             probe_inputs.bind(self._res, data, self._probe_sampler)
         if self._tiles:
-            zero_texture(data[self.COLOR])
+            zero_image(self._clear, data[self.COLOR])
+            ctx.barrier(Access.IMAGE)   # the zeros land before the tiles' stores
             work_tiles.run(self._res, data[work_tiles.WORK_TILES])
         else:
             self._prog.run(*self._groups)
