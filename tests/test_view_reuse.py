@@ -451,10 +451,11 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     composite take one view per workgroup (`one_view_tiles`), in both of RTShadows' dispatches (the
     glossy boxes' pixels take their source's light sample) and RTReflections'. Without it the
     composite, whose workgroups span four views, takes the four sources first, then the others in
-    grid order (`source_views_first`). One view per workgroup, they run over the decision's work
-    tiles (`work_tiles`), or over every tile without. Which lane shades which pixel, and which
-    workgroups launch, change nothing: the images and rays per view are those of the grid order's
-    workgroups over several views."""
+    grid order (`source_views_first`). One view per workgroup, the composite and RTReflections run
+    over the decision's work tiles (`work_tiles`), or over every tile without; RTShadows' workgroups
+    gather the pixels of 8 tiles side by side (`compact_tiles`), or with 1 each runs over its own
+    tile. Which lane shades which pixel, and which workgroups launch, change nothing: the images and
+    rays per view are those of the grid order's workgroups over several views."""
     scene = lambert_cornell()
     for name in ("TallBox", "ShortBox"):
         m = scene.materials[name]
@@ -462,11 +463,14 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     scene.materials["TallBox"].effect = rv.Effect.REFLECTIONS
     stride = 2
     configs = {"grid": {"source_views_first": False, "one_view_tiles": False},
-               "sources first": {"one_view_tiles": False}, "one view": {"work_tiles": True}, "every tile": {}}
+               "sources first": {"one_view_tiles": False}, "one view": {"work_tiles": True}, "every tile": {},
+               "uncompacted": {"work_tiles": True}}
     out = {}
     for name, props in configs.items():
         g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf")
         g.update_pass("Decision", {**props, "source_stride": stride})
+        if name == "uncompacted":
+            g.update_pass("Shadows", {"compact_tiles": 1})
         g.mark_output("SVGF.color")
         g.mark_output(DECISION)
         with Renderer(scene, g, views=16, size=(16, 16)) as r:
@@ -483,10 +487,13 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     assert order == sources + [v for v in range(16) if v not in sources]
     for p in ("Shadows", "Composite", "Reflections"):
         assert out["one view"][3][p]["RAY_GROUP_Z"] == 1 and out["grid"][3][p]["RAY_GROUP_Z"] > 1, p
-        assert out["one view"][3][p].get("WORK_TILES_INPUT") == 1, p
+        assert out["uncompacted"][3][p].get("WORK_TILES_INPUT") == 1, p
         assert "WORK_TILES_INPUT" not in out["every tile"][3][p] and "WORK_TILES_INPUT" not in out["grid"][3][p], p
+    for name in configs:
+        assert out[name][3]["Shadows"].get("RAY_PASS_COMPACT") == (None if name == "uncompacted" else 8), name
+    assert "WORK_TILES_INPUT" not in out["one view"][3]["Shadows"]
     assert ((out["one view"][4] & SHARED_LIGHT) != 0).sum() > 50   # RTShadows' second dispatch has pixels
-    for name in ("sources first", "one view", "every tile"):
+    for name in ("sources first", "one view", "every tile", "uncompacted"):
         np.testing.assert_array_equal(out[name][0], out["grid"][0])
         np.testing.assert_array_equal(out[name][1], out["grid"][1])
         assert out[name][2] == out["grid"][2]

@@ -49,6 +49,7 @@ class GBufferLightingPass(RenderPass):
     PIXEL_LIST: str | None = None   # input pin of the pixel list, for indirect dispatch
     SALT = RNG_SALTS["lighting"]   # its random stream (subclasses name their own)
     LOWEST_EFFECT = Effect.RASTER   # the pixels it lights: this effect and above
+    COMPACTS = False   # its shader runs in batches (pixel_list.glsl ray_pass_batches): `compact_tiles` applies
     FILL_LOBE = "whole"   # what its output holds, for the trace decision's fill (trace_decision.fill)
     CHOICES = {"dispatch_mode": DISPATCHES}
     WHOLE = {"light_samples": (1, MAX_LIGHT_SAMPLES, "light samples per pixel")}
@@ -109,8 +110,12 @@ class GBufferLightingPass(RenderPass):
                          **self._fill.defines()}
         if self.PIXEL_LIST and not self._pixels_2d:
             self._defines["PIXEL_LIST_INPUT"] = 1
-        # over the decision's work tiles when its workgroup is one (glsl/work_tiles.glsl)
-        self._tiles = self._pixels_2d and work_tiles.usable(ctx, cd, self._group)
+        # under a trace decision a workgroup gathers the pixels of `compact_tiles` tiles (glsl/pixel_list.glsl
+        # RAY_PASS_COMPACT), else over the decision's work tiles when its workgroup is one (glsl/work_tiles.glsl)
+        self._compact = self._compact_tiles(self._group) if self._pixels_2d and self._fill.bound else 1
+        if self._compact > 1:
+            self._defines["RAY_PASS_COMPACT"] = self._compact
+        self._tiles = self._pixels_2d and self._compact == 1 and work_tiles.usable(ctx, cd, self._group)
         if self._tiles:
             self._defines["WORK_TILES_INPUT"] = 1
         self._probes = probe_inputs.bound(cd)
@@ -122,8 +127,17 @@ class GBufferLightingPass(RenderPass):
                                                           repeat_x=False, repeat_y=False))
         self._prog = self.compute_program(ctx.gl, self.SHADER, self._defines)
         self._res = program_resources(self._prog)
-        # whole-image dispatches: ray passes in ray_group tiles, DirectLighting in 8x8 tiles of one view
-        self._groups = groups_2d(cd.size, cd.views, self._group if self._pixels_2d else COMPUTE_GROUP)
+        # whole-image dispatches: ray passes in ray_group tiles (`_compact` side by side), DirectLighting in
+        # 8x8 tiles of one view
+        gx, gy, gz = groups_2d(cd.size, cd.views, self._group if self._pixels_2d else COMPUTE_GROUP)
+        self._groups = (-(-gx // self._compact), gy, gz)
+
+    def _compact_tiles(self, group) -> int:
+        """The tiles a workgroup gathers its pixels from (1: its own tile only): the pass's `compact_tiles`
+        where its shader runs in batches and the workgroup has at most 32 invocations (a mask word)."""
+        if not self.COMPACTS or group[0] * group[1] * group[2] > 32:
+            return 1
+        return int(self.compact_tiles)
 
     def _dispatch_2d(self, cd) -> bool:
         if self.dispatch_mode != "auto":

@@ -5,7 +5,16 @@
 // effect SHADOWS and REFLECTIONS record their sample (shading.glsl SharedLight) in `shared_lights`;
 // a pixel the decision flags DECISION_SHARED_LIGHT traces no ray of its own: a second dispatch of
 // this shader, built with SHARED_LIGHT_TAKE, shades its own lobes over its source pixel's sample.
+// With RAY_PASS_COMPACT (glsl/pixel_list.glsl) a workgroup works through the pixels of several
+// tiles in full batches.
 #define GBUF_READER 1
+#ifndef SHARED_LIGHT
+#define SHARED_LIGHT 0
+#endif
+#ifndef SHARED_LIGHT_TAKE
+#define SHARED_LIGHT_TAKE 0
+#endif
+#define RAY_PASS_ACCEPTS SHARED_LIGHT   // each dispatch its own pixels (ray_pass_accepts below)
 #include "views.glsl"
 #include "gbuffer.glsl"
 #include "pixel_list.glsl"
@@ -20,22 +29,19 @@ layout(local_size_x = RAY_GROUP_SIZE) in;
 layout(local_size_x = PIXEL_LIST_GROUP) in;
 #endif
 layout(rgba16f) writeonly uniform image2DArray dst;
-#ifndef SHARED_LIGHT
-#define SHARED_LIGHT 0
-#endif
-#ifndef SHARED_LIGHT_TAKE
-#define SHARED_LIGHT_TAKE 0
-#endif
 #if SHARED_LIGHT
 layout(rgba32ui) uniform uimage2DArray shared_lights;
+
+// The pixels that take their source's light sample are the second dispatch's, the others the first's.
+bool ray_pass_accepts(ivec3 p) { return decision_shared_light(decision_at(p)) == bool(SHARED_LIGHT_TAKE); }
 #endif
 
-void main() {
-    ivec3 p;
-    if (!ray_pass_pixel(EFFECT_SHADOWS, imageSize(dst), p)) return;
-#if SHARED_LIGHT
+void shade(ivec3 p) {
+#if !PIXELS_2D && SHARED_LIGHT   // over the list the test is here (the image's is ray_pass_wants')
+    if (!ray_pass_accepts(p)) return;
+#endif
+#if SHARED_LIGHT_TAKE
     uvec2 t = decision_at(p);
-    if (decision_shared_light(t) != bool(SHARED_LIGHT_TAKE)) return;   // the other dispatch's
 #endif
     GSurface g = gbuf_load(p);
     PathVertex s = path_vertex_at_gbuffer(g, uint(p.z));
@@ -59,4 +65,10 @@ void main() {
     vec3 c = g.emissive + direct + probe_gi_diffuse(s);
     imageStore(dst, p, vec4(to_half_range(nonfinite_scrub(c)), 1.0));   // the target is rgba16f
     ray_count_commit(uint(p.z));
+}
+
+void main() {
+    ivec3 p;
+    for (uint b = 0u, n = ray_pass_batches(EFFECT_SHADOWS, imageSize(dst)); b < n; ++b)
+        if (ray_pass_batch_pixel(b, p)) shade(p);
 }

@@ -27,7 +27,12 @@ class RTShadows(GBufferLightingPass):
     sample and its visibility (`sharedLights`, scratch), and a pixel the decision flags
     DECISION_SHARED_LIGHT (a glossy lobe that another view's shaded light would not suit) traces no
     shadow ray: a second dispatch shades its own lobes towards its source pixel's sample, over that
-    sample's visibility."""
+    sample's visibility.
+
+    `compact_tiles` (8; under a trace decision, over the image): a workgroup gathers the pixels with
+    rays of that many tiles side by side and traces them a full warp at a time, in the tiles' order
+    (glsl/pixel_list.glsl RAY_PASS_COMPACT), so that a view that reuses most of its light does not
+    hold a warp per tile for its few traced pixels; 1: each workgroup its own tile."""
 
     SHARED = "sharedLights"
 
@@ -38,8 +43,10 @@ class RTShadows(GBufferLightingPass):
     COUNTS_RAYS = True
     LOWEST_EFFECT = Effect.SHADOWS
     SALT = RNG_SALTS["rt_shadows"]
-    PROPERTIES = {"light_samples": 1, "blend_roulette": 0.0, "share_light_samples": False,
+    PROPERTIES = {"light_samples": 1, "blend_roulette": 0.0, "share_light_samples": False, "compact_tiles": 8,
                   **ray_properties(view_group=16)}
+    WHOLE = {**GBufferLightingPass.WHOLE, "compact_tiles": (1, 32, "tiles a workgroup gathers its pixels from")}
+    COMPACTS = True
     _sharing = False   # compiled with shared light samples (shares(cd))
 
     def validate_property(self, key, value):
