@@ -452,9 +452,9 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     glossy boxes' pixels take their source's light sample) and RTReflections'. Without it the
     composite, whose workgroups span four views, takes the four sources first, then the others in
     grid order (`source_views_first`). One view per workgroup, the composite and RTReflections run
-    over the decision's work tiles (`work_tiles`), or over every tile without; RTShadows' workgroups
-    gather the pixels of 8 tiles side by side (`compact_tiles`), or with 1 each runs over its own
-    tile. Which lane shades which pixel, and which workgroups launch, change nothing: the images and
+    over the decision's work tiles (`work_tiles`), or over every tile without; RTShadows' and the
+    composite's workgroups gather the pixels of 8 tiles side by side (`compact_tiles`), or with 1
+    each runs over its own tile. Which lane shades which pixel, and which workgroups launch, change nothing: the images and
     rays per view are those of the grid order's workgroups over several views."""
     scene = lambert_cornell()
     for name in ("TallBox", "ShortBox"):
@@ -470,7 +470,8 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
         g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf")
         g.update_pass("Decision", {**props, "source_stride": stride})
         if name == "uncompacted":
-            g.update_pass("Shadows", {"compact_tiles": 1})
+            for p in ("Shadows", "Composite"):
+                g.update_pass(p, {"compact_tiles": 1})
         g.mark_output("SVGF.color")
         g.mark_output(DECISION)
         with Renderer(scene, g, views=16, size=(16, 16)) as r:
@@ -491,7 +492,9 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
         assert "WORK_TILES_INPUT" not in out["every tile"][3][p] and "WORK_TILES_INPUT" not in out["grid"][3][p], p
     for name in configs:
         assert out[name][3]["Shadows"].get("RAY_PASS_COMPACT") == (None if name == "uncompacted" else 8), name
+        assert out[name][3]["Composite"].get("TILE_GATHER") == (None if name == "uncompacted" else 8), name
     assert "WORK_TILES_INPUT" not in out["one view"][3]["Shadows"]
+    assert "WORK_TILES_INPUT" not in out["one view"][3]["Composite"]
     assert ((out["one view"][4] & SHARED_LIGHT) != 0).sum() > 50   # RTShadows' second dispatch has pixels
     for name in ("sources first", "one view", "every tile", "uncompacted"):
         np.testing.assert_array_equal(out[name][0], out["grid"][0])

@@ -111,61 +111,31 @@ bool ray_pass_pixel(uint min_effect, ivec3 image_size, out ivec3 p) {
 //   for (uint b = 0u, n = ray_pass_batches(E, size); b < n; ++b)
 //       if (ray_pass_batch_pixel(b, p)) shade(p);
 // With RAY_PASS_COMPACT K > 1 (PIXELS_2D, a workgroup of at most 32 invocations, no work tiles) a
-// workgroup gathers the pixels with work of K ray_group tiles side by side and works through them
-// RAY_GROUP_SIZE at a time, in the tiles' order: where few pixels of a tile have work (a view that
-// reuses most of its light) its lanes are not left idle behind one ray each. Else one batch: the
-// invocation's ray_pass_pixel.
-#if PIXELS_2D && RAY_PASS_COMPACT > 1
-shared uint s_ray_pass_mask[RAY_PASS_COMPACT];   // bit i of word k: lane i of tile k has work
-
-uvec3 ray_pass_tile(uint k) { return uvec3(gl_WorkGroupID.x * uint(RAY_PASS_COMPACT) + k, gl_WorkGroupID.yz); }
-
-uint ray_pass_batches(uint min_effect, ivec3 image_size) {
-    uint lane = gl_LocalInvocationIndex;
-    if (lane < uint(RAY_PASS_COMPACT)) s_ray_pass_mask[lane] = 0u;
-    barrier();
-    for (uint k = 0u; k < uint(RAY_PASS_COMPACT); ++k)
-        if (ray_pass_wants(ray_group_pixel_of(ray_pass_tile(k), lane), min_effect, image_size))
-            atomicOr(s_ray_pass_mask[k], 1u << lane);
-    barrier();
-    uint n = 0u;
-    for (uint k = 0u; k < uint(RAY_PASS_COMPACT); ++k) n += uint(bitCount(s_ray_pass_mask[k]));
-    return (n + uint(RAY_GROUP_SIZE) - 1u) / uint(RAY_GROUP_SIZE);
-}
-
-// The bit position of the n-th (from 0) set bit of m (which has more than n).
-uint ray_pass_nth_bit(uint m, uint n) {
-    uint at = 0u;
-    for (uint w = 16u; w > 0u; w >>= 1u) {
-        uint low = m & ((1u << w) - 1u);
-        uint c = uint(bitCount(low));
-        if (n >= c) { n -= c; m >>= w; at += w; } else m = low;
-    }
-    return at;
-}
-
-bool ray_pass_batch_pixel(uint b, out ivec3 p) {
-    uint j = b * uint(RAY_GROUP_SIZE) + gl_LocalInvocationIndex;
-    p = ivec3(0);
-    for (uint k = 0u; k < uint(RAY_PASS_COMPACT); ++k) {
-        uint m = s_ray_pass_mask[k];
-        uint c = uint(bitCount(m));
-        if (j < c) {
-            p = ray_group_pixel_of(ray_pass_tile(k), ray_pass_nth_bit(m, j));
-            return true;
-        }
-        j -= c;
-    }
-    return false;
-}
-#else
+// workgroup gathers the pixels ray_pass_wants of K tiles (glsl/tile_gather.glsl); else one batch,
+// the invocation's ray_pass_pixel.
 uint ray_pass_min_effect;
 ivec3 ray_pass_size;
+#if PIXELS_2D && RAY_PASS_COMPACT > 1
+#define TILE_GATHER RAY_PASS_COMPACT
+#include "tile_gather.glsl"
+bool tile_gather_wants(ivec3 p) { return ray_pass_wants(p, ray_pass_min_effect, ray_pass_size); }
+#endif
+
 uint ray_pass_batches(uint min_effect, ivec3 image_size) {
     ray_pass_min_effect = min_effect;
     ray_pass_size = image_size;
+#if PIXELS_2D && RAY_PASS_COMPACT > 1
+    return tile_gather();
+#else
     return 1u;
-}
-bool ray_pass_batch_pixel(uint b, out ivec3 p) { return ray_pass_pixel(ray_pass_min_effect, ray_pass_size, p); }
 #endif
+}
+
+bool ray_pass_batch_pixel(uint b, out ivec3 p) {
+#if PIXELS_2D && RAY_PASS_COMPACT > 1
+    return tile_gather_pixel(b, p);
+#else
+    return ray_pass_pixel(ray_pass_min_effect, ray_pass_size, p);
+#endif
+}
 #endif
