@@ -453,8 +453,8 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     composite, whose workgroups span four views, takes the four sources first, then the others in
     grid order (`source_views_first`). One view per workgroup, the composite and RTReflections run
     over the decision's work tiles (`work_tiles`), or over every tile without; RTShadows' and the
-    composite's workgroups gather the pixels of 8 tiles side by side (`compact_tiles`), or with 1
-    each runs over its own tile. Which lane shades which pixel, and which workgroups launch, change nothing: the images and
+    composite's workgroups, and SVGF's reprojection's, gather the pixels of 8 tiles side by side
+    (`compact_tiles`), or with 1 each runs over its own tile. Which lane shades which pixel, and which workgroups launch, change nothing: the images and
     rays per view are those of the grid order's workgroups over several views."""
     scene = lambert_cornell()
     for name in ("TallBox", "ShortBox"):
@@ -470,7 +470,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
         g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf")
         g.update_pass("Decision", {**props, "source_stride": stride})
         if name == "uncompacted":
-            for p in ("Shadows", "Composite"):
+            for p in ("Shadows", "Composite", "SVGF"):
                 g.update_pass(p, {"compact_tiles": 1})
         g.mark_output("SVGF.color")
         g.mark_output(DECISION)
@@ -478,7 +478,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
             for _ in range(2):
                 r.render()
             out[name] = (r.read_output("Composite.color"), r.read_output("SVGF.color"), r.compiled.ray_counts(),
-                         {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite", "Reflections")},
+                         {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite", "Reflections", "SVGF")},
                          r.read_output(DECISION)[..., 0])
     cols = rv.xr.grid_for_views(16)[0]
     sources = [v for v in range(16) if (v % cols) % stride == 0 and (v // cols) % stride == 0]
@@ -492,7 +492,8 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
         assert "WORK_TILES_INPUT" not in out["every tile"][3][p] and "WORK_TILES_INPUT" not in out["grid"][3][p], p
     for name in configs:
         assert out[name][3]["Shadows"].get("RAY_PASS_COMPACT") == (None if name == "uncompacted" else 8), name
-        assert out[name][3]["Composite"].get("TILE_GATHER") == (None if name == "uncompacted" else 8), name
+        for p in ("Composite", "SVGF"):
+            assert out[name][3][p].get("TILE_GATHER") == (None if name == "uncompacted" else 8), (name, p)
     assert "WORK_TILES_INPUT" not in out["one view"][3]["Shadows"]
     assert "WORK_TILES_INPUT" not in out["one view"][3]["Composite"]
     assert ((out["one view"][4] & SHARED_LIGHT) != 0).sum() > 50   # RTShadows' second dispatch has pixels
