@@ -454,7 +454,8 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     grid order (`source_views_first`). One view per workgroup, the composite and RTReflections run
     over the decision's work tiles (`work_tiles`), or over every tile without; RTShadows' and the
     composite's workgroups, and SVGF's reprojection's, gather the pixels of 8 tiles side by side
-    (`compact_tiles`), or with 1 each runs over its own tile. Which lane shades which pixel, and which workgroups launch, change nothing: the images and
+    (`compact_tiles`; 16 of RTShadows' 4x2 tiles: more tiles than lanes), or with 1 each runs over
+    its own tile. Which lane shades which pixel, and which workgroups launch, change nothing: the images and
     rays per view are those of the grid order's workgroups over several views."""
     scene = lambert_cornell()
     for name in ("TallBox", "ShortBox"):
@@ -464,7 +465,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     stride = 2
     configs = {"grid": {"source_views_first": False, "one_view_tiles": False},
                "sources first": {"one_view_tiles": False}, "one view": {"work_tiles": True}, "every tile": {},
-               "uncompacted": {"work_tiles": True}}
+               "uncompacted": {"work_tiles": True}, "narrow": {}}
     out = {}
     for name, props in configs.items():
         g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf")
@@ -472,6 +473,8 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
         if name == "uncompacted":
             for p in ("Shadows", "Composite", "SVGF"):
                 g.update_pass(p, {"compact_tiles": 1})
+        if name == "narrow":   # more tiles than lanes
+            g.update_pass("Shadows", {"tile": [4, 2], "compact_tiles": 16})
         g.mark_output("SVGF.color")
         g.mark_output(DECISION)
         with Renderer(scene, g, views=16, size=(16, 16)) as r:
@@ -491,13 +494,14 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
         assert out["uncompacted"][3][p].get("WORK_TILES_INPUT") == 1, p
         assert "WORK_TILES_INPUT" not in out["every tile"][3][p] and "WORK_TILES_INPUT" not in out["grid"][3][p], p
     for name in configs:
-        assert out[name][3]["Shadows"].get("RAY_PASS_COMPACT") == (None if name == "uncompacted" else 8), name
+        want = {"uncompacted": None, "narrow": 16}.get(name, 8)
+        assert out[name][3]["Shadows"].get("RAY_PASS_COMPACT") == want, name
         for p in ("Composite", "SVGF"):
             assert out[name][3][p].get("TILE_GATHER") == (None if name == "uncompacted" else 8), (name, p)
     assert "WORK_TILES_INPUT" not in out["one view"][3]["Shadows"]
     assert "WORK_TILES_INPUT" not in out["one view"][3]["Composite"]
     assert ((out["one view"][4] & SHARED_LIGHT) != 0).sum() > 50   # RTShadows' second dispatch has pixels
-    for name in ("sources first", "one view", "every tile", "uncompacted"):
+    for name in ("sources first", "one view", "every tile", "uncompacted", "narrow"):
         np.testing.assert_array_equal(out[name][0], out["grid"][0])
         np.testing.assert_array_equal(out[name][1], out["grid"][1])
         assert out[name][2] == out["grid"][2]

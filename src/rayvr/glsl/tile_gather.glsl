@@ -21,7 +21,7 @@ uvec3 tile_gather_tile(uint k) { return uvec3(gl_WorkGroupID.x * uint(TILE_GATHE
 // The batches of RAY_GROUP_SIZE pixels the workgroup works through.
 uint tile_gather() {
     uint lane = gl_LocalInvocationIndex;
-    if (lane < uint(TILE_GATHER)) s_tile_gather[lane] = 0u;
+    for (uint k = lane; k < uint(TILE_GATHER); k += uint(RAY_GROUP_SIZE)) s_tile_gather[k] = 0u;
     barrier();
     for (uint k = 0u; k < uint(TILE_GATHER); ++k)
         if (tile_gather_wants(ray_group_pixel_of(tile_gather_tile(k), lane))) atomicOr(s_tile_gather[k], 1u << lane);
