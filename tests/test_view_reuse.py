@@ -453,8 +453,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     composite, whose workgroups span four views, takes the four sources first, then the others in
     grid order (`source_views_first`). One view per workgroup, the composite and RTReflections run
     over the decision's work tiles (`work_tiles`), or over every tile without; RTShadows' and the
-    composite's workgroups, and SVGF's reprojection's, gather the pixels of 8 tiles side by side
-    (`compact_tiles`; 16 of RTShadows' 4x2 tiles: more tiles than lanes), or with 1 each runs over
+    composite's workgroups gather the pixels of 8 tiles side by side (`compact_tiles`; 16 of RTShadows' 4x2 tiles: more tiles than lanes), or with 1 each runs over
     its own tile. Which lane shades which pixel, and which workgroups launch, change nothing: the images and
     rays per view are those of the grid order's workgroups over several views."""
     scene = lambert_cornell()
@@ -471,7 +470,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
         g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf")
         g.update_pass("Decision", {**props, "source_stride": stride})
         if name == "uncompacted":
-            for p in ("Shadows", "Composite", "SVGF"):
+            for p in ("Shadows", "Composite"):
                 g.update_pass(p, {"compact_tiles": 1})
         if name == "narrow":   # more tiles than lanes
             g.update_pass("Shadows", {"tile": [4, 2], "compact_tiles": 16})
@@ -481,7 +480,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
             for _ in range(2):
                 r.render()
             out[name] = (r.read_output("Composite.color"), r.read_output("SVGF.color"), r.compiled.ray_counts(),
-                         {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite", "Reflections", "SVGF")},
+                         {p: r.compiled.passes[p].defines() for p in ("Shadows", "Composite", "Reflections")},
                          r.read_output(DECISION)[..., 0])
     cols = rv.xr.grid_for_views(16)[0]
     sources = [v for v in range(16) if (v % cols) % stride == 0 and (v // cols) % stride == 0]
@@ -496,8 +495,7 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     for name in configs:
         want = {"uncompacted": None, "narrow": 16}.get(name, 8)
         assert out[name][3]["Shadows"].get("RAY_PASS_COMPACT") == want, name
-        for p in ("Composite", "SVGF"):
-            assert out[name][3][p].get("TILE_GATHER") == (None if name == "uncompacted" else 8), (name, p)
+        assert out[name][3]["Composite"].get("TILE_GATHER") == (None if name == "uncompacted" else 8), name
     assert "WORK_TILES_INPUT" not in out["one view"][3]["Shadows"]
     assert "WORK_TILES_INPUT" not in out["one view"][3]["Composite"]
     assert ((out["one view"][4] & SHARED_LIGHT) != 0).sum() > 50   # RTShadows' second dispatch has pixels

@@ -48,9 +48,7 @@ trace its own light then.
 There the reprojection also lists the pixels it filters (`filterPixels`, with `filter_list`), and
 the variance and a-trous stages run over that list, indirectly: a view that reuses most of its
 light has a few pixels to filter, scattered over its image, and 8x8 tiles of the image would hold
-warps of mostly idle lanes. For the same reason a reprojection workgroup then gathers the pixels
-to filter of `compact_tiles` (8) one-warp tiles side by side and reprojects them a full warp at a
-time (glsl/tile_gather.glsl; 1: 8x8 tiles of the image).
+warps of mostly idle lanes.
 
 History resets on the first frame, on `reset()` and on scene edits that change the lighting
 (materials or lights: `GpuScene.version` moved and one of them differs). Camera motion never
@@ -64,13 +62,11 @@ from ...gpu.program_resources import program_resources
 from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Access, Reflection, RenderPass
 from ..compaction.pixel_list import dispatch_list, empty_lists, pixel_list_bytes
-from ..dispatch import groups_2d, ray_group_defines
+from ..dispatch import groups_2d
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
 from ..history import HistoryOwner, LightingHistory, still_frame
 from ..trace_decision.fill import DECISION, DecisionFill
-
-TILE = (8, 4, 1)   # the reprojection's tile when it gathers: one warp of one view
 
 GBUFFER = tuple(c.name for c in channels.CHANNELS)   # every channel: the surface, material and motion
 MAX_ITERATIONS = 8   # taps up to 2 x 2^7 = 256 pixels apart
@@ -109,9 +105,8 @@ class SVGF(HistoryOwner, RenderPass):
     COUNTS_NONFINITE = True   # scrubs NaN/Inf samples (glsl/nonfinite.glsl)
     PROPERTIES = {"iterations": 5, "kernel": 3, "feedback_tap": -1, "alpha": 0.05, "moments_alpha": 0.2,
                   "max_history": 32, "still_max_history": 256, "phi_color": 4.0, "phi_normal": 128.0, "phi_depth": 1.0,
-                  "spread": True, "filter_list": True, "compact_tiles": 8}
+                  "spread": True, "filter_list": True}
     WHOLE = {"iterations": (0, MAX_ITERATIONS, "a-trous passes"),
-             "compact_tiles": (1, 32, "tiles a reprojection workgroup gathers its pixels from"),
              "feedback_tap": (-1, None, "the iteration fed back; -1: the temporal mean"),
              "max_history": (1, None, "frames"), "still_max_history": (1, None, "frames")}
     USES_SCENE = True
@@ -189,13 +184,6 @@ class SVGF(HistoryOwner, RenderPass):
         if self._listed:
             self._defines["SVGF_FILTER_LIST"] = 1
         reproject = {**self._defines, "TRACE_DECISION": int(self._density)}
-        self._groups = groups_2d(cd.size, cd.views)
-        self._reproject_groups = self._groups
-        self._gather = gather = int(self.compact_tiles) if self._listed else 1
-        if gather > 1:   # one-warp tiles of one view, `gather` a workgroup (glsl/tile_gather.glsl)
-            reproject.update(TILE_GATHER=gather, **ray_group_defines(TILE))
-            gx, gy, gz = groups_2d(cd.size, cd.views, TILE)
-            self._reproject_groups = (-(-gx // gather), gy, gz)
         self._gl = ctx.gl
         # the modulate stage's own program only when 0 iterations ask for it (_modulate_program)
         self._res = {"reproject": program_resources(self.compute_program(ctx.gl, "svgf_reproject.comp", reproject)),
@@ -206,6 +194,7 @@ class SVGF(HistoryOwner, RenderPass):
         self._atrous = {}
         self._atrous_program()
         self._atrous_program(final=True)
+        self._groups = groups_2d(cd.size, cd.views)
         self._history.restart()
 
     def _atrous_program(self, final: bool = False):
@@ -221,10 +210,8 @@ class SVGF(HistoryOwner, RenderPass):
     def defines(self) -> dict:
         if not hasattr(self, "_defines"):
             return {}
-        reproject = {"TRACE_DECISION": 1} if self._density else {}   # the reprojection's
-        if self._gather > 1:
-            reproject["TILE_GATHER"] = self._gather
-        return {**self._defines, "SVGF_KERNEL": int(self.kernel), **reproject}   # the a-trous stage's kernel
+        density = {"TRACE_DECISION": 1} if self._density else {}   # the reprojection's
+        return {**self._defines, "SVGF_KERNEL": int(self.kernel), **density}   # the a-trous stage's kernel
 
     def _histories(self, res, data) -> None:
         """Bind the colour histories as the images `history_diffuse` (and `_specular`) of `res`."""
@@ -288,7 +275,7 @@ class SVGF(HistoryOwner, RenderPass):
         res.set("svgf_still_max_history", float(max(self.still_max_history, self.max_history)))
         res.set("svgf_still", still_frame(ctx))
         res.set("svgf_history_valid", self._history.valid)
-        res.prog.run(*self._reproject_groups)
+        res.prog.run(*self._groups)
         ctx.barrier(*between, *((Access.INDIRECT,) if pixels is not None else ()))
 
         res = self._res["variance"]   # in place in scratch[0]

@@ -16,12 +16,7 @@
 #include "pixel_list.glsl"
 
 #ifdef SVGF_LIST_WRITER
-#ifdef TILE_GATHER   // glsl/tile_gather.glsl: one-warp ray_group tiles, several a workgroup
-#include "tile_gather.glsl"
-layout(local_size_x = RAY_GROUP_SIZE) in;
-#else
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
-#endif
 // Lists p when `filtered`; every invocation of the workgroup calls it, in uniform control flow.
 void svgf_list_pixel(bool filtered, ivec3 p) {
 #if SVGF_FILTER_LIST

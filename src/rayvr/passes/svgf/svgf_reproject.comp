@@ -14,9 +14,8 @@
 // length SVGF_BORROWED) gives its sources' history, through its decision texel, and the scratch
 // texels of pixels without a surface are left unwritten: the variance blur tests the key before it
 // reads one. Without SVGF_SHARED they are written 0 (few pixels, and no key test in the blur's
-// nine taps at every pixel). With SVGF_FILTER_LIST it lists the pixels it does filter, those the
-// later stages run over (svgf_pixels.glsl); with TILE_GATHER too (glsl/tile_gather.glsl) a
-// workgroup gathers them from several tiles and reprojects them a full workgroup at a time.
+// nine taps at every pixel). With SVGF_FILTER_LIST it lists the pixels it does filter, those the later stages
+// run over (svgf_pixels.glsl).
 #include "svgf_common.glsl"
 #include "trace_decision.glsl"
 #if SVGF_SHARED
@@ -104,17 +103,18 @@ void add_tap(inout Reprojected r, ivec3 q, float w, uint word, vec3 n, float pre
     add_history(r, q, w, s.history);
 }
 
-// Whether pixel p is filtered: inside the image, with a surface whose light is its own. Elsewhere
-// inside it is written here as having none.
-bool filtered(ivec3 p) {
-    if (any(greaterThanEqual(p, imageSize(out_illum)))) return false;
-    uint word = gbuf_fetch_effect(p);
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    ivec3 size = imageSize(out_illum);
+    bool inside = all(lessThan(p, size));
+    uint word = inside ? gbuf_fetch_effect(p) : 0u;
     bool borrowed = false;
 #if SVGF_SHARED
-    borrowed = decision_spread(decision_at(p));
+    borrowed = inside && decision_spread(decision_at(p));
 #endif
-    if (svgf_has_geometry(word) && !borrowed) return true;
-    {
+    svgf_list_pixel(inside && svgf_has_geometry(word) && !borrowed, p);
+    if (!inside) return;
+    if (!svgf_has_geometry(word) || borrowed) {
         // the key says "no surface": no a-trous tap reads this pixel; the variance blur reads its
         // scratch texels (0) or, with SVGF_SHARED, tests the key first; a borrowed pixel's tag is
         // svgf_spread.comp's to write (its moments are its sources'), and nothing reads it before
@@ -125,21 +125,11 @@ bool filtered(ivec3 p) {
 #endif
         SvgfSurface none = svgf_no_geometry();
         imageStore(key_out, p, uvec4(svgf_pack_key(none), 0u, 0u));
-        if (borrowed) return false;
+        if (borrowed) return;
         imageStore(moments_out, p, vec4(0.0));
         imageStore(surface_out, p, uvec4(svgf_pack_tag(none), 0u, 0u));
-        return false;
+        return;
     }
-}
-
-#ifdef TILE_GATHER
-bool tile_gather_wants(ivec3 p) { return filtered(p); }
-#endif
-
-// Reproject and accumulate a pixel that is filtered.
-void reproject(ivec3 p) {
-    ivec3 size = imageSize(out_illum);
-    uint word = gbuf_fetch_effect(p);
     GSurface g = gbuf_load(p);
     vec3 albedo_d, albedo_s;
     svgf_albedos(g, uint(p.z), albedo_d, albedo_s);
@@ -200,20 +190,4 @@ void reproject(ivec3 p) {
     SvgfSurface s = svgf_surface_at(p, g, word, history);
     imageStore(key_out, p, uvec4(svgf_pack_key(s), 0u, 0u));
     imageStore(surface_out, p, uvec4(svgf_pack_tag(s), 0u, 0u));
-}
-
-void main() {
-    ivec3 p;
-#ifdef TILE_GATHER   // the pixels to filter of several tiles, a full workgroup at a time
-    for (uint b = 0u, n = tile_gather(); b < n; ++b) {
-        bool has = tile_gather_pixel(b, p);
-        svgf_list_pixel(has, p);
-        if (has) reproject(p);
-    }
-#else
-    p = ivec3(gl_GlobalInvocationID);
-    bool has = filtered(p);
-    svgf_list_pixel(has, p);
-    if (has) reproject(p);
-#endif
 }
