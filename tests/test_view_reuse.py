@@ -452,10 +452,10 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     glossy boxes' pixels take their source's light sample) and RTReflections'. Without it the
     composite, whose workgroups span four views, takes the four sources first, then the others in
     grid order (`source_views_first`). One view per workgroup, the composite and RTReflections run
-    over the decision's work tiles (`work_tiles`), or over every tile without; RTShadows' and the
-    composite's workgroups gather the pixels of 8 tiles side by side (`compact_tiles`; 16 of RTShadows' 4x2 tiles: more tiles than lanes), or with 1 each runs over
-    its own tile. Which lane shades which pixel, and which workgroups launch, change nothing: the images and
-    rays per view are those of the grid order's workgroups over several views."""
+    over the decision's work tiles (`work_tiles`, the default), or over every tile without; RTShadows' workgroups
+    may gather the pixels of 8 tiles side by side (`compact_tiles`; 16 of its 4x2 tiles: more tiles
+    than lanes). Which lane shades which pixel, and which workgroups launch, change nothing: the
+    images and rays per view are those of the grid order's workgroups over several views."""
     scene = lambert_cornell()
     for name in ("TallBox", "ShortBox"):
         m = scene.materials[name]
@@ -463,15 +463,14 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     scene.materials["TallBox"].effect = rv.Effect.REFLECTIONS
     stride = 2
     configs = {"grid": {"source_views_first": False, "one_view_tiles": False},
-               "sources first": {"one_view_tiles": False}, "one view": {"work_tiles": True}, "every tile": {},
-               "uncompacted": {"work_tiles": True}, "narrow": {}}
+               "sources first": {"one_view_tiles": False}, "one view": {}, "every tile": {"work_tiles": False},
+               "gathered": {}, "narrow": {}}
     out = {}
     for name, props in configs.items():
         g = rv.graphs.hybrid(reuse="views", gi="probes", denoise="svgf")
         g.update_pass("Decision", {**props, "source_stride": stride})
-        if name == "uncompacted":
-            for p in ("Shadows", "Composite"):
-                g.update_pass(p, {"compact_tiles": 1})
+        if name == "gathered":
+            g.update_pass("Shadows", {"compact_tiles": 8})
         if name == "narrow":   # more tiles than lanes
             g.update_pass("Shadows", {"tile": [4, 2], "compact_tiles": 16})
         g.mark_output("SVGF.color")
@@ -490,16 +489,14 @@ def test_workgroups_over_reused_views_and_render_the_same_image(gpu):
     assert order == sources + [v for v in range(16) if v not in sources]
     for p in ("Shadows", "Composite", "Reflections"):
         assert out["one view"][3][p]["RAY_GROUP_Z"] == 1 and out["grid"][3][p]["RAY_GROUP_Z"] > 1, p
-        assert out["uncompacted"][3][p].get("WORK_TILES_INPUT") == 1, p
+        assert out["one view"][3][p].get("WORK_TILES_INPUT") == 1, p
         assert "WORK_TILES_INPUT" not in out["every tile"][3][p] and "WORK_TILES_INPUT" not in out["grid"][3][p], p
     for name in configs:
-        want = {"uncompacted": None, "narrow": 16}.get(name, 8)
+        want = {"gathered": 8, "narrow": 16}.get(name)   # view reuse alone: none by default
         assert out[name][3]["Shadows"].get("RAY_PASS_COMPACT") == want, name
-        assert out[name][3]["Composite"].get("TILE_GATHER") == (None if name == "uncompacted" else 8), name
-    assert "WORK_TILES_INPUT" not in out["one view"][3]["Shadows"]
-    assert "WORK_TILES_INPUT" not in out["one view"][3]["Composite"]
+    assert "WORK_TILES_INPUT" not in out["gathered"][3]["Shadows"]   # the gather takes the tiles' place
     assert ((out["one view"][4] & SHARED_LIGHT) != 0).sum() > 50   # RTShadows' second dispatch has pixels
-    for name in ("sources first", "one view", "every tile", "uncompacted", "narrow"):
+    for name in ("sources first", "one view", "every tile", "gathered", "narrow"):
         np.testing.assert_array_equal(out[name][0], out["grid"][0])
         np.testing.assert_array_equal(out[name][1], out["grid"][1])
         assert out[name][2] == out["grid"][2]
@@ -547,3 +544,21 @@ def test_the_ray_passes_fill_only_where_the_decision_leaves_them_pixels(gpu, fov
     assert (shadows._fill._res is not None) == fills
     assert ("decision_fill" not in report.defines["Shadows"]) == fills
     assert image[..., :3].max() > 0
+
+
+def test_under_foveation_rtshadows_gathers_its_dithered_pixels_and_renders_the_same_image(gpu):
+    """Foveation's dither leaves a few traced pixels in every tile of the periphery: RTShadows'
+    workgroups then gather those of 8 tiles (`compact_tiles` 0, the default), without it (reuse
+    alone) not; gathered or not, the same image and the same rays."""
+    out = {}
+    for name, tiles in (("auto", 0), ("own tile", 1)):
+        g = rv.graphs.hybrid(foveation="fixed")
+        g.update_pass("Decision", {"foveal_radius_deg": 2.0})
+        g.update_pass("Shadows", {"compact_tiles": tiles})
+        with Renderer(lambert_cornell(), g, views=2, size=(40, 24)) as r:
+            r.render()
+            out[name] = (r.read_output("Composite.color"), r.compiled.ray_counts(),
+                         r.compiled.passes["Shadows"].defines().get("RAY_PASS_COMPACT"))
+    assert out["auto"][2] == 8 and out["own tile"][2] is None
+    np.testing.assert_array_equal(out["auto"][0], out["own tile"][0])
+    assert out["auto"][1] == out["own tile"][1] and 0 < sum(out["auto"][1]) < 2 * 40 * 24

@@ -84,6 +84,8 @@ SOURCE_VIEWS = "source_views"
 # RenderContext.dictionary's key, true when a trace decision reuses light across the views of a
 # camera grid and the ray passes that read it take one view per workgroup (TraceDecision).
 ONE_VIEW_TILES = "one_view_tiles"
+DITHERED_TRACE = "dithered_trace"   # ctx.dictionary: the trace decision's foveation spreads traced pixels thinly
+GATHER_TILES = 8   # a ray pass's tile gather (glsl/tile_gather.glsl) where DITHERED_TRACE, with compact_tiles 0
 
 
 def decision_view_group(ctx, view_group: int) -> int:

@@ -15,16 +15,13 @@
 // they did in RTShadows (the probe update measured 2.2x from the same split).
 // With TRACE_DECISION a pixel the decision flags DECISION_SPREAD (SVGF gives it another view's
 // filtered light) is left: 0 in `dst`, and the two lobes unwritten (SVGF, their one reader, reads
-// neither at such a pixel). With TILE_GATHER a workgroup gathers the pixels to composite of several
-// tiles (glsl/tile_gather.glsl), writing the 0 as it goes; else with WORK_TILES_INPUT the
-// workgroups are the decision's work tiles (glsl/work_tiles.glsl), and the pass clears `dst`
-// before, for the spread pixels of the others.
+// neither at such a pixel). With WORK_TILES_INPUT the workgroups are the decision's work tiles
+// (glsl/work_tiles.glsl), and the pass clears `dst` before, for the spread pixels of the others.
 #define GBUF_READER 1
 #include "gbuffer.glsl"
 #include "trace_decision.glsl"
 #include "probe_gi.glsl"
 #include "ray_group.glsl"
-#include "tile_gather.glsl"
 
 // HybridComposite's workgroups: with PROBE_GI one warp (8x4 pixels; in a camera grid 4x2 pixels of 4 views,
 // whose lookups share probes), else 8x8 pixels of one view
@@ -50,24 +47,15 @@ layout(rgba16f) writeonly uniform image2DArray dst_diffuse;
 layout(rgba16f) writeonly uniform image2DArray dst_specular;
 #endif
 
-// Whether pixel p is composited here: inside the image, and not spread (0 is written there now:
-// the lobes are left unwritten, SVGF reads neither at such a pixel).
-bool composited(ivec3 p) {
-    if (any(greaterThanEqual(p, imageSize(dst)))) return false;   // past the image or the last view
+void main() {
+    ivec3 p = ray_group_pixel();
+    if (any(greaterThanEqual(p, imageSize(dst)))) return;   // past the image or the last view
 #if TRACE_DECISION
-    if (decision_spread(decision_at(p))) {
+    if (decision_spread(decision_at(p))) {   // the lobes are left unwritten: SVGF reads neither there
         imageStore(dst, p, vec4(0.0));   // as the clear before a dispatch over the work tiles
-        return false;
+        return;
     }
 #endif
-    return true;
-}
-
-#ifdef TILE_GATHER
-bool tile_gather_wants(ivec3 p) { return composited(p); }
-#endif
-
-void composite(ivec3 p) {
     uint effect = gbuf_effect_at(p);
     vec3 c = texelFetch(direct_tex, p, 0).rgb;
     vec3 reflected = vec3(0.0);
@@ -108,15 +96,4 @@ void composite(ivec3 p) {
     if (effect == EFFECT_PATH_TRACED) c = texelFetch(path_tex, p, 0).rgb;
 #endif
     imageStore(dst, p, vec4(to_half_range(c), 1.0));
-}
-
-void main() {
-    ivec3 p;
-#ifdef TILE_GATHER
-    for (uint b = 0u, n = tile_gather(); b < n; ++b)
-        if (tile_gather_pixel(b, p)) composite(p);
-#else
-    p = ray_group_pixel();
-    if (composited(p)) composite(p);
-#endif
 }

@@ -41,11 +41,7 @@ class HybridComposite(RenderPass):
     # (8x8 tiles of one view cost them a fifth more); without probes, 8x8 tiles of one view, which
     # take half the time of 8x4 ones (benchmarks/RESULTS.md has the measurements). Under view reuse over
     # a camera grid one view a workgroup (TraceDecision `one_view_tiles`): 1.30 against 1.40 ms at 64 views.
-    # `compact_tiles` (8): under a trace decision a workgroup of at most 32 invocations gathers the pixels
-    # to composite of that many tiles side by side (glsl/tile_gather.glsl) and works through them a full
-    # warp at a time: most pixels of a reusing view are spread, and its probe lookups would each hold a warp.
-    PROPERTIES = {"lobes": False, "probe_tile": [8, 4], "probe_view_group": 4, "compact_tiles": 8}
-    WHOLE = {"compact_tiles": (1, 32, "tiles a workgroup gathers its pixels from")}
+    PROPERTIES = {"lobes": False, "probe_tile": [8, 4], "probe_view_group": 4}
 
     def validate_property(self, key, value):
         return check_shape(self.name, key, super().validate_property(key, value))
@@ -93,14 +89,9 @@ class HybridComposite(RenderPass):
         view_group = decision_view_group(ctx, self.probe_view_group) if decided else self.probe_view_group
         self._group = ray_group(cd.views, tuple(self.probe_tile), view_group) if self._probes else (*COMPUTE_GROUP, 1)
         order = view_order(ctx, cd.views, self._group) if decided else None
-        # under a decision, gathering the pixels of `compact_tiles` tiles a workgroup; else over the decision's
-        # work tiles when its workgroup is one: the colour is cleared first, so that the spread pixels of the
-        # tiles left out hold 0 as the others do
-        size = self._group[0] * self._group[1] * self._group[2]
-        self._compact = int(self.compact_tiles) if decided and size <= 32 else 1
-        if self._compact > 1:
-            defines["TILE_GATHER"] = self._compact
-        self._tiles = self._compact == 1 and work_tiles.usable(ctx, cd, self._group)
+        # over the decision's work tiles when its workgroup is one: the colour is cleared first, so that
+        # the spread pixels of the tiles left out hold 0 as the others do
+        self._tiles = work_tiles.usable(ctx, cd, self._group)
         if self._tiles:
             defines["WORK_TILES_INPUT"] = 1
             self._clear = zero_program(ctx.gl, "rgba16f")
@@ -109,8 +100,7 @@ class HybridComposite(RenderPass):
         self._prog = self.compute_program(ctx.gl, "composite.comp",
                                           {**scene_defines(ctx), **effect_defines(), **self._defines})
         self._res = program_resources(self._prog)
-        gx, gy, gz = groups_2d(cd.size, cd.views, self._group)
-        self._groups = (-(-gx // self._compact), gy, gz)
+        self._groups = groups_2d(cd.size, cd.views, self._group)
 
     def defines(self) -> dict:
         return dict(getattr(self, "_defines", {}))

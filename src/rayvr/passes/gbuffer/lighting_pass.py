@@ -10,7 +10,7 @@ from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
-from ..dispatch import (COMPUTE_GROUP, VIEW_GROUP, check_shape, decision_view_group, groups_2d, ray_group,
+from ..dispatch import (COMPUTE_GROUP, DITHERED_TRACE, GATHER_TILES, VIEW_GROUP, check_shape, decision_view_group, groups_2d, ray_group,
                         ray_group_defines, view_order)
 from ..effects import effect_defines, effects_used, scene_defines
 from ..probe_gi import inputs as probe_inputs
@@ -112,7 +112,7 @@ class GBufferLightingPass(RenderPass):
             self._defines["PIXEL_LIST_INPUT"] = 1
         # under a trace decision a workgroup gathers the pixels of `compact_tiles` tiles (glsl/pixel_list.glsl
         # RAY_PASS_COMPACT), else over the decision's work tiles when its workgroup is one (glsl/work_tiles.glsl)
-        self._compact = self._compact_tiles(self._group) if self._pixels_2d and self._fill.bound else 1
+        self._compact = self._compact_tiles(ctx, self._group) if self._pixels_2d and self._fill.bound else 1
         if self._compact > 1:
             self._defines["RAY_PASS_COMPACT"] = self._compact
         self._tiles = self._pixels_2d and self._compact == 1 and work_tiles.usable(ctx, cd, self._group)
@@ -132,12 +132,14 @@ class GBufferLightingPass(RenderPass):
         gx, gy, gz = groups_2d(cd.size, cd.views, self._group if self._pixels_2d else COMPUTE_GROUP)
         self._groups = (-(-gx // self._compact), gy, gz)
 
-    def _compact_tiles(self, group) -> int:
+    def _compact_tiles(self, ctx, group) -> int:
         """The tiles a workgroup gathers its pixels from (1: its own tile only): the pass's `compact_tiles`
-        where its shader runs in batches and the workgroup has at most 32 invocations (a mask word)."""
+        (0: GATHER_TILES where the decision's foveation dithers the traced pixels, else 1) where its shader
+        runs in batches and the workgroup has at most 32 invocations (a mask word)."""
         if not self.COMPACTS or group[0] * group[1] * group[2] > 32:
             return 1
-        return int(self.compact_tiles)
+        tiles = int(self.compact_tiles)
+        return tiles if tiles else (GATHER_TILES if ctx.dictionary.get(DITHERED_TRACE) else 1)
 
     def _dispatch_2d(self, cd) -> bool:
         if self.dispatch_mode != "auto":

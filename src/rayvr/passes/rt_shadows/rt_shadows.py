@@ -29,10 +29,12 @@ class RTShadows(GBufferLightingPass):
     shadow ray: a second dispatch shades its own lobes towards its source pixel's sample, over that
     sample's visibility.
 
-    `compact_tiles` (8; under a trace decision, over the image): a workgroup gathers the pixels with
+    `compact_tiles` (under a trace decision, over the image): a workgroup gathers the pixels with
     rays of that many tiles side by side and traces them a full warp at a time, in the tiles' order
-    (glsl/pixel_list.glsl RAY_PASS_COMPACT), so that a view that reuses most of its light does not
-    hold a warp per tile for its few traced pixels; 1: each workgroup its own tile."""
+    (glsl/tile_gather.glsl through pixel_list.glsl's RAY_PASS_COMPACT); 1: each workgroup its own
+    tile; 0 (the default): 8 where the decision's foveation dithers which pixels trace (their warps
+    held 0.38 of a lane's work each, 0.84 gathered), else 1 (view reuse's traced pixels are clustered:
+    0.81 without, 0.87 with; benchmarks/RESULTS.md, 2026-12-08)."""
 
     SHARED = "sharedLights"
 
@@ -43,9 +45,9 @@ class RTShadows(GBufferLightingPass):
     COUNTS_RAYS = True
     LOWEST_EFFECT = Effect.SHADOWS
     SALT = RNG_SALTS["rt_shadows"]
-    PROPERTIES = {"light_samples": 1, "blend_roulette": 0.0, "share_light_samples": False, "compact_tiles": 8,
+    PROPERTIES = {"light_samples": 1, "blend_roulette": 0.0, "share_light_samples": False, "compact_tiles": 0,
                   **ray_properties(view_group=16)}
-    WHOLE = {**GBufferLightingPass.WHOLE, "compact_tiles": (1, 32, "tiles a workgroup gathers its pixels from")}
+    WHOLE = {**GBufferLightingPass.WHOLE, "compact_tiles": (0, 32, "tiles a workgroup gathers its pixels from; 0: auto")}
     COMPACTS = True
     _sharing = False   # compiled with shared light samples (shares(cd))
 

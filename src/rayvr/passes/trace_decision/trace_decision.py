@@ -8,7 +8,7 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ...xr import foveation
 from ...xr.cameras import grid_for_views
-from ..dispatch import ONE_VIEW_TILES, SOURCE_VIEWS, groups_2d
+from ..dispatch import DITHERED_TRACE, ONE_VIEW_TILES, SOURCE_VIEWS, groups_2d
 from ..compaction.pixel_list import empty_lists
 from ..effects import effect_defines, scene_defines
 from ..gbuffer import channels
@@ -57,12 +57,13 @@ class TraceDecision(RenderPass):
     workgroups that read the decision hold one view each whatever their view group
     (rayvr.passes.dispatch.decision_view_group; `source_views_first` then has no workgroup to order):
     a tile of a view that reuses is mostly idle or wholly so, and a wholly idle one costs nothing.
-    `work_tiles` (False; with `reuse` and `spread`): True also lists the 8x4 tiles that hold a pixel
+    `work_tiles` (True; with `reuse` and `spread`): also lists the 8x4 tiles that hold a pixel
     whose light is not spread (`workTiles`, glsl/work_tiles.glsl), and the ray passes and the
     composite whose workgroup is such a tile run over that list: a wholly spread tile launches
-    nothing. Off by default, as measured slower (benchmarks/RESULTS.md, 2026-12-07 ninth): the
-    composite's clear of its colour before the tiles costs more than the tiles save. (False: the
-    list is declared but left empty and unread.)
+    nothing. Measured at 64 views (benchmarks/RESULTS.md, 2026-12-07 ninth): RTShadows -0.28 ms,
+    the composite's shader -0.22, the decision +0.12, and ~3 ms for the composite's clear of its
+    colour before the tiles, then glClearTexImage; the clear is now a compute dispatch, a write of
+    the image (not yet timed). (False: the list is declared but left empty and unread.)
 
     `every_surface`: every pixel has rays (a path tracer from the camera), else only those of effect
     SHADOWS and above. `spread` (the graphs set it with SVGF): SVGF gives a pixel whose light is
@@ -81,7 +82,7 @@ class TraceDecision(RenderPass):
                   "reuse_lobe_fraction": 0.25,
                   "source_stride": 4, "grid_cols": 0, "alternate": False, "every_surface": False, "spread": False,
                   "share_light_samples": True, "source_views_first": True,
-                  "one_view_tiles": True, "reuse_delta_lobes": True, "work_tiles": False}
+                  "one_view_tiles": True, "reuse_delta_lobes": True, "work_tiles": True}
     WHOLE = {"source_stride": (2, None, "grid steps between source views"),
              "grid_cols": (0, None, "the camera grid's columns; 0: the most square")}
 
@@ -138,6 +139,7 @@ class TraceDecision(RenderPass):
         if self.source_views_first and grid_reuse:
             ctx.dictionary[SOURCE_VIEWS] = self.source_views(cd.views, cols)
         ctx.dictionary[ONE_VIEW_TILES] = bool(self.one_view_tiles) and grid_reuse
+        ctx.dictionary[DITHERED_TRACE] = self.foveation != "none"
         self._res = program_resources(self.compute_program(ctx.gl, "decide.comp", {
             **scene_defines(ctx), **effect_defines(), **self._defines}))
         self._groups = groups_2d(cd.size, cd.views)
