@@ -562,3 +562,9 @@ def test_under_foveation_rtshadows_gathers_its_dithered_pixels_and_renders_the_s
     assert out["auto"][2] == 8 and out["own tile"][2] is None
     np.testing.assert_array_equal(out["auto"][0], out["own tile"][0])
     assert out["auto"][1] == out["own tile"][1] and 0 < sum(out["auto"][1]) < 2 * 40 * 24
+
+
+@pytest.mark.parametrize("value", [33, -1, 2.5])
+def test_compact_tiles_outside_0_to_32_is_refused_naming_the_pass(value):
+    with pytest.raises(rv.OptionError, match=r"pass RTShadows: property 'compact_tiles' must be an integer from 0 to 32"):
+        rv.passes.RTShadows(compact_tiles=value)

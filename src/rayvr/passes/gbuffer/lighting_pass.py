@@ -10,8 +10,8 @@ from ...gpu.rng_salts import RNG_SALTS
 from ...materials.effect import Effect
 from ...rendergraph.render_pass import Reflection, RenderPass
 from ..compaction.pixel_list import DISPATCH_OFFSET, pixel_list_bytes
-from ..dispatch import (COMPUTE_GROUP, DITHERED_TRACE, GATHER_TILES, VIEW_GROUP, check_shape, decision_view_group, groups_2d, ray_group,
-                        ray_group_defines, view_order)
+from ..dispatch import (COMPUTE_GROUP, DITHERED_TRACE, GATHER_TILES, VIEW_GROUP, check_shape, decision_view_group,
+                        groups_2d, ray_group, ray_group_defines, view_order)
 from ..effects import effect_defines, effects_used, scene_defines
 from ..probe_gi import inputs as probe_inputs
 from ..trace_decision import work_tiles

@@ -32,9 +32,9 @@ class RTShadows(GBufferLightingPass):
     `compact_tiles` (under a trace decision, over the image): a workgroup gathers the pixels with
     rays of that many tiles side by side and traces them a full warp at a time, in the tiles' order
     (glsl/tile_gather.glsl through pixel_list.glsl's RAY_PASS_COMPACT); 1: each workgroup its own
-    tile; 0 (the default): 8 where the decision's foveation dithers which pixels trace (their warps
-    held 0.38 of a lane's work each, 0.84 gathered), else 1 (view reuse's traced pixels are clustered:
-    0.81 without, 0.87 with; benchmarks/RESULTS.md, 2026-12-08)."""
+    tile; 0 (the default): 8 where the decision's foveation dithers which pixels trace (lanes of
+    the warps with work 0.38 busy, 0.84 gathered), else 1 (view reuse's traced pixels are clustered:
+    0.81 busy, 0.87 gathered; benchmarks/RESULTS.md, 2026-12-08)."""
 
     SHARED = "sharedLights"
 
@@ -47,7 +47,8 @@ class RTShadows(GBufferLightingPass):
     SALT = RNG_SALTS["rt_shadows"]
     PROPERTIES = {"light_samples": 1, "blend_roulette": 0.0, "share_light_samples": False, "compact_tiles": 0,
                   **ray_properties(view_group=16)}
-    WHOLE = {**GBufferLightingPass.WHOLE, "compact_tiles": (0, 32, "tiles a workgroup gathers its pixels from; 0: auto")}
+    WHOLE = {**GBufferLightingPass.WHOLE,
+             "compact_tiles": (0, 32, "tiles a workgroup gathers its pixels from; 0: auto")}
     COMPACTS = True
     _sharing = False   # compiled with shared light samples (shares(cd))
 
