@@ -1,6 +1,6 @@
-// Workgroups that gather their work from several tiles: under a trace decision a view that reuses
-// most of its light has a few pixels of work in each tile, and a workgroup per tile would hold a
-// warp for each of them. A workgroup of RAY_GROUP_SIZE (at most 32) invocations covers TILE_GATHER
+// Workgroups that gather their work from several tiles: where a trace decision leaves a few
+// pixels of work scattered over every tile (foveation's dither), a workgroup per tile would hold
+// a warp for each few. A workgroup of RAY_GROUP_SIZE (at most 32) invocations covers TILE_GATHER
 // ray_group tiles side by side (workgroups x * TILE_GATHER + k, glsl/ray_group.glsl), finds the
 // pixels with work among them (tile_gather_wants, which the includer defines), and works through
 // them RAY_GROUP_SIZE at a time in the tiles' order. Every invocation calls tile_gather() in
