@@ -357,22 +357,26 @@ def test_alternating_sources_swap_the_eyes_each_frame(gpu):
 SHARED_LIGHT = 8   # glsl/trace_decision.glsl DECISION_SHARED_LIGHT
 
 
-def glossy_box_on_plane(effect, roughness=0.2):
+def glossy_box_on_plane(effect, roughness=0.2, glass=False):
     scene = builtin.box_on_plane()
     plane = scene.materials["Plane"]
-    plane.effect, plane.metallic, plane.roughness = effect, 1.0, roughness
+    plane.effect, plane.metallic, plane.roughness = effect, 0.0 if glass else 1.0, roughness
+    if glass:   # the builtin plane is Lambertian: no specular layer (specular 0) until given one
+        plane.transmission, plane.specular = 1.0, 1.0
     scene.materials["Box"].effect = rv.Effect.SHADOWS
     return scene
 
 
-@pytest.mark.parametrize("effect", [rv.Effect.SHADOWS, rv.Effect.REFLECTIONS], ids=["shadows", "reflections"])
-def test_a_glossy_surface_shades_its_own_lobe_over_the_source_eyes_light_sample(gpu, effect):
+@pytest.mark.parametrize("effect, glass", [(rv.Effect.SHADOWS, False), (rv.Effect.REFLECTIONS, False),
+                                           (rv.Effect.SHADOWS, True)], ids=["shadows", "reflections", "glass"])
+def test_a_glossy_surface_shades_its_own_lobe_over_the_source_eyes_light_sample(gpu, effect, glass):
     """A metal plane of roughness 0.2 under one point light, seen by wide-apart eyes: its lobe is
     narrower than their parallax, so the second eye cannot take the first's shaded light; it shades
     its own lobe towards the first eye's light sample over that sample's shadow ray. With one point
     light that is its own independent render exactly, but for shadow edges, with no shadow ray of
-    its own (REFLECTIONS: its reflection rays are its own, so it traces those)."""
-    scene = glossy_box_on_plane(effect)
+    its own (REFLECTIONS: its reflection rays are its own, so it traces those). A glass plane
+    (transmission 1), whose shaded light is never reused, shares its light samples the same way."""
+    scene = glossy_box_on_plane(effect, glass=glass)
     views = box_stereo()
     out = {}
     for name, reuse, decision in (("independent", None, None), ("traced", "views", {"share_light_samples": False}),
@@ -396,6 +400,9 @@ def test_a_glossy_surface_shades_its_own_lobe_over_the_source_eyes_light_sample(
         assert out["shared"][1][1] <= own.sum()
     err = np.abs(shared[1] - independent[1]).max(-1)[flagged]
     assert (err <= 2e-3 * (1.0 + independent[1].max(-1)[flagged])).mean() > 0.98, np.sort(err)[-10:]
+    if glass:   # never reused, at any roughness: what the eyes see through it differs
+        assert not ((out["shaded"][2][1] & 3) == REUSE)[flagged].any()
+        return
     # the first eye's shaded light would put its highlight where the first eye sees it
     shaded = np.abs(out["shaded"][0][1] - independent[1]).max(-1)[flagged]
     assert shaded.max() > 0.05 and shaded.mean() > 20 * err.mean()

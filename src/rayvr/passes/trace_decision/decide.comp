@@ -170,8 +170,10 @@ uint decide(ivec3 p, GSurface g, float budget, out uint view, out vec2 at) {
     int n = reuses ? sources_of(v, s[0], s[1]) : 0;
     bool independent = reuses && view_independent(g.roughness, g.material, g.effect, g.pos, v, s[0]);
     // a glossy lobe traces, but its direct light sample may be a source pixel's: shared_view then
+    // (glass too: what the eyes see through it differs, but its point's light sample and shadow ray
+    // do not, and its lobes are shaded its own)
     bool shares = SHARE_LIGHT_SAMPLES != 0 && reuses && !independent && g.effect >= EFFECT_SHADOWS
-                  && g.effect <= EFFECT_REFLECTIONS && !refracts(g.material);
+                  && g.effect <= EFFECT_REFLECTIONS;
     uint shared_view = v;
     vec2 shared_at = at;
     if (independent || shares) {

@@ -45,7 +45,7 @@ class TraceDecision(RenderPass):
       turn FILLs from the nearest traced pixel of the same surface within 2 pixels (none: it traces).
 
     `share_light_samples` (with `reuse`, not `every_surface`): a pixel of effect SHADOWS or
-    REFLECTIONS whose lobe fails that test but whose surface the source view shows on a traced
+    REFLECTIONS (glass too) whose lobe fails that test but whose surface the source view shows on a traced
     pixel still traces (its lobe is its own), yet takes that pixel's direct light sample and shadow
     ray (DECISION_SHARED_LIGHT: RTShadows with its own `share_light_samples` shades it over them; a
     pass that does not traces it as any other).
