@@ -408,16 +408,21 @@ def test_a_glossy_surface_shades_its_own_lobe_over_the_source_eyes_light_sample(
     assert shaded.max() > 0.05 and shaded.mean() > 20 * err.mean()
 
 
-@pytest.mark.parametrize("effect", [rv.Effect.SHADOWS, rv.Effect.REFLECTIONS], ids=["shadows", "reflections"])
-def test_a_shared_area_light_sample_converges_to_the_same_image(gpu, effect):
+@pytest.mark.parametrize("effect, glass", [(rv.Effect.SHADOWS, False), (rv.Effect.REFLECTIONS, False),
+                                           (rv.Effect.SHADOWS, True)], ids=["shadows", "reflections", "glass"])
+def test_a_shared_area_light_sample_converges_to_the_same_image(gpu, effect, glass):
     """Under the Cornell box's area light (an emissive quad: its samples' pdf per unit area), glossy
     walls and boxes whose second-eye pixels take the first eye's light samples converge to the
     independent eyes' image, and are as close to it after 16 frames as an independent second eye
-    (REFLECTIONS: the light sample's MIS weight against the pixel's own reflection rays is its own)."""
+    (REFLECTIONS: the light sample's MIS weight against the pixel's own reflection rays is its own;
+    glass: the tall box is glass, whose pixels share too)."""
     scene = lambert_cornell()
     for name in ("Floor", "BackWall", "TallBox", "ShortBox"):
         m = scene.materials[name]
         m.metallic, m.roughness, m.effect = 0.5, 0.2, effect
+    if glass:
+        m = scene.materials["TallBox"]
+        m.metallic, m.transmission, m.specular = 0.0, 1.0, 1.0
     reference, _ = mean_color(scene, 512)
     independent, _ = mean_color(scene, 16)
     with Renderer(scene, graph(reuse="views"), views=2, size=SIZE) as r:
@@ -428,8 +433,10 @@ def test_a_shared_area_light_sample_converges_to_the_same_image(gpu, effect):
             if frame == 15:
                 shared = total / 16
         flagged = (r.read_output(DECISION)[1, ..., 0] & SHARED_LIGHT) != 0
+        on_tall_box = (r.read_output("GBuffer.effect")[1, ..., 0] >> 8) == scene.materials.index("TallBox")
         rays = r.compiled.ray_counts()
     assert flagged.sum() > 200 and rays[1] < (0.5 if effect == rv.Effect.SHADOWS else 0.9) * rays[0]
+    assert (flagged & on_tall_box).sum() > 20   # glass or not, the tall box shares
     ref = reference[1][flagged]
     converged = (total / 256)[1][flagged]
     assert abs(converged.mean() - ref.mean()) < 0.02 * ref.mean(), (converged.mean(), ref.mean())
