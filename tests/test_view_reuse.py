@@ -582,3 +582,22 @@ def test_under_foveation_rtshadows_gathers_its_dithered_pixels_and_renders_the_s
 def test_compact_tiles_outside_0_to_32_is_refused_naming_the_pass(value):
     with pytest.raises(rv.OptionError, match=r"pass RTShadows: property 'compact_tiles' must be an integer from 0 to 32"):
         rv.passes.RTShadows(compact_tiles=value)
+
+
+def test_over_the_list_each_of_rtshadows_dispatches_takes_its_own_pixels(gpu):
+    """RTShadows over the compaction's list (`dispatch_mode` 'list') under view reuse: the list holds
+    every traced pixel, and each of the two dispatches keeps those it shades (ray_pass_accepts: its
+    own light sample, or the source's); the same image and rays as over the image."""
+    scene = glossy_box_on_plane(rv.Effect.SHADOWS)
+    out = {}
+    for mode in ("image", "list"):
+        g = graph(reuse="views")
+        g.update_pass("Shadows", {"dispatch_mode": mode})
+        g.mark_output("Shadows.shadowed")
+        with Renderer(scene, g, views=box_stereo()) as r:
+            r.render()
+            out[mode] = (r.read_output("Shadows.shadowed"), r.compiled.ray_counts(),
+                         r.read_output(DECISION)[1, ..., 0])
+    assert ((out["list"][2] & SHARED_LIGHT) != 0).sum() > 300   # the second dispatch has pixels
+    np.testing.assert_array_equal(out["list"][0], out["image"][0])
+    assert out["list"][1] == out["image"][1]

@@ -16,15 +16,19 @@ struct DecisionTaps {
     vec4 w;   // weights summing to 1 (0: unused)
 };
 
+// Tap k (0-3) of a REUSE texel t: a pixel of its source view about its source position.
+ivec3 decision_tap(uvec2 t, int k) {
+    return ivec3(decision_tap_base(decision_position(t)) + ivec2(k & 1, k >> 1), int(decision_view(t)));
+}
+
 // Texel t of pixel p (surface g) with its tap mask: the taps that trace this frame and show g's
 // surface within DECISION_TAP_PIXELS footprints.
 uvec2 decision_tested_taps(ivec3 p, uvec2 t, GSurface g) {
     if (decision_kind(t) != DECISION_REUSE) return t;
-    ivec2 base = decision_tap_base(decision_position(t));
     ivec2 size = textureSize(trace_decision, 0).xy;
     uint mask = 0u;
     for (int k = 0; k < 4; ++k) {
-        ivec3 q = ivec3(base + ivec2(k & 1, k >> 1), int(decision_view(t)));
+        ivec3 q = decision_tap(t, k);
         if (pixel_inside(q.xy, size) && decision_kind(decision_at(q)) == DECISION_TRACE
             && same_surface(g, uint(p.z), q, DECISION_TAP_PIXELS))
             mask |= 1u << uint(k);
@@ -38,13 +42,11 @@ DecisionTaps decision_taps(uvec2 t) {
     taps.w = vec4(0.0);
     if (decision_kind(t) == DECISION_REUSE) {
         vec2 at = decision_position(t);
-        ivec2 base = decision_tap_base(at);
-        vec2 f = at - 0.5 - vec2(base);
+        vec2 f = at - 0.5 - vec2(decision_tap_base(at));
         uint mask = decision_tap_mask(t);
         for (int k = 0; k < 4; ++k) {
-            ivec2 o = ivec2(k & 1, k >> 1);
-            float w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y);
-            taps.q[k] = ivec3(base + o, int(decision_view(t)));
+            float w = ((k & 1) == 1 ? f.x : 1.0 - f.x) * ((k >> 1) == 1 ? f.y : 1.0 - f.y);
+            taps.q[k] = decision_tap(t, k);
             if (w > 0.0 && (mask & (1u << uint(k))) != 0u) taps.w[k] = w;
         }
     }

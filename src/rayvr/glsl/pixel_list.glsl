@@ -74,7 +74,7 @@ void pixel_list_append(bool listed, ivec3 p) {
 #define RAY_PASS_COMPACT 1
 #endif
 #if RAY_PASS_ACCEPTS
-bool ray_pass_accepts(ivec3 p);   // the shader's own test of a pixel the image dispatch would work on
+bool ray_pass_accepts(ivec3 p);   // the shader's own test of a pixel the pass would work on
 #endif
 
 #if PIXELS_2D
@@ -95,14 +95,18 @@ bool ray_pass_wants(ivec3 p, uint min_effect, ivec3 image_size) {
 #endif
 
 // The pixel a ray pass's invocation works on; false when it has none. From the list (dispatched
-// indirectly, PIXEL_LIST_GROUP threads a group), or with PIXELS_2D the invocation's own pixel of
-// the image when ray_pass_wants it (then no list is declared).
+// indirectly, PIXEL_LIST_GROUP threads a group) when ray_pass_accepts it, or with PIXELS_2D the
+// invocation's own pixel of the image when ray_pass_wants it (then no list is declared).
 bool ray_pass_pixel(uint min_effect, ivec3 image_size, out ivec3 p) {
 #if PIXELS_2D
     p = ray_group_pixel();
     return ray_pass_wants(p, min_effect, image_size);
 #else
-    return pixel_list_item(p);
+    if (!pixel_list_item(p)) return false;
+#if RAY_PASS_ACCEPTS
+    if (!ray_pass_accepts(p)) return false;
+#endif
+    return true;
 #endif
 }
 

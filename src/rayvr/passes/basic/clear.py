@@ -9,6 +9,8 @@ from ...rendergraph.registry import register_pass
 from ...rendergraph.render_pass import RenderPass, Reflection
 from .compute import program, rgba, run_over, storable_format
 
+_ZEROS = bytes(16 * BINDINGS["RAYVR_MAX_VIEWS"])   # clear.comp's `colors`, all 0 (zero_image)
+
 
 @register_pass
 class Clear(RenderPass):
@@ -64,4 +66,4 @@ def zero_image(prog, dst) -> None:
     """Write 0 in every texel of texture array `dst` with zero_program's `prog`: a compute dispatch
     that costs a write of the image, where glClearTexImage over the many layers of a half-float
     image took milliseconds on one driver (benchmarks/RESULTS.md, 2026-12-07 ninth)."""
-    clear_over(prog, dst, bytes(16 * BINDINGS["RAYVR_MAX_VIEWS"]), 1)
+    clear_over(prog, dst, _ZEROS, 1)

@@ -37,9 +37,6 @@ bool ray_pass_accepts(ivec3 p) { return decision_shared_light(decision_at(p)) ==
 #endif
 
 void shade(ivec3 p) {
-#if !PIXELS_2D && SHARED_LIGHT   // over the list the test is here (the image's is ray_pass_wants')
-    if (!ray_pass_accepts(p)) return;
-#endif
 #if SHARED_LIGHT_TAKE
     uvec2 t = decision_at(p);
 #endif

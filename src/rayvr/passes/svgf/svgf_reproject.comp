@@ -14,8 +14,8 @@
 // length SVGF_BORROWED) gives its sources' history, through its decision texel, and the scratch
 // texels of pixels without a surface are left unwritten: the variance blur tests the key before it
 // reads one. Without SVGF_SHARED they are written 0 (few pixels, and no key test in the blur's
-// nine taps at every pixel). With SVGF_FILTER_LIST it lists the pixels it does filter, those the later stages
-// run over (svgf_pixels.glsl).
+// nine taps at every pixel). With SVGF_FILTER_LIST it lists the pixels it does filter, those the
+// later stages run over (svgf_pixels.glsl).
 #include "svgf_common.glsl"
 #include "trace_decision.glsl"
 #if SVGF_SHARED

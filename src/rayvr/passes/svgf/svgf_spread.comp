@@ -4,9 +4,9 @@
 // (glsl/decision_taps.glsl), remodulated by its own albedos and emission. The reprojection wrote
 // it as having no surface, so the variance and a-trous stages did no work for it. Its history is
 // its sources': it is not copied here. The pixel keeps its own filter key, the history length
-// SVGF_BORROWED and its decision texel with the taps tested (`spread_source`), and on a later frame where it traces its
-// own light (the eyes alternating, a view moving off its source) the reprojection reads the
-// sources' history through that texel. With SVGF_FILTER_LIST, where the a-trous stage ran over the
+// SVGF_BORROWED and its decision texel with the taps tested (`spread_source`), and on a later
+// frame where it traces its own light (the eyes alternating, a view moving off its source) the
+// reprojection reads the sources' history through that texel. With SVGF_FILTER_LIST, where the a-trous stage ran over the
 // pixels it filters only, it also writes the background where nothing was drawn.
 #define TRACE_DECISION 1
 #include "svgf_common.glsl"
